@@ -1,0 +1,20 @@
+// Subcommands of the sdftrace CLI. Each registers itself on the app and sets the action to run
+// when it is chosen; the action returns the process exit status.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace sdft::cli {
+
+using Action = std::function<int()>;
+
+void addRenderCommand(CLI::App& app, Action& action);
+
+// Parses "x,y,z" (flag values); throws CLI::ValidationError naming the flag.
+struct Vec3Arg {
+    float x = 0, y = 0, z = 0;
+};
+Vec3Arg parseVec3Arg(const std::string& flag, const std::string& text);
+
+}  // namespace sdft::cli

@@ -1,0 +1,90 @@
+// The analytic field compiled to a flat opcode tape (libfive's tree -> tape -> evaluator).
+// One instruction per node; registers hold points (for domain transforms) or scalars (distances).
+// Evaluators: eval() for one point (the scalar path), evalBatch() for a structure-of-arrays batch
+// (one pass of the interpreter serves many rays), evalMaterial() for the material blend at a hit.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "sdftrace/field/node.h"
+#include "sdftrace/math/ray.h"
+
+namespace sdft {
+
+enum class Op : uint8_t {
+    // primitives: out(scalar) = f(point a), constants at k
+    Sphere, Box, RoundBox, Torus, Capsule, Cylinder, Cone, Plane, Ellipsoid, Octahedron,
+    Dodecahedron, Blobs,
+    // scalar binary: out = op(a, b)
+    Union, Intersection, Difference, SmoothUnion, SmoothIntersection, SmoothDifference, Morph,
+    // scalar unary
+    Complement,    // out = -a
+    ScaleValue,    // out = a * k[0]
+    RepeatBound,   // out = min(a, neighbour bound of point b)
+    Displace,      // out = a + amplitude * fbm(point b * frequency)
+    // point: out(point) = T(point a)
+    Translate, Rotate, ScalePoint, RepeatPoint,
+};
+
+struct Instr {
+    Op op;
+    uint16_t out = 0, a = 0, b = 0;
+    uint32_t k = 0;         // offset of this instruction's constants
+    int32_t material = -1;  // for primitives: the material of the surface they make
+};
+
+// Up to four materials with weights summing to one (smooth blends and morphs mix materials, as in
+// Keinert et al. 2014, §4: CSG operators that also propagate material information).
+struct MaterialBlend {
+    static constexpr int kMax = 4;
+    int id[kMax] = {-1, -1, -1, -1};
+    float weight[kMax] = {0, 0, 0, 0};
+    int count = 0;
+
+    static MaterialBlend single(int material);
+    // (1-t) * a + t * b, keeping the kMax heaviest entries.
+    static MaterialBlend mix(const MaterialBlend& a, const MaterialBlend& b, float t);
+};
+
+// Scratch registers for evalBatch; one per thread, reused across calls.
+struct BatchScratch {
+    std::vector<float> points;   // numPointRegs * 3 * kBatchWidth
+    std::vector<float> scalars;  // numScalarRegs * kBatchWidth
+};
+
+class Tape {
+public:
+    static constexpr int kBatchWidth = 64;
+
+    float eval(Vec3 p) const;
+    // out[i] = f(x[i], y[i], z[i]) for i < n (any n; processed in chunks of kBatchWidth).
+    void evalBatch(const float* x, const float* y, const float* z, float* out, int n,
+                   BatchScratch& scratch) const;
+    MaterialBlend evalMaterial(Vec3 p) const;
+
+    float lipschitz() const { return m_lipschitz; }
+    const Bounds3& bounds() const { return m_bounds; }
+    size_t size() const { return m_instrs.size(); }
+    int numPointRegs() const { return m_numPointRegs; }
+    int numScalarRegs() const { return m_numScalarRegs; }
+
+private:
+    friend Tape compileTape(const NodePtr& root);
+    template <bool kMaterial>
+    float evalScalar(Vec3 p, MaterialBlend* blend) const;
+    void evalChunk(const float* x, const float* y, const float* z, float* out, int n,
+                   BatchScratch& scratch) const;
+
+    std::vector<Instr> m_instrs;
+    std::vector<float> m_consts;
+    int m_numPointRegs = 1;
+    int m_numScalarRegs = 1;
+    uint16_t m_result = 0;
+    float m_lipschitz = 1;
+    Bounds3 m_bounds;
+};
+
+Tape compileTape(const NodePtr& root);
+
+}  // namespace sdft

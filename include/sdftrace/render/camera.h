@@ -1,0 +1,48 @@
+// Pinhole camera (DESIGN.md conventions): eye, target, up, vertical fov in degrees. Pixel (x, y) has
+// its centre at (x + 0.5, y + 0.5); row 0 is the top of the image; primary directions are unit.
+#pragma once
+
+#include <cmath>
+
+#include "sdftrace/math/ray.h"
+
+namespace sdft {
+
+struct CameraDesc {
+    Vec3 eye{0, 1, 5};
+    Vec3 target{0, 0, 0};
+    Vec3 up{0, 1, 0};
+    float fovDeg = 45;
+    int width = 640;
+    int height = 480;
+};
+
+class Camera {
+public:
+    explicit Camera(const CameraDesc& d) : m_desc(d) {
+        m_forward = normalize(d.target - d.eye);
+        m_right = normalize(cross(m_forward, d.up));
+        m_up = cross(m_right, m_forward);
+        m_tanHalf = std::tan(0.5f * d.fovDeg * 3.14159265358979f / 180.0f);
+        m_aspect = static_cast<float>(d.width) / static_cast<float>(d.height);
+    }
+
+    // Ray through the point (px, py) in pixel coordinates (pixel centres at +0.5).
+    SDFT_HOST_DEVICE Ray rayThrough(float px, float py) const {
+        float sx = (2.0f * px / m_desc.width - 1.0f) * m_tanHalf * m_aspect;
+        float sy = (1.0f - 2.0f * py / m_desc.height) * m_tanHalf;
+        return {m_desc.eye, normalize(m_forward + m_right * sx + m_up * sy)};
+    }
+    SDFT_HOST_DEVICE Ray pixelRay(int x, int y) const { return rayThrough(x + 0.5f, y + 0.5f); }
+
+    // Radius of half a pixel at distance 1 (Keinert et al. 2014, Listing 2's pixelRadius).
+    float pixelRadius() const { return m_tanHalf / m_desc.height; }
+    const CameraDesc& desc() const { return m_desc; }
+
+private:
+    CameraDesc m_desc;
+    Vec3 m_forward, m_right, m_up;
+    float m_tanHalf = 1, m_aspect = 1;
+};
+
+}  // namespace sdft

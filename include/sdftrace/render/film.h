@@ -1,0 +1,34 @@
+// The image being rendered: linear colour and the AOVs (arbitrary output variables).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "sdftrace/math/vec.h"
+
+namespace sdft {
+
+enum class Aov { Color, Depth, Normal, Steps, Error };
+
+// Names as on the command line: color, depth, normal, steps, error.
+const char* aovName(Aov aov);
+bool parseAov(const std::string& name, Aov& out);
+int aovChannels(Aov aov);
+
+struct Film {
+    int width = 0, height = 0;
+    std::vector<float> color;   // 3 per pixel: linear radiance before tone mapping
+    std::vector<float> depth;   // t along the unit primary ray, +inf on a miss
+    std::vector<float> normal;  // 3 per pixel, zero on a miss
+    std::vector<float> steps;   // field evaluations of the primary ray
+    std::vector<float> error;   // f(p) at the chosen hit point, 0 on a miss
+
+    Film(int w, int h);
+    size_t pixels() const { return static_cast<size_t>(width) * height; }
+    // Bytes a film of this size needs (to refuse absurd sizes before allocating).
+    static double bytesNeeded(int w, int h);
+    // Interleaved channels of one AOV.
+    const std::vector<float>& channel(Aov aov) const;
+};
+
+}  // namespace sdft

@@ -1,0 +1,31 @@
+// The direct-lighting renderer: tiles of primary rays traced as packets, gradient normals,
+// Lambert + Blinn-Phong shading, hard shadows by tracing to each light (Liktor 2008, §4.1).
+#pragma once
+
+#include <cstdint>
+
+#include "sdftrace/field/tape.h"
+#include "sdftrace/render/film.h"
+#include "sdftrace/scene/scene.h"
+
+namespace sdft {
+
+struct RenderStats {
+    double seconds = 0;
+    int threads = 0;
+    uint64_t primaryRays = 0, primaryEvaluations = 0, hits = 0, fallbacks = 0;
+    uint64_t normalEvaluations = 0, shadowRays = 0, shadowEvaluations = 0;
+
+    uint64_t totalEvaluations() const {
+        return primaryEvaluations + normalEvaluations + shadowEvaluations;
+    }
+};
+
+// Renders the scene into the film (sized from scene.camera). `progress` prints on stderr.
+RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progress = false);
+
+// Unit gradient of the field at p by central differences (6 evaluations) or the tetrahedral
+// 4-tap estimate, with step h.
+Vec3 estimateNormal(const Tape& tape, Vec3 p, float h, NormalEstimator estimator);
+
+}  // namespace sdft

@@ -1,0 +1,21 @@
+// Scene files (JSON, documented in docs/scene-format.md) to a validated Scene.
+// Every error is an InputError of one line: "<file>: <JSON path>: <what was wrong>; <accepted>".
+#pragma once
+
+#include <string>
+
+#include "sdftrace/scene/scene.h"
+
+namespace sdft {
+
+Scene parseSceneFile(const std::string& path);
+// `source` names the text in messages (a file name, or "<demo>").
+Scene parseSceneText(const std::string& text, const std::string& source);
+// The built-in demo scene (the text of examples/demo.json, embedded at build time).
+Scene demoScene();
+const char* demoSceneText();
+
+// Rejects images that cannot be rendered (zero, absurd, or more than this machine's memory).
+void validateImageSize(int width, int height, const std::string& what);
+
+}  // namespace sdft

@@ -1,0 +1,215 @@
+// Sphere tracing of a Lipschitz field (Hart 1996; Liktor 2008, §2.2) with the enhancements of
+// Keinert et al. 2014 (§3.1 over-relaxation, §3.2 screen-space selection, §3.4 discontinuity
+// reduction) and Liktor 2008 (§5.3-5.4 hybrid with regula falsi, fixed-step mode).
+//
+// Written as a per-ray state machine: the driver asks the state for its query point, evaluates the
+// field there (alone, or in a batch with many other rays), and hands the value back to advance().
+// One definition of the algorithm thus serves the scalar path and the batched path.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "sdftrace/math/ray.h"
+#include "sdftrace/trace/trace_options.h"
+
+namespace sdft {
+
+struct TraceResult {
+    bool hit = false;
+    float t = kInfinity;   // distance along the unit ray direction; +inf on a miss
+    float value = 0;       // f(p) at the chosen hit point (Keinert fig. 9)
+    int evaluations = 0;   // field evaluations spent on this ray
+    int fallbacks = 0;     // over-relaxation fallbacks taken (Keinert Listing 2)
+};
+
+struct SphereTraceState {
+    enum Phase : uint8_t { kMarch, kLinear, kFalsi, kRefine, kDone };
+
+    Ray ray;
+    float tMax = 0;
+    float t = 0;  // where the next evaluation happens
+    float candidateT = 0, candidateError = kInfinity, candidateValue = 0;
+    float previousRadius = 0, stepLength = 0, omega = 1, sign = 0;
+    float tA = 0, fA = 0, tB = 0, fB = 0;  // hybrid: the bracket
+    int steps = 0, refineLeft = 0;
+    Phase phase = kMarch;
+    TraceResult result;
+
+    SDFT_HOST_DEVICE bool done() const { return phase == kDone; }
+    SDFT_HOST_DEVICE Vec3 queryPoint() const { return ray.at(t); }
+};
+
+// Starts a ray on [tMin, tMax] clipped to `bounds`; a ray that misses the bounds is done at once.
+SDFT_HOST_DEVICE inline void sphereTraceBegin(SphereTraceState& s, const Ray& ray, float tMin,
+                                              float tMax, const Bounds3& bounds,
+                                              const TraceOptions& o) {
+    s = SphereTraceState{};
+    s.ray = ray;
+    float t0, t1;
+    if (!intersectBounds(bounds, ray, tMin, tMax, t0, t1)) {
+        s.phase = SphereTraceState::kDone;
+        return;
+    }
+    s.t = t0;
+    s.tMax = t1;
+    s.candidateT = t0;
+    s.omega = o.omega;
+}
+
+namespace detail {
+
+SDFT_HOST_DEVICE inline float hitError(const SphereTraceState& s, float radius, const TraceOptions& o) {
+    return o.screenSpace ? radius / std::fmax(s.t, 1e-6f) : radius;
+}
+SDFT_HOST_DEVICE inline float hitThreshold(const TraceOptions& o) {
+    return o.screenSpace ? o.pixelRadius : o.tau;
+}
+// The permitted error err(t) the discontinuity reduction aims f at (Keinert eq. 2).
+SDFT_HOST_DEVICE inline float permittedError(float t, const TraceOptions& o) {
+    return o.screenSpace ? t * o.pixelRadius : o.tau;
+}
+
+SDFT_HOST_DEVICE inline void finish(SphereTraceState& s, bool hit, float t, float value) {
+    s.result.hit = hit;
+    s.result.t = hit ? t : kInfinity;
+    s.result.value = hit ? value : 0.0f;
+    s.phase = SphereTraceState::kDone;
+}
+
+// End of the march: decide hit or miss (Keinert Listing 2, last lines), then refine.
+SDFT_HOST_DEVICE inline void endMarch(SphereTraceState& s, const TraceOptions& o) {
+    bool hit = s.candidateError <= hitThreshold(o) && s.candidateT <= s.tMax;
+    if (!hit && !o.forceHit) {
+        finish(s, false, 0, 0);
+        return;
+    }
+    if (o.discontinuityIters > 0) {
+        s.phase = SphereTraceState::kRefine;
+        s.refineLeft = o.discontinuityIters + 1;  // n moves, then one evaluation for f(p_n)
+        s.t = s.candidateT;
+        return;
+    }
+    finish(s, true, s.candidateT, s.candidateValue);
+}
+
+// Keinert et al. 2014, Listing 2: over-relaxed step with the safe fallback and screen-space
+// intersection-point selection.
+SDFT_HOST_DEVICE inline void marchStep(SphereTraceState& s, float f, float invL,
+                                       const TraceOptions& o) {
+    if (s.steps == 0) s.sign = f < 0 ? -1.0f : 1.0f;  // a ray starting inside traces out
+    float signedRadius = s.sign * f * invL;
+    float radius = std::fabs(signedRadius);
+    bool sorFail = s.omega > 1 && (radius + s.previousRadius) < s.stepLength;
+    if (sorFail) {
+        // The unbounding spheres do not overlap: step back to where plain sphere tracing would
+        // have gone (p_fallback) and continue without over-relaxation.
+        s.stepLength -= s.omega * s.stepLength;
+        s.omega = 1;
+        s.result.fallbacks++;
+    } else {
+        s.stepLength = signedRadius * s.omega;
+    }
+    s.previousRadius = radius;
+    float error = hitError(s, radius, o);
+    if (!sorFail && error < s.candidateError && s.t <= s.tMax) {
+        s.candidateT = s.t;
+        s.candidateError = error;
+        s.candidateValue = f;
+    }
+    s.steps++;
+    if (o.hybrid && !sorFail && radius < o.hybridEpsilon) {
+        // Liktor 2008, §5.4: near the surface, linear search takes larger steps than sphere tracing.
+        s.phase = SphereTraceState::kLinear;
+        s.tA = s.t;
+        s.fA = signedRadius;
+        s.t += o.hybridStep;
+        if (s.t > s.tMax || s.steps >= o.maxSteps) finish(s, false, 0, 0);
+        return;
+    }
+    bool converged = !o.hybrid && !sorFail && error < hitThreshold(o);
+    if ((converged && !o.fixedSteps) || (s.t > s.tMax && !o.fixedSteps) || s.steps >= o.maxSteps) {
+        if (o.hybrid) {
+            finish(s, false, 0, 0);
+        } else {
+            endMarch(s, o);
+        }
+        return;
+    }
+    s.t += s.stepLength;
+}
+
+// Liktor 2008, §5.3: fixed steps until the sign changes, then regula falsi on the bracket.
+SDFT_HOST_DEVICE inline void linearStep(SphereTraceState& s, float f, float invL,
+                                        const TraceOptions& o) {
+    float v = s.sign * f * invL;
+    s.steps++;
+    if (v < 0) {
+        s.tB = s.t;
+        s.fB = v;
+        s.phase = SphereTraceState::kFalsi;
+        s.refineLeft = o.falsiIters;
+        if (s.refineLeft <= 0) {
+            finish(s, true, s.tB, f);
+            return;
+        }
+        s.t = s.tA - s.fA * (s.tB - s.tA) / (s.fB - s.fA);
+        return;
+    }
+    if (v > 2 * o.hybridEpsilon) {
+        // The ray moves away from the surface again: back to sphere tracing.
+        s.phase = SphereTraceState::kMarch;
+        s.previousRadius = 0;
+        s.stepLength = 0;
+        s.t += v;
+    } else {
+        s.tA = s.t;
+        s.fA = v;
+        s.t += o.hybridStep;
+    }
+    if (s.t > s.tMax || s.steps >= o.maxSteps) finish(s, false, 0, 0);
+}
+
+SDFT_HOST_DEVICE inline void falsiStep(SphereTraceState& s, float f, float invL) {
+    float v = s.sign * f * invL;
+    if (v > 0) {
+        s.tA = s.t;
+        s.fA = v;
+    } else {
+        s.tB = s.t;
+        s.fB = v;
+    }
+    if (--s.refineLeft <= 0 || v == 0) {
+        finish(s, true, s.t, f);
+        return;
+    }
+    s.t = s.tA - s.fA * (s.tB - s.tA) / (s.fB - s.fA);
+}
+
+// Keinert et al. 2014, §3.4, eq. 3: p_{i+1} = p_i + d (f(p_i) - err(|p_i - o|)).
+SDFT_HOST_DEVICE inline void refineStep(SphereTraceState& s, float f, float invL,
+                                        const TraceOptions& o) {
+    float next = s.t + s.sign * f * invL - permittedError(s.t, o);
+    if (--s.refineLeft <= 0) {
+        finish(s, true, s.t, f);
+        return;
+    }
+    s.t = next;
+}
+
+}  // namespace detail
+
+// Consumes f(queryPoint()) and moves the state on. invL = 1 / Lipschitz bound of the field.
+SDFT_HOST_DEVICE inline void sphereTraceAdvance(SphereTraceState& s, float f, float invL,
+                                                const TraceOptions& o) {
+    s.result.evaluations++;
+    switch (s.phase) {
+        case SphereTraceState::kMarch: detail::marchStep(s, f, invL, o); break;
+        case SphereTraceState::kLinear: detail::linearStep(s, f, invL, o); break;
+        case SphereTraceState::kFalsi: detail::falsiStep(s, f, invL); break;
+        case SphereTraceState::kRefine: detail::refineStep(s, f, invL, o); break;
+        case SphereTraceState::kDone: break;
+    }
+}
+
+}  // namespace sdft

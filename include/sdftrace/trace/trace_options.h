@@ -1,0 +1,38 @@
+// Switches of the analytic sphere tracer. Defaults are the best-quality settings; every enhancement
+// can be turned off to measure it against the plain method.
+#pragma once
+
+namespace sdft {
+
+struct TraceOptions {
+    int maxSteps = 256;  // field evaluations spent marching (Hart's MAX_ITERATIONS)
+    float tau = 1e-3f;   // hit threshold on f/L when not using the screen-space criterion
+    // Keinert et al. 2014, §3.1: step omega * f/L, with the safe fallback of Listing 2. 1 = off.
+    float omega = 1.2f;
+    // Keinert et al. 2014, §3.2: pick the point with the smallest screen-space unbounding radius and
+    // stop once it is under half a pixel. Needs pixelRadius (radius of a pixel at t = 1).
+    bool screenSpace = true;
+    float pixelRadius = 0;
+    bool forceHit = false;  // return the best candidate even when it never converged
+    // Keinert et al. 2014, §3.4: fixed-point iterations p += d (f(p) - err(t)) after the march.
+    int discontinuityIters = 3;
+    // Liktor 2008, §5.4: every ray takes exactly maxSteps march steps (no early exit).
+    bool fixedSteps = false;
+    // Liktor 2008, §5.3-5.4: sphere tracing until f/L < hybridEpsilon, then linear search with
+    // step hybridStep until the sign changes, then falsiIters steps of regula falsi.
+    bool hybrid = false;
+    float hybridEpsilon = 0.02f;
+    float hybridStep = 0.01f;
+    int falsiIters = 4;
+
+    // The plain method of Hart 1996 (Keinert Listing 1): no enhancement at all.
+    static TraceOptions classic() {
+        TraceOptions o;
+        o.omega = 1;
+        o.screenSpace = false;
+        o.discontinuityIters = 0;
+        return o;
+    }
+};
+
+}  // namespace sdft

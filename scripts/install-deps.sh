@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package sdftrace needs to build, test and benchmark. Idempotent.
+set -euo pipefail
+packages=(
+    build-essential cmake make pkg-config
+    libtbb-dev            # parallel tiles (oneTBB)
+    libopenexr-dev        # EXR output
+    libstb-dev            # PNG output (stb_image_write), legend text (stb_easy_font)
+    nlohmann-json3-dev    # scene files
+    libcli11-dev          # command line
+    libgtest-dev          # tests
+    libbenchmark-dev      # bench/
+)
+missing=()
+for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+    echo "install-deps: all packages present"
+    exit 0
+fi
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,159 @@
+// Tree -> tape compilation: a post-order walk emitting one instruction per node, with registers
+// recycled as soon as their last reader is emitted (each value in a tree has exactly one reader).
+#include <algorithm>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/core/macros.h"
+#include "sdftrace/field/tape.h"
+
+namespace sdft {
+
+namespace {
+
+// Register files of the scalar evaluator live on the stack; keep these in sync with tape_eval.cpp.
+constexpr int kMaxScalarRegs = 64;
+constexpr int kMaxPointRegs = 32;
+
+class Compiler {
+public:
+    explicit Compiler(std::vector<Instr>& instrs, std::vector<float>& consts)
+        : m_instrs(instrs), m_consts(consts) {}
+
+    uint16_t emit(const Node& n, uint16_t point, int material);
+    int pointRegs() const { return m_nextPoint; }
+    int scalarRegs() const { return m_nextScalar; }
+
+private:
+    uint16_t allocScalar() { return alloc(m_freeScalar, m_nextScalar, kMaxScalarRegs); }
+    uint16_t allocPoint() { return alloc(m_freePoint, m_nextPoint, kMaxPointRegs); }
+    static uint16_t alloc(std::vector<uint16_t>& freeList, int& next, int limit) {
+        if (!freeList.empty()) {
+            uint16_t r = freeList.back();
+            freeList.pop_back();
+            return r;
+        }
+        if (next >= limit) {
+            throw InputError("scene tree is too deeply nested to compile (more than " +
+                             std::to_string(limit) + " live registers); flatten unions");
+        }
+        return static_cast<uint16_t>(next++);
+    }
+    uint32_t addConsts(const std::vector<float>& k) {
+        auto offset = static_cast<uint32_t>(m_consts.size());
+        m_consts.insert(m_consts.end(), k.begin(), k.end());
+        return offset;
+    }
+    void push(Op op, uint16_t out, uint16_t a, uint16_t b, uint32_t k, int material = -1) {
+        m_instrs.push_back({op, out, a, b, k, material});
+    }
+    uint16_t emitPointOp(Op op, uint16_t point, const std::vector<float>& k) {
+        uint16_t q = allocPoint();
+        push(op, q, point, 0, addConsts(k));
+        return q;
+    }
+
+    std::vector<Instr>& m_instrs;
+    std::vector<float>& m_consts;
+    std::vector<uint16_t> m_freeScalar, m_freePoint;
+    int m_nextScalar = 0;
+    int m_nextPoint = 1;  // point register 0 is the input point
+};
+
+Op primitiveOp(NodeKind kind) {
+    // NodeKind and Op list the primitives in the same order.
+    return static_cast<Op>(static_cast<int>(kind) - static_cast<int>(NodeKind::Sphere) +
+                           static_cast<int>(Op::Sphere));
+}
+
+uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
+    if (n.material >= 0) material = n.material;
+    if (isPrimitive(n.kind)) {
+        uint16_t out = allocScalar();
+        push(primitiveOp(n.kind), out, point, 0, addConsts(n.params), material);
+        return out;
+    }
+    auto binary = [&](Op op, const std::vector<float>& k) {
+        uint16_t acc = emit(*n.children[0], point, material);
+        uint32_t offset = addConsts(k);
+        for (size_t i = 1; i < n.children.size(); ++i) {
+            uint16_t rhs = emit(*n.children[i], point, material);
+            push(op, acc, acc, rhs, offset);
+            m_freeScalar.push_back(rhs);
+        }
+        return acc;
+    };
+    switch (n.kind) {
+        case NodeKind::Union: return binary(Op::Union, {});
+        case NodeKind::Intersection: return binary(Op::Intersection, {});
+        case NodeKind::Difference: return binary(Op::Difference, {});
+        case NodeKind::SmoothUnion: return binary(Op::SmoothUnion, n.params);
+        case NodeKind::SmoothIntersection: return binary(Op::SmoothIntersection, n.params);
+        case NodeKind::SmoothDifference: return binary(Op::SmoothDifference, n.params);
+        case NodeKind::Morph: return binary(Op::Morph, n.params);
+        case NodeKind::Complement: {
+            uint16_t r = emit(*n.children[0], point, material);
+            push(Op::Complement, r, r, 0, 0);
+            return r;
+        }
+        case NodeKind::Translate: {
+            uint16_t q = emitPointOp(Op::Translate, point, n.params);
+            uint16_t r = emit(*n.children[0], q, material);
+            m_freePoint.push_back(q);
+            return r;
+        }
+        case NodeKind::Rotate: {
+            // Store the inverse (transpose): the child sees R^T p.
+            std::vector<float> inv(9);
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) inv[i * 3 + j] = n.params[j * 3 + i];
+            uint16_t q = emitPointOp(Op::Rotate, point, inv);
+            uint16_t r = emit(*n.children[0], q, material);
+            m_freePoint.push_back(q);
+            return r;
+        }
+        case NodeKind::Scale: {
+            // Liktor 2008, §2.2: f(T^-1 p) has Lipschitz constant L_f / min(s); multiplying by
+            // min(s) restores L_f, so the value stays a distance bound in world units.
+            uint16_t q = emitPointOp(Op::ScalePoint, point, n.params);
+            uint16_t r = emit(*n.children[0], q, material);
+            m_freePoint.push_back(q);
+            float minScale = std::min({n.params[0], n.params[1], n.params[2]});
+            push(Op::ScaleValue, r, r, 0, addConsts({minScale}));
+            return r;
+        }
+        case NodeKind::Repeat: {
+            uint32_t k = addConsts(n.params);
+            uint16_t q = allocPoint();
+            push(Op::RepeatPoint, q, point, 0, k);
+            uint16_t r = emit(*n.children[0], q, material);
+            m_freePoint.push_back(q);
+            push(Op::RepeatBound, r, r, point, k);
+            return r;
+        }
+        case NodeKind::Displace: {
+            uint16_t r = emit(*n.children[0], point, material);
+            push(Op::Displace, r, r, point, addConsts(n.params));
+            push(Op::ScaleValue, r, r, 0, addConsts({displaceScale(n)}));
+            return r;
+        }
+        default: break;
+    }
+    SDFT_CHECK(false && "unhandled node kind");
+    return 0;
+}
+
+}  // namespace
+
+Tape compileTape(const NodePtr& root) {
+    SDFT_CHECK(root != nullptr);
+    Tape tape;
+    Compiler compiler(tape.m_instrs, tape.m_consts);
+    tape.m_result = compiler.emit(*root, 0, root->material >= 0 ? root->material : 0);
+    tape.m_numPointRegs = compiler.pointRegs();
+    tape.m_numScalarRegs = compiler.scalarRegs();
+    tape.m_lipschitz = lipschitzBound(*root);
+    tape.m_bounds = nodeBounds(*root);
+    return tape;
+}
+
+}  // namespace sdft

@@ -1,0 +1,263 @@
+// Tape evaluators: scalar (one point, optional material tracking) and batch (structure of arrays).
+// Both dispatch to the same per-op functions in primitives.h / operators.h / transforms.h.
+#include <algorithm>
+
+#include "sdftrace/field/noise.h"
+#include "sdftrace/field/operators.h"
+#include "sdftrace/field/primitives.h"
+#include "sdftrace/field/tape.h"
+#include "sdftrace/field/transforms.h"
+
+namespace sdft {
+
+namespace {
+constexpr int kMaxScalarRegs = 64;  // see tape_compile.cpp
+constexpr int kMaxPointRegs = 32;
+
+float evalPrimitive(Op op, Vec3 p, const float* k) {
+    switch (op) {
+        case Op::Sphere: return prim::sphere(p, k);
+        case Op::Box: return prim::box(p, k);
+        case Op::RoundBox: return prim::roundBox(p, k);
+        case Op::Torus: return prim::torus(p, k);
+        case Op::Capsule: return prim::capsule(p, k);
+        case Op::Cylinder: return prim::cylinder(p, k);
+        case Op::Cone: return prim::cone(p, k);
+        case Op::Plane: return prim::plane(p, k);
+        case Op::Ellipsoid: return prim::ellipsoid(p, k);
+        case Op::Octahedron: return prim::octahedron(p, k);
+        case Op::Dodecahedron: return prim::dodecahedron(p, k);
+        case Op::Blobs: return prim::blobs(p, k);
+        default: return 0;
+    }
+}
+
+// Binary scalar ops. `h` returns the weight of `a` for material blending.
+inline float evalBinary(Op op, float a, float b, const float* k, float& h) {
+    switch (op) {
+        case Op::Union: h = a <= b ? 1.f : 0.f; return std::fmin(a, b);
+        case Op::Intersection: h = a >= b ? 1.f : 0.f; return std::fmax(a, b);
+        case Op::Difference: h = a >= -b ? 1.f : 0.f; return std::fmax(a, -b);
+        case Op::SmoothUnion: return ops::smoothMin(a, b, k[0], h);
+        case Op::SmoothIntersection: return ops::smoothMax(a, b, k[0], h);
+        case Op::SmoothDifference: return ops::smoothMax(a, -b, k[0], h);
+        case Op::Morph: h = 1 - k[0]; return (1 - k[0]) * a + k[0] * b;
+        default: h = 1; return a;
+    }
+}
+
+inline Vec3 evalPointOp(Op op, Vec3 p, const float* k) {
+    switch (op) {
+        case Op::Translate: return p - Vec3(k[0], k[1], k[2]);
+        case Op::Rotate: {
+            return {k[0] * p.x + k[1] * p.y + k[2] * p.z, k[3] * p.x + k[4] * p.y + k[5] * p.z,
+                    k[6] * p.x + k[7] * p.y + k[8] * p.z};
+        }
+        case Op::ScalePoint: return p / Vec3(k[0], k[1], k[2]);
+        case Op::RepeatPoint: return xform::repeatPoint(p, k);
+        default: return p;
+    }
+}
+
+inline float displacement(Vec3 p, const float* k) {
+    return k[0] * noise::fbm(p * k[1], static_cast<int>(k[2]), k[3]);
+}
+}  // namespace
+
+MaterialBlend MaterialBlend::single(int material) {
+    MaterialBlend b;
+    b.id[0] = material;
+    b.weight[0] = 1;
+    b.count = 1;
+    return b;
+}
+
+MaterialBlend MaterialBlend::mix(const MaterialBlend& a, const MaterialBlend& b, float t) {
+    if (t <= 0) return a;
+    if (t >= 1) return b;
+    int ids[2 * kMax];
+    float ws[2 * kMax];
+    int n = 0;
+    auto add = [&](int id, float w) {
+        for (int i = 0; i < n; ++i) {
+            if (ids[i] == id) {
+                ws[i] += w;
+                return;
+            }
+        }
+        ids[n] = id;
+        ws[n++] = w;
+    };
+    for (int i = 0; i < a.count; ++i) add(a.id[i], a.weight[i] * (1 - t));
+    for (int i = 0; i < b.count; ++i) add(b.id[i], b.weight[i] * t);
+    // Keep the heaviest kMax entries, renormalized.
+    MaterialBlend out;
+    float total = 0;
+    for (int slot = 0; slot < kMax && slot < n; ++slot) {
+        int best = slot;
+        for (int i = slot + 1; i < n; ++i)
+            if (ws[i] > ws[best]) best = i;
+        std::swap(ids[slot], ids[best]);
+        std::swap(ws[slot], ws[best]);
+        out.id[slot] = ids[slot];
+        out.weight[slot] = ws[slot];
+        total += ws[slot];
+        out.count = slot + 1;
+    }
+    for (int i = 0; i < out.count; ++i) out.weight[i] /= total;
+    return out;
+}
+
+template <bool kMaterial>
+float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
+    float s[kMaxScalarRegs];
+    Vec3 pts[kMaxPointRegs];
+    MaterialBlend mats[kMaterial ? kMaxScalarRegs : 1];
+    pts[0] = p;
+    const float* consts = m_consts.data();
+    for (const Instr& in : m_instrs) {
+        const float* k = consts + in.k;
+        Op op = in.op;
+        if (op <= Op::Blobs) {
+            s[in.out] = evalPrimitive(op, pts[in.a], k);
+            if constexpr (kMaterial) mats[in.out] = MaterialBlend::single(in.material);
+        } else if (op <= Op::Morph) {
+            float h;
+            s[in.out] = evalBinary(op, s[in.a], s[in.b], k, h);
+            if constexpr (kMaterial) mats[in.out] = MaterialBlend::mix(mats[in.a], mats[in.b], 1 - h);
+        } else if (op == Op::Complement) {
+            s[in.out] = -s[in.a];
+        } else if (op == Op::ScaleValue) {
+            s[in.out] = s[in.a] * k[0];
+        } else if (op == Op::RepeatBound) {
+            s[in.out] = std::fmin(s[in.a], xform::repeatNeighbourBound(pts[in.b], k));
+        } else if (op == Op::Displace) {
+            s[in.out] = s[in.a] + displacement(pts[in.b], k);
+        } else {
+            pts[in.out] = evalPointOp(op, pts[in.a], k);
+        }
+    }
+    if constexpr (kMaterial) *blend = mats[m_result];
+    return s[m_result];
+}
+
+float Tape::eval(Vec3 p) const { return evalScalar<false>(p, nullptr); }
+
+MaterialBlend Tape::evalMaterial(Vec3 p) const {
+    MaterialBlend blend;
+    evalScalar<true>(p, &blend);
+    return blend;
+}
+
+void Tape::evalBatch(const float* x, const float* y, const float* z, float* out, int n,
+                     BatchScratch& scratch) const {
+    size_t needP = static_cast<size_t>(m_numPointRegs) * 3 * kBatchWidth;
+    size_t needS = static_cast<size_t>(m_numScalarRegs) * kBatchWidth;
+    if (scratch.points.size() < needP) scratch.points.resize(needP);
+    if (scratch.scalars.size() < needS) scratch.scalars.resize(needS);
+    for (int start = 0; start < n; start += kBatchWidth) {
+        int count = std::min(kBatchWidth, n - start);
+        evalChunk(x + start, y + start, z + start, out + start, count, scratch);
+    }
+}
+
+void Tape::evalChunk(const float* x, const float* y, const float* z, float* out, int n,
+                     BatchScratch& scratch) const {
+    constexpr int W = kBatchWidth;
+    float* points = scratch.points.data();
+    float* scalars = scratch.scalars.data();
+    auto px = [&](int r) { return points + (r * 3 + 0) * W; };
+    auto py = [&](int r) { return points + (r * 3 + 1) * W; };
+    auto pz = [&](int r) { return points + (r * 3 + 2) * W; };
+    auto sr = [&](int r) { return scalars + r * W; };
+    std::copy(x, x + n, px(0));
+    std::copy(y, y + n, py(0));
+    std::copy(z, z + n, pz(0));
+    const float* consts = m_consts.data();
+
+#define SDFT_PRIM_CASE(OP, FN)                                                   \
+    case Op::OP: {                                                               \
+        const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);              \
+        float* o = sr(in.out);                                                   \
+        for (int l = 0; l < n; ++l) o[l] = prim::FN(Vec3(ax[l], ay[l], az[l]), k); \
+        break;                                                                   \
+    }
+
+    for (const Instr& in : m_instrs) {
+        const float* k = consts + in.k;
+        switch (in.op) {
+            SDFT_PRIM_CASE(Sphere, sphere)
+            SDFT_PRIM_CASE(Box, box)
+            SDFT_PRIM_CASE(RoundBox, roundBox)
+            SDFT_PRIM_CASE(Torus, torus)
+            SDFT_PRIM_CASE(Capsule, capsule)
+            SDFT_PRIM_CASE(Cylinder, cylinder)
+            SDFT_PRIM_CASE(Cone, cone)
+            SDFT_PRIM_CASE(Plane, plane)
+            SDFT_PRIM_CASE(Ellipsoid, ellipsoid)
+            SDFT_PRIM_CASE(Octahedron, octahedron)
+            SDFT_PRIM_CASE(Dodecahedron, dodecahedron)
+            SDFT_PRIM_CASE(Blobs, blobs)
+            case Op::Union: {
+                float *o = sr(in.out), *a = sr(in.a), *b = sr(in.b);
+                for (int l = 0; l < n; ++l) o[l] = std::fmin(a[l], b[l]);
+                break;
+            }
+            case Op::Intersection: {
+                float *o = sr(in.out), *a = sr(in.a), *b = sr(in.b);
+                for (int l = 0; l < n; ++l) o[l] = std::fmax(a[l], b[l]);
+                break;
+            }
+            case Op::Difference:
+            case Op::SmoothUnion:
+            case Op::SmoothIntersection:
+            case Op::SmoothDifference:
+            case Op::Morph: {
+                float *o = sr(in.out), *a = sr(in.a), *b = sr(in.b);
+                float h;
+                for (int l = 0; l < n; ++l) o[l] = evalBinary(in.op, a[l], b[l], k, h);
+                break;
+            }
+            case Op::Complement: {
+                float *o = sr(in.out), *a = sr(in.a);
+                for (int l = 0; l < n; ++l) o[l] = -a[l];
+                break;
+            }
+            case Op::ScaleValue: {
+                float *o = sr(in.out), *a = sr(in.a);
+                for (int l = 0; l < n; ++l) o[l] = a[l] * k[0];
+                break;
+            }
+            case Op::RepeatBound:
+            case Op::Displace: {
+                float *o = sr(in.out), *a = sr(in.a);
+                const float *bx = px(in.b), *by = py(in.b), *bz = pz(in.b);
+                for (int l = 0; l < n; ++l) {
+                    Vec3 q(bx[l], by[l], bz[l]);
+                    o[l] = in.op == Op::RepeatBound
+                               ? std::fmin(a[l], xform::repeatNeighbourBound(q, k))
+                               : a[l] + displacement(q, k);
+                }
+                break;
+            }
+            case Op::Translate:
+            case Op::Rotate:
+            case Op::ScalePoint:
+            case Op::RepeatPoint: {
+                const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);
+                float *ox = px(in.out), *oy = py(in.out), *oz = pz(in.out);
+                for (int l = 0; l < n; ++l) {
+                    Vec3 q = evalPointOp(in.op, Vec3(ax[l], ay[l], az[l]), k);
+                    ox[l] = q.x;
+                    oy[l] = q.y;
+                    oz[l] = q.z;
+                }
+                break;
+            }
+        }
+    }
+#undef SDFT_PRIM_CASE
+    std::copy(sr(m_result), sr(m_result) + n, out);
+}
+
+}  // namespace sdft

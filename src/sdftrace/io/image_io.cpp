@@ -1,0 +1,189 @@
+#include "sdftrace/io/image_io.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/io/atomic_file.h"
+
+#define STB_IMAGE_WRITE_STATIC
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb_image_write.h>
+#include <stb_easy_font.h>
+
+namespace sdft {
+
+ImageFormat imageFormatFromPath(const std::string& path, const std::string& what) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext == ".png") return ImageFormat::Png;
+    if (ext == ".exr") return ImageFormat::Exr;
+    if (ext == ".pfm") return ImageFormat::Pfm;
+    throw InputError(what + " " + path + ": unknown image extension '" + ext +
+                     "'; accepted: .png, .exr, .pfm");
+}
+
+void writeExr(const std::string& path, int w, int h, int channels, const std::vector<float>& data,
+              const std::vector<std::string>& names) {
+    AtomicOutput out(path);
+    try {
+        Imf::Header header(w, h);
+        Imf::FrameBuffer fb;
+        const size_t xStride = sizeof(float) * channels, yStride = xStride * w;
+        for (int c = 0; c < channels; ++c) {
+            header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+            fb.insert(names[c], Imf::Slice(Imf::FLOAT,
+                                           const_cast<char*>(reinterpret_cast<const char*>(
+                                               data.data() + c)),
+                                           xStride, yStride));
+        }
+        Imf::OutputFile file(out.tempPath().c_str(), header);
+        file.setFrameBuffer(fb);
+        file.writePixels(h);
+    } catch (const std::exception& e) {
+        throw InputError(path + ": cannot write EXR (" + e.what() + ")");
+    }
+    out.commit();
+}
+
+void writePfm(const std::string& path, int w, int h, int channels, const std::vector<float>& data) {
+    AtomicOutput out(path);
+    FILE* f = std::fopen(out.tempPath().c_str(), "wb");
+    if (!f) throw InputError(path + ": cannot open for writing (" + std::strerror(errno) + ")");
+    // Header; a negative scale means little-endian. Rows run bottom to top.
+    std::fprintf(f, "%s\n%d %d\n-1.0\n", channels == 3 ? "PF" : "Pf", w, h);
+    bool ok = true;
+    for (int y = h - 1; y >= 0 && ok; --y) {
+        const float* row = data.data() + static_cast<size_t>(y) * w * channels;
+        ok = std::fwrite(row, sizeof(float), static_cast<size_t>(w) * channels, f) ==
+             static_cast<size_t>(w) * channels;
+    }
+    ok = (std::fclose(f) == 0) && ok;
+    if (!ok) throw InputError(path + ": write failed");
+    out.commit();
+}
+
+void writePng(const std::string& path, int w, int h, int channels,
+              const std::vector<unsigned char>& data) {
+    AtomicOutput out(path);
+    if (!stbi_write_png(out.tempPath().c_str(), w, h, channels, data.data(), w * channels)) {
+        throw InputError(path + ": cannot write PNG");
+    }
+    out.commit();
+}
+
+namespace {
+unsigned char toByte(float v) {
+    if (!(v > 0)) return 0;  // also catches NaN
+    if (v >= 1) return 255;
+    return static_cast<unsigned char>(v * 255.0f + 0.5f);
+}
+float linearToSrgb(float v) {
+    return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+// A perceptually ordered dark-blue -> magenta -> orange -> yellow ramp (inferno-like stops).
+Vec3 heatColor(float u) {
+    static const Vec3 stops[] = {{0.0f, 0.0f, 0.02f}, {0.26f, 0.04f, 0.41f}, {0.58f, 0.15f, 0.40f},
+                                 {0.87f, 0.32f, 0.23f}, {0.99f, 0.65f, 0.04f}, {0.99f, 1.0f, 0.64f}};
+    u = clampf(u, 0.0f, 1.0f) * 5.0f;
+    int i = std::min(4, static_cast<int>(u));
+    return lerp(stops[i], stops[i + 1], u - i);
+}
+std::string formatValue(float v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", v);
+    return buf;
+}
+// Draws text with stb_easy_font (quads), scaled by an integer factor, in white.
+void drawText(std::vector<unsigned char>& img, int w, int h, int x, int y, const std::string& text,
+              int scale) {
+    static char buffer[60000];
+    int quads = stb_easy_font_print(0, 0, const_cast<char*>(text.c_str()), nullptr, buffer,
+                                    sizeof buffer);
+    const float* v = reinterpret_cast<const float*>(buffer);
+    for (int q = 0; q < quads; ++q) {
+        const float* quad = v + q * 16;  // 4 vertices x (x, y, z, colour)
+        int qx0 = static_cast<int>(quad[0]), qy0 = static_cast<int>(quad[1]);
+        int qx1 = static_cast<int>(quad[8]), qy1 = static_cast<int>(quad[9]);
+        for (int py = y + qy0 * scale; py < y + qy1 * scale; ++py)
+            for (int px = x + qx0 * scale; px < x + qx1 * scale; ++px)
+                if (px >= 0 && px < w && py >= 0 && py < h)
+                    for (int c = 0; c < 3; ++c) img[3 * (static_cast<size_t>(py) * w + px) + c] = 255;
+    }
+}
+}  // namespace
+
+std::vector<unsigned char> toneMapSrgb(const std::vector<float>& rgb) {
+    std::vector<unsigned char> out(rgb.size());
+    for (size_t i = 0; i < rgb.size(); ++i) out[i] = toByte(linearToSrgb(clampf(rgb[i], 0.f, 1.f)));
+    return out;
+}
+
+std::vector<unsigned char> heatMapWithLegend(const std::vector<float>& values, int w, int h,
+                                             const std::string& label, int& outHeight) {
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (float v : values) {
+        if (!std::isfinite(v)) continue;
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+    }
+    if (!(lo <= hi)) lo = hi = 0;  // no finite value at all
+    float range = hi > lo ? hi - lo : 1.0f;
+    const int scale = w >= 320 ? 2 : 1;
+    const int legend = 16 * scale;
+    outHeight = h + legend;
+    std::vector<unsigned char> img(static_cast<size_t>(w) * outHeight * 3, 0);
+    for (size_t i = 0; i < values.size(); ++i) {
+        if (!std::isfinite(values[i])) continue;
+        Vec3 c = heatColor((values[i] - lo) / range);
+        for (int a = 0; a < 3; ++a) img[3 * i + a] = toByte(c[a]);
+    }
+    // Legend: the colour ramp across the width, then "min" at the left and "max" at the right.
+    for (int y = h; y < h + legend / 2; ++y)
+        for (int x = 0; x < w; ++x) {
+            Vec3 c = heatColor(static_cast<float>(x) / std::max(1, w - 1));
+            for (int a = 0; a < 3; ++a) img[3 * (static_cast<size_t>(y) * w + x) + a] = toByte(c[a]);
+        }
+    std::string left = label + " " + formatValue(lo);
+    std::string right = formatValue(hi);
+    int textY = h + legend / 2 + 1;
+    drawText(img, w, outHeight, 2, textY, left, scale);
+    int rightWidth = stb_easy_font_width(const_cast<char*>(right.c_str())) * scale;
+    drawText(img, w, outHeight, w - rightWidth - 2, textY, right, scale);
+    return img;
+}
+
+void writeAov(const Film& film, Aov aov, const std::string& path) {
+    ImageFormat format = imageFormatFromPath(path, std::string("--aov ") + aovName(aov));
+    const std::vector<float>& data = film.channel(aov);
+    int channels = aovChannels(aov);
+    if (format == ImageFormat::Exr) {
+        std::vector<std::string> names = channels == 3
+                                             ? std::vector<std::string>{"R", "G", "B"}
+                                             : std::vector<std::string>{aov == Aov::Depth ? "Z" : "Y"};
+        writeExr(path, film.width, film.height, channels, data, names);
+    } else if (format == ImageFormat::Pfm) {
+        writePfm(path, film.width, film.height, channels, data);
+    } else if (aov == Aov::Color) {
+        writePng(path, film.width, film.height, 3, toneMapSrgb(data));
+    } else if (aov == Aov::Normal) {
+        std::vector<unsigned char> rgb(data.size());
+        for (size_t i = 0; i < data.size(); ++i) rgb[i] = toByte(0.5f * data[i] + 0.5f);
+        writePng(path, film.width, film.height, 3, rgb);
+    } else {
+        int outHeight = 0;
+        auto rgb = heatMapWithLegend(data, film.width, film.height, aovName(aov), outHeight);
+        writePng(path, film.width, outHeight, 3, rgb);
+    }
+}
+
+}  // namespace sdft

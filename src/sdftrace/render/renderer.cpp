@@ -1,0 +1,286 @@
+#include "sdftrace/render/renderer.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+
+#include "sdftrace/exec/progress.h"
+#include "sdftrace/render/camera.h"
+#include "sdftrace/trace/field_tracer.h"
+
+namespace sdft {
+
+namespace {
+
+// Both estimators are grad f ~ sum_i o_i f(p + h o_i): central differences use the six axis
+// directions, the tetrahedral estimate the four vertices of a tetrahedron.
+struct Stencil {
+    const Vec3* offsets;
+    int count;
+};
+constexpr Vec3 kCentral[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+constexpr Vec3 kTetrahedral[4] = {{1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
+
+Stencil stencil(NormalEstimator e) {
+    return e == NormalEstimator::Central ? Stencil{kCentral, 6} : Stencil{kTetrahedral, 4};
+}
+
+struct TileScratch {
+    PacketScratch packet;
+    std::vector<RaySegment> segments;
+    std::vector<TraceResult> results;
+    std::vector<int> hitPixel;  // tile-local index of each hit
+    std::vector<Vec3> hitPoint, hitNormal;
+    std::vector<float> x, y, z, f;
+    std::vector<RaySegment> shadowSegments;
+    std::vector<TraceResult> shadowResults;
+    std::vector<int> shadowOwner;
+    std::vector<Vec3> radiance;
+    RenderStats stats;
+};
+
+Material blendMaterial(const std::vector<Material>& table, const MaterialBlend& blend) {
+    Material m;
+    m.color = Vec3(0.0f);
+    m.diffuse = m.specular = m.shininess = 0;
+    for (int i = 0; i < blend.count; ++i) {
+        const Material& src = table[std::clamp(blend.id[i], 0, static_cast<int>(table.size()) - 1)];
+        float w = blend.weight[i];
+        m.color += src.color * w;
+        m.diffuse += src.diffuse * w;
+        m.specular += src.specular * w;
+        m.shininess += src.shininess * w;
+    }
+    return m;
+}
+
+// Direction to the light and the distance to it (inf for directional lights).
+void toLight(const Light& light, Vec3 p, Vec3& dir, float& dist, float& scale) {
+    if (light.kind == Light::Kind::Directional) {
+        dir = normalize(-light.direction);
+        dist = kInfinity;
+        scale = light.intensity;
+    } else {
+        Vec3 d = light.position - p;
+        dist = length(d);
+        dir = d / std::fmax(dist, 1e-12f);
+        scale = light.intensity / std::fmax(dist * dist, 1e-12f);
+    }
+}
+
+class TileRenderer {
+public:
+    TileRenderer(const Scene& scene, const Tape& tape, Film& film)
+        : m_scene(scene), m_tape(tape), m_film(film), m_camera(scene.camera),
+          m_settings(scene.settings) {
+        m_primary = m_settings.trace;
+        m_primary.pixelRadius = m_camera.pixelRadius();
+        // Shadow rays need only a yes/no answer: plain threshold, relaxation kept, no refinement.
+        m_shadow = m_settings.trace;
+        m_shadow.screenSpace = false;
+        m_shadow.forceHit = false;
+        m_shadow.discontinuityIters = 0;
+        m_shadow.fixedSteps = false;
+    }
+
+    void renderTile(int x0, int y0, int x1, int y1, TileScratch& s);
+
+private:
+    void traceShadows(TileScratch& s, std::vector<float>& visible, const Light& light);
+
+    const Scene& m_scene;
+    const Tape& m_tape;
+    Film& m_film;
+    Camera m_camera;
+    const RenderSettings& m_settings;
+    TraceOptions m_primary, m_shadow;
+};
+
+void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
+    int tw = x1 - x0;
+    int count = tw * (y1 - y0);
+    s.segments.resize(count);
+    s.results.resize(count);
+    for (int i = 0; i < count; ++i) {
+        s.segments[i] = {m_camera.pixelRay(x0 + i % tw, y0 + i / tw), 0.0f, m_settings.maxDistance};
+    }
+    tracePacket(m_tape, s.segments, m_primary, s.results, s.packet);
+
+    s.hitPixel.clear();
+    s.hitPoint.clear();
+    for (int i = 0; i < count; ++i) {
+        const TraceResult& r = s.results[i];
+        s.stats.primaryEvaluations += r.evaluations;
+        s.stats.fallbacks += r.fallbacks;
+        if (!r.hit) continue;
+        s.hitPixel.push_back(i);
+        s.hitPoint.push_back(s.segments[i].ray.at(r.t));
+    }
+    s.stats.primaryRays += count;
+    s.stats.hits += s.hitPixel.size();
+    int hits = static_cast<int>(s.hitPixel.size());
+
+    // Normals: every stencil point of every hit in one batch.
+    Stencil st = stencil(m_settings.normals);
+    int m = hits * st.count;
+    s.x.resize(m);
+    s.y.resize(m);
+    s.z.resize(m);
+    s.f.resize(m);
+    for (int h = 0; h < hits; ++h) {
+        float t = s.results[s.hitPixel[h]].t;
+        float eps = std::fmax(1e-4f, 0.5f * t * m_primary.pixelRadius);
+        for (int k = 0; k < st.count; ++k) {
+            Vec3 q = s.hitPoint[h] + st.offsets[k] * eps;
+            s.x[h * st.count + k] = q.x;
+            s.y[h * st.count + k] = q.y;
+            s.z[h * st.count + k] = q.z;
+        }
+    }
+    m_tape.evalBatch(s.x.data(), s.y.data(), s.z.data(), s.f.data(), m, s.packet.batch);
+    s.stats.normalEvaluations += m;
+    s.hitNormal.resize(hits);
+    for (int h = 0; h < hits; ++h) {
+        Vec3 g(0.0f);
+        for (int k = 0; k < st.count; ++k) g += st.offsets[k] * s.f[h * st.count + k];
+        Vec3 n = normalize(g);
+        // Degenerate gradient (a crease or a flat extremum): face the viewer rather than emit NaN.
+        s.hitNormal[h] = length(n) > 0 ? n : -s.segments[s.hitPixel[h]].ray.direction;
+    }
+
+    // Shading: ambient + for each light, Lambert + Blinn-Phong if the light is visible.
+    s.radiance.assign(hits, Vec3(0.0f));
+    std::vector<Material> mats(hits);
+    for (int h = 0; h < hits; ++h) {
+        mats[h] = blendMaterial(m_scene.materials, m_tape.evalMaterial(s.hitPoint[h]));
+        s.radiance[h] = m_scene.lighting.ambient * mats[h].color;
+    }
+    std::vector<float> visible;
+    for (const Light& light : m_scene.lighting.lights) {
+        visible.assign(hits, 1.0f);
+        if (m_settings.shadows && light.castShadows) traceShadows(s, visible, light);
+        for (int h = 0; h < hits; ++h) {
+            if (visible[h] == 0) continue;
+            Vec3 l;
+            float dist, scale;
+            toLight(light, s.hitPoint[h], l, dist, scale);
+            Vec3 n = s.hitNormal[h];
+            float ndotl = dot(n, l);
+            if (ndotl <= 0) continue;
+            Vec3 v = -s.segments[s.hitPixel[h]].ray.direction;
+            Vec3 half = normalize(l + v);
+            float spec = std::pow(std::fmax(dot(n, half), 0.0f), mats[h].shininess);
+            Vec3 c = mats[h].color * (mats[h].diffuse * ndotl) + Vec3(mats[h].specular * spec);
+            s.radiance[h] += c * light.color * scale;
+        }
+    }
+
+    // Write the film.
+    const Vec3 bg = m_scene.lighting.background;
+    for (int i = 0; i < count; ++i) {
+        size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
+        m_film.color[3 * p + 0] = bg.x;
+        m_film.color[3 * p + 1] = bg.y;
+        m_film.color[3 * p + 2] = bg.z;
+        m_film.steps[p] = static_cast<float>(s.results[i].evaluations);
+    }
+    for (int h = 0; h < hits; ++h) {
+        int i = s.hitPixel[h];
+        size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
+        Vec3 c = s.radiance[h];
+        if (!isFinite(c)) c = Vec3(0.0f);
+        for (int a = 0; a < 3; ++a) {
+            m_film.color[3 * p + a] = c[a];
+            m_film.normal[3 * p + a] = s.hitNormal[h][a];
+        }
+        m_film.depth[p] = s.results[i].t;
+        m_film.error[p] = s.results[i].value;
+    }
+}
+
+void TileRenderer::traceShadows(TileScratch& s, std::vector<float>& visible, const Light& light) {
+    int hits = static_cast<int>(s.hitPixel.size());
+    s.shadowSegments.clear();
+    s.shadowOwner.clear();
+    for (int h = 0; h < hits; ++h) {
+        Vec3 l;
+        float dist, scale;
+        toLight(light, s.hitPoint[h], l, dist, scale);
+        Vec3 n = s.hitNormal[h];
+        if (dot(n, l) <= 0) continue;  // facing away: unlit anyway
+        // Keinert et al. 2014, §3.3: offset the origin by 2 max(eps_min, |f(p)|) along the normal,
+        // so it clears the surface however far from it the march stopped.
+        float f = std::fabs(s.results[s.hitPixel[h]].value) / m_tape.lipschitz();
+        float offset = 2.0f * std::fmax(m_settings.shadowOffsetMin, f);
+        s.shadowSegments.push_back({{s.hitPoint[h] + n * offset, l}, 0.0f, dist});
+        s.shadowOwner.push_back(h);
+    }
+    s.shadowResults.resize(s.shadowSegments.size());
+    tracePacket(m_tape, s.shadowSegments, m_shadow, s.shadowResults, s.packet);
+    for (size_t j = 0; j < s.shadowSegments.size(); ++j) {
+        s.stats.shadowEvaluations += s.shadowResults[j].evaluations;
+        if (s.shadowResults[j].hit) visible[s.shadowOwner[j]] = 0.0f;
+    }
+    s.stats.shadowRays += s.shadowSegments.size();
+}
+
+}  // namespace
+
+Vec3 estimateNormal(const Tape& tape, Vec3 p, float h, NormalEstimator estimator) {
+    Stencil st = stencil(estimator);
+    Vec3 g(0.0f);
+    for (int k = 0; k < st.count; ++k) g += st.offsets[k] * tape.eval(p + st.offsets[k] * h);
+    return normalize(g);
+}
+
+RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progress) {
+    auto start = std::chrono::steady_clock::now();
+    int threads = scene.settings.threads > 0 ? scene.settings.threads
+                                             : tbb::this_task_arena::max_concurrency();
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    tbb::task_arena arena(threads);
+
+    const int ts = std::max(1, scene.settings.tileSize);
+    const int tilesX = (film.width + ts - 1) / ts, tilesY = (film.height + ts - 1) / ts;
+    TileRenderer renderer(scene, tape, film);
+    tbb::enumerable_thread_specific<TileScratch> scratch;
+    Progress bar("render", static_cast<uint64_t>(tilesX) * tilesY, progress);
+    arena.execute([&] {
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, tilesX * tilesY, 1),
+            [&](const tbb::blocked_range<int>& range) {
+                TileScratch& s = scratch.local();
+                for (int tile = range.begin(); tile != range.end(); ++tile) {
+                    int tx = tile % tilesX, ty = tile / tilesX;
+                    renderer.renderTile(tx * ts, ty * ts, std::min(film.width, (tx + 1) * ts),
+                                        std::min(film.height, (ty + 1) * ts), s);
+                    bar.advance();
+                }
+            },
+            tbb::simple_partitioner());
+    });
+
+    RenderStats total;
+    for (const TileScratch& s : scratch) {
+        const RenderStats& t = s.stats;
+        total.primaryRays += t.primaryRays;
+        total.primaryEvaluations += t.primaryEvaluations;
+        total.hits += t.hits;
+        total.fallbacks += t.fallbacks;
+        total.normalEvaluations += t.normalEvaluations;
+        total.shadowRays += t.shadowRays;
+        total.shadowEvaluations += t.shadowEvaluations;
+    }
+    total.threads = threads;
+    total.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return total;
+}
+
+}  // namespace sdft

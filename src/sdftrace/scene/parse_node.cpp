@@ -1,0 +1,267 @@
+#include "parse_node.h"
+
+#include <cmath>
+#include <vector>
+
+#include "sdftrace/field/noise.h"
+
+namespace sdft {
+
+using json_reader::nonNegative;
+using json_reader::positive;
+using json_reader::Reader;
+
+namespace {
+
+const char* kPrimitiveTypes =
+    "sphere, box, round_box, torus, capsule, cylinder, cone, plane, ellipsoid, octahedron, "
+    "dodecahedron, blobs";
+const char* kOperatorTypes =
+    "union, intersection, difference, complement, smooth_union, smooth_intersection, "
+    "smooth_difference, morph, translate, rotate, scale, repeat, displace";
+
+std::vector<NodePtr> parseChildren(const Reader& r, const std::map<std::string, int>& mats,
+                                   size_t minCount, size_t maxCount) {
+    if (!r.has("children")) r.fail("missing required key 'children' (an array of objects)");
+    Reader list = r.child("children");
+    list.requireArray("a list of child objects");
+    size_t n = list.value().size();
+    if (n < minCount || n > maxCount) {
+        std::string want = minCount == maxCount ? "exactly " + std::to_string(minCount)
+                                                : "at least " + std::to_string(minCount);
+        list.fail("expected " + want + " children, got " + std::to_string(n));
+    }
+    std::vector<NodePtr> out;
+    for (size_t i = 0; i < n; ++i) out.push_back(parseNode(list.element(i), mats));
+    return out;
+}
+
+NodePtr parseSingleChild(const Reader& r, const std::map<std::string, int>& mats) {
+    if (!r.has("child")) r.fail("missing required key 'child' (an object)");
+    return parseNode(r.child("child"), mats);
+}
+
+Mat3 parseRotation(const Reader& r, const std::string& key) {
+    const auto& v = r.value().at(key);
+    if (v.is_object()) {
+        Reader rot = r.child(key);
+        rot.allowKeys({"axis", "angle"});
+        Vec3 axis = rot.vec3("axis");
+        if (length(axis) <= 0) rot.failKey("axis", "expected a non-zero axis");
+        float angle = rot.number("angle", json_reader::anyFinite, "an angle in degrees");
+        return rotationAxisAngle(axis, angle);
+    }
+    if (!v.is_array()) {
+        r.failKey(key, "expected {\"axis\": [x,y,z], \"angle\": degrees} or [x, y, z] Euler degrees");
+    }
+    // Euler angles in degrees, applied about X, then Y, then Z.
+    Vec3 e = r.vec3(key, nullptr, "Euler angles in degrees");
+    Mat3 rx = rotationAxisAngle({1, 0, 0}, e.x), ry = rotationAxisAngle({0, 1, 0}, e.y),
+         rz = rotationAxisAngle({0, 0, 1}, e.z);
+    auto mul = [](const Mat3& a, const Mat3& b) {
+        Mat3 c;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                c.m[i][j] = a.m[i][0] * b.m[0][j] + a.m[i][1] * b.m[1][j] + a.m[i][2] * b.m[2][j];
+        return c;
+    };
+    return mul(rz, mul(ry, rx));
+}
+
+Vec3 parseScale(const Reader& r, const std::string& key) {
+    const auto& v = r.value().at(key);
+    if (v.is_number()) {
+        float s = r.number(key, positive, "a positive number or 3 positive numbers");
+        return Vec3(s);
+    }
+    return r.vec3(key, positive, "positive scale factors");
+}
+
+// Applies the optional inline transform keys of any object: scale, then rotate, then translate.
+NodePtr applyInlineTransforms(const Reader& r, NodePtr n) {
+    if (r.has("scale")) n = node::scale(n, parseScale(r, "scale"));
+    if (r.has("rotate")) n = node::rotate(n, parseRotation(r, "rotate"));
+    if (r.has("translate")) n = node::translate(n, r.vec3("translate"));
+    return n;
+}
+
+NodePtr parseBlobs(const Reader& r) {
+    if (!r.has("blobs")) r.fail("missing required key 'blobs' (an array of {center, radius, strength})");
+    Reader list = r.child("blobs");
+    list.requireArray("a list of blobs");
+    if (list.value().empty() || list.value().size() > 256) list.fail("expected 1 to 256 blobs");
+    std::vector<node::Blob> blobs;
+    float total = 0;
+    for (size_t i = 0; i < list.value().size(); ++i) {
+        Reader b = list.element(i);
+        b.requireObject("a blob");
+        b.allowKeys({"center", "radius", "strength"});
+        node::Blob blob{b.vec3("center"), b.number("radius", positive, "a positive support radius"),
+                        b.number("strength", 1.0f, positive, "a positive strength")};
+        total += blob.strength;
+        blobs.push_back(blob);
+    }
+    float threshold = r.number("threshold", 0.5f, positive, "a positive threshold");
+    if (threshold >= total) {
+        r.failKey("threshold", "must be below the sum of the blob strengths (" + std::to_string(total) +
+                                   "), or no surface exists");
+    }
+    return node::blobs(blobs, threshold);
+}
+
+}  // namespace
+
+NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
+    r.requireObject("an object node");
+    std::string type = r.string("type");
+    const char* common[] = {"type", "material", "translate", "rotate", "scale"};
+    auto allow = [&](std::initializer_list<const char*> extra) {
+        std::vector<const char*> keys(std::begin(common), std::end(common));
+        keys.insert(keys.end(), extra.begin(), extra.end());
+        for (auto it = r.value().begin(); it != r.value().end(); ++it) {
+            bool ok = false;
+            for (const char* k : keys) ok = ok || it.key() == k;
+            if (!ok) {
+                std::string list;
+                for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
+                r.failKey(it.key(), "unknown key for a " + type + "; accepted: " + list);
+            }
+        }
+    };
+
+    NodePtr n;
+    if (type == "sphere") {
+        allow({"radius"});
+        n = node::sphere(r.number("radius", positive, "a positive radius"));
+    } else if (type == "box") {
+        allow({"size"});
+        n = node::box(r.vec3("size", positive, "positive edge lengths") * 0.5f);
+    } else if (type == "round_box") {
+        allow({"size", "radius"});
+        Vec3 half = r.vec3("size", positive, "positive edge lengths") * 0.5f;
+        float radius = r.number("radius", nonNegative, "a non-negative edge radius");
+        if (radius > minComponent(half)) r.failKey("radius", "must not exceed half the smallest edge");
+        n = node::roundBox(half, radius);
+    } else if (type == "torus") {
+        allow({"major_radius", "minor_radius"});
+        float R = r.number("major_radius", positive, "a positive ring radius");
+        float rr = r.number("minor_radius", positive, "a positive tube radius");
+        n = node::torus(R, rr);
+    } else if (type == "capsule") {
+        allow({"a", "b", "radius"});
+        n = node::capsule(r.vec3("a"), r.vec3("b"), r.number("radius", positive, "a positive radius"));
+    } else if (type == "cylinder") {
+        allow({"radius", "height"});
+        float radius = r.number("radius", positive, "a positive radius");
+        n = node::cylinder(radius, 0.5f * r.number("height", positive, "a positive height"));
+    } else if (type == "cone") {
+        allow({"radius", "height"});
+        float radius = r.number("radius", positive, "a positive base radius");
+        n = node::cone(radius, r.number("height", positive, "a positive height"));
+    } else if (type == "plane") {
+        allow({"normal", "distance"});
+        Vec3 normal = r.vec3("normal");
+        if (length(normal) <= 0) r.failKey("normal", "expected a non-zero normal");
+        // Solid on the side opposite the normal: n.p <= distance.
+        n = node::plane(normal, -r.number("distance", 0.0f, json_reader::anyFinite, "a number"));
+    } else if (type == "ellipsoid") {
+        allow({"radii"});
+        n = node::ellipsoid(r.vec3("radii", positive, "positive semi-axes"));
+    } else if (type == "octahedron") {
+        allow({"size"});
+        n = node::octahedron(r.number("size", positive, "a positive centre-to-vertex size"));
+    } else if (type == "dodecahedron") {
+        allow({"radius"});
+        n = node::dodecahedron(r.number("radius", positive, "a positive inradius"));
+    } else if (type == "blobs") {
+        allow({"blobs", "threshold"});
+        n = parseBlobs(r);
+    } else if (type == "union" || type == "intersection") {
+        allow({"children"});
+        auto c = parseChildren(r, mats, 1, 100000);
+        n = type == "union" ? node::unite(c) : node::intersect(c);
+    } else if (type == "difference") {
+        allow({"children"});
+        auto c = parseChildren(r, mats, 2, 100000);
+        NodePtr cutters = c.size() == 2 ? c[1] : node::unite({c.begin() + 1, c.end()});
+        n = node::subtract(c[0], cutters);
+    } else if (type == "complement") {
+        allow({"child"});
+        n = node::complement(parseSingleChild(r, mats));
+    } else if (type == "smooth_union" || type == "smooth_intersection" ||
+               type == "smooth_difference") {
+        allow({"children", "k"});
+        float k = r.number("k", nonNegative, "a non-negative blend radius");
+        auto c = parseChildren(r, mats, 2, 100000);
+        if (type == "smooth_difference") {
+            NodePtr cutters = c.size() == 2 ? c[1] : node::unite({c.begin() + 1, c.end()});
+            n = node::smoothDifference(c[0], cutters, k);
+        } else {
+            n = c[0];
+            for (size_t i = 1; i < c.size(); ++i)
+                n = type == "smooth_union" ? node::smoothUnion(n, c[i], k)
+                                           : node::smoothIntersection(n, c[i], k);
+        }
+    } else if (type == "morph") {
+        allow({"children", "weight"});
+        float w = r.number("weight", [](double v) { return v >= 0 && v <= 1; },
+                           "a weight in [0, 1]");
+        auto c = parseChildren(r, mats, 2, 2);
+        n = node::morph(c[0], c[1], w);
+    } else if (type == "translate") {
+        allow({"child", "offset"});
+        n = node::translate(parseSingleChild(r, mats), r.vec3("offset"));
+    } else if (type == "rotate") {
+        allow({"child", "axis", "angle"});
+        Vec3 axis = r.vec3("axis");
+        if (length(axis) <= 0) r.failKey("axis", "expected a non-zero axis");
+        float angle = r.number("angle", json_reader::anyFinite, "an angle in degrees");
+        n = node::rotate(parseSingleChild(r, mats), rotationAxisAngle(axis, angle));
+    } else if (type == "scale") {
+        allow({"child", "factors"});
+        if (!r.has("factors")) r.fail("missing required key 'factors' (a number or 3 numbers)");
+        n = node::scale(parseSingleChild(r, mats), parseScale(r, "factors"));
+    } else if (type == "repeat") {
+        allow({"child", "cell", "count"});
+        Vec3 cell = r.vec3("cell", positive, "positive cell sizes");
+        Vec3 count = r.vec3("count", [](double v) { return v >= 0 && v <= 1000 && v == std::floor(v); },
+                            "whole numbers of copies per side in [0, 1000]");
+        NodePtr child = parseSingleChild(r, mats);
+        Bounds3 b = nodeBounds(*child);
+        for (int i = 0; i < 3; ++i) {
+            if (count[i] <= 0) continue;
+            float extent = std::fmax(std::fabs(b.lo[i]), std::fabs(b.hi[i]));
+            if (!(extent <= 0.5f * cell[i])) {
+                r.failKey("cell", "the child reaches " + std::to_string(extent) + " from its origin along axis " +
+                                      std::to_string(i) + "; the cell must be at least twice that (" +
+                                      std::to_string(2 * extent) + ") so copies do not overlap");
+            }
+        }
+        n = node::repeat(child, cell, count);
+    } else if (type == "displace") {
+        allow({"child", "amplitude", "frequency", "octaves", "gain"});
+        float amplitude = r.number("amplitude", nonNegative, "a non-negative amplitude");
+        float frequency = r.number("frequency", 1.0f, positive, "a positive frequency");
+        int octaves = r.integer("octaves", 3, 1, 12);
+        float gain = r.number("gain", 0.5f, [](double v) { return v > 0 && v < 1; }, "a gain in (0, 1)");
+        n = node::displace(parseSingleChild(r, mats), amplitude, frequency, octaves, gain);
+    } else {
+        r.failKey("type", "unknown object type '" + type + "'; accepted: " + kPrimitiveTypes + ", " +
+                              kOperatorTypes);
+    }
+
+    n = applyInlineTransforms(r, n);
+    if (r.has("material")) {
+        std::string name = r.string("material");
+        auto it = mats.find(name);
+        if (it == mats.end()) {
+            std::string known;
+            for (const auto& [k, v] : mats) known += (known.empty() ? "" : ", ") + k;
+            r.failKey("material", "unknown material '" + name + "'; defined: " + known);
+        }
+        n = node::withMaterial(n, it->second);
+    }
+    return n;
+}
+
+}  // namespace sdft

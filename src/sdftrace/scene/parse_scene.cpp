@@ -1,0 +1,191 @@
+#include "sdftrace/scene/parse_scene.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "json_reader.h"
+#include "parse_node.h"
+#include "sdftrace/render/film.h"
+
+namespace sdft {
+
+using json_reader::Json;
+using json_reader::nonNegative;
+using json_reader::positive;
+using json_reader::Reader;
+
+extern const char* const kDemoSceneJson;  // generated from examples/demo.json
+
+namespace {
+
+constexpr int kMaxImageSide = 65536;
+
+void parseCamera(const Reader& r, CameraDesc& cam) {
+    r.requireObject("the camera");
+    r.allowKeys({"eye", "target", "up", "fov", "width", "height"});
+    cam.eye = r.vec3("eye", cam.eye);
+    cam.target = r.vec3("target", cam.target);
+    cam.up = r.vec3("up", cam.up);
+    cam.fovDeg = r.number("fov", cam.fovDeg, [](double v) { return v > 0 && v < 180; },
+                          "a vertical field of view in degrees in (0, 180)");
+    cam.width = r.integer("width", cam.width, 1, kMaxImageSide);
+    cam.height = r.integer("height", cam.height, 1, kMaxImageSide);
+    if (length(cam.target - cam.eye) <= 0) r.failKey("target", "must differ from the eye");
+    if (length(cross(normalize(cam.target - cam.eye), cam.up)) < 1e-6f) {
+        r.failKey("up", "must not be parallel to the viewing direction");
+    }
+}
+
+Material parseMaterial(const Reader& r, const std::string& name) {
+    r.requireObject("a material");
+    r.allowKeys({"color", "diffuse", "specular", "shininess"});
+    Material m;
+    m.name = name;
+    m.color = r.vec3("color", m.color, nonNegative, "non-negative linear RGB");
+    m.diffuse = r.number("diffuse", m.diffuse, nonNegative, "a non-negative weight");
+    m.specular = r.number("specular", m.specular, nonNegative, "a non-negative weight");
+    m.shininess = r.number("shininess", m.shininess, [](double v) { return v >= 1 && v <= 1e5; },
+                           "a Blinn-Phong exponent in [1, 100000]");
+    return m;
+}
+
+Light parseLight(const Reader& r) {
+    r.requireObject("a light");
+    Light l;
+    std::string type = r.string("type");
+    if (type == "directional") {
+        r.allowKeys({"type", "direction", "color", "intensity", "shadows"});
+        l.kind = Light::Kind::Directional;
+        l.direction = r.vec3("direction");
+        if (length(l.direction) <= 0) r.failKey("direction", "expected a non-zero direction");
+        l.direction = normalize(l.direction);
+    } else if (type == "point") {
+        r.allowKeys({"type", "position", "color", "intensity", "shadows"});
+        l.kind = Light::Kind::Point;
+        l.position = r.vec3("position");
+    } else {
+        r.failKey("type", "unknown light type '" + type + "'; accepted: directional, point");
+    }
+    l.color = r.vec3("color", l.color, nonNegative, "non-negative linear RGB");
+    l.intensity = r.number("intensity", l.intensity, nonNegative, "a non-negative intensity");
+    l.castShadows = r.boolean("shadows", true);
+    return l;
+}
+
+void parseRender(const Reader& r, RenderSettings& s) {
+    r.requireObject("render settings");
+    r.allowKeys({"max_steps", "tau", "omega", "screen_space", "force_hit", "discontinuity_iterations",
+                 "fixed_steps", "hybrid", "hybrid_epsilon", "hybrid_step", "falsi_iterations",
+                 "normals", "shadows", "max_distance", "shadow_offset"});
+    TraceOptions& t = s.trace;
+    t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
+    t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
+    t.omega = r.number("omega", t.omega, [](double v) { return v >= 1 && v < 2; },
+                       "an over-relaxation factor in [1, 2)");
+    t.screenSpace = r.boolean("screen_space", t.screenSpace);
+    t.forceHit = r.boolean("force_hit", t.forceHit);
+    t.discontinuityIters = r.integer("discontinuity_iterations", t.discontinuityIters, 0, 64);
+    t.fixedSteps = r.boolean("fixed_steps", t.fixedSteps);
+    t.hybrid = r.boolean("hybrid", t.hybrid);
+    t.hybridEpsilon = r.number("hybrid_epsilon", t.hybridEpsilon, positive, "a positive distance");
+    t.hybridStep = r.number("hybrid_step", t.hybridStep, positive, "a positive step length");
+    t.falsiIters = r.integer("falsi_iterations", t.falsiIters, 0, 64);
+    std::string normals = r.string("normals", "tetrahedral");
+    if (normals == "central") s.normals = NormalEstimator::Central;
+    else if (normals == "tetrahedral") s.normals = NormalEstimator::Tetrahedral;
+    else r.failKey("normals", "unknown estimator '" + normals + "'; accepted: central, tetrahedral");
+    s.shadows = r.boolean("shadows", s.shadows);
+    s.maxDistance = r.number("max_distance", s.maxDistance, positive, "a positive distance");
+    s.shadowOffsetMin = r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");
+}
+
+Scene parseRoot(const Json& root, const std::string& source) {
+    Reader r(root, source, "");
+    r.requireObject("a scene");
+    r.allowKeys({"camera", "lights", "ambient", "background", "materials", "objects", "render"});
+    Scene scene;
+    scene.materials.push_back(Material{"default"});
+    std::map<std::string, int> materialIndex{{"default", 0}};
+    if (r.has("materials")) {
+        Reader m = r.child("materials");
+        m.requireObject("a map from material names to materials");
+        for (auto it = m.value().begin(); it != m.value().end(); ++it) {
+            int index = static_cast<int>(scene.materials.size());
+            if (it.key() == "default") index = 0;
+            Material mat = parseMaterial(m.child(it.key()), it.key());
+            if (index == 0) scene.materials[0] = mat;
+            else scene.materials.push_back(mat);
+            materialIndex[it.key()] = index;
+        }
+    }
+    if (r.has("camera")) parseCamera(r.child("camera"), scene.camera);
+    if (r.has("lights")) {
+        Reader l = r.child("lights");
+        l.requireArray("a list of lights");
+        for (size_t i = 0; i < l.value().size(); ++i) scene.lighting.lights.push_back(parseLight(l.element(i)));
+    }
+    scene.lighting.ambient = r.vec3("ambient", scene.lighting.ambient, nonNegative, "non-negative linear RGB");
+    scene.lighting.background = r.vec3("background", scene.lighting.background, nonNegative, "non-negative linear RGB");
+    if (r.has("render")) parseRender(r.child("render"), scene.settings);
+    if (!r.has("objects")) r.fail("missing required key 'objects' (a list of at least one object)");
+    Reader objs = r.child("objects");
+    objs.requireArray("a list of objects");
+    if (objs.value().empty()) objs.fail("expected at least one object");
+    std::vector<NodePtr> nodes;
+    for (size_t i = 0; i < objs.value().size(); ++i) nodes.push_back(parseNode(objs.element(i), materialIndex));
+    scene.root = nodes.size() == 1 ? nodes[0] : node::unite(nodes);
+    validateImageSize(scene.camera.width, scene.camera.height, source + ": /camera");
+    return scene;
+}
+
+}  // namespace
+
+void validateImageSize(int width, int height, const std::string& what) {
+    if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide) {
+        throw InputError(what + ": image size " + std::to_string(width) + "x" + std::to_string(height) +
+                         " is out of range; width and height must be in [1, " +
+                         std::to_string(kMaxImageSide) + "]");
+    }
+    double need = Film::bytesNeeded(width, height);
+    double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+    if (need > 0.5 * have) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      "image %dx%d needs %.1f GiB of film, more than half of this machine's %.1f GiB; "
+                      "render a smaller image",
+                      width, height, need / (1 << 30), have / (1 << 30));
+        throw InputError(what + ": " + buf);
+    }
+}
+
+Scene parseSceneText(const std::string& text, const std::string& source) {
+    Json root;
+    try {
+        root = Json::parse(text);
+    } catch (const Json::parse_error& e) {
+        // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, ...".
+        std::string msg = e.what();
+        auto pos = msg.find("] ");
+        throw InputError(source + ": malformed JSON: " + (pos == std::string::npos ? msg : msg.substr(pos + 2)));
+    }
+    return parseRoot(root, source);
+}
+
+Scene parseSceneFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path + ": cannot open scene file (does it exist and is it readable?)");
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw InputError(path + ": cannot read scene file");
+    return parseSceneText(text.str(), path);
+}
+
+const char* demoSceneText() { return kDemoSceneJson; }
+
+Scene demoScene() { return parseSceneText(kDemoSceneJson, "<demo scene>"); }
+
+}  // namespace sdft
