@@ -58,10 +58,10 @@ SDFT_HOST_DEVICE inline float perlin(Vec3 p) {
                  w);
 }
 
-// Upper bound of |grad perlin|. Measured maximum of the analytic-gradient magnitude over dense
-// random samples is about 2.0 (see noise_test.cpp, which checks the bound on 10^6 samples and on
-// random point pairs); we keep a margin.
-constexpr float kPerlinLipschitz = 2.5f;
+// Upper bound of |grad perlin|. The largest gradient found by 2e7 random samples followed by local
+// ascent from the worst one is 3.53 (central differences); we keep a 13% margin. noise_test.cpp
+// checks the bound on 10^6 samples, and the Lipschitz tests check displaced fields on point pairs.
+constexpr float kPerlinLipschitz = 4.0f;
 
 // Fractal sum: sum_i gain^i perlin(p * 2^i), i < octaves.
 SDFT_HOST_DEVICE inline float fbm(Vec3 p, int octaves, float gain) {

@@ -55,6 +55,10 @@ SDFT_HOST_DEVICE inline void sphereTraceBegin(SphereTraceState& s, const Ray& ra
     s.tMax = t1;
     s.candidateT = t0;
     s.omega = o.omega;
+    // The bounds contain the whole solid, so a ray clipped to them starts outside it (its first
+    // sample may sit exactly on a tight surface, where f rounds to -0). Otherwise the sign of the
+    // first sample decides (Keinert Listing 2's functionSign).
+    if (t0 > tMin) s.sign = 1.0f;
 }
 
 namespace detail {
@@ -97,7 +101,7 @@ SDFT_HOST_DEVICE inline void endMarch(SphereTraceState& s, const TraceOptions& o
 // intersection-point selection.
 SDFT_HOST_DEVICE inline void marchStep(SphereTraceState& s, float f, float invL,
                                        const TraceOptions& o) {
-    if (s.steps == 0) s.sign = f < 0 ? -1.0f : 1.0f;  // a ray starting inside traces out
+    if (s.sign == 0) s.sign = f < 0 ? -1.0f : 1.0f;  // a ray starting inside traces out
     float signedRadius = s.sign * f * invL;
     float radius = std::fabs(signedRadius);
     bool sorFail = s.omega > 1 && (radius + s.previousRadius) < s.stepLength;

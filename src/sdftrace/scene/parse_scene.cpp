@@ -166,11 +166,14 @@ Scene parseSceneText(const std::string& text, const std::string& source) {
     Json root;
     try {
         root = Json::parse(text);
-    } catch (const Json::parse_error& e) {
-        // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, ...".
+    } catch (const Json::exception& e) {
+        // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, ...";
+        // an overflowing number ("1e999") is an out_of_range error of the parser.
         std::string msg = e.what();
         auto pos = msg.find("] ");
-        throw InputError(source + ": malformed JSON: " + (pos == std::string::npos ? msg : msg.substr(pos + 2)));
+        msg = pos == std::string::npos ? msg : msg.substr(pos + 2);
+        if (e.id == 406) msg += " (numbers must be finite)";
+        throw InputError(source + ": malformed JSON: " + msg);
     }
     return parseRoot(root, source);
 }

@@ -1,0 +1,140 @@
+// The compiled tape against the recursive tree reference, batch against scalar, and the Lipschitz
+// bound of every node kind on random point pairs.
+#include <gtest/gtest.h>
+
+#include "sdftrace/field/tape.h"
+#include "sdftrace/field/test_util.h"
+
+namespace sdft {
+namespace {
+
+TEST(Tape, MatchesTreeReferenceOnRandomPoints) {
+    NodePtr root = testing::everyKindTree();
+    Tape tape = compileTape(root);
+    testing::Rng rng(42);
+    for (int i = 0; i < 20000; ++i) {
+        Vec3 p = rng.inCube(4);
+        float ref = evalTree(*root, p);
+        ASSERT_NEAR(tape.eval(p), ref, 1e-5f * (1 + std::fabs(ref))) << i;
+    }
+}
+
+TEST(Tape, BatchMatchesScalar) {
+    NodePtr root = testing::everyKindTree();
+    Tape tape = compileTape(root);
+    testing::Rng rng(43);
+    const int n = 1000;  // not a multiple of the batch width on purpose
+    std::vector<float> x(n), y(n), z(n), out(n);
+    for (int i = 0; i < n; ++i) {
+        Vec3 p = rng.inCube(4);
+        x[i] = p.x, y[i] = p.y, z[i] = p.z;
+    }
+    BatchScratch scratch;
+    tape.evalBatch(x.data(), y.data(), z.data(), out.data(), n, scratch);
+    for (int i = 0; i < n; ++i) ASSERT_EQ(out[i], tape.eval({x[i], y[i], z[i]})) << i;
+}
+
+TEST(Tape, RecyclesRegisters) {
+    // A union of 200 spheres needs two scalar registers, not 200.
+    std::vector<NodePtr> spheres;
+    for (int i = 0; i < 200; ++i) spheres.push_back(node::translate(node::sphere(0.1f), {0.3f * i, 0, 0}));
+    Tape tape = compileTape(node::unite(spheres));
+    EXPECT_LE(tape.numScalarRegs(), 2);
+    EXPECT_LE(tape.numPointRegs(), 2);
+    EXPECT_NEAR(tape.eval({0.3f * 57, 0.5f, 0}), 0.4f, 1e-5f);
+}
+
+TEST(Tape, MaterialFollowsTheNearestSurfaceAndBlends) {
+    NodePtr a = node::withMaterial(node::translate(node::sphere(0.5f), {-1, 0, 0}), 1);
+    NodePtr b = node::withMaterial(node::translate(node::sphere(0.5f), {1, 0, 0}), 2);
+    Tape hard = compileTape(node::unite({a, b}));
+    EXPECT_EQ(hard.evalMaterial({-1.5f, 0, 0}).id[0], 1);
+    EXPECT_EQ(hard.evalMaterial({1.5f, 0, 0}).id[0], 2);
+    Tape smooth = compileTape(node::smoothUnion(a, b, 2.0f));
+    MaterialBlend mid = smooth.evalMaterial({0, 0, 0});
+    ASSERT_EQ(mid.count, 2);
+    EXPECT_NEAR(mid.weight[0], 0.5f, 1e-5f);
+    EXPECT_NEAR(mid.weight[0] + mid.weight[1], 1.0f, 1e-6f);
+}
+
+// |f(a) - f(b)| <= L |a - b| on random pairs, far apart and very close (local slope).
+void expectLipschitz(const NodePtr& n, const char* what, uint32_t seed) {
+    Tape tape = compileTape(n);
+    float L = tape.lipschitz();
+    testing::Rng rng(seed);
+    float worst = 0;
+    for (int i = 0; i < 20000; ++i) {
+        Vec3 a = rng.inCube(3);
+        Vec3 b = (i % 2) ? rng.inCube(3) : a + rng.direction() * rng.uniform(1e-3f, 2e-2f);
+        float dist = length(a - b);
+        if (dist < 1e-4f) continue;
+        float slope = std::fabs(tape.eval(a) - tape.eval(b)) / dist;
+        worst = std::fmax(worst, slope);
+    }
+    // float rounding of the difference quotient over short pairs
+    EXPECT_LE(worst, L * 1.002f + 1e-3f) << what << ": measured slope " << worst << " > L = " << L;
+}
+
+TEST(Lipschitz, BoundHoldsForEveryPrimitiveOperatorAndTransform) {
+    using namespace node;
+    NodePtr s = sphere(0.5f), bx = box({0.4f, 0.6f, 0.3f});
+    struct {
+        const char* name;
+        NodePtr node;
+    } cases[] = {
+        {"sphere", s},
+        {"box", bx},
+        {"round_box", roundBox({0.5f, 0.5f, 0.5f}, 0.2f)},
+        {"torus", torus(0.7f, 0.2f)},
+        {"capsule", capsule({-1, 0, 0}, {1, 0.5f, 0}, 0.3f)},
+        {"cylinder", cylinder(0.5f, 0.8f)},
+        {"cone", cone(0.5f, 1.2f)},
+        {"plane", plane({1, 2, 3}, 0.5f)},
+        {"ellipsoid", ellipsoid({1.0f, 0.2f, 0.5f})},
+        {"octahedron", octahedron(0.8f)},
+        {"dodecahedron", dodecahedron(0.6f)},
+        {"blobs", blobs({{{0, 0, 0}, 0.7f, 1}, {{0.5f, 0, 0}, 0.4f, 2}}, 0.5f)},
+        {"union", unite({s, translate(bx, {1, 0, 0})})},
+        {"intersection", intersect({s, bx})},
+        {"difference", subtract(bx, s)},
+        {"complement", complement(s)},
+        {"smooth_union", smoothUnion(s, translate(bx, {0.5f, 0, 0}), 0.5f)},
+        {"smooth_intersection", smoothIntersection(s, bx, 0.3f)},
+        {"smooth_difference", smoothDifference(bx, s, 0.3f)},
+        {"morph", morph(s, torus(0.6f, 0.2f), 0.4f)},
+        {"translate", translate(bx, {0.3f, -0.2f, 1})},
+        {"rotate", rotate(bx, rotationAxisAngle({1, 2, 0}, 40))},
+        {"uniform scale", scale(bx, Vec3(2.5f))},
+        {"non-uniform scale", scale(s, {3.0f, 0.5f, 1.0f})},
+        {"repeat", repeat(s, {1.2f, 1.5f, 1.1f}, {2, 1, 0})},
+        {"displace", displace(s, 0.1f, 4.0f, 4, 0.5f)},
+        {"nested", testing::everyKindTree()},
+    };
+    uint32_t seed = 1;
+    for (const auto& c : cases) expectLipschitz(c.node, c.name, seed++);
+}
+
+TEST(Lipschitz, NonUniformScaleIsCorrectedToStayADistanceBound) {
+    // Liktor §2.2: without the min(s) factor, a sphere stretched 4x along x would report
+    // f = |p/s| - r, too large along y/z by a factor 4 and unsafe to step by.
+    NodePtr n = node::scale(node::sphere(1.0f), {4.0f, 1.0f, 1.0f});
+    Tape tape = compileTape(n);
+    // Along y the true distance from (0, 3, 0) to the surface (y = 1) is 2.
+    EXPECT_LE(tape.eval({0, 3, 0}), 2.0f + 1e-5f);
+    // Along x the true distance from (6, 0, 0) to the surface (x = 4) is 2; the bound is below it.
+    EXPECT_LE(tape.eval({6, 0, 0}), 2.0f + 1e-5f);
+    EXPECT_GT(tape.eval({6, 0, 0}), 0.0f);
+}
+
+TEST(Bounds, RepeatAndTransformsContainTheSurface) {
+    NodePtr root = testing::everyKindTree();
+    Bounds3 b = nodeBounds(*root);
+    testing::Rng rng(5);
+    for (int i = 0; i < 50000; ++i) {
+        Vec3 p = rng.inCube(6);
+        if (evalTree(*root, p) < 0 && p.y > -2.9f) ASSERT_TRUE(b.contains(p));
+    }
+}
+
+}  // namespace
+}  // namespace sdft

@@ -1,0 +1,161 @@
+// Every kind of bad input through the CLI: a non-zero exit, one clear line naming the file and the
+// JSON path (or the flag), what was wrong and what is accepted, and no output file left behind.
+#include <gtest/gtest.h>
+
+#include "cli_runner.h"
+
+namespace sdft::e2e {
+namespace {
+
+const char* kGoodScene = R"({
+  "camera": {"eye": [0, 1, 4], "target": [0, 0, 0], "width": 32, "height": 24},
+  "lights": [{"type": "directional", "direction": [-1, -1, -1]}],
+  "objects": [{"type": "sphere", "radius": 1}]
+})";
+
+std::string sceneWithObject(const std::string& object) {
+    return R"({"camera": {"width": 16, "height": 12}, "objects": [)" + object + "]}";
+}
+
+struct BadCase {
+    const char* name;
+    std::string scene;       // written to bad.json (empty: none)
+    std::string args;        // after "render"
+    std::vector<std::string> expected;  // fragments of the error line
+};
+
+// Names the case in test listings instead of dumping its bytes.
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
+
+class BadInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadInput, FailsWithOneClearLineAndNoOutput) {
+    const BadCase& c = GetParam();
+    TempDir dir;
+    std::string args = c.args;
+    if (!c.scene.empty()) args = dir.write("bad.json", c.scene) + " " + args;
+    std::string out = dir.file("out.png");
+    RunResult r = runCli("render " + args + " -o " + out + " -q", dir);
+    EXPECT_NE(r.status, 0) << c.name;
+    // One line, on stderr.
+    ASSERT_FALSE(r.err.empty()) << c.name;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.name << ": " << r.err;
+    for (const std::string& fragment : c.expected) {
+        EXPECT_NE(r.err.find(fragment), std::string::npos)
+            << c.name << ": expected '" << fragment << "' in: " << r.err;
+    }
+    EXPECT_FALSE(std::filesystem::exists(out)) << c.name;
+    EXPECT_EQ(dir.count(), c.scene.empty() ? 0 : 1) << c.name << ": a stray file was left behind";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cli, BadInput,
+    ::testing::Values(
+        BadCase{"malformed_json", "{\"objects\": [ {\"type\": \"sphere\", }", "", {"bad.json", "malformed JSON", "line 1"}},
+        BadCase{"unknown_type", sceneWithObject(R"({"type": "spheer", "radius": 1})"), "",
+                {"bad.json", "/objects/0/type", "unknown object type 'spheer'", "accepted:", "sphere"}},
+        BadCase{"unknown_operator_child", sceneWithObject(R"({"type": "union", "children": [{"type": "blend"}]})"), "",
+                {"/objects/0/children/0/type", "unknown object type 'blend'"}},
+        BadCase{"missing_field", sceneWithObject(R"({"type": "sphere"})"), "",
+                {"/objects/0", "missing required key 'radius'"}},
+        BadCase{"wrong_type", sceneWithObject(R"({"type": "sphere", "radius": "big"})"), "",
+                {"/objects/0/radius", "expected a positive radius, got a string"}},
+        BadCase{"negative_radius", sceneWithObject(R"({"type": "sphere", "radius": -1})"), "",
+                {"/objects/0/radius", "expected a positive radius, got -1"}},
+        BadCase{"non_finite", sceneWithObject(R"({"type": "sphere", "radius": 1e999})"), "",
+                {"bad.json", "number overflow parsing '1e999'", "finite"}},
+        BadCase{"vector_length", sceneWithObject(R"({"type": "box", "size": [1, 2]})"), "",
+                {"/objects/0/size", "array of 3 numbers"}},
+        BadCase{"unknown_key", sceneWithObject(R"({"type": "sphere", "radius": 1, "raduis": 2})"), "",
+                {"/objects/0/raduis", "unknown key"}},
+        BadCase{"unknown_material", sceneWithObject(R"({"type": "sphere", "radius": 1, "material": "gold"})"), "",
+                {"/objects/0/material", "unknown material 'gold'"}},
+        BadCase{"fov_out_of_range", R"({"camera": {"fov": 180}, "objects": [{"type": "sphere", "radius": 1}]})", "",
+                {"/camera/fov", "(0, 180)"}},
+        BadCase{"zero_image", R"({"camera": {"width": 0}, "objects": [{"type": "sphere", "radius": 1}]})", "",
+                {"/camera/width", "[1, 65536]"}},
+        BadCase{"no_objects", R"({"objects": []})", "", {"/objects", "at least one object"}},
+        BadCase{"repeat_overlap", sceneWithObject(R"({"type": "repeat", "cell": [1, 1, 1], "count": [1, 1, 1], "child": {"type": "sphere", "radius": 0.8}})"), "",
+                {"/objects/0/cell", "twice"}},
+        BadCase{"omega", R"({"render": {"omega": 2.5}, "objects": [{"type": "sphere", "radius": 1}]})", "",
+                {"/render/omega", "[1, 2)"}},
+        BadCase{"absurd_size", "", "--width 65536 --height 65536", {"--width/--height", "GiB"}},
+        BadCase{"missing_scene", "", "/nonexistent/scene.json", {"/nonexistent/scene.json", "cannot open"}},
+        BadCase{"unknown_flag", "", "--frobnicate", {"--frobnicate", "--help"}},
+        BadCase{"bad_fov_flag", "", "--fov 0", {"--fov"}},
+        BadCase{"bad_eye_flag", "", "--eye 1,2", {"--eye", "x,y,z"}},
+        BadCase{"bad_aov_name", "", "--aov depht=/tmp/x.exr", {"--aov depht=/tmp/x.exr", "color, depth"}},
+        BadCase{"bad_aov_extension", "", "--aov depth=/tmp/x.jpg", {"--aov depth", ".png, .exr, .pfm"}}),
+    [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
+
+TEST(Cli, UnwritableOutputPathFailsBeforeRendering) {
+    TempDir dir;
+    RunResult r = runCli("render -q --width 8 --height 8 -o /nonexistent-dir/x.png", dir);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("--output /nonexistent-dir/x.png"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+}
+
+TEST(Cli, UnwritableAovLeavesNoColorImageEither) {
+    TempDir dir;
+    std::string out = dir.file("out.png");
+    RunResult r = runCli("render -q --width 8 --height 8 -o " + out + " --aov depth=/nonexistent-dir/d.exr", dir);
+    EXPECT_NE(r.status, 0);
+    EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST(Cli, HelpDocumentsEveryFlag) {
+    TempDir dir;
+    RunResult r = runCli("render --help", dir);
+    EXPECT_EQ(r.status, 0);
+    for (const char* flag : {"--output", "--aov", "--eye", "--target", "--up", "--fov", "--width", "--height",
+                             "--threads", "--omega", "--screen-space", "--force-hit", "--discontinuity",
+                             "--fixed-steps", "--hybrid", "--max-steps", "--tau", "--normals", "--classic"}) {
+        EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
+    }
+}
+
+TEST(Cli, RendersASceneFileWithEveryAovFormat) {
+    TempDir dir;
+    std::string scene = dir.write("scene.json", kGoodScene);
+    RunResult r = runCli("render " + scene + " -o " + dir.file("c.png") + " --aov depth=" + dir.file("d.exr") +
+                             " --aov depth=" + dir.file("d.pfm") + " --aov steps=" + dir.file("s.png") +
+                             " --aov normal=" + dir.file("n.exr") + " --aov error=" + dir.file("e.pfm") +
+                             " --aov color=" + dir.file("c.exr") + " --threads 2",
+                         dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    for (const char* f : {"c.png", "d.exr", "d.pfm", "s.png", "n.exr", "e.pfm", "c.exr"}) {
+        EXPECT_TRUE(std::filesystem::exists(dir.file(f))) << f;
+    }
+    // The PFM depth: 32x24 single channel, header then floats; misses are +inf, hits near 3.
+    std::string pfm = readFile(dir.file("d.pfm"));
+    ASSERT_EQ(pfm.substr(0, 3), "Pf\n");
+    EXPECT_EQ(pfm.size(), std::string("Pf\n32 24\n-1.0\n").size() + 32 * 24 * 4);
+    // The summary line: time, rays/s, evaluations per ray, thread count.
+    EXPECT_NE(r.err.find("on 2 threads"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("Mrays/s"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("evaluations per primary ray"), std::string::npos) << r.err;
+    EXPECT_EQ(dir.count(), 8);  // the scene and seven images, no temporaries
+}
+
+TEST(Cli, RendersTheBuiltInDemoWithoutASceneArgument) {
+    TempDir dir;
+    RunResult r = runCli("render -q --width 64 --height 36 -o " + dir.file("demo.png"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(dir.file("demo.png")));
+}
+
+TEST(Cli, EveryExampleSceneParsesAndRenders) {
+    TempDir dir;
+    int n = 0;
+    for (auto& e : std::filesystem::directory_iterator(std::string(SDFT_SOURCE_DIR) + "/examples")) {
+        if (e.path().extension() != ".json") continue;
+        RunResult r = runCli("render -q --width 24 --height 16 " + e.path().string() + " -o " + dir.file("x.png"), dir);
+        EXPECT_EQ(r.status, 0) << e.path() << ": " << r.err;
+        ++n;
+    }
+    EXPECT_GE(n, 4);
+}
+
+}  // namespace
+}  // namespace sdft::e2e

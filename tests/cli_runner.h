@@ -1,0 +1,66 @@
+// Runs the sdftrace binary as a user would and captures its exit status and output.
+#pragma once
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace sdft::e2e {
+
+struct RunResult {
+    int status = -1;
+    std::string out, err;
+};
+
+inline std::string readFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+// A fresh directory per test, removed at the end.
+class TempDir {
+public:
+    TempDir() {
+        char tmpl[] = "/tmp/sdftrace-test-XXXXXX";
+        m_path = ::mkdtemp(tmpl);
+    }
+    ~TempDir() { std::filesystem::remove_all(m_path); }
+    std::string file(const std::string& name) const { return m_path + "/" + name; }
+    std::string write(const std::string& name, const std::string& text) const {
+        std::ofstream(file(name), std::ios::binary) << text;
+        return file(name);
+    }
+    // Names of the files in the directory (to check no output or temporary file was left).
+    int count() const {
+        int n = 0;
+        for (auto& e : std::filesystem::directory_iterator(m_path)) n += e.is_regular_file() ? 1 : 0;
+        return n;
+    }
+    const std::string& path() const { return m_path; }
+
+private:
+    std::string m_path;
+};
+
+inline RunResult runCli(const std::string& args, const TempDir& dir) {
+    std::string out = dir.path() + "/.stdout", err = dir.path() + "/.stderr";
+    std::string cmd = std::string(SDFT_CLI_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+    int raw = std::system(cmd.c_str());
+    RunResult r;
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = readFile(out);
+    r.err = readFile(err);
+    std::filesystem::remove(out);
+    std::filesystem::remove(err);
+    return r;
+}
+
+}  // namespace sdft::e2e
