@@ -6,6 +6,8 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <vector>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -49,6 +51,22 @@ public:
 private:
     std::string m_path;
 };
+
+// Reads a PFM written by sdftrace (rows bottom to top) into top-to-bottom rows.
+inline std::vector<float> readPfm(const std::string& path, int& w, int& h, int& channels) {
+    std::string data = readFile(path);
+    char kind[3] = {};
+    float scale;
+    int consumed = 0;
+    if (std::sscanf(data.c_str(), "%2s %d %d %f%n", kind, &w, &h, &scale, &consumed) != 4) return {};
+    channels = std::string(kind) == "PF" ? 3 : 1;
+    size_t offset = consumed + 1;
+    std::vector<float> out(static_cast<size_t>(w) * h * channels);
+    for (int y = 0; y < h; ++y)  // PFM rows run bottom to top
+        std::memcpy(out.data() + static_cast<size_t>(h - 1 - y) * w * channels,
+                    data.data() + offset + static_cast<size_t>(y) * w * channels * 4, w * channels * 4);
+    return out;
+}
 
 inline RunResult runCli(const std::string& args, const TempDir& dir) {
     std::string out = dir.path() + "/.stdout", err = dir.path() + "/.stderr";

@@ -49,21 +49,6 @@ float intersect(const Ray& ray, Vec3& n, const Sphere*& what) {
     return best;
 }
 
-std::vector<float> readPfm(const std::string& path, int& w, int& h, int& channels) {
-    std::string data = readFile(path);
-    char kind[3] = {};
-    float scale;
-    int consumed = 0;
-    if (std::sscanf(data.c_str(), "%2s %d %d %f%n", kind, &w, &h, &scale, &consumed) != 4) return {};
-    channels = std::string(kind) == "PF" ? 3 : 1;
-    size_t offset = consumed + 1;
-    std::vector<float> out(static_cast<size_t>(w) * h * channels);
-    for (int y = 0; y < h; ++y)  // PFM rows run bottom to top
-        std::memcpy(out.data() + static_cast<size_t>(h - 1 - y) * w * channels,
-                    data.data() + offset + static_cast<size_t>(y) * w * channels * 4, w * channels * 4);
-    return out;
-}
-
 TEST(RenderReference, SpheresOnAFloorMatchAnalyticRayTracing) {
     TempDir dir;
     std::string scene = std::string(SDFT_SOURCE_DIR) + "/tests/data/spheres.json";
@@ -188,6 +173,33 @@ TEST(RenderReference, SpheresOnAFloorMatchAnalyticRayTracing) {
     // hit point may sit half a pixel's footprint off the surface, which moves grazing shading).
     EXPECT_LT(colorErrorSum / interior, 0.005);
     EXPECT_LE(colorOff, interior / 100);
+}
+
+// Decision 0002: bounds culling changes values far from surfaces, never a hit. Compared with the
+// fixed threshold tau = 1e-4 (plain tracing): with the screen-space criterion the stopping point
+// legitimately moves within half a pixel's footprint when the step sequence changes.
+TEST(RenderReference, BoundsCullingChangesNoHit) {
+    TempDir dir;
+    for (const char* flag : {"--bounds-culling", "--no-bounds-culling"}) {
+        RunResult r = runCli(std::string("render -q --classic --tau 1e-4 --max-steps 2000 --max-distance 40 "
+                                         "--width 160 --height 90 ") + flag + " -o " +
+                                 dir.file(std::string(flag + 2) + ".pfm") + " --aov depth=" +
+                                 dir.file(std::string(flag + 2) + "-d.pfm"),
+                             dir);
+        ASSERT_EQ(r.status, 0) << r.err;
+    }
+    int w, h, ch;
+    std::vector<float> on = readPfm(dir.file("bounds-culling-d.pfm"), w, h, ch);
+    std::vector<float> off = readPfm(dir.file("no-bounds-culling-d.pfm"), w, h, ch);
+    ASSERT_EQ(on.size(), off.size());
+    int hits = 0;
+    for (size_t i = 0; i < on.size(); ++i) {
+        ASSERT_EQ(std::isfinite(on[i]), std::isfinite(off[i])) << i;
+        if (!std::isfinite(on[i])) continue;
+        ++hits;
+        EXPECT_NEAR(on[i], off[i], 1e-3f * off[i]) << i;  // tau / cos theta on the far floor
+    }
+    EXPECT_GT(hits, w * h / 2);
 }
 
 }  // namespace

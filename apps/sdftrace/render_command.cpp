@@ -33,7 +33,7 @@ struct RenderArgs {
         CLI::Option* option = nullptr;
         bool given() const { return option && option->count() > 0; }
     };
-    Switch screenSpace, forceHit, fixedSteps, hybrid, shadows;
+    Switch screenSpace, forceHit, fixedSteps, hybrid, shadows, boundsCulling;
     std::string normals;
     bool quiet = false;
 };
@@ -71,6 +71,7 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.normals == "central") s.normals = NormalEstimator::Central;
     if (a.normals == "tetrahedral") s.normals = NormalEstimator::Tetrahedral;
     if (a.shadows.given()) s.shadows = a.shadows.value;
+    if (a.boundsCulling.given()) s.boundsCulling = a.boundsCulling.value;
     if (a.maxDistance) s.maxDistance = *a.maxDistance;
     if (a.threads) s.threads = *a.threads;
 }
@@ -95,7 +96,7 @@ int runRender(const RenderArgs& a) {
 
     Scene scene = a.scene.empty() ? demoScene() : parseSceneFile(a.scene);
     applyOverrides(a, scene);
-    Tape tape = compileTape(scene.root);
+    Tape tape = compileTape(scene.root, {.boundsCulling = scene.settings.boundsCulling});
     Film film(scene.camera.width, scene.camera.height);
     RenderStats st = render(scene, tape, film, !a.quiet && stderrIsTerminal());
 
@@ -161,6 +162,9 @@ void addRenderCommand(CLI::App& app, Action& action) {
         ->check(CLI::PositiveNumber);
     tracer->add_option("--falsi-iterations", args->falsiIters, "Regula falsi iterations of the hybrid")
         ->check(CLI::Range(0, 64));
+    args->boundsCulling.option = tracer->add_flag(
+        "--bounds-culling,!--no-bounds-culling", args->boundsCulling.value,
+        "Skip union operands whose bounding box is no nearer than the running minimum (decision 0002)");
     tracer->add_option("--max-distance", args->maxDistance, "Largest t of a primary ray")
         ->check(CLI::PositiveNumber);
 

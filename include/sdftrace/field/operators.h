@@ -13,7 +13,7 @@ namespace sdft::ops {
 SDFT_HOST_DEVICE inline float smoothMin(float a, float b, float k, float& h) {
     if (k <= 0) {
         h = a <= b ? 1.0f : 0.0f;
-        return std::fmin(a, b);
+        return minf(a, b);
     }
     h = clampf(0.5f + 0.5f * (b - a) / k, 0.0f, 1.0f);
     return b + (a - b) * h - k * h * (1.0f - h);

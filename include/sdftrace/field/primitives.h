@@ -14,14 +14,14 @@ SDFT_HOST_DEVICE inline float sphere(Vec3 p, const float* k) { return length(p) 
 // k: half-size (3).
 SDFT_HOST_DEVICE inline float box(Vec3 p, const float* k) {
     Vec3 q = abs(p) - Vec3(k[0], k[1], k[2]);
-    return length(max(q, 0.0f)) + std::fmin(maxComponent(q), 0.0f);
+    return length(max(q, 0.0f)) + minf(maxComponent(q), 0.0f);
 }
 
 // k: outer half-size (3), edge radius. Exact.
 SDFT_HOST_DEVICE inline float roundBox(Vec3 p, const float* k) {
     float r = k[3];
     Vec3 q = abs(p) - Vec3(k[0] - r, k[1] - r, k[2] - r);
-    return length(max(q, 0.0f)) + std::fmin(maxComponent(q), 0.0f) - r;
+    return length(max(q, 0.0f)) + minf(maxComponent(q), 0.0f) - r;
 }
 
 // k: major radius R (ring in the XZ plane), minor radius r.
@@ -43,8 +43,8 @@ SDFT_HOST_DEVICE inline float capsule(Vec3 p, const float* k) {
 SDFT_HOST_DEVICE inline float cylinder(Vec3 p, const float* k) {
     float dx = std::sqrt(p.x * p.x + p.z * p.z) - k[0];
     float dy = std::fabs(p.y) - k[1];
-    float ox = std::fmax(dx, 0.0f), oy = std::fmax(dy, 0.0f);
-    return std::fmin(std::fmax(dx, dy), 0.0f) + std::sqrt(ox * ox + oy * oy);
+    float ox = maxf(dx, 0.0f), oy = maxf(dy, 0.0f);
+    return minf(maxf(dx, dy), 0.0f) + std::sqrt(ox * ox + oy * oy);
 }
 
 // Solid cone along Y: base disc of radius r at y = -h/2, apex at y = +h/2. k: r, h. Exact: the
@@ -57,9 +57,9 @@ SDFT_HOST_DEVICE inline float cone(Vec3 p, const float* k) {
     float ax = wx - qx * s1, ay = wy - qy * s1;  // to the slanted side
     float s2 = clampf(wx / qx, 0.0f, 1.0f);
     float bx = wx - qx * s2, by = wy - qy;  // to the base disc
-    float d = std::fmin(ax * ax + ay * ay, bx * bx + by * by);
+    float d = minf(ax * ax + ay * ay, bx * bx + by * by);
     // Inside when below the slanted side and above the base.
-    float s = std::fmax(-(wx * qy - wy * qx), -(wy - qy));
+    float s = maxf(-(wx * qy - wy * qx), -(wy - qy));
     return std::sqrt(d) * (s > 0 ? 1.0f : -1.0f);
 }
 
@@ -77,7 +77,7 @@ SDFT_HOST_DEVICE inline float ellipsoid(Vec3 p, const float* k) {
     float k0 = length(p / r);
     float scaled = (k0 - 1.0f) * minComponent(r);
     float sphereBound = length(p) - maxComponent(r);
-    return std::fmax(scaled, sphereBound);
+    return maxf(scaled, sphereBound);
 }
 
 // Regular octahedron |x|+|y|+|z| = s. Bound (generalized distance to its 4 face-plane pairs).
@@ -92,7 +92,7 @@ SDFT_HOST_DEVICE inline float dodecahedron(Vec3 p, const float* k) {
     const float phi = 1.618033988749895f;
     const float s = 1.0f / std::sqrt(1.0f + phi * phi);  // normalizes (0, 1, phi)
     Vec3 a = abs(p) * s;
-    float d = std::fmax(std::fmax(a.y + phi * a.z, a.z + phi * a.x), a.x + phi * a.y);
+    float d = maxf(maxf(a.y + phi * a.z, a.z + phi * a.x), a.x + phi * a.y);
     return d - k[0];
 }
 
@@ -122,9 +122,9 @@ SDFT_HOST_DEVICE inline float blobs(Vec3 p, const float* k) {
     for (int i = 0; i < n; ++i, b += 5) {
         float r = length(p - Vec3(b[0], b[1], b[2]));
         density += b[4] * blobFalloff(r / b[3]);
-        support = std::fmin(support, r - b[3]);
+        support = minf(support, r - b[3]);
     }
-    return std::fmax((threshold - density) * invL, support);
+    return maxf((threshold - density) * invL, support);
 }
 
 }  // namespace sdft::prim

@@ -25,6 +25,9 @@ enum class Op : uint8_t {
     Displace,      // out = a + amplitude * fbm(point b * frequency)
     // point: out(point) = T(point a)
     Translate, Rotate, ScalePoint, RepeatPoint,
+    // control: skip the next union operand when its bounds (constants at k) are no nearer to point a
+    // than the union's running minimum in scalar b; jump to `jump`. See decision 0002.
+    CullIfFar,
 };
 
 struct Instr {
@@ -32,6 +35,14 @@ struct Instr {
     uint16_t out = 0, a = 0, b = 0;
     uint32_t k = 0;         // offset of this instruction's constants
     int32_t material = -1;  // for primitives: the material of the surface they make
+    uint32_t jump = 0;      // CullIfFar: index of the first instruction after the union step
+    int32_t cull = -1;      // CullIfFar and the Union it guards: the lane-mask slot in batches
+};
+
+struct CompileOptions {
+    // Skip union operands whose bounding box is no nearer than the running minimum (decision 0002).
+    // The value stays a distance bound with the same zero set; off, the tape equals the tree.
+    bool boundsCulling = true;
 };
 
 // Up to four materials with weights summing to one (smooth blends and morphs mix materials, as in
@@ -51,6 +62,7 @@ struct MaterialBlend {
 struct BatchScratch {
     std::vector<float> points;   // numPointRegs * 3 * kBatchWidth
     std::vector<float> scalars;  // numScalarRegs * kBatchWidth
+    std::vector<uint8_t> culled; // numCulls * kBatchWidth: lanes that skipped an operand
 };
 
 class Tape {
@@ -68,9 +80,10 @@ public:
     size_t size() const { return m_instrs.size(); }
     int numPointRegs() const { return m_numPointRegs; }
     int numScalarRegs() const { return m_numScalarRegs; }
+    int numCulls() const { return m_numCulls; }
 
 private:
-    friend Tape compileTape(const NodePtr& root);
+    friend Tape compileTape(const NodePtr& root, const CompileOptions& options);
     template <bool kMaterial>
     float evalScalar(Vec3 p, MaterialBlend* blend) const;
     void evalChunk(const float* x, const float* y, const float* z, float* out, int n,
@@ -80,11 +93,12 @@ private:
     std::vector<float> m_consts;
     int m_numPointRegs = 1;
     int m_numScalarRegs = 1;
+    int m_numCulls = 0;
     uint16_t m_result = 0;
     float m_lipschitz = 1;
     Bounds3 m_bounds;
 };
 
-Tape compileTape(const NodePtr& root);
+Tape compileTape(const NodePtr& root, const CompileOptions& options = {});
 
 }  // namespace sdft

@@ -7,7 +7,8 @@
 
 namespace sdft::xform {
 
-// Finite domain repetition. k: cell size (3), copies per side (3), gap (1).
+// Finite domain repetition. k: cell size (3), copies per side (3), gap (1), bounds of the whole
+// array lo (3), hi (3).
 // Maps p into the frame of its nearest copy (indices clamped to [-n, n]).
 SDFT_HOST_DEVICE inline Vec3 repeatPoint(Vec3 p, const float* k) {
     Vec3 q = p;
@@ -24,7 +25,9 @@ SDFT_HOST_DEVICE inline Vec3 repeatPoint(Vec3 p, const float* k) {
 // p's cell that have a neighbour behind them, plus the gap between a cell wall and the child's
 // bounds (gap = min_i c_i/2 - extent_i >= 0, checked when the node is built). Taking the min of this
 // and the child's value makes mod-style repetition a true distance bound even where a neighbouring
-// copy is nearer than the cell's own copy.
+// copy is nearer than the cell's own copy. Every copy also lies in the array's bounds, so the
+// distance to those bounds is a second lower bound; the max of the two is tight outside the array.
+SDFT_HOST_DEVICE inline float boxDistance(Vec3 p, const float* k);
 SDFT_HOST_DEVICE inline float repeatNeighbourBound(Vec3 p, const float* k) {
     float d = 1e30f;
     for (int i = 0; i < 3; ++i) {
@@ -32,10 +35,18 @@ SDFT_HOST_DEVICE inline float repeatNeighbourBound(Vec3 p, const float* k) {
         if (n <= 0) continue;
         float idx = clampf(std::nearbyint(p[i] / c), -n, n);
         float q = p[i] - c * idx;
-        if (idx < n) d = std::fmin(d, 0.5f * c - q);
-        if (idx > -n) d = std::fmin(d, 0.5f * c + q);
+        if (idx < n) d = minf(d, 0.5f * c - q);
+        if (idx > -n) d = minf(d, 0.5f * c + q);
     }
-    return d + k[6];
+    return maxf(d + k[6], boxDistance(p, k + 7));
+}
+
+// Distance from p to the box k[0..2] (lo) - k[3..5] (hi); 0 inside.
+SDFT_HOST_DEVICE inline float boxDistance(Vec3 p, const float* k) {
+    float dx = maxf(maxf(k[0] - p.x, p.x - k[3]), 0.0f);
+    float dy = maxf(maxf(k[1] - p.y, p.y - k[4]), 0.0f);
+    float dz = maxf(maxf(k[2] - p.z, p.z - k[5]), 0.0f);
+    return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
 }  // namespace sdft::xform

@@ -67,8 +67,8 @@ SDFT_HOST_DEVICE inline bool intersectBounds(const Bounds3& b, const Ray& r, flo
             tb = tmp;
         }
         // NaN arises only for infinite slab limits with o inside; treat as no constraint.
-        if (ta == ta) t0 = std::fmax(t0, ta);
-        if (tb == tb) t1 = std::fmin(t1, tb);
+        if (ta == ta) t0 = maxf(t0, ta);
+        if (tb == tb) t1 = minf(t1, tb);
         if (t0 > t1) return false;
     }
     return true;

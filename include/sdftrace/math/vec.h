@@ -7,6 +7,11 @@
 
 namespace sdft {
 
+// min/max that compile to one instruction (std::fmin/fmax are libm calls for their NaN rules).
+// Hot-path values are never NaN.
+SDFT_HOST_DEVICE constexpr float minf(float a, float b) { return a < b ? a : b; }
+SDFT_HOST_DEVICE constexpr float maxf(float a, float b) { return a > b ? a : b; }
+
 struct Vec2 {
     float x = 0, y = 0;
 };
@@ -45,20 +50,20 @@ SDFT_HOST_DEVICE inline Vec3 normalize(Vec3 a) {
 }
 SDFT_HOST_DEVICE inline Vec3 abs(Vec3 a) { return {std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)}; }
 SDFT_HOST_DEVICE inline Vec3 min(Vec3 a, Vec3 b) {
-    return {std::fmin(a.x, b.x), std::fmin(a.y, b.y), std::fmin(a.z, b.z)};
+    return {minf(a.x, b.x), minf(a.y, b.y), minf(a.z, b.z)};
 }
 SDFT_HOST_DEVICE inline Vec3 max(Vec3 a, Vec3 b) {
-    return {std::fmax(a.x, b.x), std::fmax(a.y, b.y), std::fmax(a.z, b.z)};
+    return {maxf(a.x, b.x), maxf(a.y, b.y), maxf(a.z, b.z)};
 }
 SDFT_HOST_DEVICE inline Vec3 max(Vec3 a, float s) { return max(a, Vec3(s)); }
-SDFT_HOST_DEVICE inline float minComponent(Vec3 a) { return std::fmin(a.x, std::fmin(a.y, a.z)); }
-SDFT_HOST_DEVICE inline float maxComponent(Vec3 a) { return std::fmax(a.x, std::fmax(a.y, a.z)); }
+SDFT_HOST_DEVICE inline float minComponent(Vec3 a) { return minf(a.x, minf(a.y, a.z)); }
+SDFT_HOST_DEVICE inline float maxComponent(Vec3 a) { return maxf(a.x, maxf(a.y, a.z)); }
 SDFT_HOST_DEVICE inline Vec3 lerp(Vec3 a, Vec3 b, float t) { return a + (b - a) * t; }
 SDFT_HOST_DEVICE inline bool isFinite(Vec3 a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
 SDFT_HOST_DEVICE inline float clampf(float v, float lo, float hi) {
-    return std::fmin(std::fmax(v, lo), hi);
+    return minf(maxf(v, lo), hi);
 }
 
 // Row-major 3x3 matrix (rotations).

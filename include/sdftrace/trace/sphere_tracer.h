@@ -64,7 +64,7 @@ SDFT_HOST_DEVICE inline void sphereTraceBegin(SphereTraceState& s, const Ray& ra
 namespace detail {
 
 SDFT_HOST_DEVICE inline float hitError(const SphereTraceState& s, float radius, const TraceOptions& o) {
-    return o.screenSpace ? radius / std::fmax(s.t, 1e-6f) : radius;
+    return o.screenSpace ? radius / maxf(s.t, 1e-6f) : radius;
 }
 SDFT_HOST_DEVICE inline float hitThreshold(const TraceOptions& o) {
     return o.screenSpace ? o.pixelRadius : o.tau;

@@ -116,10 +116,15 @@ NodePtr repeat(NodePtr c, Vec3 cell, Vec3 count) {
     float gap = 1e30f;
     for (int i = 0; i < 3; ++i) {
         if (count[i] <= 0) continue;
-        float extent = std::fmax(std::fabs(b.lo[i]), std::fabs(b.hi[i]));
-        gap = std::fmin(gap, 0.5f * cell[i] - extent);
+        float extent = maxf(std::fabs(b.lo[i]), std::fabs(b.hi[i]));
+        gap = minf(gap, 0.5f * cell[i] - extent);
     }
-    return make(NodeKind::Repeat, {cell.x, cell.y, cell.z, count.x, count.y, count.z, gap}, {c});
+    Vec3 reach = cell * count;
+    Bounds3 array{b.lo - reach, b.hi + reach};
+    return make(NodeKind::Repeat,
+                {cell.x, cell.y, cell.z, count.x, count.y, count.z, gap, array.lo.x, array.lo.y,
+                 array.lo.z, array.hi.x, array.hi.y, array.hi.z},
+                {c});
 }
 
 NodePtr displace(NodePtr c, float amplitude, float frequency, int octaves, float gain) {
@@ -297,15 +302,15 @@ float evalTree(const Node& n, Vec3 p) {
         case NodeKind::Blobs: return prim::blobs(p, k);
         case NodeKind::Union: {
             float v = child(0, p);
-            for (size_t i = 1; i < n.children.size(); ++i) v = std::fmin(v, child(i, p));
+            for (size_t i = 1; i < n.children.size(); ++i) v = minf(v, child(i, p));
             return v;
         }
         case NodeKind::Intersection: {
             float v = child(0, p);
-            for (size_t i = 1; i < n.children.size(); ++i) v = std::fmax(v, child(i, p));
+            for (size_t i = 1; i < n.children.size(); ++i) v = maxf(v, child(i, p));
             return v;
         }
-        case NodeKind::Difference: return std::fmax(child(0, p), -child(1, p));
+        case NodeKind::Difference: return maxf(child(0, p), -child(1, p));
         case NodeKind::Complement: return -child(0, p);
         case NodeKind::SmoothUnion: return ops::smoothMin(child(0, p), child(1, p), k[0], h);
         case NodeKind::SmoothIntersection: return ops::smoothMax(child(0, p), child(1, p), k[0], h);
@@ -322,7 +327,7 @@ float evalTree(const Node& n, Vec3 p) {
             return child(0, p / s) * minComponent(s);
         }
         case NodeKind::Repeat:
-            return std::fmin(child(0, xform::repeatPoint(p, k)), xform::repeatNeighbourBound(p, k));
+            return minf(child(0, xform::repeatPoint(p, k)), xform::repeatNeighbourBound(p, k));
         case NodeKind::Displace:
             return (child(0, p) + k[0] * noise::fbm(p * k[1], static_cast<int>(k[2]), k[3])) *
                    displaceScale(n);

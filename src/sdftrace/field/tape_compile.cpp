@@ -16,12 +16,13 @@ constexpr int kMaxPointRegs = 32;
 
 class Compiler {
 public:
-    explicit Compiler(std::vector<Instr>& instrs, std::vector<float>& consts)
-        : m_instrs(instrs), m_consts(consts) {}
+    Compiler(std::vector<Instr>& instrs, std::vector<float>& consts, const CompileOptions& options)
+        : m_instrs(instrs), m_consts(consts), m_options(options) {}
 
     uint16_t emit(const Node& n, uint16_t point, int material);
     int pointRegs() const { return m_nextPoint; }
     int scalarRegs() const { return m_nextScalar; }
+    int culls() const { return m_numCulls; }
 
 private:
     uint16_t allocScalar() { return alloc(m_freeScalar, m_nextScalar, kMaxScalarRegs); }
@@ -44,8 +45,16 @@ private:
         return offset;
     }
     void push(Op op, uint16_t out, uint16_t a, uint16_t b, uint32_t k, int material = -1) {
-        m_instrs.push_back({op, out, a, b, k, material});
+        Instr in;
+        in.op = op;
+        in.out = out;
+        in.a = a;
+        in.b = b;
+        in.k = k;
+        in.material = material;
+        m_instrs.push_back(in);
     }
+    uint16_t emitUnion(const Node& n, uint16_t point, int material);
     uint16_t emitPointOp(Op op, uint16_t point, const std::vector<float>& k) {
         uint16_t q = allocPoint();
         push(op, q, point, 0, addConsts(k));
@@ -54,6 +63,8 @@ private:
 
     std::vector<Instr>& m_instrs;
     std::vector<float>& m_consts;
+    const CompileOptions& m_options;
+    int m_numCulls = 0;
     std::vector<uint16_t> m_freeScalar, m_freePoint;
     int m_nextScalar = 0;
     int m_nextPoint = 1;  // point register 0 is the input point
@@ -83,7 +94,7 @@ uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
         return acc;
     };
     switch (n.kind) {
-        case NodeKind::Union: return binary(Op::Union, {});
+        case NodeKind::Union: return emitUnion(n, point, material);
         case NodeKind::Intersection: return binary(Op::Intersection, {});
         case NodeKind::Difference: return binary(Op::Difference, {});
         case NodeKind::SmoothUnion: return binary(Op::SmoothUnion, n.params);
@@ -142,15 +153,46 @@ uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
     return 0;
 }
 
+// A union of operands, each but the first guarded by a CullIfFar when bounds culling is on and the
+// operand has finite bounds: if the operand's box is no nearer than the running minimum, its value
+// cannot be below the true distance's lower bound we already hold, and it is skipped
+// (docs/decisions/0002-bounds-culling.md). Unbounded operands (planes) go first.
+uint16_t Compiler::emitUnion(const Node& n, uint16_t point, int material) {
+    std::vector<const Node*> order;
+    for (const NodePtr& c : n.children) order.push_back(c.get());
+    std::stable_partition(order.begin(), order.end(),
+                          [](const Node* c) { return !nodeBounds(*c).finite(); });
+    uint16_t acc = emit(*order[0], point, material);
+    for (size_t i = 1; i < order.size(); ++i) {
+        Bounds3 box = nodeBounds(*order[i]);
+        bool cull = m_options.boundsCulling && box.finite() && !box.empty();
+        size_t guard = m_instrs.size();
+        int slot = -1;
+        if (cull) {
+            slot = m_numCulls++;
+            push(Op::CullIfFar, 0, point, acc,
+                 addConsts({box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z}));
+            m_instrs.back().cull = slot;
+        }
+        uint16_t rhs = emit(*order[i], point, material);
+        push(Op::Union, acc, acc, rhs, 0);
+        m_instrs.back().cull = slot;
+        m_freeScalar.push_back(rhs);
+        if (cull) m_instrs[guard].jump = static_cast<uint32_t>(m_instrs.size());
+    }
+    return acc;
+}
+
 }  // namespace
 
-Tape compileTape(const NodePtr& root) {
+Tape compileTape(const NodePtr& root, const CompileOptions& options) {
     SDFT_CHECK(root != nullptr);
     Tape tape;
-    Compiler compiler(tape.m_instrs, tape.m_consts);
+    Compiler compiler(tape.m_instrs, tape.m_consts, options);
     tape.m_result = compiler.emit(*root, 0, root->material >= 0 ? root->material : 0);
     tape.m_numPointRegs = compiler.pointRegs();
     tape.m_numScalarRegs = compiler.scalarRegs();
+    tape.m_numCulls = compiler.culls();
     tape.m_lipschitz = lipschitzBound(*root);
     tape.m_bounds = nodeBounds(*root);
     return tape;

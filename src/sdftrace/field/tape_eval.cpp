@@ -35,9 +35,9 @@ float evalPrimitive(Op op, Vec3 p, const float* k) {
 // Binary scalar ops. `h` returns the weight of `a` for material blending.
 inline float evalBinary(Op op, float a, float b, const float* k, float& h) {
     switch (op) {
-        case Op::Union: h = a <= b ? 1.f : 0.f; return std::fmin(a, b);
-        case Op::Intersection: h = a >= b ? 1.f : 0.f; return std::fmax(a, b);
-        case Op::Difference: h = a >= -b ? 1.f : 0.f; return std::fmax(a, -b);
+        case Op::Union: h = a <= b ? 1.f : 0.f; return minf(a, b);
+        case Op::Intersection: h = a >= b ? 1.f : 0.f; return maxf(a, b);
+        case Op::Difference: h = a >= -b ? 1.f : 0.f; return maxf(a, -b);
         case Op::SmoothUnion: return ops::smoothMin(a, b, k[0], h);
         case Op::SmoothIntersection: return ops::smoothMax(a, b, k[0], h);
         case Op::SmoothDifference: return ops::smoothMax(a, -b, k[0], h);
@@ -115,9 +115,15 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
     MaterialBlend mats[kMaterial ? kMaxScalarRegs : 1];
     pts[0] = p;
     const float* consts = m_consts.data();
-    for (const Instr& in : m_instrs) {
+    const size_t count = m_instrs.size();
+    for (size_t pc = 0; pc < count; ++pc) {
+        const Instr& in = m_instrs[pc];
         const float* k = consts + in.k;
         Op op = in.op;
+        if (op == Op::CullIfFar) {
+            if (xform::boxDistance(pts[in.a], k) >= s[in.b]) pc = in.jump - 1;
+            continue;
+        }
         if (op <= Op::Blobs) {
             s[in.out] = evalPrimitive(op, pts[in.a], k);
             if constexpr (kMaterial) mats[in.out] = MaterialBlend::single(in.material);
@@ -130,7 +136,7 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
         } else if (op == Op::ScaleValue) {
             s[in.out] = s[in.a] * k[0];
         } else if (op == Op::RepeatBound) {
-            s[in.out] = std::fmin(s[in.a], xform::repeatNeighbourBound(pts[in.b], k));
+            s[in.out] = minf(s[in.a], xform::repeatNeighbourBound(pts[in.b], k));
         } else if (op == Op::Displace) {
             s[in.out] = s[in.a] + displacement(pts[in.b], k);
         } else {
@@ -155,6 +161,8 @@ void Tape::evalBatch(const float* x, const float* y, const float* z, float* out,
     size_t needS = static_cast<size_t>(m_numScalarRegs) * kBatchWidth;
     if (scratch.points.size() < needP) scratch.points.resize(needP);
     if (scratch.scalars.size() < needS) scratch.scalars.resize(needS);
+    size_t needC = static_cast<size_t>(m_numCulls) * kBatchWidth;
+    if (scratch.culled.size() < needC) scratch.culled.resize(needC);
     for (int start = 0; start < n; start += kBatchWidth) {
         int count = std::min(kBatchWidth, n - start);
         evalChunk(x + start, y + start, z + start, out + start, count, scratch);
@@ -183,9 +191,23 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
         break;                                                                   \
     }
 
-    for (const Instr& in : m_instrs) {
+    const size_t count = m_instrs.size();
+    for (size_t pc = 0; pc < count; ++pc) {
+        const Instr& in = m_instrs[pc];
         const float* k = consts + in.k;
         switch (in.op) {
+            case Op::CullIfFar: {
+                // Per lane as in the scalar path; the operand is skipped when every lane skips it.
+                uint8_t* mask = scratch.culled.data() + static_cast<size_t>(in.cull) * W;
+                const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a), *acc = sr(in.b);
+                int skipped = 0;
+                for (int l = 0; l < n; ++l) {
+                    mask[l] = xform::boxDistance(Vec3(ax[l], ay[l], az[l]), k) >= acc[l];
+                    skipped += mask[l];
+                }
+                if (skipped == n) pc = in.jump - 1;
+                break;
+            }
             SDFT_PRIM_CASE(Sphere, sphere)
             SDFT_PRIM_CASE(Box, box)
             SDFT_PRIM_CASE(RoundBox, roundBox)
@@ -200,12 +222,17 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
             SDFT_PRIM_CASE(Blobs, blobs)
             case Op::Union: {
                 float *o = sr(in.out), *a = sr(in.a), *b = sr(in.b);
-                for (int l = 0; l < n; ++l) o[l] = std::fmin(a[l], b[l]);
+                if (in.cull >= 0) {
+                    const uint8_t* mask = scratch.culled.data() + static_cast<size_t>(in.cull) * W;
+                    for (int l = 0; l < n; ++l) o[l] = mask[l] ? a[l] : minf(a[l], b[l]);
+                } else {
+                    for (int l = 0; l < n; ++l) o[l] = minf(a[l], b[l]);
+                }
                 break;
             }
             case Op::Intersection: {
                 float *o = sr(in.out), *a = sr(in.a), *b = sr(in.b);
-                for (int l = 0; l < n; ++l) o[l] = std::fmax(a[l], b[l]);
+                for (int l = 0; l < n; ++l) o[l] = maxf(a[l], b[l]);
                 break;
             }
             case Op::Difference:
@@ -235,7 +262,7 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 for (int l = 0; l < n; ++l) {
                     Vec3 q(bx[l], by[l], bz[l]);
                     o[l] = in.op == Op::RepeatBound
-                               ? std::fmin(a[l], xform::repeatNeighbourBound(q, k))
+                               ? minf(a[l], xform::repeatNeighbourBound(q, k))
                                : a[l] + displacement(q, k);
                 }
                 break;

@@ -10,12 +10,41 @@ namespace {
 
 TEST(Tape, MatchesTreeReferenceOnRandomPoints) {
     NodePtr root = testing::everyKindTree();
-    Tape tape = compileTape(root);
+    Tape tape = compileTape(root, CompileOptions{.boundsCulling = false});
     testing::Rng rng(42);
     for (int i = 0; i < 20000; ++i) {
         Vec3 p = rng.inCube(4);
         float ref = evalTree(*root, p);
         ASSERT_NEAR(tape.eval(p), ref, 1e-5f * (1 + std::fabs(ref))) << i;
+    }
+}
+
+// Decision 0002: culling returns the running minimum instead of an operand whose box is no nearer.
+// For exact-distance operands that is the same value; for any operands the sign (the surface) is
+// unchanged and the value never drops below the exact tape's.
+TEST(Tape, BoundsCullingIsExactForExactOperandsAndKeepsTheSurfaceOtherwise) {
+    using namespace node;
+    std::vector<NodePtr> exact;
+    testing::Rng rng(44);
+    for (int i = 0; i < 30; ++i) {
+        Vec3 c = rng.inCube(3);
+        NodePtr shape = i % 3 == 0 ? sphere(0.3f) : (i % 3 == 1 ? box({0.2f, 0.3f, 0.1f}) : torus(0.3f, 0.1f));
+        exact.push_back(translate(rotate(shape, rotationAxisAngle(rng.direction(), 40)), c));
+    }
+    NodePtr exactUnion = unite(exact);
+    Tape culled = compileTape(exactUnion), plain = compileTape(exactUnion, {.boundsCulling = false});
+    EXPECT_EQ(culled.numCulls(), 29);
+    for (int i = 0; i < 20000; ++i) {
+        Vec3 p = rng.inCube(5);
+        ASSERT_NEAR(culled.eval(p), plain.eval(p), 1e-6f);
+    }
+    NodePtr any = testing::everyKindTree();
+    Tape culledAny = compileTape(any), plainAny = compileTape(any, {.boundsCulling = false});
+    for (int i = 0; i < 20000; ++i) {
+        Vec3 p = rng.inCube(5);
+        float a = culledAny.eval(p), b = plainAny.eval(p);
+        ASSERT_GE(a, b - 1e-6f);
+        ASSERT_EQ(a < 0, b < 0);
     }
 }
 
@@ -59,7 +88,8 @@ TEST(Tape, MaterialFollowsTheNearestSurfaceAndBlends) {
 
 // |f(a) - f(b)| <= L |a - b| on random pairs, far apart and very close (local slope).
 void expectLipschitz(const NodePtr& n, const char* what, uint32_t seed) {
-    Tape tape = compileTape(n);
+    // The field's definition, without the culling shortcut (which is discontinuous by design).
+    Tape tape = compileTape(n, CompileOptions{.boundsCulling = false});
     float L = tape.lipschitz();
     testing::Rng rng(seed);
     float worst = 0;

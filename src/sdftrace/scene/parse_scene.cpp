@@ -80,7 +80,7 @@ void parseRender(const Reader& r, RenderSettings& s) {
     r.requireObject("render settings");
     r.allowKeys({"max_steps", "tau", "omega", "screen_space", "force_hit", "discontinuity_iterations",
                  "fixed_steps", "hybrid", "hybrid_epsilon", "hybrid_step", "falsi_iterations",
-                 "normals", "shadows", "max_distance", "shadow_offset"});
+                 "normals", "shadows", "max_distance", "shadow_offset", "bounds_culling"});
     TraceOptions& t = s.trace;
     t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
     t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
@@ -99,6 +99,7 @@ void parseRender(const Reader& r, RenderSettings& s) {
     else if (normals == "tetrahedral") s.normals = NormalEstimator::Tetrahedral;
     else r.failKey("normals", "unknown estimator '" + normals + "'; accepted: central, tetrahedral");
     s.shadows = r.boolean("shadows", s.shadows);
+    s.boundsCulling = r.boolean("bounds_culling", s.boundsCulling);
     s.maxDistance = r.number("max_distance", s.maxDistance, positive, "a positive distance");
     s.shadowOffsetMin = r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");
 }
