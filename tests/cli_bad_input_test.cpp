@@ -2,6 +2,8 @@
 // JSON path (or the flag), what was wrong and what is accepted, and no output file left behind.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "cli_runner.h"
 
 namespace sdft::e2e {
@@ -150,8 +152,12 @@ TEST(Cli, EveryExampleSceneParsesAndRenders) {
     int n = 0;
     for (auto& e : std::filesystem::directory_iterator(std::string(SDFT_SOURCE_DIR) + "/examples")) {
         if (e.path().extension() != ".json") continue;
-        RunResult r = runCli("render -q --width 24 --height 16 " + e.path().string() + " -o " + dir.file("x.png"), dir);
-        EXPECT_EQ(r.status, 0) << e.path() << ": " << r.err;
+        RunResult r = runCli("render -q --width 48 --height 32 " + e.path().string() + " -o " + dir.file("x.pfm"), dir);
+        ASSERT_EQ(r.status, 0) << e.path() << ": " << r.err;
+        int w, h, ch;
+        std::vector<float> color = readPfm(dir.file("x.pfm"), w, h, ch);
+        ASSERT_EQ(color.size(), 48u * 32u * 3u);
+        for (float v : color) ASSERT_TRUE(std::isfinite(v)) << e.path() << ": a non-finite pixel";
         ++n;
     }
     EXPECT_GE(n, 4);

@@ -88,6 +88,10 @@ float lipschitzBound(const Node& n);
 float displaceScale(const Node& n);
 // Axis-aligned box containing the node's surface and interior (may be infinite).
 Bounds3 nodeBounds(const Node& n);
+// True when the node's value is at least the distance to nodeBounds() at every point outside those
+// bounds (exact-distance primitives, blobs, rigid or uniformly scaled transforms, unions and
+// repetitions of such). Bounds culling of smooth unions relies on it (decision 0002).
+bool dominatesBounds(const Node& n);
 // Recursive reference evaluation of the tree (slow; the tests' ground truth for the tape).
 float evalTree(const Node& n, Vec3 p);
 

@@ -11,8 +11,12 @@
 namespace sdft::noise {
 
 namespace detail {
+struct PermutationTable {
+    uint8_t v[512];
+};
+
 // A fixed permutation of 0..255 (Fisher-Yates with a fixed LCG), repeated twice.
-constexpr std::array<uint8_t, 512> makePermutation() {
+constexpr PermutationTable makePermutation() {
     std::array<uint8_t, 256> p{};
     for (int i = 0; i < 256; ++i) p[i] = static_cast<uint8_t>(i);
     uint32_t state = 0x9E3779B9u;
@@ -23,11 +27,23 @@ constexpr std::array<uint8_t, 512> makePermutation() {
         p[i] = p[j];
         p[j] = t;
     }
-    std::array<uint8_t, 512> out{};
-    for (int i = 0; i < 512; ++i) out[i] = p[i & 255];
+    PermutationTable out{};
+    for (int i = 0; i < 512; ++i) out.v[i] = p[i & 255];
     return out;
 }
-inline constexpr std::array<uint8_t, 512> kPerm = makePermutation();
+// Host code reads the constexpr table; device code a copy in constant memory.
+inline constexpr PermutationTable kPerm = makePermutation();
+#if defined(__CUDACC__)
+static __constant__ constexpr PermutationTable kPermDevice = makePermutation();
+#endif
+
+SDFT_HOST_DEVICE inline const uint8_t* permutation() {
+#if defined(__CUDA_ARCH__)
+    return kPermDevice.v;
+#else
+    return kPerm.v;
+#endif
+}
 
 SDFT_HOST_DEVICE inline float fade(float t) { return t * t * t * (t * (t * 6 - 15) + 10); }
 SDFT_HOST_DEVICE inline float lerpf(float a, float b, float t) { return a + (b - a) * t; }
@@ -47,7 +63,7 @@ SDFT_HOST_DEVICE inline float perlin(Vec3 p) {
     int X = static_cast<int>(fx) & 255, Y = static_cast<int>(fy) & 255, Z = static_cast<int>(fz) & 255;
     float x = p.x - fx, y = p.y - fy, z = p.z - fz;
     float u = fade(x), v = fade(y), w = fade(z);
-    const uint8_t* P = kPerm.data();
+    const uint8_t* P = permutation();
     int A = P[X] + Y, AA = P[A] + Z, AB = P[A + 1] + Z;
     int B = P[X + 1] + Y, BA = P[B] + Z, BB = P[B + 1] + Z;
     return lerpf(lerpf(lerpf(grad(P[AA], x, y, z), grad(P[BA], x - 1, y, z), u),

@@ -25,8 +25,9 @@ enum class Op : uint8_t {
     Displace,      // out = a + amplitude * fbm(point b * frequency)
     // point: out(point) = T(point a)
     Translate, Rotate, ScalePoint, RepeatPoint,
-    // control: skip the next union operand when its bounds (constants at k) are no nearer to point a
-    // than the union's running minimum in scalar b; jump to `jump`. See decision 0002.
+    // control: skip the next (smooth) union operand when its bounds (constants k[0..5]) are at least
+    // the running minimum in scalar b plus the margin k[6] away from point a; jump to `jump`.
+    // See decision 0002.
     CullIfFar,
 };
 

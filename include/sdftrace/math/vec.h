@@ -19,7 +19,7 @@ struct Vec2 {
 struct Vec3 {
     float x = 0, y = 0, z = 0;
 
-    SDFT_HOST_DEVICE constexpr Vec3() = default;
+    constexpr Vec3() = default;
     SDFT_HOST_DEVICE constexpr Vec3(float x_, float y_, float z_) : x(x_), y(y_), z(z_) {}
     SDFT_HOST_DEVICE constexpr explicit Vec3(float s) : x(s), y(s), z(s) {}
 

@@ -181,6 +181,34 @@ Bounds3 transformBounds(const Bounds3& b, const auto& map) {
 }
 }  // namespace
 
+bool dominatesBounds(const Node& n) {
+    auto child = [&](size_t i) { return dominatesBounds(*n.children[i]); };
+    switch (n.kind) {
+        case NodeKind::Sphere:
+        case NodeKind::Box:
+        case NodeKind::RoundBox:
+        case NodeKind::Torus:
+        case NodeKind::Capsule:
+        case NodeKind::Cylinder:
+        case NodeKind::Cone:
+        case NodeKind::Blobs:  // max with the distance to the support spheres, inside the boxes
+            return true;
+        case NodeKind::Union:
+        case NodeKind::SmoothUnion: {  // the smooth union's bounds are grown by k >= the blend's dip
+            for (size_t i = 0; i < n.children.size(); ++i)
+                if (!child(i)) return false;
+            return true;
+        }
+        case NodeKind::Difference:
+        case NodeKind::SmoothDifference:  // max(a, -b) >= a, and the bounds are a's
+        case NodeKind::Translate:
+        case NodeKind::Rotate:
+        case NodeKind::Repeat: return child(0);
+        case NodeKind::Scale: return n.params[0] == n.params[1] && n.params[1] == n.params[2] && child(0);
+        default: return false;  // bounds (ellipsoid, polyhedra), intersections, morph, displace
+    }
+}
+
 float displaceScale(const Node& n) {
     float child = lipschitzBound(*n.children[0]);
     float added = noise::fbmLipschitz(n.params[0], n.params[1], static_cast<int>(n.params[2]),

@@ -55,6 +55,10 @@ private:
         m_instrs.push_back(in);
     }
     uint16_t emitUnion(const Node& n, uint16_t point, int material);
+    uint16_t emitSmoothUnion(const Node& n, uint16_t point, int material);
+    // Emits `operand` combined into `acc` by `op`, behind a CullIfFar when culling applies.
+    void emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t point, int material,
+                     float margin, bool cullable, const std::vector<float>& opConsts);
     uint16_t emitPointOp(Op op, uint16_t point, const std::vector<float>& k) {
         uint16_t q = allocPoint();
         push(op, q, point, 0, addConsts(k));
@@ -97,7 +101,7 @@ uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
         case NodeKind::Union: return emitUnion(n, point, material);
         case NodeKind::Intersection: return binary(Op::Intersection, {});
         case NodeKind::Difference: return binary(Op::Difference, {});
-        case NodeKind::SmoothUnion: return binary(Op::SmoothUnion, n.params);
+        case NodeKind::SmoothUnion: return emitSmoothUnion(n, point, material);
         case NodeKind::SmoothIntersection: return binary(Op::SmoothIntersection, n.params);
         case NodeKind::SmoothDifference: return binary(Op::SmoothDifference, n.params);
         case NodeKind::Morph: return binary(Op::Morph, n.params);
@@ -163,24 +167,40 @@ uint16_t Compiler::emitUnion(const Node& n, uint16_t point, int material) {
     std::stable_partition(order.begin(), order.end(),
                           [](const Node* c) { return !nodeBounds(*c).finite(); });
     uint16_t acc = emit(*order[0], point, material);
-    for (size_t i = 1; i < order.size(); ++i) {
-        Bounds3 box = nodeBounds(*order[i]);
-        bool cull = m_options.boundsCulling && box.finite() && !box.empty();
-        size_t guard = m_instrs.size();
-        int slot = -1;
-        if (cull) {
-            slot = m_numCulls++;
-            push(Op::CullIfFar, 0, point, acc,
-                 addConsts({box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z}));
-            m_instrs.back().cull = slot;
-        }
-        uint16_t rhs = emit(*order[i], point, material);
-        push(Op::Union, acc, acc, rhs, 0);
-        m_instrs.back().cull = slot;
-        m_freeScalar.push_back(rhs);
-        if (cull) m_instrs[guard].jump = static_cast<uint32_t>(m_instrs.size());
+    for (size_t i = 1; i < order.size(); ++i) emitGuarded(Op::Union, acc, *order[i], point, material, 0, true, {});
+    return acc;
+}
+
+// A smooth union with radius k ignores an operand b >= acc + k (the blend weight of b is zero),
+// so an operand whose value dominates the distance to its box can be skipped when that box is at
+// least acc + k away: the result is exactly acc.
+uint16_t Compiler::emitSmoothUnion(const Node& n, uint16_t point, int material) {
+    uint16_t acc = emit(*n.children[0], point, material);
+    float k = n.params[0];
+    for (size_t i = 1; i < n.children.size(); ++i) {
+        emitGuarded(Op::SmoothUnion, acc, *n.children[i], point, material, k,
+                    dominatesBounds(*n.children[i]), n.params);
     }
     return acc;
+}
+
+void Compiler::emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t point, int material,
+                           float margin, bool cullable, const std::vector<float>& opConsts) {
+    Bounds3 box = nodeBounds(operand);
+    bool cull = m_options.boundsCulling && cullable && box.finite() && !box.empty();
+    size_t guard = m_instrs.size();
+    int slot = -1;
+    if (cull) {
+        slot = m_numCulls++;
+        push(Op::CullIfFar, 0, point, acc,
+             addConsts({box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z, margin}));
+        m_instrs.back().cull = slot;
+    }
+    uint16_t rhs = emit(operand, point, material);
+    push(op, acc, acc, rhs, addConsts(opConsts));
+    m_instrs.back().cull = slot;
+    m_freeScalar.push_back(rhs);
+    if (cull) m_instrs[guard].jump = static_cast<uint32_t>(m_instrs.size());
 }
 
 }  // namespace

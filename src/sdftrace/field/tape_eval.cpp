@@ -59,6 +59,15 @@ inline Vec3 evalPointOp(Op op, Vec3 p, const float* k) {
     }
 }
 
+// CullIfFar's test, as the batch loop computes it: box distance >= acc + margin, squared.
+inline bool cullSkips(Vec3 p, float acc, const float* k) {
+    float dx = maxf(maxf(k[0] - p.x, p.x - k[3]), 0.0f);
+    float dy = maxf(maxf(k[1] - p.y, p.y - k[4]), 0.0f);
+    float dz = maxf(maxf(k[2] - p.z, p.z - k[5]), 0.0f);
+    float t = acc + k[6];
+    return (t <= 0.0f) | (dx * dx + dy * dy + dz * dz >= t * t);
+}
+
 inline float displacement(Vec3 p, const float* k) {
     return k[0] * noise::fbm(p * k[1], static_cast<int>(k[2]), k[3]);
 }
@@ -121,7 +130,7 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
         const float* k = consts + in.k;
         Op op = in.op;
         if (op == Op::CullIfFar) {
-            if (xform::boxDistance(pts[in.a], k) >= s[in.b]) pc = in.jump - 1;
+            if (cullSkips(pts[in.a], s[in.b], k)) pc = in.jump - 1;
             continue;
         }
         if (op <= Op::Blobs) {
@@ -197,13 +206,19 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
         const float* k = consts + in.k;
         switch (in.op) {
             case Op::CullIfFar: {
-                // Per lane as in the scalar path; the operand is skipped when every lane skips it.
+                // Per lane as in the scalar path (compared squared, branch-free so it vectorizes);
+                // the operand is skipped when every lane skips it.
                 uint8_t* mask = scratch.culled.data() + static_cast<size_t>(in.cull) * W;
                 const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a), *acc = sr(in.b);
                 int skipped = 0;
                 for (int l = 0; l < n; ++l) {
-                    mask[l] = xform::boxDistance(Vec3(ax[l], ay[l], az[l]), k) >= acc[l];
-                    skipped += mask[l];
+                    float dx = maxf(maxf(k[0] - ax[l], ax[l] - k[3]), 0.0f);
+                    float dy = maxf(maxf(k[1] - ay[l], ay[l] - k[4]), 0.0f);
+                    float dz = maxf(maxf(k[2] - az[l], az[l] - k[5]), 0.0f);
+                    float t = acc[l] + k[6];
+                    uint8_t skip = (t <= 0.0f) | (dx * dx + dy * dy + dz * dz >= t * t);
+                    mask[l] = skip;
+                    skipped += skip;
                 }
                 if (skipped == n) pc = in.jump - 1;
                 break;
@@ -242,7 +257,12 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
             case Op::Morph: {
                 float *o = sr(in.out), *a = sr(in.a), *b = sr(in.b);
                 float h;
-                for (int l = 0; l < n; ++l) o[l] = evalBinary(in.op, a[l], b[l], k, h);
+                if (in.cull >= 0) {  // a culled smooth-union operand: masked lanes keep a
+                    const uint8_t* mask = scratch.culled.data() + static_cast<size_t>(in.cull) * W;
+                    for (int l = 0; l < n; ++l) o[l] = mask[l] ? a[l] : evalBinary(in.op, a[l], b[l], k, h);
+                } else {
+                    for (int l = 0; l < n; ++l) o[l] = evalBinary(in.op, a[l], b[l], k, h);
+                }
                 break;
             }
             case Op::Complement: {

@@ -4,6 +4,7 @@
 
 #include "sdftrace/field/tape.h"
 #include "sdftrace/field/test_util.h"
+#include "sdftrace/field/transforms.h"
 
 namespace sdft {
 namespace {
@@ -164,6 +165,67 @@ TEST(Bounds, RepeatAndTransformsContainTheSurface) {
         Vec3 p = rng.inCube(6);
         if (evalTree(*root, p) < 0 && p.y > -2.9f) ASSERT_TRUE(b.contains(p));
     }
+}
+
+}  // namespace
+}  // namespace sdft
+
+namespace sdft {
+namespace {
+
+// The property bounds culling of smooth unions relies on: outside its bounds, a node that claims to
+// dominate them has a value at least the distance to them.
+TEST(Bounds, DominatingNodesAreAtLeastTheirBoxDistance) {
+    using namespace node;
+    NodePtr exacts = unite({translate(sphere(0.4f), {1, 0, 0}), rotate(box({0.3f, 0.5f, 0.2f}), rotationAxisAngle({1, 1, 1}, 30)),
+                            torus(0.5f, 0.1f), capsule({0, 0, 0}, {0.5f, 0.5f, 0}, 0.1f), cone(0.3f, 0.6f),
+                            cylinder(0.2f, 0.4f), roundBox({0.3f, 0.3f, 0.3f}, 0.1f)});
+    std::vector<NodePtr> claims = {
+        exacts,
+        smoothUnion(sphere(0.5f), translate(box({0.3f, 0.3f, 0.3f}), {0.6f, 0, 0}), 0.4f),
+        subtract(box({0.5f, 0.5f, 0.5f}), sphere(0.6f)),
+        smoothDifference(torus(0.6f, 0.2f), sphere(0.3f), 0.1f),
+        scale(exacts, Vec3(1.7f)),
+        repeat(sphere(0.2f), {0.6f, 0.6f, 0.6f}, {2, 1, 0}),
+        blobs({{{0, 0, 0}, 0.7f, 1}, {{0.5f, 0.2f, 0}, 0.4f, 1}}, 0.5f),
+    };
+    std::vector<NodePtr> nonClaims = {ellipsoid({1, 0.2f, 0.3f}), octahedron(0.5f), dodecahedron(0.4f),
+                                      scale(sphere(0.5f), {2, 1, 1}), morph(sphere(0.5f), box(Vec3(0.4f)), 0.5f),
+                                      displace(sphere(0.5f), 0.1f, 3, 2, 0.5f)};
+    for (const NodePtr& n : nonClaims) EXPECT_FALSE(dominatesBounds(*n)) << nodeKindName(n->kind);
+    testing::Rng rng(31);
+    for (const NodePtr& n : claims) {
+        ASSERT_TRUE(dominatesBounds(*n)) << nodeKindName(n->kind);
+        Bounds3 b = nodeBounds(*n);
+        float k[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+        for (int i = 0; i < 20000; ++i) {
+            Vec3 p = rng.inCube(4);
+            float d = xform::boxDistance(p, k);
+            if (d > 0) ASSERT_GE(evalTree(*n, p), d - 1e-5f) << nodeKindName(n->kind);
+        }
+    }
+}
+
+TEST(Tape, SmoothUnionCullingIsExactForDominatingOperands) {
+    using namespace node;
+    testing::Rng rng(45);
+    NodePtr chain = sphere(0.3f);
+    for (int i = 0; i < 40; ++i) {
+        NodePtr shape = i % 2 ? torus(0.25f, 0.08f) : roundBox({0.2f, 0.2f, 0.2f}, 0.05f);
+        chain = smoothUnion(chain, translate(rotate(shape, rotationAxisAngle(rng.direction(), 50)), rng.inCube(2.5f)), 0.3f);
+    }
+    Tape culled = compileTape(chain), plain = compileTape(chain, {.boundsCulling = false});
+    EXPECT_EQ(culled.numCulls(), 40);
+    std::vector<float> x(4096), y(4096), z(4096), out(4096);
+    for (int i = 0; i < 4096; ++i) {
+        Vec3 p = rng.inCube(4);
+        x[i] = p.x, y[i] = p.y, z[i] = p.z;
+        ASSERT_NEAR(culled.eval(p), plain.eval(p), 1e-6f);
+        ASSERT_EQ(culled.evalMaterial(p).id[0], plain.evalMaterial(p).id[0]);
+    }
+    BatchScratch scratch;
+    culled.evalBatch(x.data(), y.data(), z.data(), out.data(), 4096, scratch);
+    for (int i = 0; i < 4096; ++i) ASSERT_EQ(out[i], culled.eval({x[i], y[i], z[i]}));
 }
 
 }  // namespace

@@ -1,0 +1,70 @@
+#include "sdftrace/render/renderer.h"
+
+#include <gtest/gtest.h>
+
+#include "sdftrace/field/test_util.h"
+#include "sdftrace/scene/parse_scene.h"
+
+namespace sdft {
+namespace {
+
+TEST(Normals, BothEstimatorsMatchAnalyticNormals) {
+    Tape sphereTape = compileTape(node::sphere(1.0f));
+    Tape torusTape = compileTape(node::torus(1.0f, 0.3f));
+    testing::Rng rng(21);
+    for (NormalEstimator e : {NormalEstimator::Central, NormalEstimator::Tetrahedral}) {
+        for (int i = 0; i < 2000; ++i) {
+            Vec3 u = rng.direction();
+            Vec3 n = estimateNormal(sphereTape, u * 1.0005f, 1e-3f, e);
+            EXPECT_GT(dot(n, u), 0.99999f);
+            // Torus: the normal points from the ring's core circle to the point.
+            float a = rng.uniform(0, 6.2831853f), b = rng.uniform(0, 6.2831853f);
+            Vec3 core(std::cos(a), 0, std::sin(a));
+            Vec3 dir = core * std::cos(b) + Vec3(0, std::sin(b), 0);
+            Vec3 p = core + dir * 0.3f;
+            EXPECT_GT(dot(estimateNormal(torusTape, p, 1e-3f, e), dir), 0.9999f);
+        }
+    }
+}
+
+TEST(Renderer, DemoHasNoNonFinitePixelAndCountsEveryRay) {
+    Scene scene = demoScene();
+    scene.camera.width = 96;
+    scene.camera.height = 54;
+    scene.settings.threads = 1;
+    Tape tape = compileTape(scene.root);
+    Film film(96, 54);
+    RenderStats stats = render(scene, tape, film);
+    EXPECT_EQ(stats.threads, 1);
+    EXPECT_EQ(stats.primaryRays, 96u * 54u);
+    EXPECT_GT(stats.hits, stats.primaryRays / 2);
+    double steps = 0;
+    for (size_t i = 0; i < film.pixels(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+            ASSERT_TRUE(std::isfinite(film.color[3 * i + c])) << i;
+            ASSERT_TRUE(std::isfinite(film.normal[3 * i + c])) << i;
+        }
+        ASSERT_FALSE(std::isnan(film.depth[i])) << i;
+        ASSERT_TRUE(std::isfinite(film.error[i])) << i;
+        steps += film.steps[i];
+    }
+    // The steps AOV is the per-pixel count of the primary-ray evaluations in the stats.
+    EXPECT_EQ(steps, static_cast<double>(stats.primaryEvaluations));
+}
+
+TEST(Renderer, ThreadCountDoesNotChangeTheImage) {
+    Scene scene = demoScene();
+    scene.camera.width = 64;
+    scene.camera.height = 40;
+    Tape tape = compileTape(scene.root);
+    Film one(64, 40), two(64, 40);
+    scene.settings.threads = 1;
+    render(scene, tape, one);
+    scene.settings.threads = 2;
+    EXPECT_EQ(render(scene, tape, two).threads, 2);
+    EXPECT_EQ(one.color, two.color);
+    EXPECT_EQ(one.depth, two.depth);
+}
+
+}  // namespace
+}  // namespace sdft
