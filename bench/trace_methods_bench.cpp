@@ -1,4 +1,5 @@
-// Keinert et al. 2014 §3.1-3.2 measured: classic sphere tracing vs over-relaxation vs over-relaxation
+// Keinert et al. 2014 §3.1-3.2 measured: classic sphere tracing vs over-relaxation vs
+// over-relaxation
 // + screen-space selection, on several scenes, primary rays only, all in one run.
 //
 // Counters per benchmark: evals/ray (field evaluations per primary ray, hardware-independent),
@@ -27,7 +28,8 @@ constexpr int kWidth = 320, kHeight = 240;
 
 struct Prepared {
     Scene scene;
-    Tape tape;
+    Tape tape;           // with bounds culling (decision 0002), as the renderer uses it
+    Tape tapeNoCulling;  // the same field without it
     std::vector<RaySegment> rays;
 };
 
@@ -40,32 +42,36 @@ const Prepared& prepared(const std::string& name) {
     p.scene.camera.width = kWidth;
     p.scene.camera.height = kHeight;
     p.tape = compileTape(p.scene.root);
+    p.tapeNoCulling = compileTape(p.scene.root, {.boundsCulling = false});
     Camera cam(p.scene.camera);
     // Tile order (16x16), as the renderer traces them.
     for (int ty = 0; ty < kHeight; ty += 16)
         for (int tx = 0; tx < kWidth; tx += 16)
             for (int y = ty; y < ty + 16; ++y)
-                for (int x = tx; x < tx + 16; ++x) p.rays.push_back({cam.pixelRay(x, y), 0, p.scene.settings.maxDistance});
+                for (int x = tx; x < tx + 16; ++x)
+                    p.rays.push_back({cam.pixelRay(x, y), 0, p.scene.settings.maxDistance});
     return cache.emplace(name, std::move(p)).first->second;
 }
 
-enum Method { kClassic, kRelaxed, kRelaxedScreenSpace, kEnhanced };
+enum Method { kClassic, kRelaxed, kRelaxedScreenSpace, kEnhanced, kEnhancedNoCulling };
 
 TraceOptions options(Method m, const Prepared& p) {
     TraceOptions o = TraceOptions::classic();
     o.pixelRadius = Camera(p.scene.camera).pixelRadius();
     if (m >= kRelaxed) o.omega = 1.2f;
     if (m >= kRelaxedScreenSpace) o.screenSpace = true;
-    if (m == kEnhanced) o.discontinuityIters = 3;
+    if (m >= kEnhanced) o.discontinuityIters = 3;
     return o;
 }
 
-std::vector<TraceResult> traceAll(const Prepared& p, const TraceOptions& o) {
+std::vector<TraceResult> traceAll(const Prepared& p, const TraceOptions& o, bool culling = true) {
+    const Tape& tape = culling ? p.tape : p.tapeNoCulling;
     std::vector<TraceResult> results(p.rays.size());
     PacketScratch scratch;
     for (size_t start = 0; start < p.rays.size(); start += 256) {
         size_t n = std::min<size_t>(256, p.rays.size() - start);
-        tracePacket(p.tape, std::span(p.rays).subspan(start, n), o, std::span(results).subspan(start, n), scratch);
+        tracePacket(tape, std::span(p.rays).subspan(start, n), o,
+                    std::span(results).subspan(start, n), scratch);
     }
     return results;
 }
@@ -85,7 +91,7 @@ void Methods(benchmark::State& state, std::string scene, Method method) {
     TraceOptions o = options(method, p);
     std::vector<TraceResult> results;
     for (auto _ : state) {
-        results = traceAll(p, o);
+        results = traceAll(p, o, method != kEnhancedNoCulling);
         benchmark::DoNotOptimize(results.data());
     }
     const auto& ref = classicResults(scene);
@@ -93,8 +99,10 @@ void Methods(benchmark::State& state, std::string scene, Method method) {
     for (size_t i = 0; i < results.size(); ++i) {
         evals += results[i].evaluations;
         if (!results[i].hit && results[i].evaluations >= o.maxSteps) exhausted += 1;
-        if (results[i].hit != ref[i].hit) hitDiff += 1;
-        else if (results[i].hit && std::fabs(results[i].t - ref[i].t) > 0.05 * ref[i].t) depthDiff += 1;
+        if (results[i].hit != ref[i].hit)
+            hitDiff += 1;
+        else if (results[i].hit && std::fabs(results[i].t - ref[i].t) > 0.05 * ref[i].t)
+            depthDiff += 1;
     }
     double n = static_cast<double>(results.size());
     state.counters["evals/ray"] = evals / n;
@@ -106,10 +114,13 @@ void Methods(benchmark::State& state, std::string scene, Method method) {
 
 void registerAll() {
     for (const char* scene : {"many_blend", "thin", "jewel", "city", "demo"}) {
-        for (auto [name, m] : {std::pair{"classic", kClassic}, {"relaxed", kRelaxed},
-                               {"relaxed+screen", kRelaxedScreenSpace}, {"enhanced", kEnhanced}}) {
-            benchmark::RegisterBenchmark((std::string("Methods/") + scene + "/" + name).c_str(), Methods,
-                                         std::string(scene), m)
+        for (auto [name, m] : {std::pair{"classic", kClassic},
+                               {"relaxed", kRelaxed},
+                               {"relaxed+screen", kRelaxedScreenSpace},
+                               {"enhanced", kEnhanced},
+                               {"enhanced-no-culling", kEnhancedNoCulling}}) {
+            benchmark::RegisterBenchmark((std::string("Methods/") + scene + "/" + name).c_str(),
+                                         Methods, std::string(scene), m)
                 ->Unit(benchmark::kMillisecond)
                 ->MinTime(0.3);
         }

@@ -21,8 +21,8 @@ std::string sceneWithObject(const std::string& object) {
 
 struct BadCase {
     const char* name;
-    std::string scene;       // written to bad.json (empty: none)
-    std::string args;        // after "render"
+    std::string scene;                  // written to bad.json (empty: none)
+    std::string args;                   // after "render"
     std::vector<std::string> expected;  // fragments of the error line
 };
 
@@ -53,41 +53,82 @@ TEST_P(BadInput, FailsWithOneClearLineAndNoOutput) {
 INSTANTIATE_TEST_SUITE_P(
     Cli, BadInput,
     ::testing::Values(
-        BadCase{"malformed_json", "{\"objects\": [ {\"type\": \"sphere\", }", "", {"bad.json", "malformed JSON", "line 1"}},
-        BadCase{"unknown_type", sceneWithObject(R"({"type": "spheer", "radius": 1})"), "",
-                {"bad.json", "/objects/0/type", "unknown object type 'spheer'", "accepted:", "sphere"}},
-        BadCase{"unknown_operator_child", sceneWithObject(R"({"type": "union", "children": [{"type": "blend"}]})"), "",
+        BadCase{"malformed_json",
+                "{\"objects\": [ {\"type\": \"sphere\", }",
+                "",
+                {"bad.json", "malformed JSON", "line 1"}},
+        BadCase{
+            "unknown_type",
+            sceneWithObject(R"({"type": "spheer", "radius": 1})"),
+            "",
+            {"bad.json", "/objects/0/type", "unknown object type 'spheer'", "accepted:", "sphere"}},
+        BadCase{"unknown_operator_child",
+                sceneWithObject(R"({"type": "union", "children": [{"type": "blend"}]})"),
+                "",
                 {"/objects/0/children/0/type", "unknown object type 'blend'"}},
-        BadCase{"missing_field", sceneWithObject(R"({"type": "sphere"})"), "",
+        BadCase{"missing_field",
+                sceneWithObject(R"({"type": "sphere"})"),
+                "",
                 {"/objects/0", "missing required key 'radius'"}},
-        BadCase{"wrong_type", sceneWithObject(R"({"type": "sphere", "radius": "big"})"), "",
+        BadCase{"wrong_type",
+                sceneWithObject(R"({"type": "sphere", "radius": "big"})"),
+                "",
                 {"/objects/0/radius", "expected a positive radius, got a string"}},
-        BadCase{"negative_radius", sceneWithObject(R"({"type": "sphere", "radius": -1})"), "",
+        BadCase{"negative_radius",
+                sceneWithObject(R"({"type": "sphere", "radius": -1})"),
+                "",
                 {"/objects/0/radius", "expected a positive radius, got -1"}},
-        BadCase{"non_finite", sceneWithObject(R"({"type": "sphere", "radius": 1e999})"), "",
+        BadCase{"non_finite",
+                sceneWithObject(R"({"type": "sphere", "radius": 1e999})"),
+                "",
                 {"bad.json", "number overflow parsing '1e999'", "finite"}},
-        BadCase{"vector_length", sceneWithObject(R"({"type": "box", "size": [1, 2]})"), "",
+        BadCase{"vector_length",
+                sceneWithObject(R"({"type": "box", "size": [1, 2]})"),
+                "",
                 {"/objects/0/size", "array of 3 numbers"}},
-        BadCase{"unknown_key", sceneWithObject(R"({"type": "sphere", "radius": 1, "raduis": 2})"), "",
+        BadCase{"unknown_key",
+                sceneWithObject(R"({"type": "sphere", "radius": 1, "raduis": 2})"),
+                "",
                 {"/objects/0/raduis", "unknown key"}},
-        BadCase{"unknown_material", sceneWithObject(R"({"type": "sphere", "radius": 1, "material": "gold"})"), "",
+        BadCase{"unknown_material",
+                sceneWithObject(R"({"type": "sphere", "radius": 1, "material": "gold"})"),
+                "",
                 {"/objects/0/material", "unknown material 'gold'"}},
-        BadCase{"fov_out_of_range", R"({"camera": {"fov": 180}, "objects": [{"type": "sphere", "radius": 1}]})", "",
+        BadCase{"fov_out_of_range",
+                R"({"camera": {"fov": 180}, "objects": [{"type": "sphere", "radius": 1}]})",
+                "",
                 {"/camera/fov", "(0, 180)"}},
-        BadCase{"zero_image", R"({"camera": {"width": 0}, "objects": [{"type": "sphere", "radius": 1}]})", "",
+        BadCase{"zero_image",
+                R"({"camera": {"width": 0}, "objects": [{"type": "sphere", "radius": 1}]})",
+                "",
                 {"/camera/width", "[1, 65536]"}},
         BadCase{"no_objects", R"({"objects": []})", "", {"/objects", "at least one object"}},
-        BadCase{"repeat_overlap", sceneWithObject(R"({"type": "repeat", "cell": [1, 1, 1], "count": [1, 1, 1], "child": {"type": "sphere", "radius": 0.8}})"), "",
-                {"/objects/0/cell", "twice"}},
-        BadCase{"omega", R"({"render": {"omega": 2.5}, "objects": [{"type": "sphere", "radius": 1}]})", "",
+        BadCase{
+            "repeat_overlap",
+            sceneWithObject(
+                R"({"type": "repeat", "cell": [1, 1, 1], "count": [1, 1, 1], "child": {"type": "sphere", "radius": 0.8}})"),
+            "",
+            {"/objects/0/cell", "twice"}},
+        BadCase{"omega",
+                R"({"render": {"omega": 2.5}, "objects": [{"type": "sphere", "radius": 1}]})",
+                "",
                 {"/render/omega", "[1, 2)"}},
         BadCase{"absurd_size", "", "--width 65536 --height 65536", {"--width/--height", "GiB"}},
-        BadCase{"missing_scene", "", "/nonexistent/scene.json", {"/nonexistent/scene.json", "cannot open"}},
+        BadCase{"missing_scene",
+                "",
+                "/nonexistent/scene.json",
+                {"/nonexistent/scene.json", "cannot open"}},
         BadCase{"unknown_flag", "", "--frobnicate", {"--frobnicate", "--help"}},
         BadCase{"bad_fov_flag", "", "--fov 0", {"--fov"}},
         BadCase{"bad_eye_flag", "", "--eye 1,2", {"--eye", "x,y,z"}},
-        BadCase{"bad_aov_name", "", "--aov depht=/tmp/x.exr", {"--aov depht=/tmp/x.exr", "color, depth"}},
-        BadCase{"bad_aov_extension", "", "--aov depth=/tmp/x.jpg", {"--aov depth", ".png, .exr, .pfm"}}),
+        BadCase{"bad_aov_name",
+                "",
+                "--aov depht=/tmp/x.exr",
+                {"--aov depht=/tmp/x.exr", "color, depth"}},
+        BadCase{"bad_aov_extension",
+                "",
+                "--aov depth=/tmp/x.jpg",
+                {"--aov depth", ".png, .exr, .pfm"}}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
 
 TEST(Cli, UnwritableOutputPathFailsBeforeRendering) {
@@ -101,7 +142,8 @@ TEST(Cli, UnwritableOutputPathFailsBeforeRendering) {
 TEST(Cli, UnwritableAovLeavesNoColorImageEither) {
     TempDir dir;
     std::string out = dir.file("out.png");
-    RunResult r = runCli("render -q --width 8 --height 8 -o " + out + " --aov depth=/nonexistent-dir/d.exr", dir);
+    RunResult r = runCli(
+        "render -q --width 8 --height 8 -o " + out + " --aov depth=/nonexistent-dir/d.exr", dir);
     EXPECT_NE(r.status, 0);
     EXPECT_FALSE(std::filesystem::exists(out));
 }
@@ -110,9 +152,10 @@ TEST(Cli, HelpDocumentsEveryFlag) {
     TempDir dir;
     RunResult r = runCli("render --help", dir);
     EXPECT_EQ(r.status, 0);
-    for (const char* flag : {"--output", "--aov", "--eye", "--target", "--up", "--fov", "--width", "--height",
-                             "--threads", "--omega", "--screen-space", "--force-hit", "--discontinuity",
-                             "--fixed-steps", "--hybrid", "--max-steps", "--tau", "--normals", "--classic"}) {
+    for (const char* flag :
+         {"--output", "--aov", "--eye", "--target", "--up", "--fov", "--width", "--height",
+          "--threads", "--omega", "--screen-space", "--force-hit", "--discontinuity",
+          "--fixed-steps", "--hybrid", "--max-steps", "--tau", "--normals", "--classic"}) {
         EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
     }
 }
@@ -120,11 +163,12 @@ TEST(Cli, HelpDocumentsEveryFlag) {
 TEST(Cli, RendersASceneFileWithEveryAovFormat) {
     TempDir dir;
     std::string scene = dir.write("scene.json", kGoodScene);
-    RunResult r = runCli("render " + scene + " -o " + dir.file("c.png") + " --aov depth=" + dir.file("d.exr") +
-                             " --aov depth=" + dir.file("d.pfm") + " --aov steps=" + dir.file("s.png") +
-                             " --aov normal=" + dir.file("n.exr") + " --aov error=" + dir.file("e.pfm") +
-                             " --aov color=" + dir.file("c.exr") + " --threads 2",
-                         dir);
+    RunResult r = runCli(
+        "render " + scene + " -o " + dir.file("c.png") + " --aov depth=" + dir.file("d.exr") +
+            " --aov depth=" + dir.file("d.pfm") + " --aov steps=" + dir.file("s.png") +
+            " --aov normal=" + dir.file("n.exr") + " --aov error=" + dir.file("e.pfm") +
+            " --aov color=" + dir.file("c.exr") + " --threads 2",
+        dir);
     ASSERT_EQ(r.status, 0) << r.err;
     for (const char* f : {"c.png", "d.exr", "d.pfm", "s.png", "n.exr", "e.pfm", "c.exr"}) {
         EXPECT_TRUE(std::filesystem::exists(dir.file(f))) << f;
@@ -150,9 +194,12 @@ TEST(Cli, RendersTheBuiltInDemoWithoutASceneArgument) {
 TEST(Cli, EveryExampleSceneParsesAndRenders) {
     TempDir dir;
     int n = 0;
-    for (auto& e : std::filesystem::directory_iterator(std::string(SDFT_SOURCE_DIR) + "/examples")) {
+    for (auto& e :
+         std::filesystem::directory_iterator(std::string(SDFT_SOURCE_DIR) + "/examples")) {
         if (e.path().extension() != ".json") continue;
-        RunResult r = runCli("render -q --width 48 --height 32 " + e.path().string() + " -o " + dir.file("x.pfm"), dir);
+        RunResult r = runCli(
+            "render -q --width 48 --height 32 " + e.path().string() + " -o " + dir.file("x.pfm"),
+            dir);
         ASSERT_EQ(r.status, 0) << e.path() << ": " << r.err;
         int w, h, ch;
         std::vector<float> color = readPfm(dir.file("x.pfm"), w, h, ch);

@@ -7,11 +7,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <vector>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace sdft::e2e {
 
@@ -29,7 +29,7 @@ inline std::string readFile(const std::string& path) {
 
 // A fresh directory per test, removed at the end.
 class TempDir {
-public:
+  public:
     TempDir() {
         char tmpl[] = "/tmp/sdftrace-test-XXXXXX";
         m_path = ::mkdtemp(tmpl);
@@ -43,12 +43,13 @@ public:
     // Names of the files in the directory (to check no output or temporary file was left).
     int count() const {
         int n = 0;
-        for (auto& e : std::filesystem::directory_iterator(m_path)) n += e.is_regular_file() ? 1 : 0;
+        for (auto& e : std::filesystem::directory_iterator(m_path))
+            n += e.is_regular_file() ? 1 : 0;
         return n;
     }
     const std::string& path() const { return m_path; }
 
-private:
+  private:
     std::string m_path;
 };
 
@@ -58,19 +59,22 @@ inline std::vector<float> readPfm(const std::string& path, int& w, int& h, int& 
     char kind[3] = {};
     float scale;
     int consumed = 0;
-    if (std::sscanf(data.c_str(), "%2s %d %d %f%n", kind, &w, &h, &scale, &consumed) != 4) return {};
+    if (std::sscanf(data.c_str(), "%2s %d %d %f%n", kind, &w, &h, &scale, &consumed) != 4)
+        return {};
     channels = std::string(kind) == "PF" ? 3 : 1;
     size_t offset = consumed + 1;
     std::vector<float> out(static_cast<size_t>(w) * h * channels);
     for (int y = 0; y < h; ++y)  // PFM rows run bottom to top
         std::memcpy(out.data() + static_cast<size_t>(h - 1 - y) * w * channels,
-                    data.data() + offset + static_cast<size_t>(y) * w * channels * 4, w * channels * 4);
+                    data.data() + offset + static_cast<size_t>(y) * w * channels * 4,
+                    w * channels * 4);
     return out;
 }
 
 inline RunResult runCli(const std::string& args, const TempDir& dir) {
     std::string out = dir.path() + "/.stdout", err = dir.path() + "/.stderr";
-    std::string cmd = std::string(SDFT_CLI_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+    std::string cmd =
+        std::string(SDFT_CLI_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null";
     int raw = std::system(cmd.c_str());
     RunResult r;
     r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;

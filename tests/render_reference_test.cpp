@@ -52,8 +52,8 @@ float intersect(const Ray& ray, Vec3& n, const Sphere*& what) {
 TEST(RenderReference, SpheresOnAFloorMatchAnalyticRayTracing) {
     TempDir dir;
     std::string scene = std::string(SDFT_SOURCE_DIR) + "/tests/data/spheres.json";
-    RunResult r = runCli("render -q " + scene + " -o " + dir.file("c.pfm") + " --aov depth=" + dir.file("d.pfm") +
-                             " --aov normal=" + dir.file("n.pfm"),
+    RunResult r = runCli("render -q " + scene + " -o " + dir.file("c.pfm") + " --aov depth=" +
+                             dir.file("d.pfm") + " --aov normal=" + dir.file("n.pfm"),
                          dir);
     ASSERT_EQ(r.status, 0) << r.err;
     int w, h, ch;
@@ -160,7 +160,8 @@ TEST(RenderReference, SpheresOnAFloorMatchAnalyticRayTracing) {
             const Sphere* s = refObject[i];
             bool floor = s == &kFloor;
             float dist = floor ? p.y : length(p - s->c) - s->r;
-            EXPECT_LE(std::fabs(dist), 1.5f * depth[i] * cam.pixelRadius() + 1e-4f) << x << "," << y;
+            EXPECT_LE(std::fabs(dist), 1.5f * depth[i] * cam.pixelRadius() + 1e-4f)
+                << x << "," << y;
             EXPECT_LE(depth[i], refDepth[i] + 1e-4f) << x << "," << y;
             // The gradient normal matches the exact normal at the point found.
             Vec3 exact = floor ? Vec3(0, 1, 0) : normalize(p - s->c);
@@ -181,11 +182,12 @@ TEST(RenderReference, SpheresOnAFloorMatchAnalyticRayTracing) {
 TEST(RenderReference, BoundsCullingChangesNoHit) {
     TempDir dir;
     for (const char* flag : {"--bounds-culling", "--no-bounds-culling"}) {
-        RunResult r = runCli(std::string("render -q --classic --tau 1e-4 --max-steps 2000 --max-distance 40 "
-                                         "--width 160 --height 90 ") + flag + " -o " +
-                                 dir.file(std::string(flag + 2) + ".pfm") + " --aov depth=" +
-                                 dir.file(std::string(flag + 2) + "-d.pfm"),
-                             dir);
+        RunResult r =
+            runCli(std::string("render -q --classic --tau 1e-4 --max-steps 2000 --max-distance 40 "
+                               "--width 160 --height 90 ") +
+                       flag + " -o " + dir.file(std::string(flag + 2) + ".pfm") +
+                       " --aov depth=" + dir.file(std::string(flag + 2) + "-d.pfm"),
+                   dir);
         ASSERT_EQ(r.status, 0) << r.err;
     }
     int w, h, ch;

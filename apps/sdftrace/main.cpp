@@ -24,7 +24,8 @@ int main(int argc, char** argv) {
         // One line: what was wrong and where to look.
         const CLI::App* sub = app.get_subcommands().empty() ? &app : app.get_subcommands().front();
         std::string name = sub == &app ? "sdftrace" : "sdftrace " + sub->get_name();
-        std::fprintf(stderr, "%s: error: %s (see '%s --help')\n", name.c_str(), e.what(), name.c_str());
+        std::fprintf(stderr, "%s: error: %s (see '%s --help')\n", name.c_str(), e.what(),
+                     name.c_str());
         return 2;
     }
     try {

@@ -48,7 +48,8 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.fov) cam.fovDeg = *a.fov;
     if (a.width) cam.width = *a.width;
     if (a.height) cam.height = *a.height;
-    if (length(cam.target - cam.eye) <= 0) throw InputError("--eye/--target: the eye must differ from the target");
+    if (length(cam.target - cam.eye) <= 0)
+        throw InputError("--eye/--target: the eye must differ from the target");
     if (length(cross(normalize(cam.target - cam.eye), cam.up)) < 1e-6f) {
         throw InputError("--up: must not be parallel to the viewing direction");
     }
@@ -84,9 +85,11 @@ int runRender(const RenderArgs& a) {
     for (const std::string& spec : a.aovs) {
         auto eq = spec.find('=');
         Aov aov;
-        if (eq == std::string::npos || !parseAov(spec.substr(0, eq), aov) || eq + 1 == spec.size()) {
-            throw InputError("--aov " + spec +
-                             ": expected NAME=PATH with NAME one of color, depth, normal, steps, error");
+        if (eq == std::string::npos || !parseAov(spec.substr(0, eq), aov) ||
+            eq + 1 == spec.size()) {
+            throw InputError(
+                "--aov " + spec +
+                ": expected NAME=PATH with NAME one of color, depth, normal, steps, error");
         }
         std::string path = spec.substr(eq + 1);
         imageFormatFromPath(path, "--aov " + spec.substr(0, eq));
@@ -104,13 +107,14 @@ int runRender(const RenderArgs& a) {
     for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
 
     double rays = static_cast<double>(st.primaryRays);
-    std::fprintf(stderr,
-                 "sdftrace render: %dx%d in %.3f s on %d threads, %.3f Mrays/s, %.2f evaluations per "
-                 "primary ray (%.2f per pixel with normals and shadows), %.2f%% hits, %llu "
-                 "over-relaxation fallbacks, L = %.3g\n",
-                 film.width, film.height, st.seconds, st.threads, rays / st.seconds * 1e-6,
-                 st.primaryEvaluations / rays, st.totalEvaluations() / rays, 100.0 * st.hits / rays,
-                 static_cast<unsigned long long>(st.fallbacks), tape.lipschitz());
+    std::fprintf(
+        stderr,
+        "sdftrace render: %dx%d in %.3f s on %d threads, %.3f Mrays/s, %.2f evaluations per "
+        "primary ray (%.2f per pixel with normals and shadows), %.2f%% hits, %llu "
+        "over-relaxation fallbacks, L = %.3g\n",
+        film.width, film.height, st.seconds, st.threads, rays / st.seconds * 1e-6,
+        st.primaryEvaluations / rays, st.totalEvaluations() / rays, 100.0 * st.hits / rays,
+        static_cast<unsigned long long>(st.fallbacks), tape.lipschitz());
     return 0;
 }
 
@@ -119,62 +123,88 @@ int runRender(const RenderArgs& a) {
 void addRenderCommand(CLI::App& app, Action& action) {
     auto args = std::make_shared<RenderArgs>();
     CLI::App* cmd = app.add_subcommand(
-        "render", "Ray trace a scene file (or the built-in demo scene when none is given) to an image");
-    cmd->add_option("scene", args->scene, "Scene file (JSON, see docs/scene-format.md); default: the demo");
-    cmd->add_option("-o,--output", args->output, "Output image: .png (tone-mapped sRGB), .exr or .pfm (linear)")
+        "render",
+        "Ray trace a scene file (or the built-in demo scene when none is given) to an image");
+    cmd->add_option("scene", args->scene,
+                    "Scene file (JSON, see docs/scene-format.md); default: the demo");
+    cmd->add_option("-o,--output", args->output,
+                    "Output image: .png (tone-mapped sRGB), .exr or .pfm (linear)")
         ->capture_default_str();
-    cmd->add_option("--aov", args->aovs,
-                    "Extra output NAME=PATH, repeatable. NAME: color (linear radiance), depth (t along the "
-                    "unit primary ray, inf on a miss), normal, steps (field evaluations of the primary "
-                    "ray), error (f at the hit point). PATH: .exr, .pfm, or .png (heat map with legend)");
+    cmd->add_option(
+        "--aov", args->aovs,
+        "Extra output NAME=PATH, repeatable. NAME: color (linear radiance), depth (t along the "
+        "unit primary ray, inf on a miss), normal, steps (field evaluations of the primary "
+        "ray), error (f at the hit point). PATH: .exr, .pfm, or .png (heat map with legend)");
     auto* camera = cmd->add_option_group("Camera", "Override the scene's camera");
     camera->add_option("--eye", args->eye, "Camera position x,y,z");
     camera->add_option("--target", args->target, "Point looked at x,y,z");
     camera->add_option("--up", args->up, "Up vector x,y,z");
     camera->add_option("--fov", args->fov, "Vertical field of view in degrees, in (0, 180)")
         ->check(CLI::Range(1e-3, 179.999));
-    camera->add_option("--width", args->width, "Image width in pixels")->check(CLI::Range(1, 65536));
-    camera->add_option("--height", args->height, "Image height in pixels")->check(CLI::Range(1, 65536));
+    camera->add_option("--width", args->width, "Image width in pixels")
+        ->check(CLI::Range(1, 65536));
+    camera->add_option("--height", args->height, "Image height in pixels")
+        ->check(CLI::Range(1, 65536));
 
-    auto* tracer = cmd->add_option_group("Tracer", "Sphere tracing switches (override the scene's render block)");
-    tracer->add_flag("--classic", args->classic,
-                     "Plain sphere tracing (Hart): omega 1, no screen-space selection, no discontinuity "
-                     "reduction; later flags still apply");
-    tracer->add_option("--max-steps", args->maxSteps, "March evaluations per ray")->check(CLI::Range(1, 100000));
+    auto* tracer = cmd->add_option_group(
+        "Tracer", "Sphere tracing switches (override the scene's render block)");
+    tracer->add_flag(
+        "--classic", args->classic,
+        "Plain sphere tracing (Hart): omega 1, no screen-space selection, no discontinuity "
+        "reduction; later flags still apply");
+    tracer->add_option("--max-steps", args->maxSteps, "March evaluations per ray")
+        ->check(CLI::Range(1, 100000));
     tracer->add_option("--tau", args->tau, "Hit threshold on f/L (without screen-space selection)")
         ->check(CLI::PositiveNumber);
-    tracer->add_option("--omega", args->omega, "Over-relaxation factor in [1, 2) (Keinert §3.1; 1 = off)")
+    tracer
+        ->add_option("--omega", args->omega,
+                     "Over-relaxation factor in [1, 2) (Keinert §3.1; 1 = off)")
         ->check(CLI::Range(1.0, 1.999999));
-    args->screenSpace.option = tracer->add_flag("--screen-space,!--no-screen-space", args->screenSpace.value,
-                     "Screen-space intersection selection and half-pixel early exit (Keinert §3.2)");
-    args->forceHit.option = tracer->add_flag("--force-hit,!--no-force-hit", args->forceHit.value,
-                     "Use the best candidate even when the march did not converge (Keinert §3.2)");
-    tracer->add_option("--discontinuity", args->discontinuity,
-                       "Fixed-point iterations after the march (Keinert §3.4; 0 = off)")
+    args->screenSpace.option = tracer->add_flag(
+        "--screen-space,!--no-screen-space", args->screenSpace.value,
+        "Screen-space intersection selection and half-pixel early exit (Keinert §3.2)");
+    args->forceHit.option = tracer->add_flag(
+        "--force-hit,!--no-force-hit", args->forceHit.value,
+        "Use the best candidate even when the march did not converge (Keinert §3.2)");
+    tracer
+        ->add_option("--discontinuity", args->discontinuity,
+                     "Fixed-point iterations after the march (Keinert §3.4; 0 = off)")
         ->check(CLI::Range(0, 64));
-    args->fixedSteps.option = tracer->add_flag("--fixed-steps,!--no-fixed-steps", args->fixedSteps.value,
-                     "Every ray takes exactly --max-steps steps (Liktor §5.4)");
-    args->hybrid.option = tracer->add_flag("--hybrid,!--no-hybrid", args->hybrid.value,
-                     "Sphere tracing / linear search hybrid with regula falsi (Liktor §5.3-5.4)");
-    tracer->add_option("--hybrid-epsilon", args->hybridEpsilon, "Distance under which the hybrid searches linearly")
+    args->fixedSteps.option =
+        tracer->add_flag("--fixed-steps,!--no-fixed-steps", args->fixedSteps.value,
+                         "Every ray takes exactly --max-steps steps (Liktor §5.4)");
+    args->hybrid.option = tracer->add_flag(
+        "--hybrid,!--no-hybrid", args->hybrid.value,
+        "Sphere tracing / linear search hybrid with regula falsi (Liktor §5.3-5.4)");
+    tracer
+        ->add_option("--hybrid-epsilon", args->hybridEpsilon,
+                     "Distance under which the hybrid searches linearly")
         ->check(CLI::PositiveNumber);
     tracer->add_option("--hybrid-step", args->hybridStep, "Linear-search step of the hybrid")
         ->check(CLI::PositiveNumber);
-    tracer->add_option("--falsi-iterations", args->falsiIters, "Regula falsi iterations of the hybrid")
+    tracer
+        ->add_option("--falsi-iterations", args->falsiIters,
+                     "Regula falsi iterations of the hybrid")
         ->check(CLI::Range(0, 64));
-    args->boundsCulling.option = tracer->add_flag(
-        "--bounds-culling,!--no-bounds-culling", args->boundsCulling.value,
-        "Skip union operands whose bounding box is no nearer than the running minimum (decision 0002)");
+    args->boundsCulling.option =
+        tracer->add_flag("--bounds-culling,!--no-bounds-culling", args->boundsCulling.value,
+                         "Skip union operands whose bounding box is no nearer than the running "
+                         "minimum (decision 0002)");
     tracer->add_option("--max-distance", args->maxDistance, "Largest t of a primary ray")
         ->check(CLI::PositiveNumber);
 
     auto* shading = cmd->add_option_group("Shading");
-    shading->add_option("--normals", args->normals, "Gradient estimator: central (6 taps) or tetrahedral (4 taps)")
+    shading
+        ->add_option("--normals", args->normals,
+                     "Gradient estimator: central (6 taps) or tetrahedral (4 taps)")
         ->check(CLI::IsMember({"central", "tetrahedral"}));
-    args->shadows.option = shading->add_flag("--shadows,!--no-shadows", args->shadows.value, "Hard shadows by tracing to each light");
+    args->shadows.option = shading->add_flag("--shadows,!--no-shadows", args->shadows.value,
+                                             "Hard shadows by tracing to each light");
 
-    cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
-    cmd->add_flag("-q,--quiet", args->quiet, "No progress on stderr (the summary line is still printed)");
+    cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(1, 1024));
+    cmd->add_flag("-q,--quiet", args->quiet,
+                  "No progress on stderr (the summary line is still printed)");
     cmd->callback([&action, args] { action = [args] { return runRender(*args); }; });
 }
 

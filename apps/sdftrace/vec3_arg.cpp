@@ -12,7 +12,8 @@ Vec3Arg parseVec3Arg(const std::string& flag, const std::string& text) {
     std::string part;
     while (std::getline(in, part, ',')) parts.push_back(part);
     auto bad = [&] {
-        return CLI::ValidationError(flag, "expected three finite numbers x,y,z, got '" + text + "'");
+        return CLI::ValidationError(flag,
+                                    "expected three finite numbers x,y,z, got '" + text + "'");
     };
     if (parts.size() != 3) throw bad();
     float v[3];

@@ -14,10 +14,10 @@
 
 // Fatal invariant check: prints file, line and the failed condition, then aborts.
 // For programmer errors only; bad user input throws sdft::InputError instead.
-#define SDFT_CHECK(cond)                                                                    \
-    do {                                                                                    \
-        if (!(cond)) {                                                                      \
+#define SDFT_CHECK(cond)                                                                      \
+    do {                                                                                      \
+        if (!(cond)) {                                                                        \
             std::fprintf(stderr, "%s:%d: invariant failed: %s\n", __FILE__, __LINE__, #cond); \
-            std::abort();                                                                   \
-        }                                                                                   \
+            std::abort();                                                                     \
+        }                                                                                     \
     } while (0)

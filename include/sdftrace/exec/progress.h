@@ -8,12 +8,12 @@
 namespace sdft {
 
 class Progress {
-public:
+  public:
     Progress(std::string label, uint64_t total, bool enabled);
     ~Progress();
     void advance(uint64_t n = 1);
 
-private:
+  private:
     std::string m_label;
     uint64_t m_total;
     bool m_enabled;

@@ -1,5 +1,5 @@
-// The analytic field as a tree of nodes: primitives, CSG operators, transforms, displacement, morph.
-// Built by the scene parser (or by code); compiled to a flat Tape for evaluation (DESIGN.md:
+// The analytic field as a tree of nodes: primitives, CSG operators, transforms, displacement,
+// morph. Built by the scene parser (or by code); compiled to a flat Tape for evaluation (DESIGN.md:
 // tree -> tape -> batch evaluators). evalTree() is the plain recursive reference the tests compare
 // the tape against.
 #pragma once
@@ -14,13 +14,32 @@ namespace sdft {
 
 enum class NodeKind {
     // primitives
-    Sphere, Box, RoundBox, Torus, Capsule, Cylinder, Cone, Plane, Ellipsoid, Octahedron,
-    Dodecahedron, Blobs,
+    Sphere,
+    Box,
+    RoundBox,
+    Torus,
+    Capsule,
+    Cylinder,
+    Cone,
+    Plane,
+    Ellipsoid,
+    Octahedron,
+    Dodecahedron,
+    Blobs,
     // operators
-    Union, Intersection, Difference, Complement, SmoothUnion, SmoothIntersection,
-    SmoothDifference, Morph,
+    Union,
+    Intersection,
+    Difference,
+    Complement,
+    SmoothUnion,
+    SmoothIntersection,
+    SmoothDifference,
+    Morph,
     // domain transforms (one child)
-    Translate, Rotate, Scale, Repeat,
+    Translate,
+    Rotate,
+    Scale,
+    Repeat,
     // value modifier (one child)
     Displace,
 };
@@ -83,8 +102,8 @@ NodePtr withMaterial(NodePtr n, int material);
 // Lipschitz bound of the node's value (Liktor 2008, §2.2).
 float lipschitzBound(const Node& n);
 // f + A fbm(p) is (L_f + L_noise)-Lipschitz; the displace node multiplies it by
-// L_f / (L_f + L_noise) so it keeps its child's bound and slows only rays near the displaced object,
-// not the whole scene.
+// L_f / (L_f + L_noise) so it keeps its child's bound and slows only rays near the displaced
+// object, not the whole scene.
 float displaceScale(const Node& n);
 // Axis-aligned box containing the node's surface and interior (may be infinite).
 Bounds3 nodeBounds(const Node& n);

@@ -1,5 +1,5 @@
-// Gradient noise (Perlin 2002, "improved noise") and its fractal sum, for displacement and later for
-// procedural textures. Header-only, GPU-ready: the permutation table is a constexpr array.
+// Gradient noise (Perlin 2002, "improved noise") and its fractal sum, for displacement and later
+// for procedural textures. Header-only, GPU-ready: the permutation table is a constexpr array.
 #pragma once
 
 #include <array>
@@ -60,18 +60,19 @@ SDFT_HOST_DEVICE inline float grad(int hash, float x, float y, float z) {
 SDFT_HOST_DEVICE inline float perlin(Vec3 p) {
     using namespace detail;
     float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
-    int X = static_cast<int>(fx) & 255, Y = static_cast<int>(fy) & 255, Z = static_cast<int>(fz) & 255;
+    int X = static_cast<int>(fx) & 255, Y = static_cast<int>(fy) & 255,
+        Z = static_cast<int>(fz) & 255;
     float x = p.x - fx, y = p.y - fy, z = p.z - fz;
     float u = fade(x), v = fade(y), w = fade(z);
     const uint8_t* P = permutation();
     int A = P[X] + Y, AA = P[A] + Z, AB = P[A + 1] + Z;
     int B = P[X + 1] + Y, BA = P[B] + Z, BB = P[B + 1] + Z;
-    return lerpf(lerpf(lerpf(grad(P[AA], x, y, z), grad(P[BA], x - 1, y, z), u),
-                       lerpf(grad(P[AB], x, y - 1, z), grad(P[BB], x - 1, y - 1, z), u), v),
-                 lerpf(lerpf(grad(P[AA + 1], x, y, z - 1), grad(P[BA + 1], x - 1, y, z - 1), u),
-                       lerpf(grad(P[AB + 1], x, y - 1, z - 1), grad(P[BB + 1], x - 1, y - 1, z - 1), u),
-                       v),
-                 w);
+    return lerpf(
+        lerpf(lerpf(grad(P[AA], x, y, z), grad(P[BA], x - 1, y, z), u),
+              lerpf(grad(P[AB], x, y - 1, z), grad(P[BB], x - 1, y - 1, z), u), v),
+        lerpf(lerpf(grad(P[AA + 1], x, y, z - 1), grad(P[BA + 1], x - 1, y, z - 1), u),
+              lerpf(grad(P[AB + 1], x, y - 1, z - 1), grad(P[BB + 1], x - 1, y - 1, z - 1), u), v),
+        w);
 }
 
 // Upper bound of |grad perlin|. The largest gradient found by 2e7 random samples followed by local

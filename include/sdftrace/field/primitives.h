@@ -52,7 +52,7 @@ SDFT_HOST_DEVICE inline float cylinder(Vec3 p, const float* k) {
 SDFT_HOST_DEVICE inline float cone(Vec3 p, const float* k) {
     float r = k[0], h = k[1];
     float wx = std::sqrt(p.x * p.x + p.z * p.z), wy = p.y - 0.5f * h;  // apex at origin
-    float qx = r, qy = -h;                                               // apex to base rim
+    float qx = r, qy = -h;                                             // apex to base rim
     float s1 = clampf((wx * qx + wy * qy) / (qx * qx + qy * qy), 0.0f, 1.0f);
     float ax = wx - qx * s1, ay = wy - qy * s1;  // to the slanted side
     float s2 = clampf(wx / qx, 0.0f, 1.0f);
@@ -112,8 +112,8 @@ SDFT_HOST_DEVICE inline float blobFalloff(float u) {
 // Blobs / metaballs (Liktor 2008, fig. 1). k: threshold T, 1/L, count n, then n x (center (3),
 // support radius R, strength s). The density sum D(p) = sum s_i w(|p-c_i|/R_i) is Lipschitz with
 // L = sum s_i * 1.7173 / R_i, so (T - D)/L is a distance bound (Hart 1996). Taking the max with the
-// distance to the nearest support sphere (the surface lies inside the supports) keeps it a bound and
-// lets rays far from the blobs take long steps.
+// distance to the nearest support sphere (the surface lies inside the supports) keeps it a bound
+// and lets rays far from the blobs take long steps.
 SDFT_HOST_DEVICE inline float blobs(Vec3 p, const float* k) {
     float threshold = k[0], invL = k[1];
     int n = static_cast<int>(k[2]);

@@ -14,18 +14,38 @@ namespace sdft {
 
 enum class Op : uint8_t {
     // primitives: out(scalar) = f(point a), constants at k
-    Sphere, Box, RoundBox, Torus, Capsule, Cylinder, Cone, Plane, Ellipsoid, Octahedron,
-    Dodecahedron, Blobs,
+    Sphere,
+    Box,
+    RoundBox,
+    Torus,
+    Capsule,
+    Cylinder,
+    Cone,
+    Plane,
+    Ellipsoid,
+    Octahedron,
+    Dodecahedron,
+    Blobs,
     // scalar binary: out = op(a, b)
-    Union, Intersection, Difference, SmoothUnion, SmoothIntersection, SmoothDifference, Morph,
+    Union,
+    Intersection,
+    Difference,
+    SmoothUnion,
+    SmoothIntersection,
+    SmoothDifference,
+    Morph,
     // scalar unary
-    Complement,    // out = -a
-    ScaleValue,    // out = a * k[0]
-    RepeatBound,   // out = min(a, neighbour bound of point b)
-    Displace,      // out = a + amplitude * fbm(point b * frequency)
+    Complement,   // out = -a
+    ScaleValue,   // out = a * k[0]
+    RepeatBound,  // out = min(a, neighbour bound of point b)
+    Displace,     // out = a + amplitude * fbm(point b * frequency)
     // point: out(point) = T(point a)
-    Translate, Rotate, ScalePoint, RepeatPoint,
-    // control: skip the next (smooth) union operand when its bounds (constants k[0..5]) are at least
+    Translate,
+    Rotate,
+    ScalePoint,
+    RepeatPoint,
+    // control: skip the next (smooth) union operand when its bounds (constants k[0..5]) are at
+    // least
     // the running minimum in scalar b plus the margin k[6] away from point a; jump to `jump`.
     // See decision 0002.
     CullIfFar,
@@ -61,13 +81,13 @@ struct MaterialBlend {
 
 // Scratch registers for evalBatch; one per thread, reused across calls.
 struct BatchScratch {
-    std::vector<float> points;   // numPointRegs * 3 * kBatchWidth
-    std::vector<float> scalars;  // numScalarRegs * kBatchWidth
-    std::vector<uint8_t> culled; // numCulls * kBatchWidth: lanes that skipped an operand
+    std::vector<float> points;    // numPointRegs * 3 * kBatchWidth
+    std::vector<float> scalars;   // numScalarRegs * kBatchWidth
+    std::vector<uint8_t> culled;  // numCulls * kBatchWidth: lanes that skipped an operand
 };
 
 class Tape {
-public:
+  public:
     static constexpr int kBatchWidth = 64;
 
     float eval(Vec3 p) const;
@@ -83,7 +103,7 @@ public:
     int numScalarRegs() const { return m_numScalarRegs; }
     int numCulls() const { return m_numCulls; }
 
-private:
+  private:
     friend Tape compileTape(const NodePtr& root, const CompileOptions& options);
     template <bool kMaterial>
     float evalScalar(Vec3 p, MaterialBlend* blend) const;

@@ -23,10 +23,11 @@ SDFT_HOST_DEVICE inline Vec3 repeatPoint(Vec3 p, const float* k) {
 
 // Lower bound of the distance from p to the copies in *other* cells: the distance to the walls of
 // p's cell that have a neighbour behind them, plus the gap between a cell wall and the child's
-// bounds (gap = min_i c_i/2 - extent_i >= 0, checked when the node is built). Taking the min of this
-// and the child's value makes mod-style repetition a true distance bound even where a neighbouring
-// copy is nearer than the cell's own copy. Every copy also lies in the array's bounds, so the
-// distance to those bounds is a second lower bound; the max of the two is tight outside the array.
+// bounds (gap = min_i c_i/2 - extent_i >= 0, checked when the node is built). Taking the min of
+// this and the child's value makes mod-style repetition a true distance bound even where a
+// neighbouring copy is nearer than the cell's own copy. Every copy also lies in the array's bounds,
+// so the distance to those bounds is a second lower bound; the max of the two is tight outside the
+// array.
 SDFT_HOST_DEVICE inline float boxDistance(Vec3 p, const float* k);
 SDFT_HOST_DEVICE inline float repeatNeighbourBound(Vec3 p, const float* k) {
     float d = 1e30f;

@@ -7,7 +7,7 @@
 namespace sdft {
 
 class AtomicOutput {
-public:
+  public:
     explicit AtomicOutput(std::string finalPath);
     ~AtomicOutput();  // removes the temporary file unless commit() succeeded
     AtomicOutput(const AtomicOutput&) = delete;
@@ -16,7 +16,7 @@ public:
     const std::string& tempPath() const { return m_temp; }
     void commit();  // rename over the final path; throws InputError on failure
 
-private:
+  private:
     std::string m_final, m_temp;
     bool m_committed = false;
 };

@@ -41,13 +41,15 @@ struct Bounds3 {
     }
 };
 
-inline Bounds3 unite(const Bounds3& a, const Bounds3& b) { return {min(a.lo, b.lo), max(a.hi, b.hi)}; }
+inline Bounds3 unite(const Bounds3& a, const Bounds3& b) {
+    return {min(a.lo, b.lo), max(a.hi, b.hi)};
+}
 inline Bounds3 intersect(const Bounds3& a, const Bounds3& b) {
     return {max(a.lo, b.lo), min(a.hi, b.hi)};
 }
 
-// Slab test. Returns false when the ray misses; otherwise [t0, t1] is the overlap with [tMin, tMax].
-// Handles infinite slabs and zero direction components.
+// Slab test. Returns false when the ray misses; otherwise [t0, t1] is the overlap with [tMin,
+// tMax]. Handles infinite slabs and zero direction components.
 SDFT_HOST_DEVICE inline bool intersectBounds(const Bounds3& b, const Ray& r, float tMin, float tMax,
                                              float& t0, float& t1) {
     t0 = tMin;

@@ -48,7 +48,9 @@ SDFT_HOST_DEVICE inline Vec3 normalize(Vec3 a) {
     float len = length(a);
     return len > 0 ? a / len : Vec3(0, 0, 0);
 }
-SDFT_HOST_DEVICE inline Vec3 abs(Vec3 a) { return {std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)}; }
+SDFT_HOST_DEVICE inline Vec3 abs(Vec3 a) {
+    return {std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)};
+}
 SDFT_HOST_DEVICE inline Vec3 min(Vec3 a, Vec3 b) {
     return {minf(a.x, b.x), minf(a.y, b.y), minf(a.z, b.z)};
 }
@@ -62,9 +64,7 @@ SDFT_HOST_DEVICE inline Vec3 lerp(Vec3 a, Vec3 b, float t) { return a + (b - a) 
 SDFT_HOST_DEVICE inline bool isFinite(Vec3 a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
-SDFT_HOST_DEVICE inline float clampf(float v, float lo, float hi) {
-    return minf(maxf(v, lo), hi);
-}
+SDFT_HOST_DEVICE inline float clampf(float v, float lo, float hi) { return minf(maxf(v, lo), hi); }
 
 // Row-major 3x3 matrix (rotations).
 struct Mat3 {

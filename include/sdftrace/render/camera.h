@@ -1,5 +1,5 @@
-// Pinhole camera (DESIGN.md conventions): eye, target, up, vertical fov in degrees. Pixel (x, y) has
-// its centre at (x + 0.5, y + 0.5); row 0 is the top of the image; primary directions are unit.
+// Pinhole camera (DESIGN.md conventions): eye, target, up, vertical fov in degrees. Pixel (x, y)
+// has its centre at (x + 0.5, y + 0.5); row 0 is the top of the image; primary directions are unit.
 #pragma once
 
 #include <cmath>
@@ -18,7 +18,7 @@ struct CameraDesc {
 };
 
 class Camera {
-public:
+  public:
     explicit Camera(const CameraDesc& d) : m_desc(d) {
         m_forward = normalize(d.target - d.eye);
         m_right = normalize(cross(m_forward, d.up));
@@ -39,7 +39,7 @@ public:
     float pixelRadius() const { return m_tanHalf / m_desc.height; }
     const CameraDesc& desc() const { return m_desc; }
 
-private:
+  private:
     CameraDesc m_desc;
     Vec3 m_forward, m_right, m_up;
     float m_tanHalf = 1, m_aspect = 1;

@@ -11,9 +11,9 @@ namespace sdft {
 struct Material {
     std::string name;
     Vec3 color{0.8f, 0.8f, 0.8f};  // base (diffuse) colour, linear RGB
-    float diffuse = 1.0f;           // Lambert weight
-    float specular = 0.2f;          // Blinn-Phong weight
-    float shininess = 32.0f;        // Blinn-Phong exponent
+    float diffuse = 1.0f;          // Lambert weight
+    float specular = 0.2f;         // Blinn-Phong weight
+    float shininess = 32.0f;       // Blinn-Phong exponent
 };
 
 struct Light {
@@ -22,7 +22,7 @@ struct Light {
     Vec3 direction{-1, -1, -1};  // directional: the direction light travels
     Vec3 position{0, 5, 0};      // point
     Vec3 color{1, 1, 1};
-    float intensity = 1.0f;      // directional: irradiance scale; point: intensity (falls off as 1/d^2)
+    float intensity = 1.0f;  // directional: irradiance scale; point: intensity (falls off as 1/d^2)
     bool castShadows = true;
 };
 

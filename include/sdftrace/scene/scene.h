@@ -16,11 +16,11 @@ enum class NormalEstimator { Central, Tetrahedral };
 struct RenderSettings {
     TraceOptions trace;  // primary rays
     NormalEstimator normals = NormalEstimator::Tetrahedral;
-    bool shadows = true;          // hard shadows by tracing to each light (Liktor 2008, §4.1)
-    float maxDistance = 100.0f;   // t_max of primary rays (the scene bounds clip it further)
+    bool shadows = true;            // hard shadows by tracing to each light (Liktor 2008, §4.1)
+    float maxDistance = 100.0f;     // t_max of primary rays (the scene bounds clip it further)
     float shadowOffsetMin = 1e-3f;  // eps_min of the shadow-ray origin offset
-    bool boundsCulling = true;    // skip far union operands (docs/decisions/0002-bounds-culling.md)
-    int threads = 0;              // 0 = all hardware threads
+    bool boundsCulling = true;  // skip far union operands (docs/decisions/0002-bounds-culling.md)
+    int threads = 0;            // 0 = all hardware threads
     int tileSize = 16;
 };
 

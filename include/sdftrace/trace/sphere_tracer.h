@@ -17,10 +17,10 @@ namespace sdft {
 
 struct TraceResult {
     bool hit = false;
-    float t = kInfinity;   // distance along the unit ray direction; +inf on a miss
-    float value = 0;       // f(p) at the chosen hit point (Keinert fig. 9)
-    int evaluations = 0;   // field evaluations spent on this ray
-    int fallbacks = 0;     // over-relaxation fallbacks taken (Keinert Listing 2)
+    float t = kInfinity;  // distance along the unit ray direction; +inf on a miss
+    float value = 0;      // f(p) at the chosen hit point (Keinert fig. 9)
+    int evaluations = 0;  // field evaluations spent on this ray
+    int fallbacks = 0;    // over-relaxation fallbacks taken (Keinert Listing 2)
 };
 
 struct SphereTraceState {
@@ -63,7 +63,8 @@ SDFT_HOST_DEVICE inline void sphereTraceBegin(SphereTraceState& s, const Ray& ra
 
 namespace detail {
 
-SDFT_HOST_DEVICE inline float hitError(const SphereTraceState& s, float radius, const TraceOptions& o) {
+SDFT_HOST_DEVICE inline float hitError(const SphereTraceState& s, float radius,
+                                       const TraceOptions& o) {
     return o.screenSpace ? radius / maxf(s.t, 1e-6f) : radius;
 }
 SDFT_HOST_DEVICE inline float hitThreshold(const TraceOptions& o) {
@@ -123,7 +124,8 @@ SDFT_HOST_DEVICE inline void marchStep(SphereTraceState& s, float f, float invL,
     }
     s.steps++;
     if (o.hybrid && !sorFail && radius < o.hybridEpsilon) {
-        // Liktor 2008, §5.4: near the surface, linear search takes larger steps than sphere tracing.
+        // Liktor 2008, §5.4: near the surface, linear search takes larger steps than sphere
+        // tracing.
         s.phase = SphereTraceState::kLinear;
         s.tA = s.t;
         s.fA = signedRadius;
@@ -208,11 +210,20 @@ SDFT_HOST_DEVICE inline void sphereTraceAdvance(SphereTraceState& s, float f, fl
                                                 const TraceOptions& o) {
     s.result.evaluations++;
     switch (s.phase) {
-        case SphereTraceState::kMarch: detail::marchStep(s, f, invL, o); break;
-        case SphereTraceState::kLinear: detail::linearStep(s, f, invL, o); break;
-        case SphereTraceState::kFalsi: detail::falsiStep(s, f, invL); break;
-        case SphereTraceState::kRefine: detail::refineStep(s, f, invL, o); break;
-        case SphereTraceState::kDone: break;
+        case SphereTraceState::kMarch:
+            detail::marchStep(s, f, invL, o);
+            break;
+        case SphereTraceState::kLinear:
+            detail::linearStep(s, f, invL, o);
+            break;
+        case SphereTraceState::kFalsi:
+            detail::falsiStep(s, f, invL);
+            break;
+        case SphereTraceState::kRefine:
+            detail::refineStep(s, f, invL, o);
+            break;
+        case SphereTraceState::kDone:
+            break;
     }
 }
 

@@ -9,8 +9,8 @@ struct TraceOptions {
     float tau = 1e-3f;   // hit threshold on f/L when not using the screen-space criterion
     // Keinert et al. 2014, §3.1: step omega * f/L, with the safe fallback of Listing 2. 1 = off.
     float omega = 1.2f;
-    // Keinert et al. 2014, §3.2: pick the point with the smallest screen-space unbounding radius and
-    // stop once it is under half a pixel. Needs pixelRadius (radius of a pixel at t = 1).
+    // Keinert et al. 2014, §3.2: pick the point with the smallest screen-space unbounding radius
+    // and stop once it is under half a pixel. Needs pixelRadius (radius of a pixel at t = 1).
     bool screenSpace = true;
     float pixelRadius = 0;
     bool forceHit = false;  // return the best candidate even when it never converged

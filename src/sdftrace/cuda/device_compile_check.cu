@@ -1,6 +1,6 @@
 // Compiled only where CMake finds a CUDA compiler: proves that the header-only code a CUDA backend
-// will share (primitives, CSG operators, domain transforms, noise, the sphere-tracing state machine)
-// compiles as device code. Not linked into anything; there is no GPU backend yet.
+// will share (primitives, CSG operators, domain transforms, noise, the sphere-tracing state
+// machine) compiles as device code. Not linked into anything; there is no GPU backend yet.
 #include "sdftrace/field/noise.h"
 #include "sdftrace/field/operators.h"
 #include "sdftrace/field/primitives.h"
@@ -21,7 +21,8 @@ __global__ void traceDeviceCheck(const Ray* rays, TraceOptions options, float* d
     while (!state.done()) {
         Vec3 p = state.queryPoint();
         float h;
-        float f = ops::smoothMin(prim::sphere(p, sphereParams), prim::torus(p, torusParams), 0.2f, h);
+        float f =
+            ops::smoothMin(prim::sphere(p, sphereParams), prim::torus(p, torusParams), 0.2f, h);
         f += 0.02f * noise::fbm(p * 3.0f, 2, 0.5f);
         sphereTraceAdvance(state, f, 1.0f / 1.5f, options);
     }

@@ -15,31 +15,56 @@ bool isPrimitive(NodeKind kind) { return kind <= NodeKind::Blobs; }
 
 const char* nodeKindName(NodeKind kind) {
     switch (kind) {
-        case NodeKind::Sphere: return "sphere";
-        case NodeKind::Box: return "box";
-        case NodeKind::RoundBox: return "round_box";
-        case NodeKind::Torus: return "torus";
-        case NodeKind::Capsule: return "capsule";
-        case NodeKind::Cylinder: return "cylinder";
-        case NodeKind::Cone: return "cone";
-        case NodeKind::Plane: return "plane";
-        case NodeKind::Ellipsoid: return "ellipsoid";
-        case NodeKind::Octahedron: return "octahedron";
-        case NodeKind::Dodecahedron: return "dodecahedron";
-        case NodeKind::Blobs: return "blobs";
-        case NodeKind::Union: return "union";
-        case NodeKind::Intersection: return "intersection";
-        case NodeKind::Difference: return "difference";
-        case NodeKind::Complement: return "complement";
-        case NodeKind::SmoothUnion: return "smooth_union";
-        case NodeKind::SmoothIntersection: return "smooth_intersection";
-        case NodeKind::SmoothDifference: return "smooth_difference";
-        case NodeKind::Morph: return "morph";
-        case NodeKind::Translate: return "translate";
-        case NodeKind::Rotate: return "rotate";
-        case NodeKind::Scale: return "scale";
-        case NodeKind::Repeat: return "repeat";
-        case NodeKind::Displace: return "displace";
+        case NodeKind::Sphere:
+            return "sphere";
+        case NodeKind::Box:
+            return "box";
+        case NodeKind::RoundBox:
+            return "round_box";
+        case NodeKind::Torus:
+            return "torus";
+        case NodeKind::Capsule:
+            return "capsule";
+        case NodeKind::Cylinder:
+            return "cylinder";
+        case NodeKind::Cone:
+            return "cone";
+        case NodeKind::Plane:
+            return "plane";
+        case NodeKind::Ellipsoid:
+            return "ellipsoid";
+        case NodeKind::Octahedron:
+            return "octahedron";
+        case NodeKind::Dodecahedron:
+            return "dodecahedron";
+        case NodeKind::Blobs:
+            return "blobs";
+        case NodeKind::Union:
+            return "union";
+        case NodeKind::Intersection:
+            return "intersection";
+        case NodeKind::Difference:
+            return "difference";
+        case NodeKind::Complement:
+            return "complement";
+        case NodeKind::SmoothUnion:
+            return "smooth_union";
+        case NodeKind::SmoothIntersection:
+            return "smooth_intersection";
+        case NodeKind::SmoothDifference:
+            return "smooth_difference";
+        case NodeKind::Morph:
+            return "morph";
+        case NodeKind::Translate:
+            return "translate";
+        case NodeKind::Rotate:
+            return "rotate";
+        case NodeKind::Scale:
+            return "scale";
+        case NodeKind::Repeat:
+            return "repeat";
+        case NodeKind::Displace:
+            return "displace";
     }
     return "?";
 }
@@ -93,7 +118,9 @@ NodePtr intersect(std::vector<NodePtr> c) {
 }
 NodePtr subtract(NodePtr a, NodePtr b) { return make(NodeKind::Difference, {}, {a, b}); }
 NodePtr complement(NodePtr a) { return make(NodeKind::Complement, {}, {a}); }
-NodePtr smoothUnion(NodePtr a, NodePtr b, float k) { return make(NodeKind::SmoothUnion, {k}, {a, b}); }
+NodePtr smoothUnion(NodePtr a, NodePtr b, float k) {
+    return make(NodeKind::SmoothUnion, {k}, {a, b});
+}
 NodePtr smoothIntersection(NodePtr a, NodePtr b, float k) {
     return make(NodeKind::SmoothIntersection, {k}, {a, b});
 }
@@ -139,8 +166,9 @@ NodePtr withMaterial(NodePtr n, int material) {
 }  // namespace node
 
 // Liktor 2008, §2.2: union, intersection and complement keep the larger Lipschitz constant of
-// their operands; a transform multiplies it by the Lipschitz constant of its inverse. The scale node
-// multiplies its value by min(s), which cancels that factor (1/min s), so it keeps the child's bound.
+// their operands; a transform multiplies it by the Lipschitz constant of its inverse. The scale
+// node multiplies its value by min(s), which cancels that factor (1/min s), so it keeps the child's
+// bound.
 float lipschitzBound(const Node& n) {
     auto childL = [&](size_t i) { return lipschitzBound(*n.children[i]); };
     switch (n.kind) {
@@ -162,9 +190,12 @@ float lipschitzBound(const Node& n) {
         case NodeKind::Translate:
         case NodeKind::Rotate:
         case NodeKind::Scale:
-        case NodeKind::Repeat: return childL(0);
-        case NodeKind::Displace: return childL(0);  // renormalized, see displaceScale()
-        default: return 1.0f;  // every primitive is 1-Lipschitz (see primitives.h)
+        case NodeKind::Repeat:
+            return childL(0);
+        case NodeKind::Displace:
+            return childL(0);  // renormalized, see displaceScale()
+        default:
+            return 1.0f;  // every primitive is 1-Lipschitz (see primitives.h)
     }
 }
 
@@ -174,7 +205,8 @@ Bounds3 transformBounds(const Bounds3& b, const auto& map) {
     if (!b.finite()) return Bounds3::everything();
     Bounds3 out;
     for (int c = 0; c < 8; ++c) {
-        Vec3 corner((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+        Vec3 corner((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y,
+                    (c & 4) ? b.hi.z : b.lo.z);
         out.include(map(corner));
     }
     return out;
@@ -194,7 +226,8 @@ bool dominatesBounds(const Node& n) {
         case NodeKind::Blobs:  // max with the distance to the support spheres, inside the boxes
             return true;
         case NodeKind::Union:
-        case NodeKind::SmoothUnion: {  // the smooth union's bounds are grown by k >= the blend's dip
+        case NodeKind::SmoothUnion: {  // the smooth union's bounds are grown by k >= the blend's
+                                       // dip
             for (size_t i = 0; i < n.children.size(); ++i)
                 if (!child(i)) return false;
             return true;
@@ -203,16 +236,19 @@ bool dominatesBounds(const Node& n) {
         case NodeKind::SmoothDifference:  // max(a, -b) >= a, and the bounds are a's
         case NodeKind::Translate:
         case NodeKind::Rotate:
-        case NodeKind::Repeat: return child(0);
-        case NodeKind::Scale: return n.params[0] == n.params[1] && n.params[1] == n.params[2] && child(0);
-        default: return false;  // bounds (ellipsoid, polyhedra), intersections, morph, displace
+        case NodeKind::Repeat:
+            return child(0);
+        case NodeKind::Scale:
+            return n.params[0] == n.params[1] && n.params[1] == n.params[2] && child(0);
+        default:
+            return false;  // bounds (ellipsoid, polyhedra), intersections, morph, displace
     }
 }
 
 float displaceScale(const Node& n) {
     float child = lipschitzBound(*n.children[0]);
-    float added = noise::fbmLipschitz(n.params[0], n.params[1], static_cast<int>(n.params[2]),
-                                      n.params[3]);
+    float added =
+        noise::fbmLipschitz(n.params[0], n.params[1], static_cast<int>(n.params[2]), n.params[3]);
     return child / (child + added);
 }
 
@@ -220,10 +256,12 @@ Bounds3 nodeBounds(const Node& n) {
     const auto& k = n.params;
     auto child = [&](size_t i) { return nodeBounds(*n.children[i]); };
     switch (n.kind) {
-        case NodeKind::Sphere: return {Vec3(-k[0]), Vec3(k[0])};
+        case NodeKind::Sphere:
+            return {Vec3(-k[0]), Vec3(k[0])};
         case NodeKind::Box:
         case NodeKind::RoundBox:
-        case NodeKind::Ellipsoid: return {Vec3(-k[0], -k[1], -k[2]), Vec3(k[0], k[1], k[2])};
+        case NodeKind::Ellipsoid:
+            return {Vec3(-k[0], -k[1], -k[2]), Vec3(k[0], k[1], k[2])};
         case NodeKind::Torus: {
             Vec3 e(k[0] + k[1], k[1], k[0] + k[1]);
             return {-e, e};
@@ -234,8 +272,10 @@ Bounds3 nodeBounds(const Node& n) {
             b.include({k[3], k[4], k[5]});
             return b.expanded(k[6]);
         }
-        case NodeKind::Cylinder: return {Vec3(-k[0], -k[1], -k[0]), Vec3(k[0], k[1], k[0])};
-        case NodeKind::Cone: return {Vec3(-k[0], -0.5f * k[1], -k[0]), Vec3(k[0], 0.5f * k[1], k[0])};
+        case NodeKind::Cylinder:
+            return {Vec3(-k[0], -k[1], -k[0]), Vec3(k[0], k[1], k[0])};
+        case NodeKind::Cone:
+            return {Vec3(-k[0], -0.5f * k[1], -k[0]), Vec3(k[0], 0.5f * k[1], k[0])};
         case NodeKind::Plane: {
             // Solid half-space n.p + d <= 0: bounded only along an axis-aligned normal.
             Bounds3 b = Bounds3::everything();
@@ -243,12 +283,15 @@ Bounds3 nodeBounds(const Node& n) {
                 Vec3 axis(0.0f);
                 axis[a] = 1;
                 if (std::fabs(dot(Vec3(k[0], k[1], k[2]), axis)) < 0.999999f) continue;
-                if (k[a] > 0) b.hi[a] = -k[3] / k[a];
-                else b.lo[a] = -k[3] / k[a];
+                if (k[a] > 0)
+                    b.hi[a] = -k[3] / k[a];
+                else
+                    b.lo[a] = -k[3] / k[a];
             }
             return b;
         }
-        case NodeKind::Octahedron: return {Vec3(-k[0]), Vec3(k[0])};
+        case NodeKind::Octahedron:
+            return {Vec3(-k[0]), Vec3(k[0])};
         case NodeKind::Dodecahedron: {
             float r = k[0] * prim::kDodecahedronCircumPerInradius;
             return {Vec3(-r), Vec3(r)};
@@ -277,10 +320,13 @@ Bounds3 nodeBounds(const Node& n) {
             for (size_t i = 0; i < n.children.size(); ++i) b = intersect(b, child(i));
             return b;
         }
-        case NodeKind::SmoothIntersection: return intersect(child(0), child(1));
+        case NodeKind::SmoothIntersection:
+            return intersect(child(0), child(1));
         case NodeKind::Difference:
-        case NodeKind::SmoothDifference: return child(0);
-        case NodeKind::Complement: return Bounds3::everything();
+        case NodeKind::SmoothDifference:
+            return child(0);
+        case NodeKind::Complement:
+            return Bounds3::everything();
         case NodeKind::Translate: {
             Vec3 t(k[0], k[1], k[2]);
             Bounds3 b = child(0);
@@ -316,18 +362,30 @@ float evalTree(const Node& n, Vec3 p) {
     auto child = [&](size_t i, Vec3 q) { return evalTree(*n.children[i], q); };
     float h;
     switch (n.kind) {
-        case NodeKind::Sphere: return prim::sphere(p, k);
-        case NodeKind::Box: return prim::box(p, k);
-        case NodeKind::RoundBox: return prim::roundBox(p, k);
-        case NodeKind::Torus: return prim::torus(p, k);
-        case NodeKind::Capsule: return prim::capsule(p, k);
-        case NodeKind::Cylinder: return prim::cylinder(p, k);
-        case NodeKind::Cone: return prim::cone(p, k);
-        case NodeKind::Plane: return prim::plane(p, k);
-        case NodeKind::Ellipsoid: return prim::ellipsoid(p, k);
-        case NodeKind::Octahedron: return prim::octahedron(p, k);
-        case NodeKind::Dodecahedron: return prim::dodecahedron(p, k);
-        case NodeKind::Blobs: return prim::blobs(p, k);
+        case NodeKind::Sphere:
+            return prim::sphere(p, k);
+        case NodeKind::Box:
+            return prim::box(p, k);
+        case NodeKind::RoundBox:
+            return prim::roundBox(p, k);
+        case NodeKind::Torus:
+            return prim::torus(p, k);
+        case NodeKind::Capsule:
+            return prim::capsule(p, k);
+        case NodeKind::Cylinder:
+            return prim::cylinder(p, k);
+        case NodeKind::Cone:
+            return prim::cone(p, k);
+        case NodeKind::Plane:
+            return prim::plane(p, k);
+        case NodeKind::Ellipsoid:
+            return prim::ellipsoid(p, k);
+        case NodeKind::Octahedron:
+            return prim::octahedron(p, k);
+        case NodeKind::Dodecahedron:
+            return prim::dodecahedron(p, k);
+        case NodeKind::Blobs:
+            return prim::blobs(p, k);
         case NodeKind::Union: {
             float v = child(0, p);
             for (size_t i = 1; i < n.children.size(); ++i) v = minf(v, child(i, p));
@@ -338,13 +396,20 @@ float evalTree(const Node& n, Vec3 p) {
             for (size_t i = 1; i < n.children.size(); ++i) v = maxf(v, child(i, p));
             return v;
         }
-        case NodeKind::Difference: return maxf(child(0, p), -child(1, p));
-        case NodeKind::Complement: return -child(0, p);
-        case NodeKind::SmoothUnion: return ops::smoothMin(child(0, p), child(1, p), k[0], h);
-        case NodeKind::SmoothIntersection: return ops::smoothMax(child(0, p), child(1, p), k[0], h);
-        case NodeKind::SmoothDifference: return ops::smoothMax(child(0, p), -child(1, p), k[0], h);
-        case NodeKind::Morph: return (1 - k[0]) * child(0, p) + k[0] * child(1, p);
-        case NodeKind::Translate: return child(0, p - Vec3(k[0], k[1], k[2]));
+        case NodeKind::Difference:
+            return maxf(child(0, p), -child(1, p));
+        case NodeKind::Complement:
+            return -child(0, p);
+        case NodeKind::SmoothUnion:
+            return ops::smoothMin(child(0, p), child(1, p), k[0], h);
+        case NodeKind::SmoothIntersection:
+            return ops::smoothMax(child(0, p), child(1, p), k[0], h);
+        case NodeKind::SmoothDifference:
+            return ops::smoothMax(child(0, p), -child(1, p), k[0], h);
+        case NodeKind::Morph:
+            return (1 - k[0]) * child(0, p) + k[0] * child(1, p);
+        case NodeKind::Translate:
+            return child(0, p - Vec3(k[0], k[1], k[2]));
         case NodeKind::Rotate: {
             Mat3 r;
             for (int i = 0; i < 9; ++i) r.m[i / 3][i % 3] = k[i];

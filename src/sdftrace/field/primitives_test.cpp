@@ -59,10 +59,11 @@ void checkAgainstSamples(const Case& c, float queryHalfSize, uint32_t seed) {
         if (d > c.tolerance) {  // sign is only well defined away from the surface
             EXPECT_EQ(f < 0, in) << c.name << " sign at " << p.x << "," << p.y << "," << p.z;
         }
-        EXPECT_LE(std::fabs(f), d + 1e-4f) << c.name << " exceeds the distance at " << p.x << ","
-                                           << p.y << "," << p.z;
+        EXPECT_LE(std::fabs(f), d + 1e-4f)
+            << c.name << " exceeds the distance at " << p.x << "," << p.y << "," << p.z;
         if (c.exact) {
-            EXPECT_GE(std::fabs(f), d - c.tolerance) << c.name << " at " << p.x << "," << p.y << "," << p.z;
+            EXPECT_GE(std::fabs(f), d - c.tolerance)
+                << c.name << " at " << p.x << "," << p.y << "," << p.z;
         }
         ++checked;
     }
@@ -75,52 +76,64 @@ TEST(Primitives, MatchSampledDistances) {
     auto star = [&](const char* name, NodePtr node, Inside in, float reach, bool exact) {
         cases.push_back({name, node, in, sampleStarShaped(in, reach, n, 7), exact, 0.035f});
     };
-    star("sphere", node::sphere(0.8f), [](Vec3 p) { return length(p) < 0.8f; }, 2, true);
-    star("box", node::box({0.5f, 0.3f, 0.7f}),
-         [](Vec3 p) { return std::fabs(p.x) < 0.5f && std::fabs(p.y) < 0.3f && std::fabs(p.z) < 0.7f; }, 2,
-         true);
-    star("round_box", node::roundBox({0.6f, 0.4f, 0.5f}, 0.15f),
-         [](Vec3 p) {
-             Vec3 q = max(abs(p) - Vec3(0.45f, 0.25f, 0.35f), 0.0f);
-             return length(q) < 0.15f;
-         },
-         2, true);
-    star("cylinder", node::cylinder(0.5f, 0.4f),
-         [](Vec3 p) { return p.x * p.x + p.z * p.z < 0.25f && std::fabs(p.y) < 0.4f; }, 2, true);
-    star("cone", node::cone(0.5f, 1.0f),
-         [](Vec3 p) {
-             // radius shrinks linearly from 0.5 at y = -0.5 to 0 at y = +0.5
-             float r = 0.5f * (0.5f - p.y);
-             return p.y > -0.5f && p.y < 0.5f && std::sqrt(p.x * p.x + p.z * p.z) < r;
-         },
-         2, true);
-    star("ellipsoid", node::ellipsoid({0.8f, 0.4f, 0.5f}),
-         [](Vec3 p) { return length(p / Vec3(0.8f, 0.4f, 0.5f)) < 1; }, 2, false);
-    star("octahedron", node::octahedron(0.7f),
-         [](Vec3 p) { return std::fabs(p.x) + std::fabs(p.y) + std::fabs(p.z) < 0.7f; }, 2, false);
+    star(
+        "sphere", node::sphere(0.8f), [](Vec3 p) { return length(p) < 0.8f; }, 2, true);
+    star(
+        "box", node::box({0.5f, 0.3f, 0.7f}),
+        [](Vec3 p) {
+            return std::fabs(p.x) < 0.5f && std::fabs(p.y) < 0.3f && std::fabs(p.z) < 0.7f;
+        },
+        2, true);
+    star(
+        "round_box", node::roundBox({0.6f, 0.4f, 0.5f}, 0.15f),
+        [](Vec3 p) {
+            Vec3 q = max(abs(p) - Vec3(0.45f, 0.25f, 0.35f), 0.0f);
+            return length(q) < 0.15f;
+        },
+        2, true);
+    star(
+        "cylinder", node::cylinder(0.5f, 0.4f),
+        [](Vec3 p) { return p.x * p.x + p.z * p.z < 0.25f && std::fabs(p.y) < 0.4f; }, 2, true);
+    star(
+        "cone", node::cone(0.5f, 1.0f),
+        [](Vec3 p) {
+            // radius shrinks linearly from 0.5 at y = -0.5 to 0 at y = +0.5
+            float r = 0.5f * (0.5f - p.y);
+            return p.y > -0.5f && p.y < 0.5f && std::sqrt(p.x * p.x + p.z * p.z) < r;
+        },
+        2, true);
+    star(
+        "ellipsoid", node::ellipsoid({0.8f, 0.4f, 0.5f}),
+        [](Vec3 p) { return length(p / Vec3(0.8f, 0.4f, 0.5f)) < 1; }, 2, false);
+    star(
+        "octahedron", node::octahedron(0.7f),
+        [](Vec3 p) { return std::fabs(p.x) + std::fabs(p.y) + std::fabs(p.z) < 0.7f; }, 2, false);
     {
         const float phi = 1.618033988749895f;
-        Vec3 normals[6] = {{0, 1, phi}, {0, 1, -phi}, {1, phi, 0}, {1, -phi, 0}, {phi, 0, 1}, {-phi, 0, 1}};
-        star("dodecahedron", node::dodecahedron(0.5f),
-             [normals](Vec3 p) {
-                 for (Vec3 nn : normals)
-                     if (std::fabs(dot(normalize(nn), p)) >= 0.5f) return false;
-                 return true;
-             },
-             2, false);
+        Vec3 normals[6] = {{0, 1, phi},  {0, 1, -phi}, {1, phi, 0},
+                           {1, -phi, 0}, {phi, 0, 1},  {-phi, 0, 1}};
+        star(
+            "dodecahedron", node::dodecahedron(0.5f),
+            [normals](Vec3 p) {
+                for (Vec3 nn : normals)
+                    if (std::fabs(dot(normalize(nn), p)) >= 0.5f) return false;
+                return true;
+            },
+            2, false);
     }
     {
         std::vector<node::Blob> list = {{{0, 0, 0}, 0.8f, 1.0f}, {{0.3f, 0.1f, 0}, 0.6f, 1.0f}};
-        star("blobs", node::blobs(list, 0.5f),
-             [list](Vec3 p) {
-                 float density = 0;
-                 for (const auto& b : list) {
-                     float u = length(p - b.center) / b.radius;
-                     if (u < 1) density += b.strength * (1 - u * u) * (1 - u * u) * (1 - u * u);
-                 }
-                 return density > 0.5f;
-             },
-             2, false);
+        star(
+            "blobs", node::blobs(list, 0.5f),
+            [list](Vec3 p) {
+                float density = 0;
+                for (const auto& b : list) {
+                    float u = length(p - b.center) / b.radius;
+                    if (u < 1) density += b.strength * (1 - u * u) * (1 - u * u) * (1 - u * u);
+                }
+                return density > 0.5f;
+            },
+            2, false);
     }
     // Not star-shaped: parametric samples.
     {
@@ -148,7 +161,8 @@ TEST(Primitives, MatchSampledDistances) {
             float t = rng.uniform(-0.3f, 1.3f);
             Vec3 c = a + (b - a) * clampf(t, 0, 1);
             Vec3 dir = rng.direction();
-            if (t >= 0 && t <= 1) dir = normalize(dir - normalize(b - a) * dot(dir, normalize(b - a)));
+            if (t >= 0 && t <= 1)
+                dir = normalize(dir - normalize(b - a) * dot(dir, normalize(b - a)));
             pts.push_back(c + dir * 0.25f);
         }
         cases.push_back({"capsule", node::capsule(a, b, 0.25f),
@@ -174,10 +188,14 @@ TEST(Primitives, PlaneIsSignedDistanceToTheHalfSpace) {
 TEST(Primitives, BoundsContainTheSurface) {
     // Every point where a primitive's value is negative lies inside its bounds.
     testing::Rng rng(11);
-    std::vector<NodePtr> nodes = {node::sphere(0.5f), node::box({0.3f, 0.4f, 0.5f}),
-                                  node::torus(0.6f, 0.2f), node::cone(0.4f, 1.0f),
-                                  node::dodecahedron(0.5f), node::ellipsoid({0.7f, 0.2f, 0.3f}),
-                                  node::capsule({0, 0, 0}, {0.5f, 0.5f, 0}, 0.2f), node::octahedron(0.6f)};
+    std::vector<NodePtr> nodes = {node::sphere(0.5f),
+                                  node::box({0.3f, 0.4f, 0.5f}),
+                                  node::torus(0.6f, 0.2f),
+                                  node::cone(0.4f, 1.0f),
+                                  node::dodecahedron(0.5f),
+                                  node::ellipsoid({0.7f, 0.2f, 0.3f}),
+                                  node::capsule({0, 0, 0}, {0.5f, 0.5f, 0}, 0.2f),
+                                  node::octahedron(0.6f)};
     for (const NodePtr& n : nodes) {
         Bounds3 b = nodeBounds(*n);
         for (int i = 0; i < 20000; ++i) {

@@ -15,7 +15,7 @@ constexpr int kMaxScalarRegs = 64;
 constexpr int kMaxPointRegs = 32;
 
 class Compiler {
-public:
+  public:
     Compiler(std::vector<Instr>& instrs, std::vector<float>& consts, const CompileOptions& options)
         : m_instrs(instrs), m_consts(consts), m_options(options) {}
 
@@ -24,7 +24,7 @@ public:
     int scalarRegs() const { return m_nextScalar; }
     int culls() const { return m_numCulls; }
 
-private:
+  private:
     uint16_t allocScalar() { return alloc(m_freeScalar, m_nextScalar, kMaxScalarRegs); }
     uint16_t allocPoint() { return alloc(m_freePoint, m_nextPoint, kMaxPointRegs); }
     static uint16_t alloc(std::vector<uint16_t>& freeList, int& next, int limit) {
@@ -74,8 +74,12 @@ private:
     int m_nextPoint = 1;  // point register 0 is the input point
 };
 
+static_assert(static_cast<int>(Op::Blobs) - static_cast<int>(Op::Sphere) ==
+                  static_cast<int>(NodeKind::Blobs) - static_cast<int>(NodeKind::Sphere),
+              "NodeKind and Op must list the primitives in the same order");
+
 Op primitiveOp(NodeKind kind) {
-    // NodeKind and Op list the primitives in the same order.
+    // NodeKind and Op list the primitives in the same order (checked above).
     return static_cast<Op>(static_cast<int>(kind) - static_cast<int>(NodeKind::Sphere) +
                            static_cast<int>(Op::Sphere));
 }
@@ -98,13 +102,20 @@ uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
         return acc;
     };
     switch (n.kind) {
-        case NodeKind::Union: return emitUnion(n, point, material);
-        case NodeKind::Intersection: return binary(Op::Intersection, {});
-        case NodeKind::Difference: return binary(Op::Difference, {});
-        case NodeKind::SmoothUnion: return emitSmoothUnion(n, point, material);
-        case NodeKind::SmoothIntersection: return binary(Op::SmoothIntersection, n.params);
-        case NodeKind::SmoothDifference: return binary(Op::SmoothDifference, n.params);
-        case NodeKind::Morph: return binary(Op::Morph, n.params);
+        case NodeKind::Union:
+            return emitUnion(n, point, material);
+        case NodeKind::Intersection:
+            return binary(Op::Intersection, {});
+        case NodeKind::Difference:
+            return binary(Op::Difference, {});
+        case NodeKind::SmoothUnion:
+            return emitSmoothUnion(n, point, material);
+        case NodeKind::SmoothIntersection:
+            return binary(Op::SmoothIntersection, n.params);
+        case NodeKind::SmoothDifference:
+            return binary(Op::SmoothDifference, n.params);
+        case NodeKind::Morph:
+            return binary(Op::Morph, n.params);
         case NodeKind::Complement: {
             uint16_t r = emit(*n.children[0], point, material);
             push(Op::Complement, r, r, 0, 0);
@@ -151,7 +162,8 @@ uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
             push(Op::ScaleValue, r, r, 0, addConsts({displaceScale(n)}));
             return r;
         }
-        default: break;
+        default:
+            break;
     }
     SDFT_CHECK(false && "unhandled node kind");
     return 0;
@@ -167,7 +179,8 @@ uint16_t Compiler::emitUnion(const Node& n, uint16_t point, int material) {
     std::stable_partition(order.begin(), order.end(),
                           [](const Node* c) { return !nodeBounds(*c).finite(); });
     uint16_t acc = emit(*order[0], point, material);
-    for (size_t i = 1; i < order.size(); ++i) emitGuarded(Op::Union, acc, *order[i], point, material, 0, true, {});
+    for (size_t i = 1; i < order.size(); ++i)
+        emitGuarded(Op::Union, acc, *order[i], point, material, 0, true, {});
     return acc;
 }
 

@@ -16,46 +16,76 @@ constexpr int kMaxPointRegs = 32;
 
 float evalPrimitive(Op op, Vec3 p, const float* k) {
     switch (op) {
-        case Op::Sphere: return prim::sphere(p, k);
-        case Op::Box: return prim::box(p, k);
-        case Op::RoundBox: return prim::roundBox(p, k);
-        case Op::Torus: return prim::torus(p, k);
-        case Op::Capsule: return prim::capsule(p, k);
-        case Op::Cylinder: return prim::cylinder(p, k);
-        case Op::Cone: return prim::cone(p, k);
-        case Op::Plane: return prim::plane(p, k);
-        case Op::Ellipsoid: return prim::ellipsoid(p, k);
-        case Op::Octahedron: return prim::octahedron(p, k);
-        case Op::Dodecahedron: return prim::dodecahedron(p, k);
-        case Op::Blobs: return prim::blobs(p, k);
-        default: return 0;
+        case Op::Sphere:
+            return prim::sphere(p, k);
+        case Op::Box:
+            return prim::box(p, k);
+        case Op::RoundBox:
+            return prim::roundBox(p, k);
+        case Op::Torus:
+            return prim::torus(p, k);
+        case Op::Capsule:
+            return prim::capsule(p, k);
+        case Op::Cylinder:
+            return prim::cylinder(p, k);
+        case Op::Cone:
+            return prim::cone(p, k);
+        case Op::Plane:
+            return prim::plane(p, k);
+        case Op::Ellipsoid:
+            return prim::ellipsoid(p, k);
+        case Op::Octahedron:
+            return prim::octahedron(p, k);
+        case Op::Dodecahedron:
+            return prim::dodecahedron(p, k);
+        case Op::Blobs:
+            return prim::blobs(p, k);
+        default:
+            return 0;
     }
 }
 
 // Binary scalar ops. `h` returns the weight of `a` for material blending.
 inline float evalBinary(Op op, float a, float b, const float* k, float& h) {
     switch (op) {
-        case Op::Union: h = a <= b ? 1.f : 0.f; return minf(a, b);
-        case Op::Intersection: h = a >= b ? 1.f : 0.f; return maxf(a, b);
-        case Op::Difference: h = a >= -b ? 1.f : 0.f; return maxf(a, -b);
-        case Op::SmoothUnion: return ops::smoothMin(a, b, k[0], h);
-        case Op::SmoothIntersection: return ops::smoothMax(a, b, k[0], h);
-        case Op::SmoothDifference: return ops::smoothMax(a, -b, k[0], h);
-        case Op::Morph: h = 1 - k[0]; return (1 - k[0]) * a + k[0] * b;
-        default: h = 1; return a;
+        case Op::Union:
+            h = a <= b ? 1.f : 0.f;
+            return minf(a, b);
+        case Op::Intersection:
+            h = a >= b ? 1.f : 0.f;
+            return maxf(a, b);
+        case Op::Difference:
+            h = a >= -b ? 1.f : 0.f;
+            return maxf(a, -b);
+        case Op::SmoothUnion:
+            return ops::smoothMin(a, b, k[0], h);
+        case Op::SmoothIntersection:
+            return ops::smoothMax(a, b, k[0], h);
+        case Op::SmoothDifference:
+            return ops::smoothMax(a, -b, k[0], h);
+        case Op::Morph:
+            h = 1 - k[0];
+            return (1 - k[0]) * a + k[0] * b;
+        default:
+            h = 1;
+            return a;
     }
 }
 
 inline Vec3 evalPointOp(Op op, Vec3 p, const float* k) {
     switch (op) {
-        case Op::Translate: return p - Vec3(k[0], k[1], k[2]);
+        case Op::Translate:
+            return p - Vec3(k[0], k[1], k[2]);
         case Op::Rotate: {
             return {k[0] * p.x + k[1] * p.y + k[2] * p.z, k[3] * p.x + k[4] * p.y + k[5] * p.z,
                     k[6] * p.x + k[7] * p.y + k[8] * p.z};
         }
-        case Op::ScalePoint: return p / Vec3(k[0], k[1], k[2]);
-        case Op::RepeatPoint: return xform::repeatPoint(p, k);
-        default: return p;
+        case Op::ScalePoint:
+            return p / Vec3(k[0], k[1], k[2]);
+        case Op::RepeatPoint:
+            return xform::repeatPoint(p, k);
+        default:
+            return p;
     }
 }
 
@@ -139,7 +169,8 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
         } else if (op <= Op::Morph) {
             float h;
             s[in.out] = evalBinary(op, s[in.a], s[in.b], k, h);
-            if constexpr (kMaterial) mats[in.out] = MaterialBlend::mix(mats[in.a], mats[in.b], 1 - h);
+            if constexpr (kMaterial)
+                mats[in.out] = MaterialBlend::mix(mats[in.a], mats[in.b], 1 - h);
         } else if (op == Op::Complement) {
             s[in.out] = -s[in.a];
         } else if (op == Op::ScaleValue) {
@@ -192,12 +223,12 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
     std::copy(z, z + n, pz(0));
     const float* consts = m_consts.data();
 
-#define SDFT_PRIM_CASE(OP, FN)                                                   \
-    case Op::OP: {                                                               \
-        const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);              \
-        float* o = sr(in.out);                                                   \
+#define SDFT_PRIM_CASE(OP, FN)                                                     \
+    case Op::OP: {                                                                 \
+        const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);                \
+        float* o = sr(in.out);                                                     \
         for (int l = 0; l < n; ++l) o[l] = prim::FN(Vec3(ax[l], ay[l], az[l]), k); \
-        break;                                                                   \
+        break;                                                                     \
     }
 
     const size_t count = m_instrs.size();
@@ -223,18 +254,18 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 if (skipped == n) pc = in.jump - 1;
                 break;
             }
-            SDFT_PRIM_CASE(Sphere, sphere)
-            SDFT_PRIM_CASE(Box, box)
-            SDFT_PRIM_CASE(RoundBox, roundBox)
-            SDFT_PRIM_CASE(Torus, torus)
-            SDFT_PRIM_CASE(Capsule, capsule)
-            SDFT_PRIM_CASE(Cylinder, cylinder)
-            SDFT_PRIM_CASE(Cone, cone)
-            SDFT_PRIM_CASE(Plane, plane)
-            SDFT_PRIM_CASE(Ellipsoid, ellipsoid)
-            SDFT_PRIM_CASE(Octahedron, octahedron)
-            SDFT_PRIM_CASE(Dodecahedron, dodecahedron)
-            SDFT_PRIM_CASE(Blobs, blobs)
+                SDFT_PRIM_CASE(Sphere, sphere)
+                SDFT_PRIM_CASE(Box, box)
+                SDFT_PRIM_CASE(RoundBox, roundBox)
+                SDFT_PRIM_CASE(Torus, torus)
+                SDFT_PRIM_CASE(Capsule, capsule)
+                SDFT_PRIM_CASE(Cylinder, cylinder)
+                SDFT_PRIM_CASE(Cone, cone)
+                SDFT_PRIM_CASE(Plane, plane)
+                SDFT_PRIM_CASE(Ellipsoid, ellipsoid)
+                SDFT_PRIM_CASE(Octahedron, octahedron)
+                SDFT_PRIM_CASE(Dodecahedron, dodecahedron)
+                SDFT_PRIM_CASE(Blobs, blobs)
             case Op::Union: {
                 float *o = sr(in.out), *a = sr(in.a), *b = sr(in.b);
                 if (in.cull >= 0) {
@@ -259,7 +290,8 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 float h;
                 if (in.cull >= 0) {  // a culled smooth-union operand: masked lanes keep a
                     const uint8_t* mask = scratch.culled.data() + static_cast<size_t>(in.cull) * W;
-                    for (int l = 0; l < n; ++l) o[l] = mask[l] ? a[l] : evalBinary(in.op, a[l], b[l], k, h);
+                    for (int l = 0; l < n; ++l)
+                        o[l] = mask[l] ? a[l] : evalBinary(in.op, a[l], b[l], k, h);
                 } else {
                     for (int l = 0; l < n; ++l) o[l] = evalBinary(in.op, a[l], b[l], k, h);
                 }
@@ -281,9 +313,8 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 const float *bx = px(in.b), *by = py(in.b), *bz = pz(in.b);
                 for (int l = 0; l < n; ++l) {
                     Vec3 q(bx[l], by[l], bz[l]);
-                    o[l] = in.op == Op::RepeatBound
-                               ? minf(a[l], xform::repeatNeighbourBound(q, k))
-                               : a[l] + displacement(q, k);
+                    o[l] = in.op == Op::RepeatBound ? minf(a[l], xform::repeatNeighbourBound(q, k))
+                                                    : a[l] + displacement(q, k);
                 }
                 break;
             }

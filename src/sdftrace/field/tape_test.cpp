@@ -1,8 +1,9 @@
 // The compiled tape against the recursive tree reference, batch against scalar, and the Lipschitz
 // bound of every node kind on random point pairs.
+#include "sdftrace/field/tape.h"
+
 #include <gtest/gtest.h>
 
-#include "sdftrace/field/tape.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/field/transforms.h"
 
@@ -29,11 +30,13 @@ TEST(Tape, BoundsCullingIsExactForExactOperandsAndKeepsTheSurfaceOtherwise) {
     testing::Rng rng(44);
     for (int i = 0; i < 30; ++i) {
         Vec3 c = rng.inCube(3);
-        NodePtr shape = i % 3 == 0 ? sphere(0.3f) : (i % 3 == 1 ? box({0.2f, 0.3f, 0.1f}) : torus(0.3f, 0.1f));
+        NodePtr shape =
+            i % 3 == 0 ? sphere(0.3f) : (i % 3 == 1 ? box({0.2f, 0.3f, 0.1f}) : torus(0.3f, 0.1f));
         exact.push_back(translate(rotate(shape, rotationAxisAngle(rng.direction(), 40)), c));
     }
     NodePtr exactUnion = unite(exact);
-    Tape culled = compileTape(exactUnion), plain = compileTape(exactUnion, {.boundsCulling = false});
+    Tape culled = compileTape(exactUnion),
+         plain = compileTape(exactUnion, {.boundsCulling = false});
     EXPECT_EQ(culled.numCulls(), 29);
     for (int i = 0; i < 20000; ++i) {
         Vec3 p = rng.inCube(5);
@@ -67,7 +70,8 @@ TEST(Tape, BatchMatchesScalar) {
 TEST(Tape, RecyclesRegisters) {
     // A union of 200 spheres needs two scalar registers, not 200.
     std::vector<NodePtr> spheres;
-    for (int i = 0; i < 200; ++i) spheres.push_back(node::translate(node::sphere(0.1f), {0.3f * i, 0, 0}));
+    for (int i = 0; i < 200; ++i)
+        spheres.push_back(node::translate(node::sphere(0.1f), {0.3f * i, 0, 0}));
     Tape tape = compileTape(node::unite(spheres));
     EXPECT_LE(tape.numScalarRegs(), 2);
     EXPECT_LE(tape.numPointRegs(), 2);
@@ -177,9 +181,11 @@ namespace {
 // dominate them has a value at least the distance to them.
 TEST(Bounds, DominatingNodesAreAtLeastTheirBoxDistance) {
     using namespace node;
-    NodePtr exacts = unite({translate(sphere(0.4f), {1, 0, 0}), rotate(box({0.3f, 0.5f, 0.2f}), rotationAxisAngle({1, 1, 1}, 30)),
-                            torus(0.5f, 0.1f), capsule({0, 0, 0}, {0.5f, 0.5f, 0}, 0.1f), cone(0.3f, 0.6f),
-                            cylinder(0.2f, 0.4f), roundBox({0.3f, 0.3f, 0.3f}, 0.1f)});
+    NodePtr exacts =
+        unite({translate(sphere(0.4f), {1, 0, 0}),
+               rotate(box({0.3f, 0.5f, 0.2f}), rotationAxisAngle({1, 1, 1}, 30)), torus(0.5f, 0.1f),
+               capsule({0, 0, 0}, {0.5f, 0.5f, 0}, 0.1f), cone(0.3f, 0.6f), cylinder(0.2f, 0.4f),
+               roundBox({0.3f, 0.3f, 0.3f}, 0.1f)});
     std::vector<NodePtr> claims = {
         exacts,
         smoothUnion(sphere(0.5f), translate(box({0.3f, 0.3f, 0.3f}), {0.6f, 0, 0}), 0.4f),
@@ -189,8 +195,11 @@ TEST(Bounds, DominatingNodesAreAtLeastTheirBoxDistance) {
         repeat(sphere(0.2f), {0.6f, 0.6f, 0.6f}, {2, 1, 0}),
         blobs({{{0, 0, 0}, 0.7f, 1}, {{0.5f, 0.2f, 0}, 0.4f, 1}}, 0.5f),
     };
-    std::vector<NodePtr> nonClaims = {ellipsoid({1, 0.2f, 0.3f}), octahedron(0.5f), dodecahedron(0.4f),
-                                      scale(sphere(0.5f), {2, 1, 1}), morph(sphere(0.5f), box(Vec3(0.4f)), 0.5f),
+    std::vector<NodePtr> nonClaims = {ellipsoid({1, 0.2f, 0.3f}),
+                                      octahedron(0.5f),
+                                      dodecahedron(0.4f),
+                                      scale(sphere(0.5f), {2, 1, 1}),
+                                      morph(sphere(0.5f), box(Vec3(0.4f)), 0.5f),
                                       displace(sphere(0.5f), 0.1f, 3, 2, 0.5f)};
     for (const NodePtr& n : nonClaims) EXPECT_FALSE(dominatesBounds(*n)) << nodeKindName(n->kind);
     testing::Rng rng(31);
@@ -212,7 +221,10 @@ TEST(Tape, SmoothUnionCullingIsExactForDominatingOperands) {
     NodePtr chain = sphere(0.3f);
     for (int i = 0; i < 40; ++i) {
         NodePtr shape = i % 2 ? torus(0.25f, 0.08f) : roundBox({0.2f, 0.2f, 0.2f}, 0.05f);
-        chain = smoothUnion(chain, translate(rotate(shape, rotationAxisAngle(rng.direction(), 50)), rng.inCube(2.5f)), 0.3f);
+        chain = smoothUnion(
+            chain,
+            translate(rotate(shape, rotationAxisAngle(rng.direction(), 50)), rng.inCube(2.5f)),
+            0.3f);
     }
     Tape culled = compileTape(chain), plain = compileTape(chain, {.boundsCulling = false});
     EXPECT_EQ(culled.numCulls(), 40);

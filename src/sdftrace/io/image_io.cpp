@@ -17,8 +17,8 @@
 
 #define STB_IMAGE_WRITE_STATIC
 #define STB_IMAGE_WRITE_IMPLEMENTATION
-#include <stb_image_write.h>
 #include <stb_easy_font.h>
+#include <stb_image_write.h>
 
 namespace sdft {
 
@@ -41,10 +41,10 @@ void writeExr(const std::string& path, int w, int h, int channels, const std::ve
         const size_t xStride = sizeof(float) * channels, yStride = xStride * w;
         for (int c = 0; c < channels; ++c) {
             header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
-            fb.insert(names[c], Imf::Slice(Imf::FLOAT,
-                                           const_cast<char*>(reinterpret_cast<const char*>(
-                                               data.data() + c)),
-                                           xStride, yStride));
+            fb.insert(names[c],
+                      Imf::Slice(Imf::FLOAT,
+                                 const_cast<char*>(reinterpret_cast<const char*>(data.data() + c)),
+                                 xStride, yStride));
         }
         Imf::OutputFile file(out.tempPath().c_str(), header);
         file.setFrameBuffer(fb);
@@ -92,8 +92,9 @@ float linearToSrgb(float v) {
 }
 // A perceptually ordered dark-blue -> magenta -> orange -> yellow ramp (inferno-like stops).
 Vec3 heatColor(float u) {
-    static const Vec3 stops[] = {{0.0f, 0.0f, 0.02f}, {0.26f, 0.04f, 0.41f}, {0.58f, 0.15f, 0.40f},
-                                 {0.87f, 0.32f, 0.23f}, {0.99f, 0.65f, 0.04f}, {0.99f, 1.0f, 0.64f}};
+    static const Vec3 stops[] = {{0.0f, 0.0f, 0.02f},   {0.26f, 0.04f, 0.41f},
+                                 {0.58f, 0.15f, 0.40f}, {0.87f, 0.32f, 0.23f},
+                                 {0.99f, 0.65f, 0.04f}, {0.99f, 1.0f, 0.64f}};
     u = clampf(u, 0.0f, 1.0f) * 5.0f;
     int i = std::min(4, static_cast<int>(u));
     return lerp(stops[i], stops[i + 1], u - i);
@@ -107,8 +108,8 @@ std::string formatValue(float v) {
 void drawText(std::vector<unsigned char>& img, int w, int h, int x, int y, const std::string& text,
               int scale) {
     static char buffer[60000];
-    int quads = stb_easy_font_print(0, 0, const_cast<char*>(text.c_str()), nullptr, buffer,
-                                    sizeof buffer);
+    int quads =
+        stb_easy_font_print(0, 0, const_cast<char*>(text.c_str()), nullptr, buffer, sizeof buffer);
     const float* v = reinterpret_cast<const float*>(buffer);
     for (int q = 0; q < quads; ++q) {
         const float* quad = v + q * 16;  // 4 vertices x (x, y, z, colour)
@@ -117,7 +118,8 @@ void drawText(std::vector<unsigned char>& img, int w, int h, int x, int y, const
         for (int py = y + qy0 * scale; py < y + qy1 * scale; ++py)
             for (int px = x + qx0 * scale; px < x + qx1 * scale; ++px)
                 if (px >= 0 && px < w && py >= 0 && py < h)
-                    for (int c = 0; c < 3; ++c) img[3 * (static_cast<size_t>(py) * w + px) + c] = 255;
+                    for (int c = 0; c < 3; ++c)
+                        img[3 * (static_cast<size_t>(py) * w + px) + c] = 255;
     }
 }
 }  // namespace
@@ -151,7 +153,8 @@ std::vector<unsigned char> heatMapWithLegend(const std::vector<float>& values, i
     for (int y = h; y < h + legend / 2; ++y)
         for (int x = 0; x < w; ++x) {
             Vec3 c = heatColor(static_cast<float>(x) / std::max(1, w - 1));
-            for (int a = 0; a < 3; ++a) img[3 * (static_cast<size_t>(y) * w + x) + a] = toByte(c[a]);
+            for (int a = 0; a < 3; ++a)
+                img[3 * (static_cast<size_t>(y) * w + x) + a] = toByte(c[a]);
         }
     std::string left = label + " " + formatValue(lo);
     std::string right = formatValue(hi);
@@ -167,9 +170,9 @@ void writeAov(const Film& film, Aov aov, const std::string& path) {
     const std::vector<float>& data = film.channel(aov);
     int channels = aovChannels(aov);
     if (format == ImageFormat::Exr) {
-        std::vector<std::string> names = channels == 3
-                                             ? std::vector<std::string>{"R", "G", "B"}
-                                             : std::vector<std::string>{aov == Aov::Depth ? "Z" : "Y"};
+        std::vector<std::string> names =
+            channels == 3 ? std::vector<std::string>{"R", "G", "B"}
+                          : std::vector<std::string>{aov == Aov::Depth ? "Z" : "Y"};
         writeExr(path, film.width, film.height, channels, data, names);
     } else if (format == ImageFormat::Pfm) {
         writePfm(path, film.width, film.height, channels, data);

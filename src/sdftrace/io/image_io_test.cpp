@@ -5,13 +5,13 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 #include "sdftrace/core/error.h"
 
@@ -19,7 +19,8 @@ namespace sdft {
 namespace {
 
 std::string tempName(const std::string& name) {
-    return (std::filesystem::temp_directory_path() / ("sdftrace-io-" + std::to_string(::getpid()) + "-" + name))
+    return (std::filesystem::temp_directory_path() /
+            ("sdftrace-io-" + std::to_string(::getpid()) + "-" + name))
         .string();
 }
 
@@ -38,7 +39,8 @@ TEST(ImageIo, ExrRoundTripKeepsFloatsAndInfinity) {
     ASSERT_NE(in.header().channels().findChannel("Z"), nullptr);
     std::vector<float> back(w * h);
     Imf::FrameBuffer fb;
-    fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(back.data()), sizeof(float), sizeof(float) * w));
+    fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(back.data()), sizeof(float),
+                              sizeof(float) * w));
     in.setFrameBuffer(fb);
     in.readPixels(dw.min.y, dw.max.y);
     for (int i = 0; i < w * h; ++i) EXPECT_EQ(back[i], film.depth[i]) << i;

@@ -6,11 +6,16 @@ namespace sdft {
 
 const char* aovName(Aov aov) {
     switch (aov) {
-        case Aov::Color: return "color";
-        case Aov::Depth: return "depth";
-        case Aov::Normal: return "normal";
-        case Aov::Steps: return "steps";
-        case Aov::Error: return "error";
+        case Aov::Color:
+            return "color";
+        case Aov::Depth:
+            return "depth";
+        case Aov::Normal:
+            return "normal";
+        case Aov::Steps:
+            return "steps";
+        case Aov::Error:
+            return "error";
     }
     return "?";
 }
@@ -42,11 +47,16 @@ double Film::bytesNeeded(int w, int h) {
 
 const std::vector<float>& Film::channel(Aov aov) const {
     switch (aov) {
-        case Aov::Color: return color;
-        case Aov::Depth: return depth;
-        case Aov::Normal: return normal;
-        case Aov::Steps: return steps;
-        case Aov::Error: return error;
+        case Aov::Color:
+            return color;
+        case Aov::Depth:
+            return depth;
+        case Aov::Normal:
+            return normal;
+        case Aov::Steps:
+            return steps;
+        case Aov::Error:
+            return error;
     }
     return color;
 }

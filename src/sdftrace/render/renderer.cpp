@@ -75,9 +75,12 @@ void toLight(const Light& light, Vec3 p, Vec3& dir, float& dist, float& scale) {
 }
 
 class TileRenderer {
-public:
+  public:
     TileRenderer(const Scene& scene, const Tape& tape, Film& film)
-        : m_scene(scene), m_tape(tape), m_film(film), m_camera(scene.camera),
+        : m_scene(scene),
+          m_tape(tape),
+          m_film(film),
+          m_camera(scene.camera),
           m_settings(scene.settings) {
         m_primary = m_settings.trace;
         m_primary.pixelRadius = m_camera.pixelRadius();
@@ -91,7 +94,7 @@ public:
 
     void renderTile(int x0, int y0, int x1, int y1, TileScratch& s);
 
-private:
+  private:
     void traceShadows(TileScratch& s, std::vector<float>& visible, const Light& light);
 
     const Scene& m_scene;
@@ -278,8 +281,7 @@ RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progre
         total.shadowEvaluations += t.shadowEvaluations;
     }
     total.threads = threads;
-    total.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return total;
 }
 

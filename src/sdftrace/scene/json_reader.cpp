@@ -23,11 +23,13 @@ std::string show(double v) {
 }  // namespace
 
 void Reader::requireObject(const char* what) const {
-    if (!m_value.is_object()) fail(std::string("expected ") + what + " (a JSON object), got " + typeName(m_value));
+    if (!m_value.is_object())
+        fail(std::string("expected ") + what + " (a JSON object), got " + typeName(m_value));
 }
 
 void Reader::requireArray(const char* what) const {
-    if (!m_value.is_array()) fail(std::string("expected ") + what + " (a JSON array), got " + typeName(m_value));
+    if (!m_value.is_array())
+        fail(std::string("expected ") + what + " (a JSON array), got " + typeName(m_value));
 }
 
 void Reader::allowKeys(std::initializer_list<const char*> allowed) const {
@@ -47,7 +49,8 @@ float Reader::number(const std::string& key, const std::function<bool(double)>& 
     const Json& v = m_value.at(key);
     if (!v.is_number()) failKey(key, "expected " + accepted + ", got " + typeName(v));
     double d = v.get<double>();
-    if (!std::isfinite(d) || std::fabs(d) > 1e30) failKey(key, "expected " + accepted + ", got a non-finite or huge number");
+    if (!std::isfinite(d) || std::fabs(d) > 1e30)
+        failKey(key, "expected " + accepted + ", got a non-finite or huge number");
     if (!ok(d)) failKey(key, "expected " + accepted + ", got " + show(d));
     return static_cast<float>(d);
 }
@@ -92,13 +95,18 @@ Vec3 Reader::vec3(const std::string& key, const std::function<bool(double)>& ok,
     std::string what = "an array of 3 numbers" + (accepted.empty() ? "" : " (" + accepted + ")");
     if (!has(key)) fail("missing required key '" + key + "' (" + what + ")");
     const Json& v = m_value.at(key);
-    if (!v.is_array() || v.size() != 3) failKey(key, "expected " + what + ", got " + typeName(v) + (v.is_array() ? " of " + std::to_string(v.size()) : ""));
+    if (!v.is_array() || v.size() != 3)
+        failKey(key, "expected " + what + ", got " + typeName(v) +
+                         (v.is_array() ? " of " + std::to_string(v.size()) : ""));
     Vec3 out;
     for (int i = 0; i < 3; ++i) {
-        if (!v[i].is_number()) failKey(key + "/" + std::to_string(i), "expected a number, got " + typeName(v[i]));
+        if (!v[i].is_number())
+            failKey(key + "/" + std::to_string(i), "expected a number, got " + typeName(v[i]));
         double d = v[i].get<double>();
-        if (!std::isfinite(d) || std::fabs(d) > 1e30) failKey(key + "/" + std::to_string(i), "expected a finite number");
-        if (ok && !ok(d)) failKey(key + "/" + std::to_string(i), "expected " + accepted + ", got " + show(d));
+        if (!std::isfinite(d) || std::fabs(d) > 1e30)
+            failKey(key + "/" + std::to_string(i), "expected a finite number");
+        if (ok && !ok(d))
+            failKey(key + "/" + std::to_string(i), "expected " + accepted + ", got " + show(d));
         out[i] = static_cast<float>(d);
     }
     return out;

@@ -15,14 +15,16 @@ namespace sdft::json_reader {
 using Json = nlohmann::json;
 
 class Reader {
-public:
+  public:
     Reader(const Json& value, std::string source, std::string path)
         : m_value(value), m_source(std::move(source)), m_path(std::move(path)) {}
 
     const Json& value() const { return m_value; }
     const std::string& path() const { return m_path; }
     const std::string& source() const { return m_source; }
-    Reader child(const std::string& key) const { return {m_value.at(key), m_source, m_path + "/" + key}; }
+    Reader child(const std::string& key) const {
+        return {m_value.at(key), m_source, m_path + "/" + key};
+    }
     Reader element(size_t i) const {
         return {m_value.at(i), m_source, m_path + "/" + std::to_string(i)};
     }
@@ -52,10 +54,11 @@ public:
     // Three finite numbers; each must satisfy `ok`.
     Vec3 vec3(const std::string& key, const std::function<bool(double)>& ok = nullptr,
               const std::string& accepted = "") const;
-    Vec3 vec3(const std::string& key, Vec3 fallback, const std::function<bool(double)>& ok = nullptr,
+    Vec3 vec3(const std::string& key, Vec3 fallback,
+              const std::function<bool(double)>& ok = nullptr,
               const std::string& accepted = "") const;
 
-private:
+  private:
     const Json& m_value;
     std::string m_source;
     std::string m_path;

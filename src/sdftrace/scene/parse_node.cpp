@@ -52,7 +52,8 @@ Mat3 parseRotation(const Reader& r, const std::string& key) {
         return rotationAxisAngle(axis, angle);
     }
     if (!v.is_array()) {
-        r.failKey(key, "expected {\"axis\": [x,y,z], \"angle\": degrees} or [x, y, z] Euler degrees");
+        r.failKey(key,
+                  "expected {\"axis\": [x,y,z], \"angle\": degrees} or [x, y, z] Euler degrees");
     }
     // Euler angles in degrees, applied about X, then Y, then Z.
     Vec3 e = r.vec3(key, nullptr, "Euler angles in degrees");
@@ -86,7 +87,8 @@ NodePtr applyInlineTransforms(const Reader& r, NodePtr n) {
 }
 
 NodePtr parseBlobs(const Reader& r) {
-    if (!r.has("blobs")) r.fail("missing required key 'blobs' (an array of {center, radius, strength})");
+    if (!r.has("blobs"))
+        r.fail("missing required key 'blobs' (an array of {center, radius, strength})");
     Reader list = r.child("blobs");
     list.requireArray("a list of blobs");
     if (list.value().empty() || list.value().size() > 256) list.fail("expected 1 to 256 blobs");
@@ -103,8 +105,8 @@ NodePtr parseBlobs(const Reader& r) {
     }
     float threshold = r.number("threshold", 0.5f, positive, "a positive threshold");
     if (threshold >= total) {
-        r.failKey("threshold", "must be below the sum of the blob strengths (" + std::to_string(total) +
-                                   "), or no surface exists");
+        r.failKey("threshold", "must be below the sum of the blob strengths (" +
+                                   std::to_string(total) + "), or no surface exists");
     }
     return node::blobs(blobs, threshold);
 }
@@ -140,7 +142,8 @@ NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
         allow({"size", "radius"});
         Vec3 half = r.vec3("size", positive, "positive edge lengths") * 0.5f;
         float radius = r.number("radius", nonNegative, "a non-negative edge radius");
-        if (radius > minComponent(half)) r.failKey("radius", "must not exceed half the smallest edge");
+        if (radius > minComponent(half))
+            r.failKey("radius", "must not exceed half the smallest edge");
         n = node::roundBox(half, radius);
     } else if (type == "torus") {
         allow({"major_radius", "minor_radius"});
@@ -149,7 +152,8 @@ NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
         n = node::torus(R, rr);
     } else if (type == "capsule") {
         allow({"a", "b", "radius"});
-        n = node::capsule(r.vec3("a"), r.vec3("b"), r.number("radius", positive, "a positive radius"));
+        n = node::capsule(r.vec3("a"), r.vec3("b"),
+                          r.number("radius", positive, "a positive radius"));
     } else if (type == "cylinder") {
         allow({"radius", "height"});
         float radius = r.number("radius", positive, "a positive radius");
@@ -204,8 +208,8 @@ NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
         }
     } else if (type == "morph") {
         allow({"children", "weight"});
-        float w = r.number("weight", [](double v) { return v >= 0 && v <= 1; },
-                           "a weight in [0, 1]");
+        float w = r.number(
+            "weight", [](double v) { return v >= 0 && v <= 1; }, "a weight in [0, 1]");
         auto c = parseChildren(r, mats, 2, 2);
         n = node::morph(c[0], c[1], w);
     } else if (type == "translate") {
@@ -224,16 +228,18 @@ NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
     } else if (type == "repeat") {
         allow({"child", "cell", "count"});
         Vec3 cell = r.vec3("cell", positive, "positive cell sizes");
-        Vec3 count = r.vec3("count", [](double v) { return v >= 0 && v <= 1000 && v == std::floor(v); },
-                            "whole numbers of copies per side in [0, 1000]");
+        Vec3 count = r.vec3(
+            "count", [](double v) { return v >= 0 && v <= 1000 && v == std::floor(v); },
+            "whole numbers of copies per side in [0, 1000]");
         NodePtr child = parseSingleChild(r, mats);
         Bounds3 b = nodeBounds(*child);
         for (int i = 0; i < 3; ++i) {
             if (count[i] <= 0) continue;
             float extent = std::fmax(std::fabs(b.lo[i]), std::fabs(b.hi[i]));
             if (!(extent <= 0.5f * cell[i])) {
-                r.failKey("cell", "the child reaches " + std::to_string(extent) + " from its origin along axis " +
-                                      std::to_string(i) + "; the cell must be at least twice that (" +
+                r.failKey("cell", "the child reaches " + std::to_string(extent) +
+                                      " from its origin along axis " + std::to_string(i) +
+                                      "; the cell must be at least twice that (" +
                                       std::to_string(2 * extent) + ") so copies do not overlap");
             }
         }
@@ -243,11 +249,12 @@ NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
         float amplitude = r.number("amplitude", nonNegative, "a non-negative amplitude");
         float frequency = r.number("frequency", 1.0f, positive, "a positive frequency");
         int octaves = r.integer("octaves", 3, 1, 12);
-        float gain = r.number("gain", 0.5f, [](double v) { return v > 0 && v < 1; }, "a gain in (0, 1)");
+        float gain = r.number(
+            "gain", 0.5f, [](double v) { return v > 0 && v < 1; }, "a gain in (0, 1)");
         n = node::displace(parseSingleChild(r, mats), amplitude, frequency, octaves, gain);
     } else {
-        r.failKey("type", "unknown object type '" + type + "'; accepted: " + kPrimitiveTypes + ", " +
-                              kOperatorTypes);
+        r.failKey("type", "unknown object type '" + type + "'; accepted: " + kPrimitiveTypes +
+                              ", " + kOperatorTypes);
     }
 
     n = applyInlineTransforms(r, n);

@@ -30,8 +30,9 @@ void parseCamera(const Reader& r, CameraDesc& cam) {
     cam.eye = r.vec3("eye", cam.eye);
     cam.target = r.vec3("target", cam.target);
     cam.up = r.vec3("up", cam.up);
-    cam.fovDeg = r.number("fov", cam.fovDeg, [](double v) { return v > 0 && v < 180; },
-                          "a vertical field of view in degrees in (0, 180)");
+    cam.fovDeg = r.number(
+        "fov", cam.fovDeg, [](double v) { return v > 0 && v < 180; },
+        "a vertical field of view in degrees in (0, 180)");
     cam.width = r.integer("width", cam.width, 1, kMaxImageSide);
     cam.height = r.integer("height", cam.height, 1, kMaxImageSide);
     if (length(cam.target - cam.eye) <= 0) r.failKey("target", "must differ from the eye");
@@ -48,8 +49,9 @@ Material parseMaterial(const Reader& r, const std::string& name) {
     m.color = r.vec3("color", m.color, nonNegative, "non-negative linear RGB");
     m.diffuse = r.number("diffuse", m.diffuse, nonNegative, "a non-negative weight");
     m.specular = r.number("specular", m.specular, nonNegative, "a non-negative weight");
-    m.shininess = r.number("shininess", m.shininess, [](double v) { return v >= 1 && v <= 1e5; },
-                           "a Blinn-Phong exponent in [1, 100000]");
+    m.shininess = r.number(
+        "shininess", m.shininess, [](double v) { return v >= 1 && v <= 1e5; },
+        "a Blinn-Phong exponent in [1, 100000]");
     return m;
 }
 
@@ -78,14 +80,16 @@ Light parseLight(const Reader& r) {
 
 void parseRender(const Reader& r, RenderSettings& s) {
     r.requireObject("render settings");
-    r.allowKeys({"max_steps", "tau", "omega", "screen_space", "force_hit", "discontinuity_iterations",
-                 "fixed_steps", "hybrid", "hybrid_epsilon", "hybrid_step", "falsi_iterations",
-                 "normals", "shadows", "max_distance", "shadow_offset", "bounds_culling"});
+    r.allowKeys({"max_steps", "tau", "omega", "screen_space", "force_hit",
+                 "discontinuity_iterations", "fixed_steps", "hybrid", "hybrid_epsilon",
+                 "hybrid_step", "falsi_iterations", "normals", "shadows", "max_distance",
+                 "shadow_offset", "bounds_culling"});
     TraceOptions& t = s.trace;
     t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
     t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
-    t.omega = r.number("omega", t.omega, [](double v) { return v >= 1 && v < 2; },
-                       "an over-relaxation factor in [1, 2)");
+    t.omega = r.number(
+        "omega", t.omega, [](double v) { return v >= 1 && v < 2; },
+        "an over-relaxation factor in [1, 2)");
     t.screenSpace = r.boolean("screen_space", t.screenSpace);
     t.forceHit = r.boolean("force_hit", t.forceHit);
     t.discontinuityIters = r.integer("discontinuity_iterations", t.discontinuityIters, 0, 64);
@@ -95,13 +99,17 @@ void parseRender(const Reader& r, RenderSettings& s) {
     t.hybridStep = r.number("hybrid_step", t.hybridStep, positive, "a positive step length");
     t.falsiIters = r.integer("falsi_iterations", t.falsiIters, 0, 64);
     std::string normals = r.string("normals", "tetrahedral");
-    if (normals == "central") s.normals = NormalEstimator::Central;
-    else if (normals == "tetrahedral") s.normals = NormalEstimator::Tetrahedral;
-    else r.failKey("normals", "unknown estimator '" + normals + "'; accepted: central, tetrahedral");
+    if (normals == "central")
+        s.normals = NormalEstimator::Central;
+    else if (normals == "tetrahedral")
+        s.normals = NormalEstimator::Tetrahedral;
+    else
+        r.failKey("normals", "unknown estimator '" + normals + "'; accepted: central, tetrahedral");
     s.shadows = r.boolean("shadows", s.shadows);
     s.boundsCulling = r.boolean("bounds_culling", s.boundsCulling);
     s.maxDistance = r.number("max_distance", s.maxDistance, positive, "a positive distance");
-    s.shadowOffsetMin = r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");
+    s.shadowOffsetMin =
+        r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");
 }
 
 Scene parseRoot(const Json& root, const std::string& source) {
@@ -118,8 +126,10 @@ Scene parseRoot(const Json& root, const std::string& source) {
             int index = static_cast<int>(scene.materials.size());
             if (it.key() == "default") index = 0;
             Material mat = parseMaterial(m.child(it.key()), it.key());
-            if (index == 0) scene.materials[0] = mat;
-            else scene.materials.push_back(mat);
+            if (index == 0)
+                scene.materials[0] = mat;
+            else
+                scene.materials.push_back(mat);
             materialIndex[it.key()] = index;
         }
     }
@@ -127,17 +137,21 @@ Scene parseRoot(const Json& root, const std::string& source) {
     if (r.has("lights")) {
         Reader l = r.child("lights");
         l.requireArray("a list of lights");
-        for (size_t i = 0; i < l.value().size(); ++i) scene.lighting.lights.push_back(parseLight(l.element(i)));
+        for (size_t i = 0; i < l.value().size(); ++i)
+            scene.lighting.lights.push_back(parseLight(l.element(i)));
     }
-    scene.lighting.ambient = r.vec3("ambient", scene.lighting.ambient, nonNegative, "non-negative linear RGB");
-    scene.lighting.background = r.vec3("background", scene.lighting.background, nonNegative, "non-negative linear RGB");
+    scene.lighting.ambient =
+        r.vec3("ambient", scene.lighting.ambient, nonNegative, "non-negative linear RGB");
+    scene.lighting.background =
+        r.vec3("background", scene.lighting.background, nonNegative, "non-negative linear RGB");
     if (r.has("render")) parseRender(r.child("render"), scene.settings);
     if (!r.has("objects")) r.fail("missing required key 'objects' (a list of at least one object)");
     Reader objs = r.child("objects");
     objs.requireArray("a list of objects");
     if (objs.value().empty()) objs.fail("expected at least one object");
     std::vector<NodePtr> nodes;
-    for (size_t i = 0; i < objs.value().size(); ++i) nodes.push_back(parseNode(objs.element(i), materialIndex));
+    for (size_t i = 0; i < objs.value().size(); ++i)
+        nodes.push_back(parseNode(objs.element(i), materialIndex));
     scene.root = nodes.size() == 1 ? nodes[0] : node::unite(nodes);
     validateImageSize(scene.camera.width, scene.camera.height, source + ": /camera");
     return scene;
@@ -147,7 +161,8 @@ Scene parseRoot(const Json& root, const std::string& source) {
 
 void validateImageSize(int width, int height, const std::string& what) {
     if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide) {
-        throw InputError(what + ": image size " + std::to_string(width) + "x" + std::to_string(height) +
+        throw InputError(what + ": image size " + std::to_string(width) + "x" +
+                         std::to_string(height) +
                          " is out of range; width and height must be in [1, " +
                          std::to_string(kMaxImageSide) + "]");
     }
@@ -155,10 +170,11 @@ void validateImageSize(int width, int height, const std::string& what) {
     double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
     if (need > 0.5 * have) {
         char buf[256];
-        std::snprintf(buf, sizeof buf,
-                      "image %dx%d needs %.1f GiB of film, more than half of this machine's %.1f GiB; "
-                      "render a smaller image",
-                      width, height, need / (1 << 30), have / (1 << 30));
+        std::snprintf(
+            buf, sizeof buf,
+            "image %dx%d needs %.1f GiB of film, more than half of this machine's %.1f GiB; "
+            "render a smaller image",
+            width, height, need / (1 << 30), have / (1 << 30));
         throw InputError(what + ": " + buf);
     }
 }
@@ -181,7 +197,8 @@ Scene parseSceneText(const std::string& text, const std::string& source) {
 
 Scene parseSceneFile(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path + ": cannot open scene file (does it exist and is it readable?)");
+    if (!in)
+        throw InputError(path + ": cannot open scene file (does it exist and is it readable?)");
     std::ostringstream text;
     text << in.rdbuf();
     if (in.bad()) throw InputError(path + ": cannot read scene file");

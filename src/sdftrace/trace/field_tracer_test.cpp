@@ -46,11 +46,14 @@ Truth groundTruth(const Tape& tape, const RaySegment& seg) {
     return none;
 }
 
-float valueAt(const Tape& tape, const Ray& r, float t) { return tape.eval(r.at(t)) / tape.lipschitz(); }
+float valueAt(const Tape& tape, const Ray& r, float t) {
+    return tape.eval(r.at(t)) / tape.lipschitz();
+}
 
 // Rays from a sphere of radius `orbit` towards random points of the scene, plus rays that skim a
 // surface: along a tangent, offset from it by a small signed distance.
-std::vector<RaySegment> makeRays(const Tape& tape, float orbit, float target, int count, uint32_t seed) {
+std::vector<RaySegment> makeRays(const Tape& tape, float orbit, float target, int count,
+                                 uint32_t seed) {
     testing::Rng rng(seed);
     std::vector<RaySegment> rays;
     for (int i = 0; i < count; ++i) {
@@ -87,7 +90,8 @@ struct Comparison {
 
 // Checks one method's answer on one ray against the ground truth (see file comment).
 void checkAgainstTruth(const Tape& tape, const RaySegment& seg, const Truth& truth,
-                       const TraceResult& r, const TraceOptions& o, const char* what, Comparison& c) {
+                       const TraceResult& r, const TraceOptions& o, const char* what,
+                       Comparison& c) {
     auto threshold = [&](float t) { return o.screenSpace ? t * o.pixelRadius : o.tau; };
     if (truth.crosses && !r.hit) {
         // Allowed only when the march ran out of steps (a grazing ray).
@@ -139,9 +143,12 @@ void compareMethods(const NodePtr& root, float orbit, float target, uint32_t see
             // Away from grazes, every method that did not run out of steps stops within its
             // threshold of the true crossing.
             float cosine = std::fabs(valueAt(exact, seg.ray, truth.t - 1e-3f) -
-                                     valueAt(exact, seg.ray, truth.t)) / 1e-3f;
+                                     valueAt(exact, seg.ray, truth.t)) /
+                           1e-3f;
             if (cosine > 0.2f) {
-                for (auto [r, tol] : {std::pair{&a, 2e-3f}, {&b, 2e-3f}, {&w, 2e-3f},
+                for (auto [r, tol] : {std::pair{&a, 2e-3f},
+                                      {&b, 2e-3f},
+                                      {&w, 2e-3f},
                                       {&e, 4 * enhanced.pixelRadius * truth.t / cosine + 2e-3f}}) {
                     if (r->hit) EXPECT_NEAR(r->t, truth.t, tol);
                 }
@@ -165,10 +172,11 @@ TEST(SphereTracer, EnhancedMethodsFindTheSameHitsOnEveryKindScene) {
 
 TEST(SphereTracer, EnhancedMethodsFindTheSameHitsOnThinFeatures) {
     using namespace node;
-    NodePtr thin = unite({rotate(box({1.0f, 0.004f, 1.0f}), rotationAxisAngle({1, 0, 0.3f}, 25)),
-                          translate(torus(1.2f, 0.01f), {0, 0.6f, 0}),
-                          translate(capsule({-1.5f, 0, 0}, {1.5f, 0.3f, 0.2f}, 0.008f), {0, -0.5f, 0.5f}),
-                          translate(cylinder(0.01f, 1.5f), {0.8f, 0, -0.6f}), plane({0, 1, 0}, 1.0f)});
+    NodePtr thin =
+        unite({rotate(box({1.0f, 0.004f, 1.0f}), rotationAxisAngle({1, 0, 0.3f}, 25)),
+               translate(torus(1.2f, 0.01f), {0, 0.6f, 0}),
+               translate(capsule({-1.5f, 0, 0}, {1.5f, 0.3f, 0.2f}, 0.008f), {0, -0.5f, 0.5f}),
+               translate(cylinder(0.01f, 1.5f), {0.8f, 0, -0.6f}), plane({0, 1, 0}, 1.0f)});
     compareMethods(thin, 5, 1.8f, 2);
 }
 
@@ -220,7 +228,8 @@ TEST(SphereTracer, HitsAnalyticSphereBoxAndPlaneWithinTau) {
             ++hits[1];
         }
         // plane y = 0 from above
-        Ray down{Vec3(o3.x, std::fabs(o3.y) + 0.1f, o3.z), normalize(Vec3(d.x, -std::fabs(d.y) - 0.2f, d.z))};
+        Ray down{Vec3(o3.x, std::fabs(o3.y) + 0.1f, o3.z),
+                 normalize(Vec3(d.x, -std::fabs(d.y) - 0.2f, d.z))};
         TraceResult rp = traceRay(planeTape, {down, 0, 1000}, o);
         float tPlane = -down.origin.y / down.direction.y;
         ASSERT_TRUE(rp.hit);
@@ -276,7 +285,8 @@ TEST(SphereTracer, FixedStepModeSpendsTheSameStepsOnEveryRay) {
         Vec3 origin = rng.direction() * 5.0f + Vec3(0, 5.5f, 0);
         RaySegment seg{{origin, normalize(rng.inCube(1.5f) - origin)}, 0, 50};
         float t0, t1;
-        if (tape.eval(origin) <= 0 || !intersectBounds(tape.bounds(), seg.ray, 0, 50, t0, t1)) continue;
+        if (tape.eval(origin) <= 0 || !intersectBounds(tape.bounds(), seg.ray, 0, 50, t0, t1))
+            continue;
         TraceResult r = traceRay(tape, seg, o);
         EXPECT_EQ(r.evaluations, 48);
         Truth truth = groundTruth(tape, seg);
@@ -290,7 +300,8 @@ TEST(SphereTracer, FixedStepModeSpendsTheSameStepsOnEveryRay) {
 }
 
 TEST(SphereTracer, HybridRegulaFalsiConvergesOntoTheSurface) {
-    Tape tape = compileTape(node::unite({node::sphere(1.0f), node::translate(node::box({0.4f, 0.4f, 0.4f}), {1.5f, 0, 0})}));
+    Tape tape = compileTape(node::unite(
+        {node::sphere(1.0f), node::translate(node::box({0.4f, 0.4f, 0.4f}), {1.5f, 0, 0})}));
     TraceOptions o = TraceOptions::classic();
     o.hybrid = true;
     o.hybridEpsilon = 0.05f;
@@ -313,17 +324,18 @@ TEST(SphereTracer, HybridRegulaFalsiConvergesOntoTheSurface) {
             ++skippedThin;
             continue;
         }
-        EXPECT_NEAR(r.t, truth.t, 2e-3f) << "o " << origin.x << "," << origin.y << "," << origin.z
-                                         << " d " << seg.ray.direction.x << "," << seg.ray.direction.y
-                                         << "," << seg.ray.direction.z << " clearance " << truth.clearance;
+        EXPECT_NEAR(r.t, truth.t, 2e-3f)
+            << "o " << origin.x << "," << origin.y << "," << origin.z << " d "
+            << seg.ray.direction.x << "," << seg.ray.direction.y << "," << seg.ray.direction.z
+            << " clearance " << truth.clearance;
     }
     EXPECT_GT(hits, 300);
     EXPECT_LT(skippedThin, hits / 50);
 }
 
 TEST(SphereTracer, DiscontinuityReductionPullsHitsOntoTheErrorLevelSet) {
-    // Keinert §3.4: after the march f(p) scatters below err(t); the fixed-point iteration aims every
-    // hit at f(p) = err(t), so the scatter |f(p) - err(t)| shrinks.
+    // Keinert §3.4: after the march f(p) scatters below err(t); the fixed-point iteration aims
+    // every hit at f(p) = err(t), so the scatter |f(p) - err(t)| shrinks.
     Tape tape = compileTape(testing::everyKindTree());
     std::vector<RaySegment> rays = makeRays(tape, 7, 3, 1500, 15);
     TraceOptions off;
