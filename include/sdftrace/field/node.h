@@ -11,6 +11,10 @@
 #include "sdftrace/math/vec.h"
 
 namespace sdft {
+class Grid;
+}
+
+namespace sdft {
 
 enum class NodeKind {
     // primitives
@@ -26,6 +30,7 @@ enum class NodeKind {
     Octahedron,
     Dodecahedron,
     Blobs,
+    Grid,  // a sampled field (dense or sparse block grid), trilinear
     // operators
     Union,
     Intersection,
@@ -54,6 +59,8 @@ struct Node {
     std::vector<NodePtr> children;
     // Index into the scene's material table; -1 inherits the parent's.
     int material = -1;
+    // NodeKind::Grid: the samples (shared, immutable).
+    std::shared_ptr<const Grid> grid;
 };
 
 bool isPrimitive(NodeKind kind);
@@ -78,6 +85,8 @@ struct Blob {
     float strength;  // s
 };
 NodePtr blobs(const std::vector<Blob>& blobs, float threshold);
+// A sampled field; its value is the trilinear reconstruction divided by the grid's Lipschitz bound.
+NodePtr grid(std::shared_ptr<const Grid> grid);
 
 NodePtr unite(std::vector<NodePtr> children);
 NodePtr intersect(std::vector<NodePtr> children);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "sdftrace/field/grid.h"
 #include "sdftrace/field/node.h"
 #include "sdftrace/math/ray.h"
 
@@ -26,6 +27,7 @@ enum class Op : uint8_t {
     Octahedron,
     Dodecahedron,
     Blobs,
+    Grid,  // k[0]: index into the tape's grid views
     // scalar binary: out = op(a, b)
     Union,
     Intersection,
@@ -112,6 +114,8 @@ class Tape {
 
     std::vector<Instr> m_instrs;
     std::vector<float> m_consts;
+    std::vector<std::shared_ptr<const Grid>> m_grids;  // keeps the views' buffers alive
+    std::vector<GridView> m_gridViews;
     int m_numPointRegs = 1;
     int m_numScalarRegs = 1;
     int m_numCulls = 0;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "sdftrace/core/macros.h"
+#include "sdftrace/field/grid.h"
 #include "sdftrace/field/noise.h"
 #include "sdftrace/field/operators.h"
 #include "sdftrace/field/primitives.h"
@@ -11,7 +12,7 @@
 
 namespace sdft {
 
-bool isPrimitive(NodeKind kind) { return kind <= NodeKind::Blobs; }
+bool isPrimitive(NodeKind kind) { return kind <= NodeKind::Grid; }
 
 const char* nodeKindName(NodeKind kind) {
     switch (kind) {
@@ -39,6 +40,8 @@ const char* nodeKindName(NodeKind kind) {
             return "dodecahedron";
         case NodeKind::Blobs:
             return "blobs";
+        case NodeKind::Grid:
+            return "grid";
         case NodeKind::Union:
             return "union";
         case NodeKind::Intersection:
@@ -106,6 +109,14 @@ NodePtr blobs(const std::vector<Blob>& list, float threshold) {
         k.insert(k.end(), {b.center.x, b.center.y, b.center.z, b.radius, b.strength});
     }
     return make(NodeKind::Blobs, std::move(k));
+}
+
+NodePtr grid(std::shared_ptr<const Grid> g) {
+    SDFT_CHECK(g != nullptr);
+    auto n = std::make_shared<Node>();
+    n->kind = NodeKind::Grid;
+    n->grid = std::move(g);
+    return n;
 }
 
 NodePtr unite(std::vector<NodePtr> c) {
@@ -296,6 +307,8 @@ Bounds3 nodeBounds(const Node& n) {
             float r = k[0] * prim::kDodecahedronCircumPerInradius;
             return {Vec3(-r), Vec3(r)};
         }
+        case NodeKind::Grid:
+            return n.grid->shape().bounds();
         case NodeKind::Blobs: {
             Bounds3 b;
             int count = static_cast<int>(k[2]);
@@ -386,6 +399,8 @@ float evalTree(const Node& n, Vec3 p) {
             return prim::dodecahedron(p, k);
         case NodeKind::Blobs:
             return prim::blobs(p, k);
+        case NodeKind::Grid:
+            return n.grid->view().sample(p) / n.grid->lipschitz();
         case NodeKind::Union: {
             float v = child(0, p);
             for (size_t i = 1; i < n.children.size(); ++i) v = minf(v, child(i, p));

@@ -16,8 +16,9 @@ constexpr int kMaxPointRegs = 32;
 
 class Compiler {
   public:
-    Compiler(std::vector<Instr>& instrs, std::vector<float>& consts, const CompileOptions& options)
-        : m_instrs(instrs), m_consts(consts), m_options(options) {}
+    Compiler(std::vector<Instr>& instrs, std::vector<float>& consts,
+             std::vector<std::shared_ptr<const Grid>>& grids, const CompileOptions& options)
+        : m_instrs(instrs), m_consts(consts), m_grids(grids), m_options(options) {}
 
     uint16_t emit(const Node& n, uint16_t point, int material);
     int pointRegs() const { return m_nextPoint; }
@@ -67,6 +68,7 @@ class Compiler {
 
     std::vector<Instr>& m_instrs;
     std::vector<float>& m_consts;
+    std::vector<std::shared_ptr<const Grid>>& m_grids;
     const CompileOptions& m_options;
     int m_numCulls = 0;
     std::vector<uint16_t> m_freeScalar, m_freePoint;
@@ -74,8 +76,8 @@ class Compiler {
     int m_nextPoint = 1;  // point register 0 is the input point
 };
 
-static_assert(static_cast<int>(Op::Blobs) - static_cast<int>(Op::Sphere) ==
-                  static_cast<int>(NodeKind::Blobs) - static_cast<int>(NodeKind::Sphere),
+static_assert(static_cast<int>(Op::Grid) - static_cast<int>(Op::Sphere) ==
+                  static_cast<int>(NodeKind::Grid) - static_cast<int>(NodeKind::Sphere),
               "NodeKind and Op must list the primitives in the same order");
 
 Op primitiveOp(NodeKind kind) {
@@ -86,6 +88,13 @@ Op primitiveOp(NodeKind kind) {
 
 uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
     if (n.material >= 0) material = n.material;
+    if (n.kind == NodeKind::Grid) {
+        uint16_t out = allocScalar();
+        m_grids.push_back(n.grid);
+        push(Op::Grid, out, point, 0, addConsts({static_cast<float>(m_grids.size() - 1)}),
+             material);
+        return out;
+    }
     if (isPrimitive(n.kind)) {
         uint16_t out = allocScalar();
         push(primitiveOp(n.kind), out, point, 0, addConsts(n.params), material);
@@ -221,11 +230,12 @@ void Compiler::emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t po
 Tape compileTape(const NodePtr& root, const CompileOptions& options) {
     SDFT_CHECK(root != nullptr);
     Tape tape;
-    Compiler compiler(tape.m_instrs, tape.m_consts, options);
+    Compiler compiler(tape.m_instrs, tape.m_consts, tape.m_grids, options);
     tape.m_result = compiler.emit(*root, 0, root->material >= 0 ? root->material : 0);
     tape.m_numPointRegs = compiler.pointRegs();
     tape.m_numScalarRegs = compiler.scalarRegs();
     tape.m_numCulls = compiler.culls();
+    for (const auto& g : tape.m_grids) tape.m_gridViews.push_back(g->view());
     tape.m_lipschitz = lipschitzBound(*root);
     tape.m_bounds = nodeBounds(*root);
     return tape;

@@ -98,6 +98,9 @@ inline bool cullSkips(Vec3 p, float acc, const float* k) {
     return (t <= 0.0f) | (dx * dx + dy * dy + dz * dz >= t * t);
 }
 
+// A grid's value, normalized by its Lipschitz bound so it is 1-Lipschitz like the primitives.
+inline float gridValue(const GridView& g, Vec3 p) { return g.sample(p) / g.lipschitz; }
+
 inline float displacement(Vec3 p, const float* k) {
     return k[0] * noise::fbm(p * k[1], static_cast<int>(k[2]), k[3]);
 }
@@ -163,8 +166,10 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
             if (cullSkips(pts[in.a], s[in.b], k)) pc = in.jump - 1;
             continue;
         }
-        if (op <= Op::Blobs) {
-            s[in.out] = evalPrimitive(op, pts[in.a], k);
+        if (op <= Op::Grid) {
+            s[in.out] = op == Op::Grid
+                            ? gridValue(m_gridViews[static_cast<size_t>(k[0])], pts[in.a])
+                            : evalPrimitive(op, pts[in.a], k);
             if constexpr (kMaterial) mats[in.out] = MaterialBlend::single(in.material);
         } else if (op <= Op::Morph) {
             float h;
@@ -266,6 +271,13 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 SDFT_PRIM_CASE(Octahedron, octahedron)
                 SDFT_PRIM_CASE(Dodecahedron, dodecahedron)
                 SDFT_PRIM_CASE(Blobs, blobs)
+            case Op::Grid: {
+                const GridView& g = m_gridViews[static_cast<size_t>(k[0])];
+                const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);
+                float* o = sr(in.out);
+                for (int l = 0; l < n; ++l) o[l] = gridValue(g, Vec3(ax[l], ay[l], az[l]));
+                break;
+            }
             case Op::Union: {
                 float *o = sr(in.out), *a = sr(in.a), *b = sr(in.b);
                 if (in.cull >= 0) {

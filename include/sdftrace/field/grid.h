@@ -1,0 +1,197 @@
+// Sampled distance fields (Liktor 2008, §3; Jamriška 2010, §3): samples at the vertices of a
+// regular grid, reconstructed by trilinear interpolation. Two layouts share one trivially copyable
+// view:
+//  - dense: every vertex stored;
+//  - sparse block grid: a coarse grid of blocks of B^3 cells (B = 4 or 8), each flagged inside,
+//    outside or surface; only surface blocks store their (B+1)^3 vertex samples (Jamriška §3), with
+//    a bit mask of the cells that contain the surface (§4.1).
+// Buffers are flat (std::vector) and the view holds plain pointers, so a device upload is one copy
+// per buffer (DESIGN.md; NanoVDB's handle + flat layout).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sdftrace/math/ray.h"
+
+namespace sdft {
+
+enum class GridKind : uint8_t { Dense = 0, Sparse = 1 };
+enum class BlockFlag : uint8_t { Outside = 0, Inside = 1, Surface = 2 };
+
+// Geometry shared by both layouts: `cells` cells per axis, vertex (0,0,0) at `origin`, cubic
+// voxels.
+struct GridShape {
+    int cells[3] = {0, 0, 0};
+    Vec3 origin;
+    float voxelSize = 1;
+
+    SDFT_HOST_DEVICE int vertices(int axis) const { return cells[axis] + 1; }
+    Bounds3 bounds() const {
+        return {origin, origin + Vec3(cells[0], cells[1], cells[2]) * voxelSize};
+    }
+    size_t vertexCount() const {
+        return static_cast<size_t>(cells[0] + 1) * (cells[1] + 1) * (cells[2] + 1);
+    }
+};
+
+struct GridView {
+    GridKind kind = GridKind::Dense;
+    GridShape shape;
+    float lipschitz = 1;  // of the trilinear reconstruction, computed from the samples
+    // dense: vertexCount() samples, x fastest
+    const float* samples = nullptr;
+    // sparse
+    int blockSize = 4;                    // B cells per block edge
+    int blocks[3] = {0, 0, 0};            // coarse grid dimensions (in blocks)
+    const uint8_t* flags = nullptr;       // BlockFlag per block
+    const int32_t* blockData = nullptr;   // per block: index of its (B+1)^3 samples, -1 if none
+    const float* blockSamples = nullptr;  // surface blocks' samples, x fastest inside a block
+    const uint64_t* cellMasks = nullptr;  // per surface block: B^3 bits, (B^3 + 63) / 64 words
+    float background = 1;  // |value| assumed in non-surface blocks (a lower bound of the distance)
+
+    SDFT_HOST_DEVICE int wordsPerMask() const {
+        return (blockSize * blockSize * blockSize + 63) / 64;
+    }
+
+    // Sample at integer vertex (i, j, k), clamped to the grid.
+    SDFT_HOST_DEVICE float vertex(int i, int j, int k) const;
+    // The 8 corner samples of cell (i, j, k), index = di + 2 dj + 4 dk.
+    SDFT_HOST_DEVICE void cellCorners(int i, int j, int k, float c[8]) const;
+    // Trilinear reconstruction inside the grid; outside, a distance bound through the nearest grid
+    // point q: sqrt(|p - q|^2 + max(f(q), 0)^2) (the surface lies in the box, which is convex).
+    SDFT_HOST_DEVICE float sample(Vec3 p) const;
+    // Trilinear interpolation at p, clamped to the grid (no outside extension).
+    SDFT_HOST_DEVICE float interpolate(Vec3 p) const;
+};
+
+// Owner of the buffers a view points into.
+class Grid {
+  public:
+    // A dense grid from samples (vertexCount() of them, x fastest).
+    static Grid dense(const GridShape& shape, std::vector<float> samples);
+    // A sparse block grid from dense samples: blocks whose samples are all farther than `band`
+    // voxels from the surface (and have no sign change) are flagged inside/outside and dropped.
+    static Grid sparseFromDense(const GridShape& shape, const std::vector<float>& samples,
+                                int blockSize, float bandVoxels);
+
+    GridView view() const;
+    GridKind kind() const { return m_kind; }
+    const GridShape& shape() const { return m_shape; }
+    size_t memoryBytes() const;
+    int blockSize() const { return m_blockSize; }
+    // Number of blocks flagged inside, outside, surface (sparse only).
+    void blockCounts(size_t& inside, size_t& outside, size_t& surface) const;
+    float background() const { return m_background; }
+    float lipschitz() const { return m_lipschitz; }
+
+    // Raw buffers, for file I/O and tests.
+    const std::vector<float>& samples() const { return m_samples; }
+    const std::vector<uint8_t>& flags() const { return m_flags; }
+    const std::vector<int32_t>& blockData() const { return m_blockData; }
+    const std::vector<float>& blockSamples() const { return m_blockSamples; }
+    const std::vector<uint64_t>& cellMasks() const { return m_cellMasks; }
+
+    // Rebuilds a sparse grid from its stored buffers (file loading); recomputes the cell masks and
+    // the Lipschitz bound. Throws InputError naming `source` if the buffers are inconsistent.
+    static Grid sparseFromBuffers(const GridShape& shape, int blockSize, float background,
+                                  std::vector<uint8_t> flags, std::vector<float> blockSamples,
+                                  const std::string& source);
+
+  private:
+    void computeCellMasks();
+    void computeLipschitz();
+
+    GridKind m_kind = GridKind::Dense;
+    GridShape m_shape;
+    float m_lipschitz = 1;
+    std::vector<float> m_samples;
+    int m_blockSize = 4;
+    int m_blocks[3] = {0, 0, 0};
+    float m_background = 1;
+    std::vector<uint8_t> m_flags;
+    std::vector<int32_t> m_blockData;
+    std::vector<float> m_blockSamples;
+    std::vector<uint64_t> m_cellMasks;
+};
+
+// ---- inline view functions (GPU-ready) ----
+
+SDFT_HOST_DEVICE inline int clampi(int v, int lo, int hi) {
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
+SDFT_HOST_DEVICE inline float GridView::vertex(int i, int j, int k) const {
+    int nx = shape.cells[0], ny = shape.cells[1], nz = shape.cells[2];
+    i = clampi(i, 0, nx);
+    j = clampi(j, 0, ny);
+    k = clampi(k, 0, nz);
+    if (kind == GridKind::Dense)
+        return samples[(static_cast<size_t>(k) * (ny + 1) + j) * (nx + 1) + i];
+    // The block of the cell below the vertex (the last vertex of an axis belongs to the last cell).
+    int ci = i < nx ? i : nx - 1, cj = j < ny ? j : ny - 1, ck = k < nz ? k : nz - 1;
+    float c[8];
+    cellCorners(ci, cj, ck, c);
+    return c[(i - ci) + 2 * (j - cj) + 4 * (k - ck)];
+}
+
+SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[8]) const {
+    if (kind == GridKind::Dense) {
+        const size_t sx = 1, sy = shape.cells[0] + 1, sz = sy * (shape.cells[1] + 1);
+        const float* s = samples + k * sz + j * sy + i * sx;
+        c[0] = s[0], c[1] = s[sx], c[2] = s[sy], c[3] = s[sy + sx];
+        c[4] = s[sz], c[5] = s[sz + sx], c[6] = s[sz + sy], c[7] = s[sz + sy + sx];
+        return;
+    }
+    // Jamriška §3: each surface block stores the (B+1)^3 vertices of its own cells.
+    const int B = blockSize;
+    int bi = i / B, bj = j / B, bk = k / B;
+    size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
+    int32_t data = blockData[block];
+    if (data < 0) {
+        float v =
+            flags[block] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
+        for (int n = 0; n < 8; ++n) c[n] = v;
+        return;
+    }
+    const size_t sx = 1, sy = B + 1, sz = sy * (B + 1);
+    const float* s = blockSamples + static_cast<size_t>(data) * sz * (B + 1) + (k - bk * B) * sz +
+                     (j - bj * B) * sy + (i - bi * B);
+    c[0] = s[0], c[1] = s[sx], c[2] = s[sy], c[3] = s[sy + sx];
+    c[4] = s[sz], c[5] = s[sz + sx], c[6] = s[sz + sy], c[7] = s[sz + sy + sx];
+}
+
+SDFT_HOST_DEVICE inline float GridView::interpolate(Vec3 p) const {
+    Vec3 g = (p - shape.origin) / shape.voxelSize;
+    float fx = clampf(g.x, 0.0f, static_cast<float>(shape.cells[0]));
+    float fy = clampf(g.y, 0.0f, static_cast<float>(shape.cells[1]));
+    float fz = clampf(g.z, 0.0f, static_cast<float>(shape.cells[2]));
+    int i = clampi(static_cast<int>(fx), 0, shape.cells[0] - 1);
+    int j = clampi(static_cast<int>(fy), 0, shape.cells[1] - 1);
+    int k = clampi(static_cast<int>(fz), 0, shape.cells[2] - 1);
+    float u = fx - i, v = fy - j, w = fz - k;
+    float c[8];
+    cellCorners(i, j, k, c);
+    float c00 = c[0] + (c[1] - c[0]) * u, c10 = c[2] + (c[3] - c[2]) * u;
+    float c01 = c[4] + (c[5] - c[4]) * u, c11 = c[6] + (c[7] - c[6]) * u;
+    float c0 = c00 + (c10 - c00) * v, c1 = c01 + (c11 - c01) * v;
+    return c0 + (c1 - c0) * w;
+}
+
+SDFT_HOST_DEVICE inline float GridView::sample(Vec3 p) const {
+    Bounds3 b{shape.origin, shape.origin + Vec3(static_cast<float>(shape.cells[0]),
+                                                static_cast<float>(shape.cells[1]),
+                                                static_cast<float>(shape.cells[2])) *
+                                               shape.voxelSize};
+    Vec3 q = min(max(p, b.lo), b.hi);
+    float f = interpolate(q);
+    Vec3 d = p - q;
+    float out2 = dot(d, d);
+    if (out2 == 0.0f) return f;
+    float inside = maxf(f, 0.0f);
+    return std::sqrt(out2 + inside * inside);
+}
+
+}  // namespace sdft

@@ -1,0 +1,204 @@
+#include "sdftrace/field/grid.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/core/macros.h"
+
+namespace sdft {
+
+Grid Grid::dense(const GridShape& shape, std::vector<float> samples) {
+    SDFT_CHECK(samples.size() == shape.vertexCount());
+    Grid g;
+    g.m_kind = GridKind::Dense;
+    g.m_shape = shape;
+    g.m_samples = std::move(samples);
+    g.computeLipschitz();
+    return g;
+}
+
+Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& samples, int B,
+                           float bandVoxels) {
+    SDFT_CHECK(samples.size() == shape.vertexCount());
+    SDFT_CHECK(B == 4 || B == 8);
+    SDFT_CHECK(bandVoxels >= 2);
+    Grid g;
+    g.m_kind = GridKind::Sparse;
+    g.m_shape = shape;
+    g.m_blockSize = B;
+    for (int a = 0; a < 3; ++a) g.m_blocks[a] = (shape.cells[a] + B - 1) / B;
+    // Samples of non-surface blocks are all at least band voxels from the surface; a point in such
+    // a block is within half a cell diagonal (< 1 voxel) of one, so (band - 1) voxels is a lower
+    // bound of its distance.
+    g.m_background = (bandVoxels - 1) * shape.voxelSize;
+    const float band = bandVoxels * shape.voxelSize;
+    const size_t numBlocks = static_cast<size_t>(g.m_blocks[0]) * g.m_blocks[1] * g.m_blocks[2];
+    g.m_flags.assign(numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
+    g.m_blockData.assign(numBlocks, -1);
+    const int V = B + 1;
+    GridView dense;
+    dense.kind = GridKind::Dense;
+    dense.shape = shape;
+    dense.samples = samples.data();
+    std::vector<float> local(static_cast<size_t>(V) * V * V);
+    for (int bk = 0; bk < g.m_blocks[2]; ++bk)
+        for (int bj = 0; bj < g.m_blocks[1]; ++bj)
+            for (int bi = 0; bi < g.m_blocks[0]; ++bi) {
+                bool anyNeg = false, anyPos = false, near = false;
+                for (int k = 0; k < V; ++k)
+                    for (int j = 0; j < V; ++j)
+                        for (int i = 0; i < V; ++i) {
+                            float v = dense.vertex(bi * B + i, bj * B + j, bk * B + k);
+                            local[(static_cast<size_t>(k) * V + j) * V + i] = v;
+                            anyNeg |= v < 0;
+                            anyPos |= v >= 0;
+                            near |= std::fabs(v) < band;
+                        }
+                size_t block = (static_cast<size_t>(bk) * g.m_blocks[1] + bj) * g.m_blocks[0] + bi;
+                if (near || (anyNeg && anyPos)) {
+                    g.m_flags[block] = static_cast<uint8_t>(BlockFlag::Surface);
+                    g.m_blockData[block] =
+                        static_cast<int32_t>(g.m_blockSamples.size() / local.size());
+                    g.m_blockSamples.insert(g.m_blockSamples.end(), local.begin(), local.end());
+                } else {
+                    g.m_flags[block] =
+                        static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
+                }
+            }
+    g.computeCellMasks();
+    g.computeLipschitz();
+    return g;
+}
+
+Grid Grid::sparseFromBuffers(const GridShape& shape, int B, float background,
+                             std::vector<uint8_t> flags, std::vector<float> blockSamples,
+                             const std::string& source) {
+    Grid g;
+    g.m_kind = GridKind::Sparse;
+    g.m_shape = shape;
+    g.m_blockSize = B;
+    g.m_background = background;
+    for (int a = 0; a < 3; ++a) g.m_blocks[a] = (shape.cells[a] + B - 1) / B;
+    size_t numBlocks = static_cast<size_t>(g.m_blocks[0]) * g.m_blocks[1] * g.m_blocks[2];
+    if (flags.size() != numBlocks)
+        throw InputError(source + ": block flag count does not match the grid size");
+    g.m_blockData.assign(numBlocks, -1);
+    size_t perBlock = static_cast<size_t>(B + 1) * (B + 1) * (B + 1);
+    int32_t next = 0;
+    for (size_t b = 0; b < numBlocks; ++b) {
+        if (flags[b] > static_cast<uint8_t>(BlockFlag::Surface)) {
+            throw InputError(source + ": block " + std::to_string(b) + " has an invalid flag " +
+                             std::to_string(flags[b]) +
+                             " (accepted: 0 outside, 1 inside, 2 surface)");
+        }
+        if (flags[b] == static_cast<uint8_t>(BlockFlag::Surface)) g.m_blockData[b] = next++;
+    }
+    if (blockSamples.size() != static_cast<size_t>(next) * perBlock) {
+        throw InputError(source + ": " + std::to_string(next) + " surface blocks need " +
+                         std::to_string(static_cast<size_t>(next) * perBlock) +
+                         " samples, the file has " + std::to_string(blockSamples.size()));
+    }
+    g.m_flags = std::move(flags);
+    g.m_blockSamples = std::move(blockSamples);
+    g.computeCellMasks();
+    g.computeLipschitz();
+    return g;
+}
+
+GridView Grid::view() const {
+    GridView v;
+    v.kind = m_kind;
+    v.shape = m_shape;
+    v.lipschitz = m_lipschitz;
+    v.samples = m_samples.data();
+    v.blockSize = m_blockSize;
+    for (int a = 0; a < 3; ++a) v.blocks[a] = m_blocks[a];
+    v.flags = m_flags.data();
+    v.blockData = m_blockData.data();
+    v.blockSamples = m_blockSamples.data();
+    v.cellMasks = m_cellMasks.data();
+    v.background = m_background;
+    return v;
+}
+
+size_t Grid::memoryBytes() const {
+    return m_samples.size() * sizeof(float) + m_flags.size() +
+           m_blockData.size() * sizeof(int32_t) + m_blockSamples.size() * sizeof(float) +
+           m_cellMasks.size() * sizeof(uint64_t);
+}
+
+void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
+    inside = outside = surface = 0;
+    for (uint8_t f : m_flags) {
+        if (f == static_cast<uint8_t>(BlockFlag::Inside))
+            ++inside;
+        else if (f == static_cast<uint8_t>(BlockFlag::Outside))
+            ++outside;
+        else
+            ++surface;
+    }
+}
+
+// Jamriška §4.1: one bit per cell of each surface block, set when the signs of its 8 corner samples
+// differ (the cell contains the surface). Recomputed whenever the block's samples change.
+void Grid::computeCellMasks() {
+    const int B = m_blockSize;
+    GridView v = view();
+    const int words = v.wordsPerMask();
+    size_t surfaceBlocks = m_blockSamples.size() / (static_cast<size_t>(B + 1) * (B + 1) * (B + 1));
+    m_cellMasks.assign(surfaceBlocks * words, 0);
+    v = view();
+    for (int bk = 0; bk < m_blocks[2]; ++bk)
+        for (int bj = 0; bj < m_blocks[1]; ++bj)
+            for (int bi = 0; bi < m_blocks[0]; ++bi) {
+                size_t block = (static_cast<size_t>(bk) * m_blocks[1] + bj) * m_blocks[0] + bi;
+                int32_t data = m_blockData[block];
+                if (data < 0) continue;
+                for (int k = 0; k < B; ++k)
+                    for (int j = 0; j < B; ++j)
+                        for (int i = 0; i < B; ++i) {
+                            int ci = bi * B + i, cj = bj * B + j, ck = bk * B + k;
+                            if (ci >= m_shape.cells[0] || cj >= m_shape.cells[1] ||
+                                ck >= m_shape.cells[2])
+                                continue;
+                            float c[8];
+                            v.cellCorners(ci, cj, ck, c);
+                            bool neg = false, pos = false;
+                            for (float x : c) (x < 0 ? neg : pos) = true;
+                            if (neg && pos) {
+                                int bit = (k * B + j) * B + i;
+                                m_cellMasks[static_cast<size_t>(data) * words + bit / 64] |=
+                                    uint64_t{1} << (bit % 64);
+                            }
+                        }
+            }
+}
+
+// The trilinear interpolant's derivative along x inside a cell is a bilinear blend of the cell's 4
+// x-edge differences, so |df/dx| <= max |edge difference| / h, and likewise for y and z. The max
+// over cells of the norm of these per-axis maxima bounds the gradient everywhere (the interpolant
+// is continuous across faces within a block).
+void Grid::computeLipschitz() {
+    GridView v = view();
+    v.lipschitz = 1;
+    float worst = 0;
+    const float h = m_shape.voxelSize;
+    for (int k = 0; k < m_shape.cells[2]; ++k)
+        for (int j = 0; j < m_shape.cells[1]; ++j)
+            for (int i = 0; i < m_shape.cells[0]; ++i) {
+                float c[8];
+                v.cellCorners(i, j, k, c);
+                float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]),
+                                     std::fabs(c[5] - c[4]), std::fabs(c[7] - c[6])});
+                float gy = std::max({std::fabs(c[2] - c[0]), std::fabs(c[3] - c[1]),
+                                     std::fabs(c[6] - c[4]), std::fabs(c[7] - c[5])});
+                float gz = std::max({std::fabs(c[4] - c[0]), std::fabs(c[5] - c[1]),
+                                     std::fabs(c[6] - c[2]), std::fabs(c[7] - c[3])});
+                worst = std::max(worst, std::sqrt(gx * gx + gy * gy + gz * gz) / h);
+            }
+    // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
+    m_lipschitz = std::max(1.0f, worst);
+}
+
+}  // namespace sdft

@@ -1,0 +1,137 @@
+// Grids sampled from analytic fields: reconstruction error, sparse == dense in the band, block
+// flags, cell masks, the Lipschitz bound, and grids inside tapes.
+#include "sdftrace/field/grid.h"
+
+#include <gtest/gtest.h>
+
+#include "sdftrace/field/sample_grid.h"
+#include "sdftrace/field/tape.h"
+#include "sdftrace/field/test_util.h"
+
+namespace sdft {
+namespace {
+
+struct Sampled {
+    NodePtr node;
+    Tape tape;
+    Grid dense, sparse;
+};
+
+Sampled sampleTorusAndBox(int resolution, int blockSize) {
+    NodePtr n = node::unite(
+        {node::torus(0.8f, 0.25f), node::translate(node::box({0.5f, 0.6f, 0.5f}), {0, 0.2f, 0})});
+    Tape tape = compileTape(n, {.boundsCulling = false});
+    SampleOptions o;
+    o.resolution = resolution;
+    o.kind = GridKind::Dense;
+    o.bandVoxels = 3;
+    Bounds3 region = nodeBounds(*n);
+    GridShape shape = gridShapeFor(region, SampleOptions{.resolution = resolution,
+                                                         .kind = GridKind::Sparse,
+                                                         .blockSize = blockSize,
+                                                         .bandVoxels = 3});
+    std::vector<float> samples = sampleVertices(tape, shape);
+    return {n, std::move(tape), Grid::dense(shape, samples),
+            Grid::sparseFromDense(shape, samples, blockSize, 3)};
+}
+
+TEST(Grid, TrilinearReconstructionIsWithinAVoxelOfTheExactField) {
+    Sampled s = sampleTorusAndBox(64, 4);
+    GridView v = s.dense.view();
+    float h = s.dense.shape().voxelSize;
+    testing::Rng rng(1);
+    Bounds3 b = s.dense.shape().bounds();
+    for (int i = 0; i < 20000; ++i) {
+        Vec3 p = rng.inBox(b.lo, b.hi);
+        // Interpolating exact distances errs by at most half a cell diagonal (sqrt(3)/2 h).
+        ASSERT_NEAR(v.sample(p), s.tape.eval(p), 0.87f * h);
+    }
+}
+
+TEST(Grid, SparseMatchesDenseInsideTheBandAndKeepsTheSignElsewhere) {
+    for (int B : {4, 8}) {
+        Sampled s = sampleTorusAndBox(64, B);
+        GridView d = s.dense.view(), sp = s.sparse.view();
+        float h = s.dense.shape().voxelSize;
+        testing::Rng rng(2);
+        Bounds3 b = s.dense.shape().bounds();
+        for (int i = 0; i < 20000; ++i) {
+            Vec3 p = rng.inBox(b.lo, b.hi);
+            float dv = d.sample(p), sv = sp.sample(p);
+            if (std::fabs(dv) < 2 * h) ASSERT_EQ(dv, sv) << "B=" << B;
+            ASSERT_EQ(dv < 0, sv < 0) << "B=" << B;
+            // Outside the band the sparse value is a smaller-magnitude bound.
+            ASSERT_LE(std::fabs(sv), std::fabs(dv) + 1e-6f);
+        }
+        size_t in, out, surf;
+        s.sparse.blockCounts(in, out, surf);
+        EXPECT_GT(in, 0u);
+        EXPECT_GT(out, 0u);
+        EXPECT_GT(surf, 0u);
+        EXPECT_LT(s.sparse.memoryBytes(), s.dense.memoryBytes());
+    }
+}
+
+TEST(Grid, CellMasksMarkExactlyTheCellsWithASignChange) {
+    Sampled s = sampleTorusAndBox(48, 4);
+    GridView v = s.sparse.view();
+    const int B = v.blockSize;
+    int marked = 0;
+    for (int k = 0; k < v.shape.cells[2]; ++k)
+        for (int j = 0; j < v.shape.cells[1]; ++j)
+            for (int i = 0; i < v.shape.cells[0]; ++i) {
+                float c[8];
+                v.cellCorners(i, j, k, c);
+                bool neg = false, pos = false;
+                for (float x : c) (x < 0 ? neg : pos) = true;
+                size_t block =
+                    (static_cast<size_t>(k / B) * v.blocks[1] + j / B) * v.blocks[0] + i / B;
+                int32_t data = v.blockData[block];
+                bool bit = false;
+                if (data >= 0) {
+                    int local = ((k % B) * B + j % B) * B + i % B;
+                    bit = (v.cellMasks[static_cast<size_t>(data) * v.wordsPerMask() + local / 64] >>
+                           (local % 64)) &
+                          1;
+                }
+                ASSERT_EQ(bit, neg && pos) << i << "," << j << "," << k;
+                marked += bit;
+            }
+    EXPECT_GT(marked, 100);
+}
+
+TEST(Grid, LipschitzBoundHoldsForTheReconstruction) {
+    Sampled s = sampleTorusAndBox(40, 4);
+    GridView v = s.dense.view();
+    Bounds3 b = s.dense.shape().bounds().expanded(0.5f);
+    testing::Rng rng(3);
+    float worst = 0;
+    for (int i = 0; i < 50000; ++i) {
+        Vec3 a = rng.inBox(b.lo, b.hi);
+        Vec3 c = a + rng.direction() * rng.uniform(1e-3f, 0.05f);
+        worst = std::max(worst, std::fabs(v.sample(a) - v.sample(c)) / length(a - c));
+    }
+    EXPECT_LE(worst, s.dense.lipschitz() * 1.001f);
+    EXPECT_GE(s.dense.lipschitz(), 1.0f);
+    EXPECT_LE(s.dense.lipschitz(), 1.7321f);  // exact distances: each axis difference <= h
+}
+
+TEST(Grid, GridNodesEvaluateInTapesLikeTheTreeAndMixWithAnalyticObjects) {
+    Sampled s = sampleTorusAndBox(32, 4);
+    auto grid = std::make_shared<Grid>(std::move(s.sparse));
+    NodePtr mixed = node::unite({node::translate(node::grid(grid), {1, 0, 0}), node::sphere(0.3f)});
+    Tape tape = compileTape(mixed);
+    testing::Rng rng(4);
+    std::vector<float> x(500), y(500), z(500), out(500);
+    for (int i = 0; i < 500; ++i) {
+        Vec3 p = rng.inCube(2.5f);
+        x[i] = p.x, y[i] = p.y, z[i] = p.z;
+        ASSERT_NEAR(tape.eval(p), evalTree(*mixed, p), 1e-5f);
+    }
+    BatchScratch scratch;
+    tape.evalBatch(x.data(), y.data(), z.data(), out.data(), 500, scratch);
+    for (int i = 0; i < 500; ++i) ASSERT_EQ(out[i], tape.eval({x[i], y[i], z[i]}));
+}
+
+}  // namespace
+}  // namespace sdft

@@ -1,0 +1,195 @@
+#include "sdftrace/io/sdfg_io.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/io/atomic_file.h"
+
+namespace sdft {
+
+namespace {
+
+constexpr char kMagic[4] = {'S', 'D', 'F', 'G'};
+constexpr int kMaxCells = 32768;
+
+// Fixed 64-byte header; all fields little-endian (the formats supported are little-endian hosts).
+struct Header {
+    char magic[4];
+    uint32_t version;
+    uint32_t kind;
+    int32_t cells[3];
+    float origin[3];
+    float voxelSize;
+    uint32_t blockSize;
+    float background;
+    uint64_t payloadBytes;
+    uint64_t checksum;
+};
+static_assert(sizeof(Header) == 64, "the .sdfg header is 64 bytes");
+
+struct File {
+    FILE* f;
+    ~File() {
+        if (f) std::fclose(f);
+    }
+};
+
+}  // namespace
+
+uint64_t fnv1a64(const void* data, size_t bytes, uint64_t h) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) {
+        h ^= p[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+void saveSdfg(const Grid& grid, const std::string& path) {
+    const GridShape& s = grid.shape();
+    Header h{};
+    std::memcpy(h.magic, kMagic, 4);
+    h.version = kSdfgVersion;
+    h.kind = static_cast<uint32_t>(grid.kind());
+    for (int a = 0; a < 3; ++a) {
+        h.cells[a] = s.cells[a];
+        h.origin[a] = s.origin[a];
+    }
+    h.voxelSize = s.voxelSize;
+    h.blockSize = grid.kind() == GridKind::Sparse ? grid.blockSize() : 0;
+    h.background = grid.background();
+    uint64_t sum = 0xcbf29ce484222325ull;
+    if (grid.kind() == GridKind::Dense) {
+        h.payloadBytes = grid.samples().size() * sizeof(float);
+        sum = fnv1a64(grid.samples().data(), h.payloadBytes, sum);
+    } else {
+        h.payloadBytes = grid.flags().size() + grid.blockSamples().size() * sizeof(float);
+        sum = fnv1a64(grid.flags().data(), grid.flags().size(), sum);
+        sum = fnv1a64(grid.blockSamples().data(), grid.blockSamples().size() * sizeof(float), sum);
+    }
+    h.checksum = sum;
+
+    AtomicOutput out(path);
+    File file{std::fopen(out.tempPath().c_str(), "wb")};
+    if (!file.f)
+        throw InputError(path + ": cannot open for writing (" + std::strerror(errno) + ")");
+    bool ok = std::fwrite(&h, sizeof h, 1, file.f) == 1;
+    if (grid.kind() == GridKind::Dense) {
+        ok = ok && std::fwrite(grid.samples().data(), sizeof(float), grid.samples().size(),
+                               file.f) == grid.samples().size();
+    } else {
+        ok = ok && std::fwrite(grid.flags().data(), 1, grid.flags().size(), file.f) ==
+                       grid.flags().size();
+        ok = ok && std::fwrite(grid.blockSamples().data(), sizeof(float),
+                               grid.blockSamples().size(), file.f) == grid.blockSamples().size();
+    }
+    ok = std::fclose(file.f) == 0 && ok;
+    file.f = nullptr;
+    if (!ok) throw InputError(path + ": write failed (disk full?)");
+    out.commit();
+}
+
+Grid loadSdfg(const std::string& path) {
+    File file{std::fopen(path.c_str(), "rb")};
+    if (!file.f)
+        throw InputError(path + ": cannot open grid file (does it exist and is it readable?)");
+    std::error_code ec;
+    uint64_t fileBytes = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path + ": cannot read the file size");
+    Header h{};
+    if (fileBytes < sizeof h || std::fread(&h, sizeof h, 1, file.f) != 1) {
+        throw InputError(path + ": truncated: shorter than the 64-byte .sdfg header");
+    }
+    if (std::memcmp(h.magic, kMagic, 4) != 0)
+        throw InputError(path + ": not an .sdfg file (bad magic)");
+    if (h.version != kSdfgVersion) {
+        throw InputError(path + ": .sdfg version " + std::to_string(h.version) +
+                         " is not supported (this build reads version " +
+                         std::to_string(kSdfgVersion) + ")");
+    }
+    if (h.kind > 1)
+        throw InputError(path + ": unknown grid kind " + std::to_string(h.kind) +
+                         " (accepted: 0 dense, 1 sparse)");
+    GridShape s;
+    for (int a = 0; a < 3; ++a) {
+        if (h.cells[a] < 1 || h.cells[a] > kMaxCells) {
+            throw InputError(path + ": grid size " + std::to_string(h.cells[0]) + "x" +
+                             std::to_string(h.cells[1]) + "x" + std::to_string(h.cells[2]) +
+                             " is out of range (1 to " + std::to_string(kMaxCells) +
+                             " cells per axis)");
+        }
+        if (!std::isfinite(h.origin[a])) throw InputError(path + ": non-finite origin");
+        s.cells[a] = h.cells[a];
+        s.origin[a] = h.origin[a];
+    }
+    if (!(h.voxelSize > 0) || !std::isfinite(h.voxelSize))
+        throw InputError(path + ": voxel size must be positive and finite");
+    s.voxelSize = h.voxelSize;
+    GridKind kind = static_cast<GridKind>(h.kind);
+
+    // Expected payload from the header alone, checked against the file before allocating.
+    uint64_t expected = 0;
+    uint64_t numBlocks = 0, perBlockBytes = 0;
+    if (kind == GridKind::Dense) {
+        expected = static_cast<uint64_t>(s.vertexCount()) * sizeof(float);
+    } else {
+        if (h.blockSize != 4 && h.blockSize != 8)
+            throw InputError(path + ": block size " + std::to_string(h.blockSize) +
+                             " (accepted: 4, 8)");
+        if (!(h.background > 0) || !std::isfinite(h.background))
+            throw InputError(path + ": background must be positive and finite");
+        for (int a = 0; a < 3; ++a)
+            numBlocks = (a == 0 ? 1 : numBlocks) * ((s.cells[a] + h.blockSize - 1) / h.blockSize);
+        perBlockBytes = static_cast<uint64_t>(h.blockSize + 1) * (h.blockSize + 1) *
+                        (h.blockSize + 1) * sizeof(float);
+        if (h.payloadBytes < numBlocks || (h.payloadBytes - numBlocks) % perBlockBytes != 0 ||
+            (h.payloadBytes - numBlocks) / perBlockBytes > numBlocks) {
+            throw InputError(path + ": corrupt header: payload size does not fit the block layout");
+        }
+        expected = h.payloadBytes;
+    }
+    if (h.payloadBytes != expected)
+        throw InputError(path + ": corrupt header: payload size does not match the grid size");
+    if (fileBytes - sizeof h < expected) {
+        throw InputError(path + ": truncated: the header promises " + std::to_string(expected) +
+                         " payload bytes, the file has " + std::to_string(fileBytes - sizeof h));
+    }
+    if (fileBytes - sizeof h > expected)
+        throw InputError(path + ": corrupt: trailing bytes after the payload");
+    double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+    if (static_cast<double>(expected) > 0.5 * have)
+        throw InputError(path + ": the grid needs more than half of this machine's memory");
+
+    auto readExact = [&](void* dst, size_t bytes) {
+        if (bytes && std::fread(dst, 1, bytes, file.f) != bytes)
+            throw InputError(path + ": truncated payload");
+    };
+    uint64_t sum = 0xcbf29ce484222325ull;
+    if (kind == GridKind::Dense) {
+        std::vector<float> samples(s.vertexCount());
+        readExact(samples.data(), expected);
+        sum = fnv1a64(samples.data(), expected, sum);
+        if (sum != h.checksum) throw InputError(path + ": corrupt: payload checksum mismatch");
+        for (float v : samples)
+            if (!std::isfinite(v)) throw InputError(path + ": corrupt: non-finite sample");
+        return Grid::dense(s, std::move(samples));
+    }
+    std::vector<uint8_t> flags(numBlocks);
+    readExact(flags.data(), numBlocks);
+    std::vector<float> blockSamples((expected - numBlocks) / sizeof(float));
+    readExact(blockSamples.data(), expected - numBlocks);
+    sum = fnv1a64(flags.data(), flags.size(), sum);
+    sum = fnv1a64(blockSamples.data(), blockSamples.size() * sizeof(float), sum);
+    if (sum != h.checksum) throw InputError(path + ": corrupt: payload checksum mismatch");
+    for (float v : blockSamples)
+        if (!std::isfinite(v)) throw InputError(path + ": corrupt: non-finite sample");
+    return Grid::sparseFromBuffers(s, static_cast<int>(h.blockSize), h.background, std::move(flags),
+                                   std::move(blockSamples), path);
+}
+
+}  // namespace sdft

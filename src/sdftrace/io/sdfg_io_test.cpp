@@ -1,0 +1,111 @@
+#include "sdftrace/io/sdfg_io.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/field/sample_grid.h"
+
+namespace sdft {
+namespace {
+
+std::string tempPath(const std::string& name) {
+    return (std::filesystem::temp_directory_path() /
+            ("sdftrace-sdfg-" + std::to_string(::getpid()) + "-" + name))
+        .string();
+}
+
+Grid makeGrid(GridKind kind) {
+    Tape tape = compileTape(node::torus(0.7f, 0.2f), {.boundsCulling = false});
+    SampleOptions o;
+    o.resolution = 40;
+    o.kind = kind;
+    return sampleGrid(tape, nodeBounds(*node::torus(0.7f, 0.2f)), o);
+}
+
+std::string readAll(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+void writeAll(const std::string& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary) << bytes;
+}
+
+TEST(Sdfg, RoundTripIsExactForBothLayouts) {
+    for (GridKind kind : {GridKind::Dense, GridKind::Sparse}) {
+        Grid g = makeGrid(kind);
+        std::string path = tempPath("rt.sdfg");
+        saveSdfg(g, path);
+        Grid back = loadSdfg(path);
+        EXPECT_EQ(back.kind(), kind);
+        EXPECT_EQ(back.samples(), g.samples());
+        EXPECT_EQ(back.flags(), g.flags());
+        EXPECT_EQ(back.blockSamples(), g.blockSamples());
+        EXPECT_EQ(back.cellMasks(), g.cellMasks());
+        EXPECT_EQ(back.lipschitz(), g.lipschitz());
+        EXPECT_EQ(back.shape().voxelSize, g.shape().voxelSize);
+        std::filesystem::remove(path);
+    }
+}
+
+void expectRejected(const std::string& bytes, const std::string& fragment) {
+    std::string path = tempPath("bad.sdfg");
+    writeAll(path, bytes);
+    try {
+        loadSdfg(path);
+        ADD_FAILURE() << "accepted a bad file; expected: " << fragment;
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+    std::filesystem::remove(path);
+}
+
+TEST(Sdfg, RejectsBadFilesBeforeAllocating) {
+    std::string path = tempPath("good.sdfg");
+    saveSdfg(makeGrid(GridKind::Sparse), path);
+    std::string good = readAll(path);
+    std::filesystem::remove(path);
+
+    expectRejected("", "truncated");
+    expectRejected(good.substr(0, 40), "truncated");
+    expectRejected(good.substr(0, good.size() - 10), "truncated");
+    expectRejected(good + "xx", "trailing bytes");
+    std::string magic = good;
+    magic[0] = 'X';
+    expectRejected(magic, "bad magic");
+    std::string version = good;
+    uint32_t v = 99;
+    std::memcpy(&version[4], &v, 4);
+    expectRejected(version, "version 99");
+    std::string corrupt = good;
+    corrupt[good.size() - 3] ^= 0x55;
+    expectRejected(corrupt, "checksum");
+    // An absurd size in the header: rejected from the header and the file size, not by allocating.
+    std::string absurd = good;
+    int32_t huge = 30000;
+    for (int a = 0; a < 3; ++a) std::memcpy(&absurd[12 + 4 * a], &huge, 4);
+    expectRejected(absurd, "payload size");
+    std::string tooBig = good;
+    int32_t over = 1 << 20;
+    std::memcpy(&tooBig[12], &over, 4);
+    expectRejected(tooBig, "out of range");
+    std::string block = good;
+    uint32_t five = 5;
+    std::memcpy(&block[40], &five, 4);
+    expectRejected(block, "block size 5");
+}
+
+TEST(Sdfg, FailedSaveLeavesNoFile) {
+    EXPECT_THROW(saveSdfg(makeGrid(GridKind::Dense), "/nonexistent-dir/x.sdfg"), InputError);
+}
+
+}  // namespace
+}  // namespace sdft
