@@ -12,6 +12,8 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "sdftrace 0.1.0");
     sdft::cli::Action action;
     sdft::cli::addRenderCommand(app, action);
+    sdft::cli::addBakeCommand(app, action);
+    sdft::cli::addInfoCommand(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -1,5 +1,6 @@
 // sdftrace render [scene.json] -o image.png [--aov NAME=PATH]... [camera, tracer, shading flags]
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <optional>
 
@@ -9,7 +10,9 @@
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/image_io.h"
+#include "sdftrace/io/sdfg_io.h"
 #include "sdftrace/render/renderer.h"
+#include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/scene/parse_scene.h"
 
 namespace sdft::cli {
@@ -97,7 +100,19 @@ int runRender(const RenderArgs& a) {
         aovs.emplace_back(aov, path);
     }
 
-    Scene scene = a.scene.empty() ? demoScene() : parseSceneFile(a.scene);
+    Scene scene;
+    if (a.scene.empty()) {
+        scene = demoScene();
+    } else if (std::filesystem::path(a.scene).extension() == ".sdfg") {
+        // A grid file rendered directly: framed by an automatic camera, lit by default lights.
+        auto grid = std::make_shared<const Grid>(loadSdfg(a.scene));
+        Bounds3 frame = grid->surfaceBounds();
+        if (frame.empty())
+            throw InputError(a.scene + ": the grid contains no surface (no sign change)");
+        scene = sceneForObject(node::grid(grid), frame);
+    } else {
+        scene = parseSceneFile(a.scene);
+    }
     applyOverrides(a, scene);
     Tape tape = compileTape(scene.root, {.boundsCulling = scene.settings.boundsCulling});
     Film film(scene.camera.width, scene.camera.height);
@@ -126,7 +141,8 @@ void addRenderCommand(CLI::App& app, Action& action) {
         "render",
         "Ray trace a scene file (or the built-in demo scene when none is given) to an image");
     cmd->add_option("scene", args->scene,
-                    "Scene file (JSON, see docs/scene-format.md); default: the demo");
+                    "Scene file (JSON, see docs/scene-format.md) or grid file (.sdfg, framed "
+                    "automatically); default: the demo");
     cmd->add_option("-o,--output", args->output,
                     "Output image: .png (tone-mapped sRGB), .exr or .pfm (linear)")
         ->capture_default_str();

@@ -85,6 +85,8 @@ class Grid {
     // Number of blocks flagged inside, outside, surface (sparse only).
     void blockCounts(size_t& inside, size_t& outside, size_t& surface) const;
     float background() const { return m_background; }
+    // Bounds of the cells whose corner samples change sign (where the surface is); empty if none.
+    Bounds3 surfaceBounds() const;
     float lipschitz() const { return m_lipschitz; }
 
     // Raw buffers, for file I/O and tests.

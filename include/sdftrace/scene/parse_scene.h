@@ -9,8 +9,10 @@
 namespace sdft {
 
 Scene parseSceneFile(const std::string& path);
-// `source` names the text in messages (a file name, or "<demo>").
-Scene parseSceneText(const std::string& text, const std::string& source);
+// `source` names the text in messages (a file name, or "<demo>"); relative file paths in the scene
+// (grid files) start from `baseDir`.
+Scene parseSceneText(const std::string& text, const std::string& source,
+                     const std::string& baseDir = "");
 // The built-in demo scene (the text of examples/demo.json, embedded at build time).
 Scene demoScene();
 const char* demoSceneText();

@@ -122,6 +122,25 @@ GridView Grid::view() const {
     return v;
 }
 
+Bounds3 Grid::surfaceBounds() const {
+    GridView v = view();
+    Bounds3 b;
+    const float h = m_shape.voxelSize;
+    for (int k = 0; k < m_shape.cells[2]; ++k)
+        for (int j = 0; j < m_shape.cells[1]; ++j)
+            for (int i = 0; i < m_shape.cells[0]; ++i) {
+                float c[8];
+                v.cellCorners(i, j, k, c);
+                bool neg = false, pos = false;
+                for (float x : c) (x < 0 ? neg : pos) = true;
+                if (!(neg && pos)) continue;
+                Vec3 lo = m_shape.origin + Vec3(i, j, k) * h;
+                b.include(lo);
+                b.include(lo + Vec3(h));
+            }
+    return b;
+}
+
 size_t Grid::memoryBytes() const {
     return m_samples.size() * sizeof(float) + m_flags.size() +
            m_blockData.size() * sizeof(int32_t) + m_blockSamples.size() * sizeof(float) +

@@ -1,9 +1,11 @@
 #include "parse_node.h"
 
 #include <cmath>
+#include <filesystem>
 #include <vector>
 
 #include "sdftrace/field/noise.h"
+#include "sdftrace/io/sdfg_io.h"
 
 namespace sdft {
 
@@ -15,13 +17,13 @@ namespace {
 
 const char* kPrimitiveTypes =
     "sphere, box, round_box, torus, capsule, cylinder, cone, plane, ellipsoid, octahedron, "
-    "dodecahedron, blobs";
+    "dodecahedron, blobs, grid";
 const char* kOperatorTypes =
     "union, intersection, difference, complement, smooth_union, smooth_intersection, "
     "smooth_difference, morph, translate, rotate, scale, repeat, displace";
 
-std::vector<NodePtr> parseChildren(const Reader& r, const std::map<std::string, int>& mats,
-                                   size_t minCount, size_t maxCount) {
+std::vector<NodePtr> parseChildren(const Reader& r, NodeContext& mats, size_t minCount,
+                                   size_t maxCount) {
     if (!r.has("children")) r.fail("missing required key 'children' (an array of objects)");
     Reader list = r.child("children");
     list.requireArray("a list of child objects");
@@ -36,7 +38,7 @@ std::vector<NodePtr> parseChildren(const Reader& r, const std::map<std::string, 
     return out;
 }
 
-NodePtr parseSingleChild(const Reader& r, const std::map<std::string, int>& mats) {
+NodePtr parseSingleChild(const Reader& r, NodeContext& mats) {
     if (!r.has("child")) r.fail("missing required key 'child' (an object)");
     return parseNode(r.child("child"), mats);
 }
@@ -111,9 +113,30 @@ NodePtr parseBlobs(const Reader& r) {
     return node::blobs(blobs, threshold);
 }
 
+// A grid file, relative to the scene file's directory; its errors carry the JSON path too.
+std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx) {
+    std::string file = r.string("file");
+    std::filesystem::path path(file);
+    if (path.is_relative() && !ctx.baseDir.empty())
+        path = std::filesystem::path(ctx.baseDir) / path;
+    std::string key = path.lexically_normal().string();
+    auto it = ctx.grids.find(key);
+    if (it != ctx.grids.end()) return it->second;
+    if (path.extension() != ".sdfg") {
+        r.failKey("file", "unsupported grid file '" + file + "'; accepted: .sdfg");
+    }
+    try {
+        auto grid = std::make_shared<const Grid>(loadSdfg(key));
+        ctx.grids[key] = grid;
+        return grid;
+    } catch (const InputError& e) {
+        r.failKey("file", e.what());
+    }
+}
+
 }  // namespace
 
-NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
+NodePtr parseNode(const Reader& r, NodeContext& mats) {
     r.requireObject("an object node");
     std::string type = r.string("type");
     const char* common[] = {"type", "material", "translate", "rotate", "scale"};
@@ -180,6 +203,9 @@ NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
     } else if (type == "blobs") {
         allow({"blobs", "threshold"});
         n = parseBlobs(r);
+    } else if (type == "grid") {
+        allow({"file"});
+        n = node::grid(loadGridObject(r, mats));
     } else if (type == "union" || type == "intersection") {
         allow({"children"});
         auto c = parseChildren(r, mats, 1, 100000);
@@ -260,10 +286,10 @@ NodePtr parseNode(const Reader& r, const std::map<std::string, int>& mats) {
     n = applyInlineTransforms(r, n);
     if (r.has("material")) {
         std::string name = r.string("material");
-        auto it = mats.find(name);
-        if (it == mats.end()) {
+        auto it = mats.materials.find(name);
+        if (it == mats.materials.end()) {
             std::string known;
-            for (const auto& [k, v] : mats) known += (known.empty() ? "" : ", ") + k;
+            for (const auto& [k, v] : mats.materials) known += (known.empty() ? "" : ", ") + k;
             r.failKey("material", "unknown material '" + name + "'; defined: " + known);
         }
         n = node::withMaterial(n, it->second);

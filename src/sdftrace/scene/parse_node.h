@@ -5,11 +5,19 @@
 #include <string>
 
 #include "json_reader.h"
+#include "sdftrace/field/grid.h"
 #include "sdftrace/field/node.h"
 
 namespace sdft {
 
-// `materials` maps names to indices in the scene's material table.
-NodePtr parseNode(const json_reader::Reader& r, const std::map<std::string, int>& materials);
+// What object parsing needs beyond the JSON: material names, the directory that relative file
+// paths start from, and the grids loaded so far (a file used twice is loaded once).
+struct NodeContext {
+    std::map<std::string, int> materials;  // name -> index in the scene's material table
+    std::string baseDir;
+    std::map<std::string, std::shared_ptr<const Grid>> grids;
+};
+
+NodePtr parseNode(const json_reader::Reader& r, NodeContext& context);
 
 }  // namespace sdft

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -112,13 +113,16 @@ void parseRender(const Reader& r, RenderSettings& s) {
         r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");
 }
 
-Scene parseRoot(const Json& root, const std::string& source) {
+Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {
     Reader r(root, source, "");
     r.requireObject("a scene");
     r.allowKeys({"camera", "lights", "ambient", "background", "materials", "objects", "render"});
     Scene scene;
     scene.materials.push_back(Material{"default"});
-    std::map<std::string, int> materialIndex{{"default", 0}};
+    NodeContext context;
+    context.baseDir = baseDir;
+    std::map<std::string, int>& materialIndex = context.materials;
+    materialIndex["default"] = 0;
     if (r.has("materials")) {
         Reader m = r.child("materials");
         m.requireObject("a map from material names to materials");
@@ -151,7 +155,7 @@ Scene parseRoot(const Json& root, const std::string& source) {
     if (objs.value().empty()) objs.fail("expected at least one object");
     std::vector<NodePtr> nodes;
     for (size_t i = 0; i < objs.value().size(); ++i)
-        nodes.push_back(parseNode(objs.element(i), materialIndex));
+        nodes.push_back(parseNode(objs.element(i), context));
     scene.root = nodes.size() == 1 ? nodes[0] : node::unite(nodes);
     validateImageSize(scene.camera.width, scene.camera.height, source + ": /camera");
     return scene;
@@ -179,7 +183,8 @@ void validateImageSize(int width, int height, const std::string& what) {
     }
 }
 
-Scene parseSceneText(const std::string& text, const std::string& source) {
+Scene parseSceneText(const std::string& text, const std::string& source,
+                     const std::string& baseDir) {
     Json root;
     try {
         root = Json::parse(text);
@@ -192,7 +197,7 @@ Scene parseSceneText(const std::string& text, const std::string& source) {
         if (e.id == 406) msg += " (numbers must be finite)";
         throw InputError(source + ": malformed JSON: " + msg);
     }
-    return parseRoot(root, source);
+    return parseRoot(root, source, baseDir);
 }
 
 Scene parseSceneFile(const std::string& path) {
@@ -202,11 +207,11 @@ Scene parseSceneFile(const std::string& path) {
     std::ostringstream text;
     text << in.rdbuf();
     if (in.bad()) throw InputError(path + ": cannot read scene file");
-    return parseSceneText(text.str(), path);
+    return parseSceneText(text.str(), path, std::filesystem::path(path).parent_path().string());
 }
 
 const char* demoSceneText() { return kDemoSceneJson; }
 
-Scene demoScene() { return parseSceneText(kDemoSceneJson, "<demo scene>"); }
+Scene demoScene() { return parseSceneText(kDemoSceneJson, "<demo scene>", ""); }
 
 }  // namespace sdft
