@@ -1,0 +1,42 @@
+// Ray tracing of a sparse block grid by two-level 3D-DDA (Jamriška 2010, §4): the coarse loop walks
+// blocks and skips those flagged inside or outside; in a surface block the inner loop walks cells
+// and tests only those whose bit in the block's mask is set (§4.1); a surface cell is intersected
+// by the midpoint method or by false position with 1-4 iterations (§4.2). Shadow rays can use the
+// volumetric-occluder traversal of §7. Dense grids are traversed as one block.
+#pragma once
+
+#include "sdftrace/field/grid.h"
+
+namespace sdft {
+
+enum class CellIntersection { Midpoint, FalsePosition };
+enum class GridNormal { AnalyticTrilinear, DifferenceOfInterpolations, InterpolationOfDifferences };
+
+struct GridTraceOptions {
+    CellIntersection cellMethod = CellIntersection::FalsePosition;
+    int falsiIters = 1;    // §4.2: 1 is visually the same as 4 (Jamriška Table 1)
+    bool bitMasks = true;  // §4.1: test the precomputed mask instead of the 8 corner signs
+};
+
+struct GridTraceResult {
+    bool hit = false;
+    float t = kInfinity;
+    int traversalSteps = 0;     // blocks + cells visited (Jamriška fig. 6-7)
+    int intersectionTests = 0;  // surface cells intersected
+    int interpolations = 0;     // trilinear reconstructions
+};
+
+// First intersection of the ray with the zero level set on [tMin, tMax].
+GridTraceResult traceGridRay(const GridView& grid, const Ray& ray, float tMin, float tMax,
+                             const GridTraceOptions& options);
+
+// Whether anything blocks the ray on [tMin, tMax]. With occluderThreshold > 0, Jamriška §7: walk
+// only the coarse blocks, stopping at the first inside block; after the first surface block, give
+// up after that many more blocks and restart the full traversal from it. 0 = plain traversal.
+GridTraceResult traceGridShadow(const GridView& grid, const Ray& ray, float tMin, float tMax,
+                                const GridTraceOptions& options, int occluderThreshold);
+
+// Jamriška §5: the three gradient estimators, unit length (zero if degenerate).
+Vec3 gridNormal(const GridView& grid, Vec3 p, GridNormal method);
+
+}  // namespace sdft

@@ -1,0 +1,294 @@
+#include "sdftrace/trace/grid_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sdft {
+
+namespace {
+
+// Amanatides & Woo 3D-DDA over a lattice of cubes of edge `size` (grid units) whose indices lie in
+// [lo, hi] per axis, starting at parameter t (ray in grid units: p(t) = o + t d).
+struct Dda {
+    int idx[3], step[3], lo[3], hi[3];
+    float tNext[3], tDelta[3];
+    float t;
+
+    void init(const Vec3& o, const Vec3& d, float tStart, float size, const int lo_[3],
+              const int hi_[3]) {
+        t = tStart;
+        Vec3 p = o + d * tStart;
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = lo_[a];
+            hi[a] = hi_[a];
+            int i = static_cast<int>(std::floor(p[a] / size));
+            idx[a] = std::clamp(i, lo[a], hi[a]);
+            if (d[a] > 0) {
+                step[a] = 1;
+                tDelta[a] = size / d[a];
+                tNext[a] = ((idx[a] + 1) * size - o[a]) / d[a];
+            } else if (d[a] < 0) {
+                step[a] = -1;
+                tDelta[a] = -size / d[a];
+                tNext[a] = (idx[a] * size - o[a]) / d[a];
+            } else {
+                step[a] = 0;
+                tDelta[a] = kInfinity;
+                tNext[a] = kInfinity;
+            }
+        }
+    }
+    // Parameter where the current cube is left.
+    float exit() const { return std::min({tNext[0], tNext[1], tNext[2]}); }
+    // Moves to the next cube; false when it leaves [lo, hi].
+    bool advance() {
+        int a = tNext[0] < tNext[1] ? (tNext[0] < tNext[2] ? 0 : 2) : (tNext[1] < tNext[2] ? 1 : 2);
+        t = tNext[a];
+        idx[a] += step[a];
+        tNext[a] += tDelta[a];
+        return idx[a] >= lo[a] && idx[a] <= hi[a];
+    }
+};
+
+// The ray in grid units: origin and direction divided by the voxel size, so t is shared with world
+// space (t_world = t_grid because the direction keeps unit length in world units / voxel units).
+struct GridRay {
+    Vec3 o, d;
+};
+
+float valueAt(const GridView& g, const GridRay& r, float t, int ci, int cj, int ck,
+              const float c[8]) {
+    Vec3 p = r.o + r.d * t;
+    float u = clampf(p.x - ci, 0.f, 1.f), v = clampf(p.y - cj, 0.f, 1.f),
+          w = clampf(p.z - ck, 0.f, 1.f);
+    float c00 = c[0] + (c[1] - c[0]) * u, c10 = c[2] + (c[3] - c[2]) * u;
+    float c01 = c[4] + (c[5] - c[4]) * u, c11 = c[6] + (c[7] - c[6]) * u;
+    float c0 = c00 + (c10 - c00) * v, c1 = c01 + (c11 - c01) * v;
+    return c0 + (c1 - c0) * w;
+}
+
+bool cellMaskBit(const GridView& g, int ci, int cj, int ck) {
+    const int B = g.blockSize;
+    size_t block = (static_cast<size_t>(ck / B) * g.blocks[1] + cj / B) * g.blocks[0] + ci / B;
+    int32_t data = g.blockData[block];
+    if (data < 0) return false;
+    int bit = ((ck % B) * B + cj % B) * B + ci % B;
+    return (g.cellMasks[static_cast<size_t>(data) * g.wordsPerMask() + bit / 64] >> (bit % 64)) & 1;
+}
+
+// Jamriška §4.2 inside one surface cell on [tIn, tOut]: true and the hit parameter if the
+// reconstruction changes sign (relative to `sign`, +1 for rays starting outside).
+bool intersectCell(const GridView& g, const GridRay& r, int ci, int cj, int ck, float tIn,
+                   float tOut, float sign, const GridTraceOptions& o, GridTraceResult& res,
+                   float& tHit) {
+    float c[8];
+    g.cellCorners(ci, cj, ck, c);
+    res.intersectionTests++;
+    if (o.cellMethod == CellIntersection::Midpoint) {
+        tHit = 0.5f * (tIn + tOut);  // assumes every surface cell is hit (fast, shows artifacts)
+        return true;
+    }
+    float fIn = sign * valueAt(g, r, tIn, ci, cj, ck, c);
+    float fOut = sign * valueAt(g, r, tOut, ci, cj, ck, c);
+    res.interpolations += 2;
+    if (fIn > 0 && fOut > 0) return false;
+    if (fIn <= 0) {  // already at or behind the surface where the cell is entered
+        tHit = tIn;
+        return true;
+    }
+    float t1 = tIn, f1 = fIn, t2 = tOut, f2 = fOut;
+    tHit = t1 + (t2 - t1) * f1 / (f1 - f2);
+    for (int i = 1; i < o.falsiIters; ++i) {
+        float f = sign * valueAt(g, r, tHit, ci, cj, ck, c);
+        res.interpolations++;
+        if (f > 0) {
+            t1 = tHit;
+            f1 = f;
+        } else {
+            t2 = tHit;
+            f2 = f;
+        }
+        if (f1 == f2) break;
+        tHit = t1 + (t2 - t1) * f1 / (f1 - f2);
+    }
+    return true;
+}
+
+struct Setup {
+    GridRay r;
+    float t0, t1;
+    float sign;
+    int blockLo[3], blockHi[3];
+    int B;
+};
+
+// Clips the ray to the grid and prepares both traversal levels. False if the grid is missed.
+bool setup(const GridView& g, const Ray& ray, float tMin, float tMax, Setup& s) {
+    const float h = g.shape.voxelSize;
+    s.r = {(ray.origin - g.shape.origin) / h, ray.direction / h};
+    Bounds3 box{Vec3(0.0f), Vec3(g.shape.cells[0], g.shape.cells[1], g.shape.cells[2])};
+    if (!intersectBounds(box, Ray{s.r.o, s.r.d}, tMin, tMax, s.t0, s.t1)) return false;
+    // A dense grid is one block of the whole grid.
+    s.B = g.kind == GridKind::Sparse
+              ? g.blockSize
+              : std::max({g.shape.cells[0], g.shape.cells[1], g.shape.cells[2]});
+    for (int a = 0; a < 3; ++a) {
+        s.blockLo[a] = 0;
+        s.blockHi[a] = g.kind == GridKind::Sparse ? g.blocks[a] - 1 : 0;
+    }
+    s.sign = g.interpolate(ray.at(s.t0)) < 0 ? -1.0f : 1.0f;
+    return true;
+}
+
+BlockFlag blockFlag(const GridView& g, const int b[3]) {
+    if (g.kind == GridKind::Dense) return BlockFlag::Surface;
+    return static_cast<BlockFlag>(
+        g.flags[(static_cast<size_t>(b[2]) * g.blocks[1] + b[1]) * g.blocks[0] + b[0]]);
+}
+
+// The inner loop over the cells of one block on [tEnter, tExit]; true with tHit on a hit.
+bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float tEnter, float tExit,
+                   const GridTraceOptions& o, GridTraceResult& res, float& tHit) {
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = block[a] * s.B;
+        hi[a] = std::min(lo[a] + s.B, g.shape.cells[a]) - 1;
+    }
+    Dda cells;
+    cells.init(s.r.o, s.r.d, tEnter, 1.0f, lo, hi);
+    for (;;) {
+        res.traversalSteps++;
+        float tIn = cells.t, tOut = std::min(cells.exit(), tExit);
+        bool surface;
+        if (o.bitMasks && g.kind == GridKind::Sparse) {
+            surface = cellMaskBit(g, cells.idx[0], cells.idx[1], cells.idx[2]);
+        } else {
+            float c[8];
+            g.cellCorners(cells.idx[0], cells.idx[1], cells.idx[2], c);
+            bool neg = false, pos = false;
+            for (float x : c) (x < 0 ? neg : pos) = true;
+            surface = neg && pos;
+        }
+        if (surface && intersectCell(g, s.r, cells.idx[0], cells.idx[1], cells.idx[2], tIn, tOut,
+                                     s.sign, o, res, tHit)) {
+            return true;
+        }
+        if (tOut >= tExit || !cells.advance()) return false;
+    }
+}
+
+}  // namespace
+
+GridTraceResult traceGridRay(const GridView& g, const Ray& ray, float tMin, float tMax,
+                             const GridTraceOptions& o) {
+    GridTraceResult res;
+    Setup s;
+    if (!setup(g, ray, tMin, tMax, s)) return res;
+    Dda blocks;
+    blocks.init(s.r.o, s.r.d, s.t0, static_cast<float>(s.B), s.blockLo, s.blockHi);
+    for (;;) {
+        res.traversalSteps++;
+        float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
+        if (blockFlag(g, blocks.idx) == BlockFlag::Surface) {
+            float tHit;
+            if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
+                res.hit = true;
+                res.t = tHit;
+                return res;
+            }
+        }
+        if (tExit >= s.t1 || !blocks.advance()) return res;
+    }
+}
+
+GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, float tMax,
+                                const GridTraceOptions& o, int threshold) {
+    if (threshold <= 0 || g.kind != GridKind::Sparse) return traceGridRay(g, ray, tMin, tMax, o);
+    GridTraceResult res;
+    Setup s;
+    if (!setup(g, ray, tMin, tMax, s)) return res;
+    Dda blocks;
+    blocks.init(s.r.o, s.r.d, s.t0, static_cast<float>(s.B), s.blockLo, s.blockHi);
+    // Jamriška §7: coarse blocks only, hoping for an inside block (a volumetric occluder).
+    bool sawSurface = false;
+    Dda restart{};
+    int sinceSurface = 0;
+    for (;;) {
+        res.traversalSteps++;
+        BlockFlag f = blockFlag(g, blocks.idx);
+        if (f == BlockFlag::Inside && s.sign > 0) {
+            res.hit = true;
+            res.t = blocks.t;
+            return res;
+        }
+        if (f == BlockFlag::Surface && !sawSurface) {
+            sawSurface = true;
+            restart = blocks;
+        }
+        if (sawSurface && ++sinceSurface > threshold) break;
+        float tExit = std::min(blocks.exit(), s.t1);
+        if (tExit >= s.t1 || !blocks.advance()) {
+            if (!sawSurface) return res;
+            break;
+        }
+    }
+    // Restart the full traversal from the first surface block.
+    blocks = restart;
+    for (;;) {
+        res.traversalSteps++;
+        float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
+        if (blockFlag(g, blocks.idx) == BlockFlag::Surface) {
+            float tHit;
+            if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
+                res.hit = true;
+                res.t = tHit;
+                return res;
+            }
+        }
+        if (tExit >= s.t1 || !blocks.advance()) return res;
+    }
+}
+
+Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
+    const float h = g.shape.voxelSize;
+    Vec3 q = (p - g.shape.origin) / h;
+    auto cellOf = [&](float x, int axis) {
+        return std::clamp(static_cast<int>(std::floor(x)), 0, g.shape.cells[axis] - 1);
+    };
+    Vec3 grad;
+    if (method == GridNormal::AnalyticTrilinear) {
+        // Derivatives of the trilinear filter inside the cell (8 samples, no interpolation).
+        int i = cellOf(q.x, 0), j = cellOf(q.y, 1), k = cellOf(q.z, 2);
+        float u = clampf(q.x - i, 0, 1), v = clampf(q.y - j, 0, 1), w = clampf(q.z - k, 0, 1);
+        float c[8];
+        g.cellCorners(i, j, k, c);
+        auto lerp1 = [](float a, float b, float t) { return a + (b - a) * t; };
+        grad.x = lerp1(lerp1(c[1] - c[0], c[3] - c[2], v), lerp1(c[5] - c[4], c[7] - c[6], v), w);
+        grad.y = lerp1(lerp1(c[2] - c[0], c[3] - c[1], u), lerp1(c[6] - c[4], c[7] - c[5], u), w);
+        grad.z = lerp1(lerp1(c[4] - c[0], c[5] - c[1], u), lerp1(c[6] - c[2], c[7] - c[3], u), v);
+    } else if (method == GridNormal::DifferenceOfInterpolations) {
+        // Central differences of interpolated values, one voxel apart.
+        for (int a = 0; a < 3; ++a) {
+            Vec3 e(0.0f);
+            e[a] = 0.5f * h;
+            grad[a] = g.interpolate(p + e) - g.interpolate(p - e);
+        }
+    } else {
+        // Central differences at the 8 cell vertices, then trilinear interpolation of them.
+        int i = cellOf(q.x, 0), j = cellOf(q.y, 1), k = cellOf(q.z, 2);
+        float u = clampf(q.x - i, 0, 1), v = clampf(q.y - j, 0, 1), w = clampf(q.z - k, 0, 1);
+        Vec3 corner[8];
+        for (int n = 0; n < 8; ++n) {
+            int x = i + (n & 1), y = j + ((n >> 1) & 1), z = k + ((n >> 2) & 1);
+            corner[n] = {g.vertex(x + 1, y, z) - g.vertex(x - 1, y, z),
+                         g.vertex(x, y + 1, z) - g.vertex(x, y - 1, z),
+                         g.vertex(x, y, z + 1) - g.vertex(x, y, z - 1)};
+        }
+        Vec3 c00 = lerp(corner[0], corner[1], u), c10 = lerp(corner[2], corner[3], u);
+        Vec3 c01 = lerp(corner[4], corner[5], u), c11 = lerp(corner[6], corner[7], u);
+        grad = lerp(lerp(c00, c10, v), lerp(c01, c11, v), w);
+    }
+    return normalize(grad);
+}
+
+}  // namespace sdft

@@ -1,0 +1,148 @@
+// The two-level DDA grid tracer (Jamriška §4) against sphere tracing of the same trilinear field,
+// and its accelerations (bit masks §4.1, occluder shadow rays §7) against the plain traversal.
+#include "sdftrace/trace/grid_tracer.h"
+
+#include <gtest/gtest.h>
+
+#include "sdftrace/field/sample_grid.h"
+#include "sdftrace/field/test_util.h"
+#include "sdftrace/trace/field_tracer.h"
+
+namespace sdft {
+namespace {
+
+struct Fixture {
+    NodePtr analytic;
+    std::shared_ptr<Grid> sparse, dense;
+    std::vector<RaySegment> rays;
+};
+
+const Fixture& fixture() {
+    static Fixture f = [] {
+        Fixture x;
+        x.analytic = node::unite({node::torus(0.8f, 0.25f),
+                                  node::translate(node::box({0.5f, 0.6f, 0.5f}), {0, 0.2f, 0}),
+                                  node::translate(node::sphere(0.35f), {-1.1f, 0.6f, 0.3f})});
+        Tape tape = compileTape(x.analytic, {.boundsCulling = false});
+        SampleOptions o;
+        o.resolution = 80;
+        GridShape shape = gridShapeFor(nodeBounds(*x.analytic), o);
+        std::vector<float> samples = sampleVertices(tape, shape);
+        x.sparse = std::make_shared<Grid>(Grid::sparseFromDense(shape, samples, 4, 3));
+        x.dense = std::make_shared<Grid>(Grid::dense(shape, samples));
+        testing::Rng rng(7);
+        for (int i = 0; i < 3000; ++i) {
+            Vec3 o3 = rng.direction() * 4.0f;
+            x.rays.push_back({{o3, normalize(rng.inCube(1.3f) - o3)}, 0, 20});
+        }
+        return x;
+    }();
+    return f;
+}
+
+TEST(GridTracer, FindsTheFirstZeroOfTheReconstructionLikeSphereTracing) {
+    const Fixture& f = fixture();
+    GridView g = f.sparse->view();
+    Tape gridTape = compileTape(node::grid(f.sparse));
+    TraceOptions st = TraceOptions::classic();
+    st.tau = 1e-5f;
+    st.maxSteps = 5000;
+    GridTraceOptions o;
+    o.falsiIters = 4;
+    int hits = 0, mismatch = 0;
+    const float h = g.shape.voxelSize;
+    for (const RaySegment& seg : f.rays) {
+        GridTraceResult d = traceGridRay(g, seg.ray, seg.tMin, seg.tMax, o);
+        TraceResult s = traceRay(gridTape, seg, st);
+        if (d.hit != s.hit) {
+            ++mismatch;  // a ray that enters and leaves the surface inside one cell (grazing)
+            continue;
+        }
+        if (!d.hit) continue;
+        ++hits;
+        EXPECT_NEAR(d.t, s.t, 0.02f * h);
+        EXPECT_LT(std::fabs(g.interpolate(seg.ray.at(d.t))), 0.01f * h);
+    }
+    EXPECT_GT(hits, 1000);
+    EXPECT_LE(mismatch, static_cast<int>(f.rays.size()) / 200);
+}
+
+TEST(GridTracer, BitMasksAndDenseTraversalChangeNoHit) {
+    const Fixture& f = fixture();
+    GridTraceOptions masks, corners;
+    corners.bitMasks = false;
+    for (const RaySegment& seg : f.rays) {
+        GridTraceResult a = traceGridRay(f.sparse->view(), seg.ray, seg.tMin, seg.tMax, masks);
+        GridTraceResult b = traceGridRay(f.sparse->view(), seg.ray, seg.tMin, seg.tMax, corners);
+        GridTraceResult c = traceGridRay(f.dense->view(), seg.ray, seg.tMin, seg.tMax, masks);
+        ASSERT_EQ(a.hit, b.hit);
+        ASSERT_EQ(a.t, b.t);
+        ASSERT_EQ(a.traversalSteps, b.traversalSteps);
+        ASSERT_EQ(a.hit, c.hit);
+        if (a.hit) ASSERT_NEAR(a.t, c.t, 1e-4f);
+    }
+}
+
+TEST(GridTracer, MidpointStaysWithinTheHitCell) {
+    const Fixture& f = fixture();
+    GridView g = f.sparse->view();
+    GridTraceOptions fp, mid;
+    mid.cellMethod = CellIntersection::Midpoint;
+    int compared = 0;
+    for (const RaySegment& seg : f.rays) {
+        GridTraceResult a = traceGridRay(g, seg.ray, seg.tMin, seg.tMax, fp);
+        GridTraceResult b = traceGridRay(g, seg.ray, seg.tMin, seg.tMax, mid);
+        if (b.hit) EXPECT_LE(b.intersectionTests, a.hit ? a.intersectionTests : 1 << 30);
+        if (!a.hit || !b.hit) continue;
+        // The midpoint method stops in the first surface cell, at or before false position's cell.
+        EXPECT_LE(b.t, a.t + 1.8f * g.shape.voxelSize);
+        EXPECT_EQ(b.interpolations, 0);
+        ++compared;
+    }
+    EXPECT_GT(compared, 1000);
+}
+
+TEST(GridTracer, OccluderShadowRaysChangeNoDecisionAndTestFewerCells) {
+    const Fixture& f = fixture();
+    GridView g = f.sparse->view();
+    GridTraceOptions o;
+    testing::Rng rng(8);
+    long testsPlain = 0, testsOccluder = 0;
+    int blocked = 0;
+    for (int i = 0; i < 4000; ++i) {
+        // Shadow rays from points around the objects towards random directions.
+        Vec3 start = rng.inCube(1.6f);
+        if (g.sample(start) <= 0.02f) continue;
+        Ray r{start, rng.direction()};
+        GridTraceResult plain = traceGridRay(g, r, 0, 20, o);
+        for (int n : {12, 32}) {
+            GridTraceResult occ = traceGridShadow(g, r, 0, 20, o, n);
+            ASSERT_EQ(occ.hit, plain.hit) << "n=" << n;
+            if (n == 12) testsOccluder += occ.intersectionTests;
+        }
+        testsPlain += plain.intersectionTests;
+        blocked += plain.hit;
+    }
+    EXPECT_GT(blocked, 300);
+    EXPECT_LT(testsOccluder, testsPlain);
+}
+
+TEST(GridTracer, AllThreeGradientEstimatorsMatchTheSphereNormal) {
+    Tape tape = compileTape(node::sphere(1.0f), {.boundsCulling = false});
+    SampleOptions o;
+    o.resolution = 48;
+    Grid grid = sampleGrid(tape, {Vec3(-1.0f), Vec3(1.0f)}, o);
+    GridView g = grid.view();
+    testing::Rng rng(9);
+    for (GridNormal m : {GridNormal::AnalyticTrilinear, GridNormal::DifferenceOfInterpolations,
+                         GridNormal::InterpolationOfDifferences}) {
+        for (int i = 0; i < 2000; ++i) {
+            Vec3 u = rng.direction();
+            EXPECT_GT(dot(gridNormal(g, u, m), u), 0.998f)
+                << static_cast<int>(m);  // within 3.6 degrees
+        }
+    }
+}
+
+}  // namespace
+}  // namespace sdft
