@@ -13,6 +13,7 @@
 #include "sdftrace/io/sdfg_io.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/grid_scene.h"
+#include "sdftrace/scene/option_names.h"
 #include "sdftrace/scene/parse_scene.h"
 
 namespace sdft::cli {
@@ -36,8 +37,10 @@ struct RenderArgs {
         CLI::Option* option = nullptr;
         bool given() const { return option && option->count() > 0; }
     };
-    Switch screenSpace, forceHit, fixedSteps, hybrid, shadows, boundsCulling;
+    Switch screenSpace, forceHit, fixedSteps, hybrid, shadows, boundsCulling, bitMasks;
     std::string normals;
+    std::string gridTracer, cellMethod, gridNormals;
+    std::optional<int> cellIterations, occluder;
     bool quiet = false;
 };
 
@@ -72,6 +75,12 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.hybridEpsilon) t.hybridEpsilon = *a.hybridEpsilon;
     if (a.hybridStep) t.hybridStep = *a.hybridStep;
     if (a.falsiIters) t.falsiIters = *a.falsiIters;
+    if (!a.gridTracer.empty()) parseGridTracer(a.gridTracer, s.gridTracer);
+    if (!a.cellMethod.empty()) parseCellIntersection(a.cellMethod, s.gridTrace.cellMethod);
+    if (!a.gridNormals.empty()) parseGridNormal(a.gridNormals, s.gridNormals);
+    if (a.cellIterations) s.gridTrace.falsiIters = *a.cellIterations;
+    if (a.occluder) s.occluderThreshold = *a.occluder;
+    if (a.bitMasks.given()) s.gridTrace.bitMasks = a.bitMasks.value;
     if (a.normals == "central") s.normals = NormalEstimator::Central;
     if (a.normals == "tetrahedral") s.normals = NormalEstimator::Tetrahedral;
     if (a.shadows.given()) s.shadows = a.shadows.value;
@@ -92,7 +101,8 @@ int runRender(const RenderArgs& a) {
             eq + 1 == spec.size()) {
             throw InputError(
                 "--aov " + spec +
-                ": expected NAME=PATH with NAME one of color, depth, normal, steps, error");
+                ": expected NAME=PATH with NAME one of color, depth, normal, steps, error, "
+                "trav_steps, isect_tests");
         }
         std::string path = spec.substr(eq + 1);
         imageFormatFromPath(path, "--aov " + spec.substr(0, eq));
@@ -122,14 +132,22 @@ int runRender(const RenderArgs& a) {
     for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
 
     double rays = static_cast<double>(st.primaryRays);
+    std::string gridCounters;
+    if (st.gridTracer) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      ", DDA: %.2f traversal steps and %.2f intersection tests per pixel",
+                      st.traversalSteps / rays, st.intersectionTests / rays);
+        gridCounters = buf;
+    }
     std::fprintf(
         stderr,
         "sdftrace render: %dx%d in %.3f s on %d threads, %.3f Mrays/s, %.2f evaluations per "
         "primary ray (%.2f per pixel with normals and shadows), %.2f%% hits, %llu "
-        "over-relaxation fallbacks, L = %.3g\n",
+        "over-relaxation fallbacks, L = %.3g%s\n",
         film.width, film.height, st.seconds, st.threads, rays / st.seconds * 1e-6,
         st.primaryEvaluations / rays, st.totalEvaluations() / rays, 100.0 * st.hits / rays,
-        static_cast<unsigned long long>(st.fallbacks), tape.lipschitz());
+        static_cast<unsigned long long>(st.fallbacks), tape.lipschitz(), gridCounters.c_str());
     return 0;
 }
 
@@ -216,6 +234,28 @@ void addRenderCommand(CLI::App& app, Action& action) {
         ->check(CLI::IsMember({"central", "tetrahedral"}));
     args->shadows.option = shading->add_flag("--shadows,!--no-shadows", args->shadows.value,
                                              "Hard shadows by tracing to each light");
+
+    auto* grid = cmd->add_option_group(
+        "Grids", "Single-grid scenes, e.g. a .sdfg rendered directly (Jamriska 2010)");
+    grid->add_option("--grid-tracer", args->gridTracer,
+                     "dda: two-level 3D-DDA over blocks and cells (§4); sphere: sphere tracing")
+        ->check(CLI::IsMember({"dda", "sphere"}));
+    grid->add_option("--cell", args->cellMethod,
+                     "Surface-cell intersection (§4.2): midpoint or false-position")
+        ->check(CLI::IsMember({"midpoint", "false-position"}));
+    grid->add_option("--cell-iterations", args->cellIterations, "False-position iterations (§4.2)")
+        ->check(CLI::Range(1, 16));
+    args->bitMasks.option =
+        grid->add_flag("--bit-masks,!--no-bit-masks", args->bitMasks.value,
+                       "Test per-block cell bit masks instead of 8 corner signs (§4.1)");
+    grid->add_option("--grid-normals", args->gridNormals,
+                     "Gradient estimator (§5): analytic, difference-of-interpolations, "
+                     "interpolation-of-differences")
+        ->check(CLI::IsMember(
+            {"analytic", "difference-of-interpolations", "interpolation-of-differences"}));
+    grid->add_option("--occluder", args->occluder,
+                     "Shadow rays by volumetric occluders (§7) with restart threshold N; 0 = off")
+        ->check(CLI::Range(0, 100000));
 
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));

@@ -8,20 +8,23 @@
 
 namespace sdft {
 
-enum class Aov { Color, Depth, Normal, Steps, Error };
+enum class Aov { Color, Depth, Normal, Steps, Error, TravSteps, IsectTests };
 
-// Names as on the command line: color, depth, normal, steps, error.
+// Names as on the command line: color, depth, normal, steps, error, trav_steps, isect_tests.
 const char* aovName(Aov aov);
 bool parseAov(const std::string& name, Aov& out);
 int aovChannels(Aov aov);
 
 struct Film {
     int width = 0, height = 0;
-    std::vector<float> color;   // 3 per pixel: linear radiance before tone mapping
-    std::vector<float> depth;   // t along the unit primary ray, +inf on a miss
-    std::vector<float> normal;  // 3 per pixel, zero on a miss
-    std::vector<float> steps;   // field evaluations of the primary ray
-    std::vector<float> error;   // f(p) at the chosen hit point, 0 on a miss
+    std::vector<float> color;      // 3 per pixel: linear radiance before tone mapping
+    std::vector<float> depth;      // t along the unit primary ray, +inf on a miss
+    std::vector<float> normal;     // 3 per pixel, zero on a miss
+    std::vector<float> steps;      // field evaluations of the primary ray
+    std::vector<float> error;      // f(p) at the chosen hit point, 0 on a miss
+    std::vector<float> travSteps;  // grid tracer: blocks + cells visited by primary and shadow rays
+    std::vector<float>
+        isectTests;  // grid tracer: surface-cell intersection tests (Jamriška fig. 7)
 
     Film(int w, int h);
     size_t pixels() const { return static_cast<size_t>(width) * height; }

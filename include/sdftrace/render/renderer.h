@@ -15,6 +15,9 @@ struct RenderStats {
     int threads = 0;
     uint64_t primaryRays = 0, primaryEvaluations = 0, hits = 0, fallbacks = 0;
     uint64_t normalEvaluations = 0, shadowRays = 0, shadowEvaluations = 0;
+    // Single-grid scenes traced by DDA (Jamriška): blocks + cells visited, surface cells tested.
+    uint64_t traversalSteps = 0, intersectionTests = 0;
+    bool gridTracer = false;
 
     uint64_t totalEvaluations() const {
         return primaryEvaluations + normalEvaluations + shadowEvaluations;

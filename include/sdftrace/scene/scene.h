@@ -7,11 +7,16 @@
 #include "sdftrace/field/node.h"
 #include "sdftrace/render/camera.h"
 #include "sdftrace/render/lighting.h"
+#include "sdftrace/trace/grid_tracer.h"
 #include "sdftrace/trace/trace_options.h"
 
 namespace sdft {
 
 enum class NormalEstimator { Central, Tetrahedral };
+
+// How a scene that is a single grid (e.g. `sdftrace render field.sdfg`) is traced: Jamriška's
+// two-level DDA (§4) or sphere tracing the trilinear field like any other object.
+enum class GridTracerKind { Dda, SphereTrace };
 
 struct RenderSettings {
     TraceOptions trace;  // primary rays
@@ -21,6 +26,11 @@ struct RenderSettings {
     float shadowOffsetMin = 1e-3f;  // eps_min of the shadow-ray origin offset
     bool boundsCulling = true;  // skip far union operands (docs/decisions/0002-bounds-culling.md)
     int threads = 0;            // 0 = all hardware threads
+    // Single-grid scenes (Jamriška 2010).
+    GridTracerKind gridTracer = GridTracerKind::Dda;
+    GridTraceOptions gridTrace;  // cell intersection (§4.2) and bit masks (§4.1)
+    GridNormal gridNormals = GridNormal::InterpolationOfDifferences;  // §5 (his choice)
+    int occluderThreshold = 0;  // §7 shadow rays: restart threshold n; 0 = plain traversal
     int tileSize = 16;
 };
 

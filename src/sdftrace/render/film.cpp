@@ -16,12 +16,17 @@ const char* aovName(Aov aov) {
             return "steps";
         case Aov::Error:
             return "error";
+        case Aov::TravSteps:
+            return "trav_steps";
+        case Aov::IsectTests:
+            return "isect_tests";
     }
     return "?";
 }
 
 bool parseAov(const std::string& name, Aov& out) {
-    for (Aov a : {Aov::Color, Aov::Depth, Aov::Normal, Aov::Steps, Aov::Error}) {
+    for (Aov a : {Aov::Color, Aov::Depth, Aov::Normal, Aov::Steps, Aov::Error, Aov::TravSteps,
+                  Aov::IsectTests}) {
         if (name == aovName(a)) {
             out = a;
             return true;
@@ -39,10 +44,12 @@ Film::Film(int w, int h) : width(w), height(h) {
     normal.assign(3 * n, 0.0f);
     steps.assign(n, 0.0f);
     error.assign(n, 0.0f);
+    travSteps.assign(n, 0.0f);
+    isectTests.assign(n, 0.0f);
 }
 
 double Film::bytesNeeded(int w, int h) {
-    return static_cast<double>(w) * static_cast<double>(h) * sizeof(float) * 9.0;
+    return static_cast<double>(w) * static_cast<double>(h) * sizeof(float) * 11.0;
 }
 
 const std::vector<float>& Film::channel(Aov aov) const {
@@ -57,6 +64,10 @@ const std::vector<float>& Film::channel(Aov aov) const {
             return steps;
         case Aov::Error:
             return error;
+        case Aov::TravSteps:
+            return travSteps;
+        case Aov::IsectTests:
+            return isectTests;
     }
     return color;
 }

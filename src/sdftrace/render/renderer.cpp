@@ -42,6 +42,7 @@ struct TileScratch {
     std::vector<TraceResult> shadowResults;
     std::vector<int> shadowOwner;
     std::vector<Vec3> radiance;
+    int x0 = 0, y0 = 0, tw = 0;  // the tile being rendered
     RenderStats stats;
 };
 
@@ -90,12 +91,19 @@ class TileRenderer {
         m_shadow.forceHit = false;
         m_shadow.discontinuityIters = 0;
         m_shadow.fixedSteps = false;
+        if (scene.root->kind == NodeKind::Grid && m_settings.gridTracer == GridTracerKind::Dda) {
+            m_gridView = scene.root->grid->view();
+            m_grid = &m_gridView;
+        }
     }
 
     void renderTile(int x0, int y0, int x1, int y1, TileScratch& s);
 
   private:
     void traceShadows(TileScratch& s, std::vector<float>& visible, const Light& light);
+    void tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw);
+    void gridNormals(TileScratch& s);
+    void stencilNormals(TileScratch& s);
 
     const Scene& m_scene;
     const Tape& m_tape;
@@ -103,17 +111,27 @@ class TileRenderer {
     Camera m_camera;
     const RenderSettings& m_settings;
     TraceOptions m_primary, m_shadow;
+    // Set when the scene is a single grid traced by Jamriška's DDA (RenderSettings::gridTracer).
+    const GridView* m_grid = nullptr;
+    GridView m_gridView;
 };
 
 void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     int tw = x1 - x0;
     int count = tw * (y1 - y0);
+    s.x0 = x0;
+    s.y0 = y0;
+    s.tw = tw;
     s.segments.resize(count);
     s.results.resize(count);
     for (int i = 0; i < count; ++i) {
         s.segments[i] = {m_camera.pixelRay(x0 + i % tw, y0 + i / tw), 0.0f, m_settings.maxDistance};
     }
-    tracePacket(m_tape, s.segments, m_primary, s.results, s.packet);
+    if (m_grid) {
+        tracePrimaryGrid(s, x0, y0, tw);
+    } else {
+        tracePacket(m_tape, s.segments, m_primary, s.results, s.packet);
+    }
 
     s.hitPixel.clear();
     s.hitPoint.clear();
@@ -129,32 +147,10 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     s.stats.hits += s.hitPixel.size();
     int hits = static_cast<int>(s.hitPixel.size());
 
-    // Normals: every stencil point of every hit in one batch.
-    Stencil st = stencil(m_settings.normals);
-    int m = hits * st.count;
-    s.x.resize(m);
-    s.y.resize(m);
-    s.z.resize(m);
-    s.f.resize(m);
-    for (int h = 0; h < hits; ++h) {
-        float t = s.results[s.hitPixel[h]].t;
-        float eps = std::fmax(1e-4f, 0.5f * t * m_primary.pixelRadius);
-        for (int k = 0; k < st.count; ++k) {
-            Vec3 q = s.hitPoint[h] + st.offsets[k] * eps;
-            s.x[h * st.count + k] = q.x;
-            s.y[h * st.count + k] = q.y;
-            s.z[h * st.count + k] = q.z;
-        }
-    }
-    m_tape.evalBatch(s.x.data(), s.y.data(), s.z.data(), s.f.data(), m, s.packet.batch);
-    s.stats.normalEvaluations += m;
-    s.hitNormal.resize(hits);
-    for (int h = 0; h < hits; ++h) {
-        Vec3 g(0.0f);
-        for (int k = 0; k < st.count; ++k) g += st.offsets[k] * s.f[h * st.count + k];
-        Vec3 n = normalize(g);
-        // Degenerate gradient (a crease or a flat extremum): face the viewer rather than emit NaN.
-        s.hitNormal[h] = length(n) > 0 ? n : -s.segments[s.hitPixel[h]].ray.direction;
+    if (m_grid) {
+        gridNormals(s);
+    } else {
+        stencilNormals(s);
     }
 
     // Shading: ambient + for each light, Lambert + Blinn-Phong if the light is visible.
@@ -207,6 +203,68 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     }
 }
 
+// Normals: every stencil point of every hit in one batch.
+void TileRenderer::stencilNormals(TileScratch& s) {
+    int hits = static_cast<int>(s.hitPixel.size());
+    Stencil st = stencil(m_settings.normals);
+    int m = hits * st.count;
+    s.x.resize(m);
+    s.y.resize(m);
+    s.z.resize(m);
+    s.f.resize(m);
+    for (int h = 0; h < hits; ++h) {
+        float t = s.results[s.hitPixel[h]].t;
+        float eps = std::fmax(1e-4f, 0.5f * t * m_primary.pixelRadius);
+        for (int k = 0; k < st.count; ++k) {
+            Vec3 q = s.hitPoint[h] + st.offsets[k] * eps;
+            s.x[h * st.count + k] = q.x;
+            s.y[h * st.count + k] = q.y;
+            s.z[h * st.count + k] = q.z;
+        }
+    }
+    m_tape.evalBatch(s.x.data(), s.y.data(), s.z.data(), s.f.data(), m, s.packet.batch);
+    s.stats.normalEvaluations += m;
+    s.hitNormal.resize(hits);
+    for (int h = 0; h < hits; ++h) {
+        Vec3 g(0.0f);
+        for (int k = 0; k < st.count; ++k) g += st.offsets[k] * s.f[h * st.count + k];
+        Vec3 n = normalize(g);
+        // Degenerate gradient (a crease or a flat extremum): face the viewer rather than emit NaN.
+        s.hitNormal[h] = length(n) > 0 ? n : -s.segments[s.hitPixel[h]].ray.direction;
+    }
+}
+
+// Jamriška 2010, §4: primary rays of a single-grid scene by two-level DDA; the counters go to the
+// trav_steps and isect_tests AOVs.
+void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
+    for (size_t i = 0; i < s.segments.size(); ++i) {
+        const RaySegment& seg = s.segments[i];
+        GridTraceResult g =
+            traceGridRay(*m_grid, seg.ray, seg.tMin, seg.tMax, m_settings.gridTrace);
+        TraceResult r;
+        r.hit = g.hit;
+        r.t = g.t;
+        r.evaluations = g.interpolations;
+        r.value = g.hit ? m_grid->interpolate(seg.ray.at(g.t)) : 0.0f;
+        s.results[i] = r;
+        size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
+        m_film.travSteps[p] = static_cast<float>(g.traversalSteps);
+        m_film.isectTests[p] = static_cast<float>(g.intersectionTests);
+        s.stats.traversalSteps += g.traversalSteps;
+        s.stats.intersectionTests += g.intersectionTests;
+    }
+}
+
+// Jamriška 2010, §5: one of the three gradient estimators on the grid's samples.
+void TileRenderer::gridNormals(TileScratch& s) {
+    int hits = static_cast<int>(s.hitPixel.size());
+    s.hitNormal.resize(hits);
+    for (int h = 0; h < hits; ++h) {
+        Vec3 n = gridNormal(*m_grid, s.hitPoint[h], m_settings.gridNormals);
+        s.hitNormal[h] = length(n) > 0 ? n : -s.segments[s.hitPixel[h]].ray.direction;
+    }
+}
+
 void TileRenderer::traceShadows(TileScratch& s, std::vector<float>& visible, const Light& light) {
     int hits = static_cast<int>(s.hitPixel.size());
     s.shadowSegments.clear();
@@ -220,12 +278,33 @@ void TileRenderer::traceShadows(TileScratch& s, std::vector<float>& visible, con
         // Keinert et al. 2014, §3.3: offset the origin by 2 max(eps_min, |f(p)|) along the normal,
         // so it clears the surface however far from it the march stopped.
         float f = std::fabs(s.results[s.hitPixel[h]].value) / m_tape.lipschitz();
-        float offset = 2.0f * std::fmax(m_settings.shadowOffsetMin, f);
+        // A DDA hit has f = 0 by construction; the trilinear field can stay <= 0 for a fraction of
+        // a voxel along the gradient estimate near creases, so grids need eps_min of half a voxel.
+        float epsMin = m_grid
+                           ? std::fmax(m_settings.shadowOffsetMin, 0.5f * m_grid->shape.voxelSize)
+                           : m_settings.shadowOffsetMin;
+        float offset = 2.0f * std::fmax(epsMin, f);
         s.shadowSegments.push_back({{s.hitPoint[h] + n * offset, l}, 0.0f, dist});
         s.shadowOwner.push_back(h);
     }
     s.shadowResults.resize(s.shadowSegments.size());
-    tracePacket(m_tape, s.shadowSegments, m_shadow, s.shadowResults, s.packet);
+    if (m_grid) {
+        // Jamriška §7: optionally the volumetric-occluder traversal.
+        for (size_t j = 0; j < s.shadowSegments.size(); ++j) {
+            const RaySegment& seg = s.shadowSegments[j];
+            GridTraceResult g = traceGridShadow(*m_grid, seg.ray, seg.tMin, seg.tMax,
+                                                m_settings.gridTrace, m_settings.occluderThreshold);
+            s.shadowResults[j] = TraceResult{g.hit, g.t, 0, g.interpolations, 0};
+            int i = s.hitPixel[s.shadowOwner[j]];
+            size_t p = static_cast<size_t>(s.y0 + i / s.tw) * m_film.width + (s.x0 + i % s.tw);
+            m_film.travSteps[p] += static_cast<float>(g.traversalSteps);
+            m_film.isectTests[p] += static_cast<float>(g.intersectionTests);
+            s.stats.traversalSteps += g.traversalSteps;
+            s.stats.intersectionTests += g.intersectionTests;
+        }
+    } else {
+        tracePacket(m_tape, s.shadowSegments, m_shadow, s.shadowResults, s.packet);
+    }
     for (size_t j = 0; j < s.shadowSegments.size(); ++j) {
         s.stats.shadowEvaluations += s.shadowResults[j].evaluations;
         if (s.shadowResults[j].hit) visible[s.shadowOwner[j]] = 0.0f;
@@ -279,8 +358,12 @@ RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progre
         total.normalEvaluations += t.normalEvaluations;
         total.shadowRays += t.shadowRays;
         total.shadowEvaluations += t.shadowEvaluations;
+        total.traversalSteps += t.traversalSteps;
+        total.intersectionTests += t.intersectionTests;
     }
     total.threads = threads;
+    total.gridTracer =
+        scene.root->kind == NodeKind::Grid && scene.settings.gridTracer == GridTracerKind::Dda;
     total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return total;
 }

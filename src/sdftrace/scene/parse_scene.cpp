@@ -11,6 +11,7 @@
 #include "json_reader.h"
 #include "parse_node.h"
 #include "sdftrace/render/film.h"
+#include "sdftrace/scene/option_names.h"
 
 namespace sdft {
 
@@ -81,10 +82,28 @@ Light parseLight(const Reader& r) {
 
 void parseRender(const Reader& r, RenderSettings& s) {
     r.requireObject("render settings");
-    r.allowKeys({"max_steps", "tau", "omega", "screen_space", "force_hit",
-                 "discontinuity_iterations", "fixed_steps", "hybrid", "hybrid_epsilon",
-                 "hybrid_step", "falsi_iterations", "normals", "shadows", "max_distance",
-                 "shadow_offset", "bounds_culling"});
+    r.allowKeys({"max_steps",
+                 "tau",
+                 "omega",
+                 "screen_space",
+                 "force_hit",
+                 "discontinuity_iterations",
+                 "fixed_steps",
+                 "hybrid",
+                 "hybrid_epsilon",
+                 "hybrid_step",
+                 "falsi_iterations",
+                 "normals",
+                 "shadows",
+                 "max_distance",
+                 "shadow_offset",
+                 "bounds_culling",
+                 "grid_tracer",
+                 "cell_intersection",
+                 "cell_iterations",
+                 "bit_masks",
+                 "grid_normals",
+                 "occluder_threshold"});
     TraceOptions& t = s.trace;
     t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
     t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
@@ -108,6 +127,19 @@ void parseRender(const Reader& r, RenderSettings& s) {
         r.failKey("normals", "unknown estimator '" + normals + "'; accepted: central, tetrahedral");
     s.shadows = r.boolean("shadows", s.shadows);
     s.boundsCulling = r.boolean("bounds_culling", s.boundsCulling);
+    // Jamriška 2010: single-grid scenes.
+    auto named = [&](const char* key, auto parse, const char* names, auto& out) {
+        if (!r.has(key)) return;
+        std::string v = r.string(key);
+        if (!parse(v, out)) r.failKey(key, "unknown value '" + v + "'; accepted: " + names);
+    };
+    named("grid_tracer", parseGridTracer, gridTracerNames(), s.gridTracer);
+    named("cell_intersection", parseCellIntersection, cellIntersectionNames(),
+          s.gridTrace.cellMethod);
+    named("grid_normals", parseGridNormal, gridNormalNames(), s.gridNormals);
+    s.gridTrace.falsiIters = r.integer("cell_iterations", s.gridTrace.falsiIters, 1, 16);
+    s.gridTrace.bitMasks = r.boolean("bit_masks", s.gridTrace.bitMasks);
+    s.occluderThreshold = r.integer("occluder_threshold", s.occluderThreshold, 0, 100000);
     s.maxDistance = r.number("max_distance", s.maxDistance, positive, "a positive distance");
     s.shadowOffsetMin =
         r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");
