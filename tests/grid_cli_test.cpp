@@ -118,6 +118,8 @@ TEST(GridCli, DdaRendersLikeSphereTracingAndItsAccelerationsChangeNothing) {
     render("--grid-tracer dda --occluder 12", "occluder");
     render("--grid-tracer dda --no-bit-masks", "nomasks");
     render("--grid-tracer dda --cell midpoint", "midpoint");
+    render("--grid-tracer dda --minmax 0", "nominmax");
+    render("--grid-tracer dda --minmax 64", "minmax64");
     EXPECT_TRUE(std::filesystem::exists(dir.file("dda-t.png")));
 
     int w, h, ch;
@@ -149,6 +151,15 @@ TEST(GridCli, DdaRendersLikeSphereTracingAndItsAccelerationsChangeNothing) {
     // tracer's unit tests and in bench/).
     EXPECT_EQ(readFile(dir.file("occluder.pfm")), readFile(dir.file("dda.pfm")));
     EXPECT_EQ(readFile(dir.file("nomasks.pfm")), readFile(dir.file("dda.pfm")));
+    // Min/max buffers (on at 128 by default) change no hit and move depth by float rounding only.
+    std::vector<float> ref = readPfm(dir.file("nominmax-d.pfm"), w, h, ch);
+    for (const char* name : {"dda-d.pfm", "minmax64-d.pfm"}) {
+        std::vector<float> other = readPfm(dir.file(name), w, h, ch);
+        for (size_t i = 0; i < ref.size(); ++i) {
+            ASSERT_EQ(std::isfinite(ref[i]), std::isfinite(other[i])) << name << " " << i;
+            if (std::isfinite(ref[i])) ASSERT_NEAR(ref[i], other[i], 1e-4f * ref[i]) << name;
+        }
+    }
     // The midpoint method hits wherever false position does, one cell test each at most.
     std::vector<float> mid = readPfm(dir.file("midpoint-d.pfm"), w, h, ch);
     for (size_t i = 0; i < a.size(); ++i)

@@ -40,7 +40,7 @@ struct RenderArgs {
     Switch screenSpace, forceHit, fixedSteps, hybrid, shadows, boundsCulling, bitMasks;
     std::string normals;
     std::string gridTracer, cellMethod, gridNormals;
-    std::optional<int> cellIterations, occluder;
+    std::optional<int> cellIterations, occluder, minMax;
     bool quiet = false;
 };
 
@@ -80,6 +80,7 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (!a.gridNormals.empty()) parseGridNormal(a.gridNormals, s.gridNormals);
     if (a.cellIterations) s.gridTrace.falsiIters = *a.cellIterations;
     if (a.occluder) s.occluderThreshold = *a.occluder;
+    if (a.minMax) s.minMaxResolution = *a.minMax;
     if (a.bitMasks.given()) s.gridTrace.bitMasks = a.bitMasks.value;
     if (a.normals == "central") s.normals = NormalEstimator::Central;
     if (a.normals == "tetrahedral") s.normals = NormalEstimator::Tetrahedral;
@@ -253,6 +254,10 @@ void addRenderCommand(CLI::App& app, Action& action) {
                      "interpolation-of-differences")
         ->check(CLI::IsMember(
             {"analytic", "difference-of-interpolations", "interpolation-of-differences"}));
+    grid->add_option("--minmax", args->minMax,
+                     "Min/max-buffer resolution for primary rays (§6), e.g. 64, 128, 256; 0 = off "
+                     "(default 128)")
+        ->check(CLI::Range(0, 4096));
     grid->add_option("--occluder", args->occluder,
                      "Shadow rays by volumetric occluders (§7) with restart threshold N; 0 = off")
         ->check(CLI::Range(0, 100000));

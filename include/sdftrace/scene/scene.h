@@ -30,7 +30,8 @@ struct RenderSettings {
     GridTracerKind gridTracer = GridTracerKind::Dda;
     GridTraceOptions gridTrace;  // cell intersection (§4.2) and bit masks (§4.1)
     GridNormal gridNormals = GridNormal::InterpolationOfDifferences;  // §5 (his choice)
-    int occluderThreshold = 0;  // §7 shadow rays: restart threshold n; 0 = plain traversal
+    int occluderThreshold = 0;   // §7 shadow rays: restart threshold n; 0 = plain traversal
+    int minMaxResolution = 128;  // §6 min/max buffer pixels along the longer side; 0 = off
     int tileSize = 16;
 };
 

@@ -13,6 +13,8 @@
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/render/camera.h"
 #include "sdftrace/trace/field_tracer.h"
+#include "sdftrace/trace/grid_tracer.h"
+#include "sdftrace/trace/minmax_buffer.h"
 
 namespace sdft {
 
@@ -94,6 +96,10 @@ class TileRenderer {
         if (scene.root->kind == NodeKind::Grid && m_settings.gridTracer == GridTracerKind::Dda) {
             m_gridView = scene.root->grid->view();
             m_grid = &m_gridView;
+            if (m_settings.minMaxResolution > 0) {
+                m_minMax = MinMaxBuffer::build(m_gridView, m_camera, m_settings.minMaxResolution);
+                m_useMinMax = true;
+            }
         }
     }
 
@@ -114,6 +120,8 @@ class TileRenderer {
     // Set when the scene is a single grid traced by Jamriška's DDA (RenderSettings::gridTracer).
     const GridView* m_grid = nullptr;
     GridView m_gridView;
+    bool m_useMinMax = false;
+    MinMaxBuffer m_minMax;  // Jamriška §6, built once per render
 };
 
 void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
@@ -239,8 +247,16 @@ void TileRenderer::stencilNormals(TileScratch& s) {
 void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
     for (size_t i = 0; i < s.segments.size(); ++i) {
         const RaySegment& seg = s.segments[i];
-        GridTraceResult g =
-            traceGridRay(*m_grid, seg.ray, seg.tMin, seg.tMax, m_settings.gridTrace);
+        float tMin = seg.tMin, tMax = seg.tMax;
+        if (m_useMinMax) {
+            float t0, t1;
+            m_minMax.range(x0 + static_cast<int>(i) % tw, y0 + static_cast<int>(i) / tw, t0, t1);
+            tMin = std::max(tMin, t0);
+            tMax = std::min(tMax, t1);
+        }
+        GridTraceResult g = tMin <= tMax
+                                ? traceGridRay(*m_grid, seg.ray, tMin, tMax, m_settings.gridTrace)
+                                : GridTraceResult{};
         TraceResult r;
         r.hit = g.hit;
         r.t = g.t;

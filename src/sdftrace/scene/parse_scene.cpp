@@ -103,7 +103,8 @@ void parseRender(const Reader& r, RenderSettings& s) {
                  "cell_iterations",
                  "bit_masks",
                  "grid_normals",
-                 "occluder_threshold"});
+                 "occluder_threshold",
+                 "minmax_resolution"});
     TraceOptions& t = s.trace;
     t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
     t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
@@ -140,6 +141,7 @@ void parseRender(const Reader& r, RenderSettings& s) {
     s.gridTrace.falsiIters = r.integer("cell_iterations", s.gridTrace.falsiIters, 1, 16);
     s.gridTrace.bitMasks = r.boolean("bit_masks", s.gridTrace.bitMasks);
     s.occluderThreshold = r.integer("occluder_threshold", s.occluderThreshold, 0, 100000);
+    s.minMaxResolution = r.integer("minmax_resolution", s.minMaxResolution, 0, 4096);
     s.maxDistance = r.number("max_distance", s.maxDistance, positive, "a positive distance");
     s.shadowOffsetMin =
         r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");

@@ -7,6 +7,7 @@
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/trace/field_tracer.h"
+#include "sdftrace/trace/minmax_buffer.h"
 
 namespace sdft {
 namespace {
@@ -125,6 +126,46 @@ TEST(GridTracer, OccluderShadowRaysChangeNoDecisionAndTestFewerCells) {
     }
     EXPECT_GT(blocked, 300);
     EXPECT_LT(testsOccluder, testsPlain);
+}
+
+// Jamriška §6: narrowing primary rays to their min/max-buffer interval changes no hit, from cameras
+// far and near (a block reaching the camera plane disables the bound), at three resolutions.
+TEST(GridTracer, MinMaxBuffersChangeNoHitAndSaveTraversalSteps) {
+    const Fixture& f = fixture();
+    GridView g = f.sparse->view();
+    GridTraceOptions o;
+    testing::Rng rng(10);
+    long stepsPlain = 0, stepsBuffered = 0;
+    int hits = 0;
+    for (int c = 0; c < 6; ++c) {
+        CameraDesc d;
+        d.eye = rng.direction() * (c < 4 ? rng.uniform(2.5f, 6.0f) : rng.uniform(0.3f, 1.2f));
+        d.target = rng.inCube(0.3f);
+        d.fovDeg = rng.uniform(25.0f, 70.0f);
+        d.width = 96;
+        d.height = 64;
+        Camera cam(d);
+        for (int res : {64, 128, 256}) {
+            MinMaxBuffer buf = MinMaxBuffer::build(g, cam, res);
+            for (int y = 0; y < d.height; ++y)
+                for (int x = 0; x < d.width; ++x) {
+                    Ray r = cam.pixelRay(x, y);
+                    GridTraceResult plain = traceGridRay(g, r, 0, 100, o);
+                    float t0, t1;
+                    buf.range(x, y, t0, t1);
+                    GridTraceResult b = t0 <= t1 ? traceGridRay(g, r, t0, std::min(t1, 100.0f), o)
+                                                 : GridTraceResult{};
+                    ASSERT_EQ(plain.hit, b.hit)
+                        << "camera " << c << " res " << res << " pixel " << x << "," << y;
+                    if (plain.hit) ASSERT_NEAR(plain.t, b.t, 1e-4f * plain.t);
+                    stepsPlain += plain.traversalSteps;
+                    stepsBuffered += b.traversalSteps;
+                    hits += plain.hit;
+                }
+        }
+    }
+    EXPECT_GT(hits, 5000);
+    EXPECT_LT(stepsBuffered, stepsPlain);
 }
 
 TEST(GridTracer, AllThreeGradientEstimatorsMatchTheSphereNormal) {

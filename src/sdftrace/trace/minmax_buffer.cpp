@@ -1,0 +1,87 @@
+#include "sdftrace/trace/minmax_buffer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sdft {
+
+MinMaxBuffer MinMaxBuffer::build(const GridView& g, const Camera& cam, int resolution) {
+    const CameraDesc& d = cam.desc();
+    MinMaxBuffer b;
+    float longer = static_cast<float>(std::max(d.width, d.height));
+    b.m_w = std::max(1, static_cast<int>(std::ceil(d.width * resolution / longer)));
+    b.m_h = std::max(1, static_cast<int>(std::ceil(d.height * resolution / longer)));
+    b.m_scaleX = static_cast<float>(b.m_w) / d.width;
+    b.m_scaleY = static_cast<float>(b.m_h) / d.height;
+    b.m_min.assign(static_cast<size_t>(b.m_w) * b.m_h, kInfinity);
+    b.m_max.assign(static_cast<size_t>(b.m_w) * b.m_h, -kInfinity);
+
+    Vec3 forward = normalize(d.target - d.eye);
+    Vec3 right = normalize(cross(forward, d.up));
+    Vec3 up = cross(right, forward);
+    float tanHalf = std::tan(0.5f * d.fovDeg * 3.14159265f / 180.0f);
+    float aspect = static_cast<float>(d.width) / d.height;
+    const int B = g.kind == GridKind::Sparse
+                      ? g.blockSize
+                      : std::max({g.shape.cells[0], g.shape.cells[1], g.shape.cells[2]});
+    const int nb[3] = {g.kind == GridKind::Sparse ? g.blocks[0] : 1,
+                       g.kind == GridKind::Sparse ? g.blocks[1] : 1,
+                       g.kind == GridKind::Sparse ? g.blocks[2] : 1};
+    const float h = g.shape.voxelSize;
+    const float radius = 0.5f * std::sqrt(3.0f) * B * h;  // bounding sphere of a block
+    for (int k = 0; k < nb[2]; ++k)
+        for (int j = 0; j < nb[1]; ++j)
+            for (int i = 0; i < nb[0]; ++i) {
+                if (g.kind == GridKind::Sparse &&
+                    g.flags[(static_cast<size_t>(k) * nb[1] + j) * nb[0] + i] !=
+                        static_cast<uint8_t>(BlockFlag::Surface))
+                    continue;
+                Vec3 c = g.shape.origin + (Vec3(i, j, k) + Vec3(0.5f)) * (B * h);
+                Vec3 rel = c - d.eye;
+                float dist = length(rel);
+                float z = dot(rel, forward);
+                ++b.m_squares;
+                if (z - radius <= 1e-6f * dist || dist <= radius) {
+                    b.m_everything = true;  // the sphere reaches the camera plane: no bound
+                    continue;
+                }
+                // Centre in image pixels and a conservative half-width per axis. A sphere point
+                // q = c + e (|e| <= r) projects to q_x / q_z; |q_x/q_z - c_x/c_z| =
+                // |e_x c_z - c_x e_z| / (q_z c_z) <= r (c_z + |c_x|) / ((c_z - r) c_z).
+                float cx = dot(rel, right), cy = dot(rel, up);
+                float px = (cx / z / (tanHalf * aspect) * 0.5f + 0.5f) * d.width;
+                float py = (0.5f - cy / z / tanHalf * 0.5f) * d.height;
+                float pixelsPerUnit = 0.5f * d.height / tanHalf;  // image-plane units to pixels
+                float halfX = radius * (z + std::fabs(cx)) / ((z - radius) * z) * pixelsPerUnit;
+                float halfY = radius * (z + std::fabs(cy)) / ((z - radius) * z) * pixelsPerUnit;
+                int x0 = std::max(0, static_cast<int>(std::floor((px - halfX) * b.m_scaleX)));
+                int x1 =
+                    std::min(b.m_w - 1, static_cast<int>(std::floor((px + halfX) * b.m_scaleX)));
+                int y0 = std::max(0, static_cast<int>(std::floor((py - halfY) * b.m_scaleY)));
+                int y1 =
+                    std::min(b.m_h - 1, static_cast<int>(std::floor((py + halfY) * b.m_scaleY)));
+                float tEnter = dist - radius, tExit = dist + radius;
+                for (int y = y0; y <= y1; ++y)
+                    for (int x = x0; x <= x1; ++x) {
+                        size_t p = static_cast<size_t>(y) * b.m_w + x;
+                        b.m_min[p] = std::min(b.m_min[p], tEnter);
+                        b.m_max[p] = std::max(b.m_max[p], tExit);
+                    }
+            }
+    return b;
+}
+
+void MinMaxBuffer::range(int x, int y, float& t0, float& t1) const {
+    if (m_everything) {
+        t0 = 0;
+        t1 = kInfinity;
+        return;
+    }
+    int bx = std::min(m_w - 1, static_cast<int>((x + 0.5f) * m_scaleX));
+    int by = std::min(m_h - 1, static_cast<int>((y + 0.5f) * m_scaleY));
+    size_t p = static_cast<size_t>(by) * m_w + bx;
+    t0 = std::max(0.0f, m_min[p]);
+    t1 = m_max[p];
+}
+
+}  // namespace sdft
