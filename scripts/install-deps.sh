@@ -8,6 +8,8 @@ packages=(
     libstb-dev            # PNG output (stb_image_write), legend text (stb_easy_font)
     nlohmann-json3-dev    # scene files
     libcli11-dev          # command line
+    libopenvdb-dev        # .vdb level sets (interop) and the OpenVDB baseline in bench/
+    libboost-iostreams-dev libblosc-dev  # needed by OpenVDB's CMake module, not pulled in by it
     libgtest-dev          # tests
     libbenchmark-dev      # bench/
 )

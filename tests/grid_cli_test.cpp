@@ -166,6 +166,51 @@ TEST(GridCli, DdaRendersLikeSphereTracingAndItsAccelerationsChangeNothing) {
         if (std::isfinite(a[i])) EXPECT_TRUE(std::isfinite(mid[i])) << i;
 }
 
+TEST(GridCli, ConvertsToAndFromOpenVdbAndRendersVdbFiles) {
+    TempDir dir;
+    std::string scene = dir.write("object.json", kObject);
+    ASSERT_EQ(runCli("bake " + scene + " --res 64 -o " + dir.file("f.sdfg"), dir).status, 0);
+    RunResult to = runCli("convert " + dir.file("f.sdfg") + " " + dir.file("f.vdb"), dir);
+    ASSERT_EQ(to.status, 0) << to.err;
+    RunResult back = runCli("convert " + dir.file("f.vdb") + " " + dir.file("g.sdfg"), dir);
+    ASSERT_EQ(back.status, 0) << back.err;
+    RunResult info = runCli("info " + dir.file("f.vdb"), dir);
+    ASSERT_EQ(info.status, 0) << info.err;
+    EXPECT_NE(info.out.find("sparse block grid"), std::string::npos);
+    // The .vdb renders like the .sdfg it came from, directly and as a scene object.
+    std::string common = std::string("render -q ") + kCamera + " ";
+    ASSERT_EQ(runCli(common + dir.file("f.sdfg") + " -o " + dir.file("a.png") +
+                         " --aov depth=" + dir.file("a.pfm"),
+                     dir)
+                  .status,
+              0);
+    ASSERT_EQ(runCli(common + dir.file("f.vdb") + " -o " + dir.file("b.png") +
+                         " --aov depth=" + dir.file("b.pfm"),
+                     dir)
+                  .status,
+              0);
+    dir.write(
+        "vdbscene.json",
+        R"({"camera": {"eye": [1.6, 1.8, 3.2], "target": [0.1, 0.1, 0], "width": 160, "height": 120},
+                                  "objects": [{"type": "grid", "file": "f.vdb"}]})");
+    ASSERT_EQ(runCli("render -q --grid-tracer dda " + dir.file("vdbscene.json") + " -o " +
+                         dir.file("c.png"),
+                     dir)
+                  .status,
+              0);
+    int w, h, ch;
+    std::vector<float> a = readPfm(dir.file("a.pfm"), w, h, ch),
+                       b = readPfm(dir.file("b.pfm"), w, h, ch);
+    for (size_t i = 0; i < a.size(); ++i) {
+        ASSERT_EQ(std::isfinite(a[i]), std::isfinite(b[i])) << i;
+        if (std::isfinite(a[i])) ASSERT_NEAR(a[i], b[i], 1e-3f * a[i]);
+    }
+    RunResult bad = runCli("convert " + dir.file("f.sdfg") + " " + dir.file("f.png"), dir);
+    EXPECT_NE(bad.status, 0);
+    EXPECT_NE(bad.err.find(".sdfg, .vdb"), std::string::npos) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("f.png")));
+}
+
 TEST(GridCli, BadGridInputFailsClearly) {
     TempDir dir;
     std::string scene = dir.write("object.json", kObject);

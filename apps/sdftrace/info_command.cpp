@@ -2,13 +2,13 @@
 #include <cstdio>
 
 #include "commands.h"
-#include "sdftrace/io/sdfg_io.h"
+#include "sdftrace/io/grid_file.h"
 
 namespace sdft::cli {
 
 namespace {
 int runInfo(const std::string& path) {
-    Grid g = loadSdfg(path);
+    Grid g = loadGridFile(path);
     const GridShape& s = g.shape();
     Bounds3 b = s.bounds();
     std::printf("file:        %s\n", path.c_str());
@@ -38,7 +38,7 @@ int runInfo(const std::string& path) {
 void addInfoCommand(CLI::App& app, Action& action) {
     auto path = std::make_shared<std::string>();
     CLI::App* cmd = app.add_subcommand(
-        "info", "Describe a grid file: size, voxel size, bounds, layout, memory");
+        "info", "Describe a grid file (.sdfg or .vdb): size, voxel size, bounds, layout, memory");
     cmd->add_option("file", *path, "Grid file (.sdfg)")->required();
     cmd->callback([&action, path] { action = [path] { return runInfo(*path); }; });
 }

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
     sdft::cli::addRenderCommand(app, action);
     sdft::cli::addBakeCommand(app, action);
     sdft::cli::addInfoCommand(app, action);
+    sdft::cli::addConvertCommand(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -9,8 +9,8 @@
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/atomic_file.h"
+#include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/image_io.h"
-#include "sdftrace/io/sdfg_io.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/scene/option_names.h"
@@ -114,9 +114,9 @@ int runRender(const RenderArgs& a) {
     Scene scene;
     if (a.scene.empty()) {
         scene = demoScene();
-    } else if (std::filesystem::path(a.scene).extension() == ".sdfg") {
+    } else if (isGridFile(a.scene)) {
         // A grid file rendered directly: framed by an automatic camera, lit by default lights.
-        auto grid = std::make_shared<const Grid>(loadSdfg(a.scene));
+        auto grid = std::make_shared<const Grid>(loadGridFile(a.scene));
         Bounds3 frame = grid->surfaceBounds();
         if (frame.empty())
             throw InputError(a.scene + ": the grid contains no surface (no sign change)");

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "sdftrace/field/noise.h"
-#include "sdftrace/io/sdfg_io.h"
+#include "sdftrace/io/grid_file.h"
 
 namespace sdft {
 
@@ -122,11 +122,10 @@ std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx) {
     std::string key = path.lexically_normal().string();
     auto it = ctx.grids.find(key);
     if (it != ctx.grids.end()) return it->second;
-    if (path.extension() != ".sdfg") {
-        r.failKey("file", "unsupported grid file '" + file + "'; accepted: .sdfg");
-    }
+    if (!isGridFile(key))
+        r.failKey("file", "unsupported grid file '" + file + "'; accepted: .sdfg, .vdb");
     try {
-        auto grid = std::make_shared<const Grid>(loadSdfg(key));
+        auto grid = std::make_shared<const Grid>(loadGridFile(key));
         ctx.grids[key] = grid;
         return grid;
     } catch (const InputError& e) {

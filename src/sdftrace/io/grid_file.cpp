@@ -1,0 +1,40 @@
+#include "sdftrace/io/grid_file.h"
+
+#include <filesystem>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/io/sdfg_io.h"
+#include "sdftrace/io/vdb_io.h"
+
+namespace sdft {
+
+namespace {
+std::string extensionOf(const std::string& path) {
+    return std::filesystem::path(path).extension().string();
+}
+}  // namespace
+
+bool isGridFile(const std::string& path) {
+    std::string e = extensionOf(path);
+    return e == ".sdfg" || e == ".vdb";
+}
+
+Grid loadGridFile(const std::string& path) {
+    std::string e = extensionOf(path);
+    if (e == ".sdfg") return loadSdfg(path);
+    if (e == ".vdb") {
+        if (!std::filesystem::exists(path))
+            throw InputError(path + ": cannot open grid file (does it exist?)");
+        return loadVdb(path);
+    }
+    throw InputError(path + ": unknown grid file extension '" + e + "'; accepted: .sdfg, .vdb");
+}
+
+void saveGridFile(const Grid& grid, const std::string& path) {
+    std::string e = extensionOf(path);
+    if (e == ".sdfg") return saveSdfg(grid, path);
+    if (e == ".vdb") return saveVdb(grid, path);
+    throw InputError(path + ": unknown grid file extension '" + e + "'; accepted: .sdfg, .vdb");
+}
+
+}  // namespace sdft
