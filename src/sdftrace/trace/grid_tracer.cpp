@@ -14,8 +14,9 @@ struct Dda {
     float tNext[3], tDelta[3];
     float t;
 
-    void init(const Vec3& o, const Vec3& d, float tStart, float size, const int lo_[3],
-              const int hi_[3]) {
+    // invD: 1 / d per axis (inf where d is 0), computed once per ray.
+    void init(const Vec3& o, const Vec3& d, const float invD[3], float tStart, float size,
+              const int lo_[3], const int hi_[3]) {
         t = tStart;
         Vec3 p = o + d * tStart;
         for (int a = 0; a < 3; ++a) {
@@ -25,12 +26,12 @@ struct Dda {
             idx[a] = std::clamp(i, lo[a], hi[a]);
             if (d[a] > 0) {
                 step[a] = 1;
-                tDelta[a] = size / d[a];
-                tNext[a] = ((idx[a] + 1) * size - o[a]) / d[a];
+                tDelta[a] = size * invD[a];
+                tNext[a] = ((idx[a] + 1) * size - o[a]) * invD[a];
             } else if (d[a] < 0) {
                 step[a] = -1;
-                tDelta[a] = -size / d[a];
-                tNext[a] = (idx[a] * size - o[a]) / d[a];
+                tDelta[a] = -size * invD[a];
+                tNext[a] = (idx[a] * size - o[a]) * invD[a];
             } else {
                 step[a] = 0;
                 tDelta[a] = kInfinity;
@@ -67,22 +68,12 @@ float valueAt(const GridView& g, const GridRay& r, float t, int ci, int cj, int 
     return c0 + (c1 - c0) * w;
 }
 
-bool cellMaskBit(const GridView& g, int ci, int cj, int ck) {
-    const int B = g.blockSize;
-    size_t block = (static_cast<size_t>(ck / B) * g.blocks[1] + cj / B) * g.blocks[0] + ci / B;
-    int32_t data = g.blockData[block];
-    if (data < 0) return false;
-    int bit = ((ck % B) * B + cj % B) * B + ci % B;
-    return (g.cellMasks[static_cast<size_t>(data) * g.wordsPerMask() + bit / 64] >> (bit % 64)) & 1;
-}
-
 // Jamriška §4.2 inside one surface cell on [tIn, tOut]: true and the hit parameter if the
 // reconstruction changes sign (relative to `sign`, +1 for rays starting outside).
-bool intersectCell(const GridView& g, const GridRay& r, int ci, int cj, int ck, float tIn,
-                   float tOut, float sign, const GridTraceOptions& o, GridTraceResult& res,
-                   float& tHit) {
-    float c[8];
-    g.cellCorners(ci, cj, ck, c);
+// `c` holds the cell's 8 corner samples.
+bool intersectCell(const GridView& g, const GridRay& r, int ci, int cj, int ck, const float c[8],
+                   float tIn, float tOut, float sign, const GridTraceOptions& o,
+                   GridTraceResult& res, float& tHit) {
     res.intersectionTests++;
     if (o.cellMethod == CellIntersection::Midpoint) {
         tHit = 0.5f * (tIn + tOut);  // assumes every surface cell is hit (fast, shows artifacts)
@@ -116,6 +107,7 @@ bool intersectCell(const GridView& g, const GridRay& r, int ci, int cj, int ck, 
 
 struct Setup {
     GridRay r;
+    float invD[3];
     float t0, t1;
     float sign;
     int blockLo[3], blockHi[3];
@@ -126,6 +118,7 @@ struct Setup {
 bool setup(const GridView& g, const Ray& ray, float tMin, float tMax, Setup& s) {
     const float h = g.shape.voxelSize;
     s.r = {(ray.origin - g.shape.origin) / h, ray.direction / h};
+    for (int a = 0; a < 3; ++a) s.invD[a] = s.r.d[a] != 0 ? 1.0f / s.r.d[a] : kInfinity;
     Bounds3 box{Vec3(0.0f), Vec3(g.shape.cells[0], g.shape.cells[1], g.shape.cells[2])};
     if (!intersectBounds(box, Ray{s.r.o, s.r.d}, tMin, tMax, s.t0, s.t1)) return false;
     // A dense grid is one block of the whole grid.
@@ -136,7 +129,9 @@ bool setup(const GridView& g, const Ray& ray, float tMin, float tMax, Setup& s) 
         s.blockLo[a] = 0;
         s.blockHi[a] = g.kind == GridKind::Sparse ? g.blocks[a] - 1 : 0;
     }
-    s.sign = g.interpolate(ray.at(s.t0)) < 0 ? -1.0f : 1.0f;
+    // A ray clipped to the grid's box starts on its boundary, outside the solid (a surface cut by
+    // the box is found at the entry cell); otherwise the sign of the first sample decides.
+    s.sign = (s.t0 > tMin || g.interpolate(ray.at(s.t0)) >= 0) ? 1.0f : -1.0f;
     return true;
 }
 
@@ -155,23 +150,47 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
         hi[a] = std::min(lo[a] + s.B, g.shape.cells[a]) - 1;
     }
     Dda cells;
-    cells.init(s.r.o, s.r.d, tEnter, 1.0f, lo, hi);
+    cells.init(s.r.o, s.r.d, s.invD, tEnter, 1.0f, lo, hi);
+    // The block's mask and samples, looked up once (§4.1): one bit per cell, x fastest; the
+    // (B+1)^3 vertex samples of its cells.
+    const uint64_t* mask = nullptr;
+    const float* samples = nullptr;
+    const size_t sy = s.B + 1, sz = sy * sy;
+    if (g.kind == GridKind::Sparse) {
+        size_t b =
+            (static_cast<size_t>(block[2]) * g.blocks[1] + block[1]) * g.blocks[0] + block[0];
+        size_t data = static_cast<size_t>(g.blockData[b]);
+        samples = g.blockSamples + data * sz * sy;
+        if (o.bitMasks) mask = g.cellMasks + data * g.wordsPerMask();
+    }
+    auto corners = [&](float c[8]) {
+        if (!samples) return g.cellCorners(cells.idx[0], cells.idx[1], cells.idx[2], c);
+        const float* q = samples + (cells.idx[2] - lo[2]) * sz + (cells.idx[1] - lo[1]) * sy +
+                         (cells.idx[0] - lo[0]);
+        c[0] = q[0], c[1] = q[1], c[2] = q[sy], c[3] = q[sy + 1];
+        c[4] = q[sz], c[5] = q[sz + 1], c[6] = q[sz + sy], c[7] = q[sz + sy + 1];
+    };
     for (;;) {
         res.traversalSteps++;
         float tIn = cells.t, tOut = std::min(cells.exit(), tExit);
-        bool surface;
-        if (o.bitMasks && g.kind == GridKind::Sparse) {
-            surface = cellMaskBit(g, cells.idx[0], cells.idx[1], cells.idx[2]);
+        float c[8];
+        bool surface, haveCorners = false;
+        if (mask) {
+            int bit = ((cells.idx[2] - lo[2]) * s.B + (cells.idx[1] - lo[1])) * s.B +
+                      (cells.idx[0] - lo[0]);
+            surface = (mask[bit >> 6] >> (bit & 63)) & 1;
         } else {
-            float c[8];
-            g.cellCorners(cells.idx[0], cells.idx[1], cells.idx[2], c);
+            corners(c);
+            haveCorners = true;
             bool neg = false, pos = false;
             for (float x : c) (x < 0 ? neg : pos) = true;
             surface = neg && pos;
         }
-        if (surface && intersectCell(g, s.r, cells.idx[0], cells.idx[1], cells.idx[2], tIn, tOut,
-                                     s.sign, o, res, tHit)) {
-            return true;
+        if (surface) {
+            if (!haveCorners) corners(c);
+            if (intersectCell(g, s.r, cells.idx[0], cells.idx[1], cells.idx[2], c, tIn, tOut,
+                              s.sign, o, res, tHit))
+                return true;
         }
         if (tOut >= tExit || !cells.advance()) return false;
     }
@@ -185,7 +204,7 @@ GridTraceResult traceGridRay(const GridView& g, const Ray& ray, float tMin, floa
     Setup s;
     if (!setup(g, ray, tMin, tMax, s)) return res;
     Dda blocks;
-    blocks.init(s.r.o, s.r.d, s.t0, static_cast<float>(s.B), s.blockLo, s.blockHi);
+    blocks.init(s.r.o, s.r.d, s.invD, s.t0, static_cast<float>(s.B), s.blockLo, s.blockHi);
     for (;;) {
         res.traversalSteps++;
         float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
@@ -208,7 +227,7 @@ GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, f
     Setup s;
     if (!setup(g, ray, tMin, tMax, s)) return res;
     Dda blocks;
-    blocks.init(s.r.o, s.r.d, s.t0, static_cast<float>(s.B), s.blockLo, s.blockHi);
+    blocks.init(s.r.o, s.r.d, s.invD, s.t0, static_cast<float>(s.B), s.blockLo, s.blockHi);
     // Jamriška §7: coarse blocks only, hoping for an inside block (a volumetric occluder).
     bool sawSurface = false;
     Dda restart{};
