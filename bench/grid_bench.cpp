@@ -19,6 +19,7 @@
 #include <atomic>
 #include <fstream>
 #include <map>
+#include <numeric>
 #include <sstream>
 
 #include "sdftrace/io/vdb_io.h"
@@ -139,14 +140,13 @@ void Primary(benchmark::State& state, int resolution, int threads, int minmax, b
     GridView g = l.grid->view();
     GridTraceOptions o;
     std::vector<uint8_t> hits(kImage * kImage);
-    std::atomic<long> steps{0}, tests{0};
+    // Per-pixel counters, like the AOVs (no shared counter between the threads).
+    std::vector<int> steps(kImage * kImage), tests(kImage * kImage);
     for (auto _ : state) {
         if (openVdb) {
             hits = vdbHits(l, threads);
             continue;
         }
-        steps = 0;
-        tests = 0;
         MinMaxBuffer buf;
         if (minmax > 0) buf = MinMaxBuffer::build(g, cam, minmax);
         forPixels(threads, [&](int x, int y) {
@@ -155,16 +155,16 @@ void Primary(benchmark::State& state, int resolution, int threads, int minmax, b
             if (minmax > 0) buf.range(x, y, t0, t1);
             GridTraceResult res = t0 <= t1 ? traceGridRay(g, r, t0, t1, o) : GridTraceResult{};
             hits[y * kImage + x] = res.hit;
-            steps.fetch_add(res.traversalSteps, std::memory_order_relaxed);
-            tests.fetch_add(res.intersectionTests, std::memory_order_relaxed);
+            steps[y * kImage + x] = res.traversalSteps;
+            tests[y * kImage + x] = res.intersectionTests;
         });
     }
     long hitCount = 0;
     for (uint8_t h : hits) hitCount += h;
     state.counters["hits"] = static_cast<double>(hitCount);
     if (!openVdb) {
-        state.counters["trav_steps_k"] = steps / 1000.0;
-        state.counters["isect_tests_k"] = tests / 1000.0;
+        state.counters["trav_steps_k"] = std::accumulate(steps.begin(), steps.end(), 0L) / 1000.0;
+        state.counters["isect_tests_k"] = std::accumulate(tests.begin(), tests.end(), 0L) / 1000.0;
         state.counters["mismatch"] = mismatchesOffSilhouettes(hits, vdbHits(l, threads));
     }
 }
@@ -228,27 +228,28 @@ void Shadows(benchmark::State& state, int resolution, int threads, int occluder)
             starts.push_back({p, gridNormal(g, p, GridNormal::InterpolationOfDifferences)});
         }
     });
-    std::atomic<long> steps{0}, tests{0}, blocked{0};
+    std::vector<int> steps(starts.size()), tests(starts.size()), blocked(starts.size());
     const float offset = g.shape.voxelSize;
     for (auto _ : state) {
-        steps = tests = blocked = 0;
         tbb::task_arena arena(threads);
         arena.execute([&] {
             tbb::parallel_for(size_t(0), starts.size(), [&](size_t i) {
+                steps[i] = tests[i] = blocked[i] = 0;
                 for (const Vec3& l : lights) {
                     if (dot(starts[i].n, l) <= 0) continue;
                     GridTraceResult r = traceGridShadow(g, {starts[i].p + starts[i].n * offset, l},
                                                         0, 1e30f, o, occluder);
-                    steps.fetch_add(r.traversalSteps, std::memory_order_relaxed);
-                    tests.fetch_add(r.intersectionTests, std::memory_order_relaxed);
-                    blocked.fetch_add(r.hit, std::memory_order_relaxed);
+                    steps[i] += r.traversalSteps;
+                    tests[i] += r.intersectionTests;
+                    blocked[i] += r.hit;
                 }
             });
         });
     }
-    state.counters["trav_steps_k"] = steps / 1000.0;
-    state.counters["isect_tests_k"] = tests / 1000.0;
-    state.counters["blocked"] = static_cast<double>(blocked);
+    state.counters["trav_steps_k"] = std::accumulate(steps.begin(), steps.end(), 0L) / 1000.0;
+    state.counters["isect_tests_k"] = std::accumulate(tests.begin(), tests.end(), 0L) / 1000.0;
+    state.counters["blocked"] =
+        static_cast<double>(std::accumulate(blocked.begin(), blocked.end(), 0L));
 }
 
 void registerAll() {
