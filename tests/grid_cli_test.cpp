@@ -43,7 +43,8 @@ TEST(GridCli, SampledGridRendersLikeTheAnalyticScene) {
         RunResult bake =
             runCli("bake " + scene + " --res 96 " + layout + " -o " + dir.file("f.sdfg"), dir);
         ASSERT_EQ(bake.status, 0) << bake.err;
-        dir.write("grid.json", R"({"objects": [{"type": "grid", "file": "f.sdfg"}]})");
+        // The issue's shorthand: {"grid": "file"}.
+        dir.write("grid.json", R"({"objects": [{"grid": "f.sdfg"}]})");
         std::string common =
             std::string("render -q --classic --tau 1e-4 --max-steps 2000 ") + kCamera;
         ASSERT_EQ(runCli(common + " " + scene + " -o " + dir.file("a.png") + " --aov depth=" +

@@ -114,8 +114,9 @@ NodePtr parseBlobs(const Reader& r) {
 }
 
 // A grid file, relative to the scene file's directory; its errors carry the JSON path too.
-std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx) {
-    std::string file = r.string("file");
+std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx,
+                                           const char* jsonKey = "file") {
+    std::string file = r.string(jsonKey);
     std::filesystem::path path(file);
     if (path.is_relative() && !ctx.baseDir.empty())
         path = std::filesystem::path(ctx.baseDir) / path;
@@ -123,20 +124,41 @@ std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx) {
     auto it = ctx.grids.find(key);
     if (it != ctx.grids.end()) return it->second;
     if (!isGridFile(key))
-        r.failKey("file", "unsupported grid file '" + file + "'; accepted: .sdfg, .vdb");
+        r.failKey(jsonKey, "unsupported grid file '" + file + "'; accepted: .sdfg, .vdb");
     try {
         auto grid = std::make_shared<const Grid>(loadGridFile(key));
         ctx.grids[key] = grid;
         return grid;
     } catch (const InputError& e) {
-        r.failKey("file", e.what());
+        r.failKey(jsonKey, e.what());
     }
+}
+
+// The keys every object may carry: inline transforms, then the material.
+NodePtr finishNode(const Reader& r, NodePtr n, const NodeContext& mats) {
+    n = applyInlineTransforms(r, n);
+    if (r.has("material")) {
+        std::string name = r.string("material");
+        auto it = mats.materials.find(name);
+        if (it == mats.materials.end()) {
+            std::string known;
+            for (const auto& [k, v] : mats.materials) known += (known.empty() ? "" : ", ") + k;
+            r.failKey("material", "unknown material '" + name + "'; defined: " + known);
+        }
+        n = node::withMaterial(n, it->second);
+    }
+    return n;
 }
 
 }  // namespace
 
 NodePtr parseNode(const Reader& r, NodeContext& mats) {
     r.requireObject("an object node");
+    // Shorthand for a grid object: {"grid": "field.sdfg", ...} is {"type": "grid", "file": ...}.
+    if (!r.has("type") && r.has("grid")) {
+        r.allowKeys({"grid", "material", "translate", "rotate", "scale"});
+        return finishNode(r, node::grid(loadGridObject(r, mats, "grid")), mats);
+    }
     std::string type = r.string("type");
     const char* common[] = {"type", "material", "translate", "rotate", "scale"};
     auto allow = [&](std::initializer_list<const char*> extra) {
@@ -282,18 +304,7 @@ NodePtr parseNode(const Reader& r, NodeContext& mats) {
                               ", " + kOperatorTypes);
     }
 
-    n = applyInlineTransforms(r, n);
-    if (r.has("material")) {
-        std::string name = r.string("material");
-        auto it = mats.materials.find(name);
-        if (it == mats.materials.end()) {
-            std::string known;
-            for (const auto& [k, v] : mats.materials) known += (known.empty() ? "" : ", ") + k;
-            r.failKey("material", "unknown material '" + name + "'; defined: " + known);
-        }
-        n = node::withMaterial(n, it->second);
-    }
-    return n;
+    return finishNode(r, n, mats);
 }
 
 }  // namespace sdft
