@@ -148,7 +148,9 @@ void Primary(benchmark::State& state, int resolution, int threads, int minmax, b
             continue;
         }
         MinMaxBuffer buf;
-        if (minmax > 0) buf = MinMaxBuffer::build(g, cam, minmax);
+        // Per frame, as in the paper, on the same number of threads as the traversal.
+        if (minmax > 0)
+            tbb::task_arena(threads).execute([&] { buf = MinMaxBuffer::build(g, cam, minmax); });
         forPixels(threads, [&](int x, int y) {
             Ray r = cam.pixelRay(x, y);
             float t0 = 0, t1 = 1e30f;
