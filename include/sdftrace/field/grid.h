@@ -121,6 +121,13 @@ class Grid {
 
 // ---- inline view functions (GPU-ready) ----
 
+// Whether a cell's 8 corner samples differ in sign: the cell contains the surface (§4.1).
+SDFT_HOST_DEVICE inline bool cornersChangeSign(const float c[8]) {
+    bool neg = false, pos = false;
+    for (int i = 0; i < 8; ++i) (c[i] < 0 ? neg : pos) = true;
+    return neg && pos;
+}
+
 SDFT_HOST_DEVICE inline int clampi(int v, int lo, int hi) {
     return v < lo ? lo : (v > hi ? hi : v);
 }

@@ -131,9 +131,7 @@ Bounds3 Grid::surfaceBounds() const {
             for (int i = 0; i < m_shape.cells[0]; ++i) {
                 float c[8];
                 v.cellCorners(i, j, k, c);
-                bool neg = false, pos = false;
-                for (float x : c) (x < 0 ? neg : pos) = true;
-                if (!(neg && pos)) continue;
+                if (!cornersChangeSign(c)) continue;
                 Vec3 lo = m_shape.origin + Vec3(i, j, k) * h;
                 b.include(lo);
                 b.include(lo + Vec3(h));
@@ -183,9 +181,7 @@ void Grid::computeCellMasks() {
                                 continue;
                             float c[8];
                             v.cellCorners(ci, cj, ck, c);
-                            bool neg = false, pos = false;
-                            for (float x : c) (x < 0 ? neg : pos) = true;
-                            if (neg && pos) {
+                            if (cornersChangeSign(c)) {
                                 int bit = (k * B + j) * B + i;
                                 m_cellMasks[static_cast<size_t>(data) * words + bit / 64] |=
                                     uint64_t{1} << (bit % 64);

@@ -182,9 +182,7 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
         } else {
             corners(c);
             haveCorners = true;
-            bool neg = false, pos = false;
-            for (float x : c) (x < 0 ? neg : pos) = true;
-            surface = neg && pos;
+            surface = cornersChangeSign(c);
         }
         if (surface) {
             if (!haveCorners) corners(c);
@@ -193,6 +191,25 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
                 return true;
         }
         if (tOut >= tExit || !cells.advance()) return false;
+    }
+}
+
+// The outer loop (§4.1): blocks along the ray from `blocks` on; inside and outside blocks are
+// skipped, surface blocks walked cell by cell. Fills res.hit and res.t on a hit.
+void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTraceOptions& o,
+                    GridTraceResult& res) {
+    for (;;) {
+        res.traversalSteps++;
+        float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
+        if (blockFlag(g, blocks.idx) == BlockFlag::Surface) {
+            float tHit;
+            if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
+                res.hit = true;
+                res.t = tHit;
+                return;
+            }
+        }
+        if (tExit >= s.t1 || !blocks.advance()) return;
     }
 }
 
@@ -205,19 +222,8 @@ GridTraceResult traceGridRay(const GridView& g, const Ray& ray, float tMin, floa
     if (!setup(g, ray, tMin, tMax, s)) return res;
     Dda blocks;
     blocks.init(s.r.o, s.r.d, s.invD, s.t0, static_cast<float>(s.B), s.blockLo, s.blockHi);
-    for (;;) {
-        res.traversalSteps++;
-        float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
-        if (blockFlag(g, blocks.idx) == BlockFlag::Surface) {
-            float tHit;
-            if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
-                res.hit = true;
-                res.t = tHit;
-                return res;
-            }
-        }
-        if (tExit >= s.t1 || !blocks.advance()) return res;
-    }
+    traverseBlocks(g, s, blocks, o, res);
+    return res;
 }
 
 GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, float tMax,
@@ -252,20 +258,8 @@ GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, f
         }
     }
     // Restart the full traversal from the first surface block.
-    blocks = restart;
-    for (;;) {
-        res.traversalSteps++;
-        float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
-        if (blockFlag(g, blocks.idx) == BlockFlag::Surface) {
-            float tHit;
-            if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
-                res.hit = true;
-                res.t = tHit;
-                return res;
-            }
-        }
-        if (tExit >= s.t1 || !blocks.advance()) return res;
-    }
+    traverseBlocks(g, s, restart, o, res);
+    return res;
 }
 
 Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
