@@ -10,6 +10,7 @@ packages=(
     libcli11-dev          # command line
     libopenvdb-dev        # .vdb level sets (interop) and the OpenVDB baseline in bench/
     libboost-iostreams-dev libblosc-dev  # needed by OpenVDB's CMake module, not pulled in by it
+    libassimp-dev         # mesh loading (OBJ, PLY, STL, OFF, glTF)
     libgtest-dev          # tests
     libbenchmark-dev      # bench/
 )

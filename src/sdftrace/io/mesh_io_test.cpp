@@ -1,0 +1,95 @@
+// Real meshes (data/meshes, facts from its README) through the loader and its cleaning.
+#include "sdftrace/io/mesh_io.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "sdftrace/core/error.h"
+
+namespace sdft {
+namespace {
+
+std::string meshPath(const std::string& name) {
+    return std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name;
+}
+
+TEST(MeshIo, ClosedBunnyLoadsWatertight) {
+    MeshReport r;
+    TriangleMesh m = loadMesh(meshPath("bunny_npm.obj"), &r);
+    EXPECT_EQ(m.positions.size(), 1839u);
+    EXPECT_EQ(m.triangles.size(), 3674u);
+    EXPECT_EQ(r.boundaryEdges, 0u);
+    EXPECT_EQ(r.components, 1u);
+    EXPECT_EQ(r.degenerateTriangles, 0u);
+}
+
+TEST(MeshIo, TeapotNeedsWeldingAndIsOpen) {
+    MeshReport r;
+    TriangleMesh m = loadMesh(meshPath("teapot.obj"), &r);
+    // 3,644 vertices in the file, 403 of them exact duplicates.
+    EXPECT_EQ(m.positions.size(), 3644u - 403u);
+    EXPECT_GE(r.weldedVertices, 403u);
+    EXPECT_EQ(r.boundaryEdges, 160u);
+    EXPECT_EQ(r.components, 3u);
+    EXPECT_EQ(m.triangles.size() + r.degenerateTriangles, 6320u);
+}
+
+TEST(MeshIo, SuzanneReportsItsDuplicateTriangle) {
+    MeshReport r;
+    TriangleMesh m = loadMesh(meshPath("suzanne.obj"), &r);
+    EXPECT_EQ(r.trianglesRead, 968u);
+    EXPECT_EQ(r.duplicateTriangles, 1u);  // the back-to-back pair
+    EXPECT_LE(m.positions.size(), 507u);  // 507 in the file, exact duplicates welded
+    EXPECT_GT(r.boundaryEdges, 0u);       // the eyes' open rims
+}
+
+TEST(MeshIo, ElephantWithHolesHasItsBoundary) {
+    MeshReport r;
+    TriangleMesh m = loadMesh(meshPath("elephant-with-holes.obj"), &r);
+    EXPECT_EQ(m.triangles.size(), 4463u);
+    EXPECT_EQ(r.boundaryEdges, 1353u);
+    EXPECT_FALSE(r.summary().empty());
+}
+
+TEST(MeshIo, CleaningDropsDegenerateTrianglesAndUnusedVertices) {
+    std::vector<Vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {2, 0, 0}, {5, 5, 5}};
+    // a real triangle; one using a welded copy of vertex 1 twice; one collinear (zero area)
+    std::vector<std::array<uint32_t, 3>> t = {{0, 1, 2}, {1, 3, 2}, {0, 1, 4}};
+    MeshReport r;
+    TriangleMesh m = cleanMesh(p, t, r);
+    EXPECT_EQ(r.weldedVertices, 1u);
+    EXPECT_EQ(r.degenerateTriangles, 2u);
+    EXPECT_EQ(m.triangles.size(), 1u);
+    EXPECT_EQ(m.positions.size(), 3u);
+    EXPECT_EQ(r.unusedVertices, 2u);  // (2,0,0) and (5,5,5)
+    EXPECT_EQ(r.boundaryEdges, 3u);
+}
+
+TEST(MeshIo, BadFilesAreRejectedByName) {
+    std::string dir = std::filesystem::temp_directory_path().string() + "/sdftrace-mesh-" +
+                      std::to_string(::getpid());
+    std::filesystem::create_directories(dir);
+    auto expectError = [](const std::string& path, const std::string& fragment) {
+        try {
+            loadMesh(path);
+            ADD_FAILURE() << "accepted " << path;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+        }
+    };
+    expectError(dir + "/missing.obj", "cannot open");
+    std::ofstream(dir + "/garbage.stl") << "this is not a mesh at all";
+    expectError(dir + "/garbage.stl", "cannot read mesh");
+    std::ofstream(dir + "/points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    expectError(dir + "/points.obj", "");
+    std::ofstream(dir + "/flat.obj") << "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n";
+    expectError(dir + "/flat.obj", "no (non-degenerate) triangles");
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace sdft
