@@ -11,6 +11,7 @@ packages=(
     libopenvdb-dev        # .vdb level sets (interop) and the OpenVDB baseline in bench/
     libboost-iostreams-dev libblosc-dev  # needed by OpenVDB's CMake module, not pulled in by it
     libassimp-dev         # mesh loading (OBJ, PLY, STL, OFF, glTF)
+    libembree-dev         # BVH closest-point queries and ray casts for mesh baking
     libgtest-dev          # tests
     libbenchmark-dev      # bench/
 )

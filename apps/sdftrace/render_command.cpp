@@ -5,12 +5,14 @@
 #include <optional>
 
 #include "commands.h"
+#include "sdftrace/bake/exact_bake.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/image_io.h"
+#include "sdftrace/io/mesh_file.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/scene/option_names.h"
@@ -114,6 +116,14 @@ int runRender(const RenderArgs& a) {
     Scene scene;
     if (a.scene.empty()) {
         scene = demoScene();
+    } else if (isMeshFile(a.scene)) {
+        // A mesh rendered directly: baked exactly at the default resolution first.
+        MeshReport report;
+        TriangleMesh mesh = loadMesh(a.scene, &report);
+        auto grid = std::make_shared<const Grid>(bakeMeshExact(mesh, SampleOptions{}));
+        std::fprintf(stderr, "sdftrace render: %s: %s; baked exactly at 128 cells\n",
+                     a.scene.c_str(), report.summary().c_str());
+        scene = sceneForObject(node::grid(grid), grid->surfaceBounds());
     } else if (isGridFile(a.scene)) {
         // A grid file rendered directly: framed by an automatic camera, lit by default lights.
         auto grid = std::make_shared<const Grid>(loadGridFile(a.scene));

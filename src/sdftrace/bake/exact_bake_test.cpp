@@ -1,0 +1,148 @@
+// The exact bake: closest points against brute force, and baked grids against meshes whose SDF is
+// known in closed form (a box; a finely tessellated sphere, within its tessellation gap).
+#include "sdftrace/bake/exact_bake.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "sdftrace/bake/closest_point.h"
+#include "sdftrace/field/primitives.h"
+#include "sdftrace/field/test_util.h"
+
+namespace sdft {
+namespace {
+
+TriangleMesh boxMesh(Vec3 h) {
+    TriangleMesh m;
+    for (int i = 0; i < 8; ++i)
+        m.positions.push_back({(i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z});
+    // Outward winding, two triangles per face.
+    m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                   {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    return m;
+}
+
+// An icosahedron subdivided `levels` times, vertices pushed onto the unit sphere.
+TriangleMesh icosphere(int levels) {
+    const float t = 1.618034f;
+    TriangleMesh m;
+    for (Vec3 v : {Vec3(-1, t, 0), Vec3(1, t, 0), Vec3(-1, -t, 0), Vec3(1, -t, 0), Vec3(0, -1, t),
+                   Vec3(0, 1, t), Vec3(0, -1, -t), Vec3(0, 1, -t), Vec3(t, 0, -1), Vec3(t, 0, 1),
+                   Vec3(-t, 0, -1), Vec3(-t, 0, 1)})
+        m.positions.push_back(normalize(v));
+    m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                   {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                   {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                   {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+    for (int l = 0; l < levels; ++l) {
+        std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+        auto midpoint = [&](uint32_t a, uint32_t b) {
+            auto key = std::make_pair(std::min(a, b), std::max(a, b));
+            auto it = mid.find(key);
+            if (it != mid.end()) return it->second;
+            m.positions.push_back(normalize(m.positions[a] + m.positions[b]));
+            return mid[key] = static_cast<uint32_t>(m.positions.size() - 1);
+        };
+        std::vector<std::array<uint32_t, 3>> next;
+        for (auto [a, b, c] : m.triangles) {
+            uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+            next.insert(next.end(), {{a, ab, ca}, {b, bc, ab}, {c, ca, bc}, {ab, bc, ca}});
+        }
+        m.triangles = next;
+    }
+    return m;
+}
+
+TEST(ClosestPoint, MatchesDenseSamplingOfTheTriangle) {
+    testing::Rng rng(1);
+    for (int n = 0; n < 200; ++n) {
+        Vec3 a = rng.inCube(1), b = rng.inCube(1), c = rng.inCube(1), p = rng.inCube(2);
+        float d = length(p - closestPointOnTriangle(p, a, b, c));
+        float best = 1e30f;
+        const int N = 300;
+        for (int i = 0; i <= N; ++i)
+            for (int j = 0; i + j <= N; ++j) {
+                float u = static_cast<float>(i) / N, v = static_cast<float>(j) / N;
+                best = std::min(best, length(p - (a + (b - a) * u + (c - a) * v)));
+            }
+        EXPECT_LE(d, best + 1e-5f);
+        EXPECT_GE(d, best - 0.02f);  // sampling spacing
+    }
+}
+
+TEST(MeshBvh, ClosestDistanceEqualsBruteForceOnTheBunny) {
+    MeshReport r;
+    TriangleMesh mesh = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/bunny_npm.obj", &r);
+    MeshBvh bvh(mesh);
+    Bounds3 b = mesh.bounds().expanded(0.3f * maxComponent(mesh.bounds().extent()));
+    testing::Rng rng(2);
+    for (int i = 0; i < 300; ++i) {
+        Vec3 p = rng.inBox(b.lo, b.hi);
+        float brute = 1e30f;
+        for (const auto& t : mesh.triangles) {
+            Vec3 q = closestPointOnTriangle(p, mesh.positions[t[0]], mesh.positions[t[1]],
+                                            mesh.positions[t[2]]);
+            brute = std::min(brute, length(p - q));
+        }
+        ASSERT_NEAR(bvh.closestDistance(p), brute, 1e-6f * (1 + brute));
+    }
+}
+
+TEST(ExactBake, BoxMeshGivesTheBoxSdfToFloatRounding) {
+    Vec3 half(0.5f, 0.3f, 0.7f);
+    SampleOptions o;
+    o.resolution = 32;
+    o.kind = GridKind::Dense;
+    Grid g = bakeMeshExact(boxMesh(half), o);
+    GridView v = g.view();
+    const GridShape& s = g.shape();
+    float k[3] = {half.x, half.y, half.z};
+    int inside = 0;
+    for (int kk = 0; kk <= s.cells[2]; ++kk)
+        for (int j = 0; j <= s.cells[1]; ++j)
+            for (int i = 0; i <= s.cells[0]; ++i) {
+                Vec3 p = s.origin + Vec3(i, j, kk) * s.voxelSize;
+                float exact = prim::box(p, k);
+                ASSERT_NEAR(v.vertex(i, j, kk), exact, 2e-6f) << i << "," << j << "," << kk;
+                inside += exact < 0;
+            }
+    EXPECT_GT(inside, 1000);
+}
+
+TEST(ExactBake, TessellatedSphereWithinItsTessellationGap) {
+    TriangleMesh sphere = icosphere(4);  // 5,120 triangles
+    // The polyhedron lies between radius cos(half the largest edge angle) and 1.
+    float gap = 0;
+    for (auto [a, b, c] : sphere.triangles)
+        gap = std::max(
+            gap,
+            1 - length((sphere.positions[a] + sphere.positions[b] + sphere.positions[c]) / 3.0f));
+    SampleOptions o;
+    o.resolution = 40;
+    Grid g = bakeMeshExact(sphere, o);  // sparse, band 3
+    GridView v = g.view();
+    testing::Rng rng(3);
+    int checked = 0;
+    for (int i = 0; i < 5000; ++i) {
+        Vec3 p = rng.inCube(1.2f);
+        float exact = length(p) - 1;
+        float baked = v.interpolate(p);
+        if (std::fabs(exact) > 2 * gap)
+            ASSERT_EQ(baked < 0, exact < 0) << p.x << "," << p.y << "," << p.z;
+        // Near the surface (in the band) the samples are exact distances to the polyhedron;
+        // interpolation adds at most half a cell diagonal of error.
+        if (std::fabs(exact) < 2 * g.shape().voxelSize) {
+            EXPECT_NEAR(baked, exact, gap + 0.87f * g.shape().voxelSize);
+            ++checked;
+        }
+    }
+    EXPECT_GT(checked, 200);
+    size_t in, out, surf;
+    g.blockCounts(in, out, surf);
+    EXPECT_GT(in, 0u);  // the inside is marked inside far from the surface
+}
+
+}  // namespace
+}  // namespace sdft

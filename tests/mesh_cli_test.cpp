@@ -1,0 +1,57 @@
+// Meshes through the CLI: bake, render directly, and bad mesh input.
+#include <gtest/gtest.h>
+
+#include "cli_runner.h"
+
+namespace sdft::e2e {
+namespace {
+
+std::string mesh(const std::string& name) {
+    return std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name;
+}
+
+TEST(MeshCli, BakesAClosedMeshExactlyAndRendersIt) {
+    TempDir dir;
+    RunResult bake =
+        runCli("bake " + mesh("bunny_npm.obj") + " --res 48 -o " + dir.file("b.sdfg"), dir);
+    ASSERT_EQ(bake.status, 0) << bake.err;
+    EXPECT_NE(bake.err.find("0 boundary edges"), std::string::npos)
+        << bake.err;  // the cleaning report
+    EXPECT_NE(bake.err.find("exact bake"), std::string::npos) << bake.err;
+    RunResult info = runCli("info " + dir.file("b.sdfg"), dir);
+    ASSERT_EQ(info.status, 0);
+    EXPECT_EQ(info.out.find("0 inside"), std::string::npos)
+        << info.out;  // a closed mesh has an inside
+    RunResult render = runCli(
+        "render -q --width 48 --height 36 " + mesh("bunny_npm.obj") + " -o " + dir.file("r.png"),
+        dir);
+    ASSERT_EQ(render.status, 0) << render.err;
+    EXPECT_TRUE(std::filesystem::exists(dir.file("r.png")));
+}
+
+TEST(MeshCli, BadMeshInputFailsClearly) {
+    TempDir dir;
+    std::string garbage = dir.write("garbage.stl", "not a mesh");
+    std::string flat = dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    struct Case {
+        std::string args, fragment;
+    } cases[] = {
+        {"bake " + garbage + " -o " + dir.file("x.sdfg"), "cannot read mesh"},
+        {"bake " + flat + " -o " + dir.file("x.sdfg"), "no (non-degenerate) triangles"},
+        {"bake " + dir.file("missing.obj") + " -o " + dir.file("x.sdfg"), "cannot open"},
+        {"bake " + mesh("bunny_npm.obj") + " --method jfa -o " + dir.file("x.sdfg"),
+         "accepted: exact"},
+        {"render -q " + garbage + " -o " + dir.file("x.png"), "cannot read mesh"},
+    };
+    for (const Case& c : cases) {
+        RunResult r = runCli(c.args, dir);
+        EXPECT_NE(r.status, 0) << c.args;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.err.find(c.fragment), std::string::npos) << c.args << ": " << r.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file("x.sdfg")));
+        EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
+    }
+}
+
+}  // namespace
+}  // namespace sdft::e2e
