@@ -108,12 +108,7 @@ int runBake(const BakeArgs& a) {
             ": the scene is unbounded (a plane or a complement?); give the region with --bounds "
             "x0,y0,z0,x1,y1,z1");
     }
-    SampleOptions o;
-    o.resolution = a.resolution;
-    o.kind = a.dense ? GridKind::Dense : GridKind::Sparse;
-    o.blockSize = a.blockSize;
-    o.bandVoxels = a.band;
-    o.threads = a.threads;
+    SampleOptions o = sampleOptions(a);
     GridShape shape = gridShapeFor(region, o);
     double bytes = static_cast<double>(shape.vertexCount()) * sizeof(float);
     double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
