@@ -29,6 +29,7 @@ struct BakeArgs {
     float band = 3;
     std::string bounds;
     std::string method = "exact";
+    std::string sign = "winding";
     int threads = 0;
 };
 
@@ -79,7 +80,9 @@ int bakeMesh(const BakeArgs& a) {
     TriangleMesh mesh = loadMesh(a.scene, &report);
     std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.scene.c_str(), report.summary().c_str());
     auto t1 = std::chrono::steady_clock::now();
-    Grid grid = bakeMeshExact(mesh, sampleOptions(a));
+    Grid grid =
+        bakeMeshExact(mesh, sampleOptions(a),
+                      a.sign == "parity" ? SignMethod::RayParity : SignMethod::WindingNumber);
     auto t2 = std::chrono::steady_clock::now();
     saveGridFile(grid, a.output);
     const GridShape& s = grid.shape();
@@ -153,7 +156,12 @@ void addBakeCommand(CLI::App& app, Action& action) {
                     "Output grid (.sdfg or .vdb, docs/file-formats.md)")
         ->required();
     cmd->add_option("--method", args->method,
-                    "Meshes: exact (closest points through an Embree BVH, sign by ray parity)")
+                    "Meshes: exact (closest points through an Embree BVH)")
+        ->capture_default_str();
+    cmd->add_option("--sign", args->sign,
+                    "Meshes: winding (generalized winding number, robust on open meshes) or parity "
+                    "(ray-crossing parity, closed meshes)")
+        ->check(CLI::IsMember({"winding", "parity"}))
         ->capture_default_str();
     cmd->add_option("--res", args->resolution, "Cells along the longest axis of the region")
         ->check(CLI::Range(8, 4096))

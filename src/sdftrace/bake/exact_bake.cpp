@@ -3,9 +3,16 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <memory>
+
+#include "sdftrace/bake/winding_number.h"
+
 namespace sdft {
 
-std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, int threads) {
+std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, SignMethod sign,
+                                    int threads) {
+    std::unique_ptr<WindingNumber> winding;
+    if (sign == SignMethod::WindingNumber) winding = std::make_unique<WindingNumber>(bvh.mesh());
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
     std::vector<float> out(s.vertexCount());
     tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
@@ -17,7 +24,8 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, int 
                     for (int i = 0; i < vx; ++i) {
                         Vec3 p = s.origin + Vec3(i, j, k) * s.voxelSize;
                         float d = bvh.closestDistance(p);
-                        out[static_cast<size_t>(row) * vx + i] = bvh.insideByParity(p) ? -d : d;
+                        bool inside = winding ? winding->inside(p) : bvh.insideByParity(p);
+                        out[static_cast<size_t>(row) * vx + i] = inside ? -d : d;
                     }
                 }
             });
@@ -25,10 +33,10 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, int 
     return out;
 }
 
-Grid bakeMeshExact(const TriangleMesh& mesh, const SampleOptions& o) {
+Grid bakeMeshExact(const TriangleMesh& mesh, const SampleOptions& o, SignMethod sign) {
     MeshBvh bvh(mesh);
     GridShape shape = gridShapeFor(mesh.bounds(), o);
-    std::vector<float> samples = bakeExactSamples(bvh, shape, o.threads);
+    std::vector<float> samples = bakeExactSamples(bvh, shape, sign, o.threads);
     if (o.kind == GridKind::Dense) return Grid::dense(shape, std::move(samples));
     return Grid::sparseFromDense(shape, samples, o.blockSize, o.bandVoxels);
 }

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "sdftrace/bake/closest_point.h"
+#include "sdftrace/bake/winding_number.h"
 #include "sdftrace/field/primitives.h"
 #include "sdftrace/field/test_util.h"
 
@@ -142,6 +143,34 @@ TEST(ExactBake, TessellatedSphereWithinItsTessellationGap) {
     size_t in, out, surf;
     g.blockCounts(in, out, surf);
     EXPECT_GT(in, 0u);  // the inside is marked inside far from the surface
+}
+
+// On an open mesh (the elephant with holes cut out) the winding-number sign follows the exact
+// winding number everywhere it is clear of 1/2; ray parity does not.
+TEST(ExactBake, WindingNumberSignsOpenMeshesWhereParityFails) {
+    TriangleMesh mesh =
+        loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/elephant-with-holes.obj");
+    MeshBvh bvh(mesh);
+    WindingNumber reference(mesh);
+    SampleOptions o;
+    o.resolution = 24;
+    GridShape shape = gridShapeFor(mesh.bounds(), o);
+    std::vector<float> winding = bakeExactSamples(bvh, shape, SignMethod::WindingNumber);
+    std::vector<float> parity = bakeExactSamples(bvh, shape, SignMethod::RayParity);
+    int clear = 0, windingWrong = 0, parityWrong = 0;
+    size_t n = 0;
+    for (int k = 0; k <= shape.cells[2]; ++k)
+        for (int j = 0; j <= shape.cells[1]; ++j)
+            for (int i = 0; i <= shape.cells[0]; ++i, ++n) {
+                double w = reference.exact(shape.origin + Vec3(i, j, k) * shape.voxelSize);
+                if (std::fabs(w - 0.5) < 0.1) continue;
+                ++clear;
+                windingWrong += (winding[n] < 0) != (w > 0.5);
+                parityWrong += (parity[n] < 0) != (w > 0.5);
+            }
+    EXPECT_GT(clear, 5000);
+    EXPECT_EQ(windingWrong, 0);
+    EXPECT_GT(parityWrong, 0);  // the failure the winding number is for
 }
 
 }  // namespace

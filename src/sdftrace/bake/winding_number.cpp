@@ -1,0 +1,129 @@
+#include "sdftrace/bake/winding_number.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace sdft {
+
+namespace {
+constexpr double kFourPi = 12.566370614359172;
+constexpr int kLeafSize = 8;
+
+struct D3 {
+    double x, y, z;
+};
+D3 sub(Vec3 a, Vec3 b) { return {double(a.x) - b.x, double(a.y) - b.y, double(a.z) - b.z}; }
+double dot3(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+D3 cross3(D3 a, D3 b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+double len3(D3 a) { return std::sqrt(dot3(a, a)); }
+}  // namespace
+
+// Van Oosterom & Strackee 1983: tan(Omega / 2) = a.(b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b| +
+// (b.c)|a|) with a, b, c the vertices relative to p.
+double triangleSolidAngle(Vec3 p, Vec3 va, Vec3 vb, Vec3 vc) {
+    D3 a = sub(va, p), b = sub(vb, p), c = sub(vc, p);
+    double la = len3(a), lb = len3(b), lc = len3(c);
+    double num = dot3(a, cross3(b, c));
+    double den = la * lb * lc + dot3(a, b) * lc + dot3(a, c) * lb + dot3(b, c) * la;
+    return 2.0 * std::atan2(num, den);
+}
+
+WindingNumber::WindingNumber(const TriangleMesh& mesh, double beta) : m_mesh(mesh), m_beta(beta) {
+    m_order.resize(mesh.triangles.size());
+    std::iota(m_order.begin(), m_order.end(), 0);
+    m_nodes.reserve(2 * mesh.triangles.size() / kLeafSize + 2);
+    if (!mesh.triangles.empty()) build(0, static_cast<int>(mesh.triangles.size()));
+}
+
+int WindingNumber::build(int first, int count) {
+    int index = static_cast<int>(m_nodes.size());
+    m_nodes.push_back(Node{});
+    Node n;
+    n.first = first;
+    n.count = count;
+    Bounds3 b, centroids;
+    double area = 0, cx = 0, cy = 0, cz = 0, nx = 0, ny = 0, nz = 0;
+    for (int i = first; i < first + count; ++i) {
+        const auto& t = m_mesh.triangles[m_order[i]];
+        Vec3 p0 = m_mesh.positions[t[0]], p1 = m_mesh.positions[t[1]], p2 = m_mesh.positions[t[2]];
+        for (Vec3 v : {p0, p1, p2}) b.include(v);
+        Vec3 c = (p0 + p1 + p2) / 3.0f;
+        centroids.include(c);
+        D3 cr = cross3(sub(p1, p0), sub(p2, p0));  // 2 * area * unit normal
+        double a = 0.5 * len3(cr);
+        area += a;
+        cx += a * c.x, cy += a * c.y, cz += a * c.z;
+        nx += 0.5 * cr.x, ny += 0.5 * cr.y, nz += 0.5 * cr.z;
+    }
+    if (area > 0) cx /= area, cy /= area, cz /= area;
+    n.lo = b.lo;
+    n.hi = b.hi;
+    n.cx = cx, n.cy = cy, n.cz = cz;
+    n.nx = nx, n.ny = ny, n.nz = nz;
+    n.radius = 0;
+    for (int i = first; i < first + count; ++i)
+        for (uint32_t v : m_mesh.triangles[m_order[i]]) {
+            Vec3 p = m_mesh.positions[v];
+            n.radius =
+                std::max(n.radius, std::sqrt((p.x - cx) * (p.x - cx) + (p.y - cy) * (p.y - cy) +
+                                             (p.z - cz) * (p.z - cz)));
+        }
+    if (count > kLeafSize) {
+        // Median split of the centroids along the longest axis.
+        Vec3 e = centroids.extent();
+        int axis = e.x > e.y ? (e.x > e.z ? 0 : 2) : (e.y > e.z ? 1 : 2);
+        int mid = first + count / 2;
+        auto key = [&](int t) {
+            const auto& tri = m_mesh.triangles[t];
+            return m_mesh.positions[tri[0]][axis] + m_mesh.positions[tri[1]][axis] +
+                   m_mesh.positions[tri[2]][axis];
+        };
+        std::nth_element(m_order.begin() + first, m_order.begin() + mid,
+                         m_order.begin() + first + count,
+                         [&](int a, int c) { return key(a) < key(c); });
+        n.left = build(first, mid - first);
+        n.right = build(mid, first + count - mid);
+    }
+    m_nodes[index] = n;
+    return index;
+}
+
+double WindingNumber::exact(Vec3 p) const {
+    double sum = 0;
+    for (const auto& t : m_mesh.triangles)
+        sum += triangleSolidAngle(p, m_mesh.positions[t[0]], m_mesh.positions[t[1]],
+                                  m_mesh.positions[t[2]]);
+    return sum / kFourPi;
+}
+
+double WindingNumber::fast(Vec3 p) const {
+    if (m_nodes.empty()) return 0;
+    double sum = 0;
+    int stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const Node& n = m_nodes[stack[--top]];
+        double dx = n.cx - p.x, dy = n.cy - p.y, dz = n.cz - p.z;
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 > m_beta * m_beta * n.radius * n.radius) {
+            // Far: the dipole term, Omega ~ (c - p).N / |c - p|^3 (Barill et al. 2018, eq. 8).
+            sum += (dx * n.nx + dy * n.ny + dz * n.nz) / (d2 * std::sqrt(d2));
+        } else if (n.left < 0) {
+            for (int i = n.first; i < n.first + n.count; ++i) {
+                const auto& t = m_mesh.triangles[m_order[i]];
+                sum += triangleSolidAngle(p, m_mesh.positions[t[0]], m_mesh.positions[t[1]],
+                                          m_mesh.positions[t[2]]);
+            }
+        } else {
+            stack[top++] = n.left;
+            stack[top++] = n.right;
+        }
+    }
+    return sum / kFourPi;
+}
+
+}  // namespace sdft
