@@ -29,6 +29,27 @@ TEST(MeshCli, BakesAClosedMeshExactlyAndRendersIt) {
     EXPECT_TRUE(std::filesystem::exists(dir.file("r.png")));
 }
 
+TEST(MeshCli, JumpFloodingWithVerifyReportsItsErrorAgainstExact) {
+    TempDir dir;
+    RunResult r =
+        runCli("bake " + mesh("bunny_npm.obj") +
+                   " --res 40 --method jfa --jfa-variant jfa+2 --verify -o " + dir.file("j.sdfg"),
+               dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    for (const char* f : {"jump flooding", "verify jfa, all samples: mean",
+                          "verify jfa, narrow band", "wrong sign"}) {
+        EXPECT_NE(r.err.find(f), std::string::npos) << f << "\n" << r.err;
+    }
+    // The reported maximum error stays under the unit test's bound (0.6 voxel).
+    size_t at = r.err.find("narrow band: mean");
+    ASSERT_NE(at, std::string::npos);
+    float mean, p99, max;
+    ASSERT_EQ(
+        std::sscanf(r.err.c_str() + at, "narrow band: mean %f, p99 %f, max %f", &mean, &p99, &max),
+        3);
+    EXPECT_LT(max, 0.6f);
+}
+
 TEST(MeshCli, BadMeshInputFailsClearly) {
     TempDir dir;
     std::string garbage = dir.write("garbage.stl", "not a mesh");
@@ -39,8 +60,10 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
         {"bake " + garbage + " -o " + dir.file("x.sdfg"), "cannot read mesh"},
         {"bake " + flat + " -o " + dir.file("x.sdfg"), "no (non-degenerate) triangles"},
         {"bake " + dir.file("missing.obj") + " -o " + dir.file("x.sdfg"), "cannot open"},
-        {"bake " + mesh("bunny_npm.obj") + " --method jfa -o " + dir.file("x.sdfg"),
-         "accepted: exact"},
+        {"bake " + mesh("bunny_npm.obj") + " --method rtsdf -o " + dir.file("x.sdfg"),
+         "accepted: exact, jfa"},
+        {"bake " + mesh("bunny_npm.obj") + " --jfa-variant 3+jfa -o " + dir.file("x.sdfg"),
+         "--jfa-variant"},
         {"render -q " + garbage + " -o " + dir.file("x.png"), "cannot read mesh"},
     };
     for (const Case& c : cases) {
