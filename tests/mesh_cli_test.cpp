@@ -1,6 +1,8 @@
 // Meshes through the CLI: bake, render directly, and bad mesh input.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "cli_runner.h"
 
 namespace sdft::e2e {
@@ -48,6 +50,44 @@ TEST(MeshCli, JumpFloodingWithVerifyReportsItsErrorAgainstExact) {
         std::sscanf(r.err.c_str() + at, "narrow band: mean %f, p99 %f, max %f", &mean, &p99, &max),
         3);
     EXPECT_LT(max, 0.6f);
+}
+
+// Issue 4: meshes as scene objects, baked on load, rendered like any grid with the rest of a scene.
+TEST(MeshCli, MeshObjectsInSceneFilesAreBakedOnLoad) {
+    TempDir dir;
+    std::string scene =
+        dir.write("scene.json", R"({
+      "camera": {"eye": [0.3, 0.3, 0.5], "target": [0, 0.1, 0], "width": 64, "height": 48},
+      "lights": [{"type": "directional", "direction": [-1, -1, -1]}],
+      "materials": {"clay": {"color": [0.8, 0.5, 0.4]}},
+      "objects": [{"mesh": ")" + mesh("bunny_npm.obj") +
+                                    R"(", "resolution": 48, "method": "jfa", "material": "clay"},
+                  {"type": "plane", "normal": [0, 1, 0], "distance": 0.03}]})");
+    RunResult r = runCli(
+        "render -q " + scene + " -o " + dir.file("m.png") + " --aov depth=" + dir.file("d.pfm"),
+        dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    // The same scene without the mesh: the pixels the bunny covers change depth.
+    std::string floorOnly = dir.write("floor.json", R"({
+      "camera": {"eye": [0.3, 0.3, 0.5], "target": [0, 0.1, 0], "width": 64, "height": 48},
+      "objects": [{"type": "plane", "normal": [0, 1, 0], "distance": 0.03}]})");
+    ASSERT_EQ(runCli("render -q " + floorOnly + " -o " + dir.file("f.png") +
+                         " --aov depth=" + dir.file("f.pfm"),
+                     dir)
+                  .status,
+              0);
+    int w, h, ch;
+    std::vector<float> depth = readPfm(dir.file("d.pfm"), w, h, ch),
+                       floor = readPfm(dir.file("f.pfm"), w, h, ch);
+    int covered = 0;
+    for (size_t i = 0; i < depth.size(); ++i)
+        covered += std::isfinite(depth[i]) && !(std::fabs(depth[i] - floor[i]) < 1e-3f);
+    EXPECT_GT(covered, 200);
+    std::string bad = dir.write("bad.json", R"({"objects": [{"mesh": "missing.obj"}]})");
+    RunResult b = runCli("render -q " + bad + " -o " + dir.file("x.png"), dir);
+    EXPECT_NE(b.status, 0);
+    EXPECT_NE(b.err.find("/objects/0/mesh"), std::string::npos) << b.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
 }
 
 TEST(MeshCli, BadMeshInputFailsClearly) {

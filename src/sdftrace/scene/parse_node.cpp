@@ -4,8 +4,11 @@
 #include <filesystem>
 #include <vector>
 
+#include "sdftrace/bake/exact_bake.h"
+#include "sdftrace/bake/jump_flood.h"
 #include "sdftrace/field/noise.h"
 #include "sdftrace/io/grid_file.h"
+#include "sdftrace/io/mesh_file.h"
 
 namespace sdft {
 
@@ -134,6 +137,45 @@ std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx,
     }
 }
 
+// A mesh file (relative to the scene file) baked to a sparse grid on load; the same file with the
+// same options is baked once.
+std::shared_ptr<const Grid> bakeMeshObject(const Reader& r, NodeContext& ctx) {
+    std::string file = r.string("mesh");
+    std::filesystem::path path(file);
+    if (path.is_relative() && !ctx.baseDir.empty())
+        path = std::filesystem::path(ctx.baseDir) / path;
+    if (!isMeshFile(path.string())) {
+        r.failKey("mesh", "unsupported mesh file '" + file +
+                              "'; accepted: .obj, .ply, .stl, .off, .gltf, .glb");
+    }
+    SampleOptions o;
+    o.resolution = r.integer("resolution", 128, 8, 1024);
+    std::string method = r.string("method", "exact");
+    if (method != "exact" && method != "jfa")
+        r.failKey("method", "unknown method '" + method + "'; accepted: exact, jfa");
+    std::string key =
+        path.lexically_normal().string() + "|" + method + "|" + std::to_string(o.resolution);
+    auto it = ctx.grids.find(key);
+    if (it != ctx.grids.end()) return it->second;
+    try {
+        TriangleMesh mesh = loadMesh(path.string());
+        GridShape shape = gridShapeFor(mesh.bounds(), o);
+        std::vector<float> samples;
+        if (method == "exact") {
+            MeshBvh bvh(mesh);
+            samples = bakeExactSamples(bvh, shape, SignMethod::WindingNumber);
+        } else {
+            samples = bakeJumpFloodSamples(mesh, shape, JfaVariant::Plain);
+        }
+        auto grid = std::make_shared<const Grid>(
+            Grid::sparseFromDense(shape, samples, o.blockSize, o.bandVoxels));
+        ctx.grids[key] = grid;
+        return grid;
+    } catch (const InputError& e) {
+        r.failKey("mesh", e.what());
+    }
+}
+
 // The keys every object may carry: inline transforms, then the material.
 NodePtr finishNode(const Reader& r, NodePtr n, const NodeContext& mats) {
     n = applyInlineTransforms(r, n);
@@ -158,6 +200,11 @@ NodePtr parseNode(const Reader& r, NodeContext& mats) {
     if (!r.has("type") && r.has("grid")) {
         r.allowKeys({"grid", "material", "translate", "rotate", "scale"});
         return finishNode(r, node::grid(loadGridObject(r, mats, "grid")), mats);
+    }
+    // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact" | "jfa"}.
+    if (!r.has("type") && r.has("mesh")) {
+        r.allowKeys({"mesh", "resolution", "method", "material", "translate", "rotate", "scale"});
+        return finishNode(r, node::grid(bakeMeshObject(r, mats)), mats);
     }
     std::string type = r.string("type");
     const char* common[] = {"type", "material", "translate", "rotate", "scale"};
