@@ -103,8 +103,9 @@ void printVerify(const char* what, const std::vector<float>& baked, const std::v
 // A mesh file: exact (Embree closest points) or jump flooding (RTSDF §2.2), signed by the
 // winding number or ray parity; --verify compares with the exact bake.
 int bakeMesh(const BakeArgs& a) {
-    if (a.method != "exact" && a.method != "jfa") {
-        throw InputError("--method " + a.method + ": not implemented yet; accepted: exact, jfa");
+    if (a.method != "exact" && a.method != "jfa" && a.method != "danielsson") {
+        throw InputError("--method " + a.method +
+                         ": not implemented yet; accepted: exact, jfa, danielsson");
     }
     auto t0 = std::chrono::steady_clock::now();
     MeshReport report;
@@ -119,6 +120,8 @@ int bakeMesh(const BakeArgs& a) {
     if (a.method == "exact" || a.verify) bvh = std::make_unique<MeshBvh>(mesh);
     if (a.method == "exact") {
         samples = bakeExactSamples(*bvh, shape, sign, a.threads);
+    } else if (a.method == "danielsson") {
+        samples = bakeDanielssonSamples(mesh, shape, a.threads);
     } else {
         JfaVariant v = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
                        : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
@@ -208,8 +211,8 @@ void addBakeCommand(CLI::App& app, Action& action) {
                     "Output grid (.sdfg or .vdb, docs/file-formats.md)")
         ->required();
     cmd->add_option("--method", args->method,
-                    "Meshes: exact (closest points through an Embree BVH) or jfa (jump flooding, "
-                    "RTSDF §2.2)")
+                    "Meshes: exact (closest points through an Embree BVH), jfa (jump flooding, "
+                    "RTSDF §2.2) or danielsson (two-pass vector distance transform, Liktor §3.2)")
         ->capture_default_str();
     cmd->add_option("--jfa-variant", args->jfaVariant, "Jump flooding: plain, 1+jfa or jfa+2")
         ->check(CLI::IsMember({"plain", "1+jfa", "jfa+2"}))

@@ -24,4 +24,20 @@ std::vector<float> bakeJumpFloodSamples(const TriangleMesh& mesh, const GridShap
                                         JfaVariant variant, int threads = 0,
                                         JfaStats* stats = nullptr);
 
+// The conservative voxelization both propagation methods start from: every vertex within half a
+// cell diagonal of a triangle holds its closest point on the nearest such triangle; others hold
+// kNoSeed in x.
+constexpr float kNoSeed = 1e30f;
+std::vector<Vec3> seedClosestPoints(const TriangleMesh& mesh, const GridShape& shape);
+
+// Signed distances from propagated seed points (kNoSeed: unreached), signed by the winding number.
+std::vector<float> signedFromSeeds(const TriangleMesh& mesh, const GridShape& shape,
+                                   const std::vector<Vec3>& seeds, int threads);
+
+// Liktor 2008, §3.2: Danielsson's vector distance transform in 3D: a forward raster sweep in which
+// each vertex adopts the nearest seed point among its 13 already-visited neighbours, then the same
+// sweep backward over the other 13. Two passes, linear time; "approximately right" distances.
+std::vector<float> bakeDanielssonSamples(const TriangleMesh& mesh, const GridShape& shape,
+                                         int threads = 0);
+
 }  // namespace sdft

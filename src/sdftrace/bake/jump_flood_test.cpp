@@ -38,5 +38,33 @@ TEST(JumpFlood, StaysWithinAFractionOfAVoxelOfTheExactDistance) {
     }
 }
 
+// Liktor §3.2: Danielsson's two-pass transform from the same seeds; less accurate than jump
+// flooding far from the surface, like it near it.
+TEST(Danielsson, StaysWithinAVoxelOfTheExactDistance) {
+    for (const char* name : {"bunny_npm.obj", "elephant-with-holes.obj"}) {
+        TriangleMesh mesh = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name);
+        SampleOptions o;
+        o.resolution = 48;
+        o.kind = GridKind::Dense;
+        GridShape shape = gridShapeFor(mesh.bounds(), o);
+        MeshBvh bvh(mesh);
+        std::vector<float> exact = bakeExactSamples(bvh, shape, SignMethod::WindingNumber);
+        std::vector<float> dan = bakeDanielssonSamples(mesh, shape);
+        double sum = 0, worst = 0, worstBand = 0;
+        for (size_t i = 0; i < dan.size(); ++i) {
+            ASSERT_GE(std::fabs(dan[i]), std::fabs(exact[i]) - 1e-5f) << name;
+            ASSERT_EQ(dan[i] < 0, exact[i] < 0) << name;
+            double e = (std::fabs(dan[i]) - std::fabs(exact[i])) / shape.voxelSize;
+            sum += e;
+            worst = std::max(worst, e);
+            if (std::fabs(exact[i]) < 3 * shape.voxelSize) worstBand = std::max(worstBand, e);
+        }
+        // Measured on the bunny at 96 cells: mean 0.036, max 1.05 voxel; 0.28 in the band.
+        EXPECT_LT(sum / dan.size(), 0.08) << name;
+        EXPECT_LT(worst, 1.6) << name;
+        EXPECT_LT(worstBand, 0.6) << name;
+    }
+}
+
 }  // namespace
 }  // namespace sdft
