@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -69,6 +70,14 @@ inline std::vector<float> readPfm(const std::string& path, int& w, int& h, int& 
                     data.data() + offset + static_cast<size_t>(y) * w * channels * 4,
                     w * channels * 4);
     return out;
+}
+
+// Whether interior pixel i of a depth image (width w) has a 4-neighbour with the other hit/miss
+// state.
+inline bool onSilhouette(const std::vector<float>& depth, int w, int i) {
+    for (int d : {-1, 1, -w, w})
+        if (std::isfinite(depth[i]) != std::isfinite(depth[i + d])) return true;
+    return false;
 }
 
 inline RunResult runCli(const std::string& args, const TempDir& dir) {

@@ -75,10 +75,7 @@ TEST(GridCli, SampledGridRendersLikeTheAnalyticScene) {
         for (int y = 1; y < h - 1; ++y)
             for (int x = 1; x < w - 1; ++x) {
                 int i = y * w + x;
-                bool silhouette = false;
-                for (int d : {-1, 1, -w, w})
-                    silhouette |= std::isfinite(a[i]) != std::isfinite(a[i + d]);
-                if (silhouette) continue;
+                if (onSilhouette(a, w, i)) continue;
                 if (std::isfinite(a[i]) != std::isfinite(b[i])) {
                     ++mismatched;
                     continue;
@@ -130,10 +127,7 @@ TEST(GridCli, DdaRendersLikeSphereTracingAndItsAccelerationsChangeNothing) {
     for (int y = 1; y < h - 1; ++y)
         for (int x = 1; x < w - 1; ++x) {
             int i = y * w + x;
-            bool silhouette = false;
-            for (int d : {-1, 1, -w, w})
-                silhouette |= std::isfinite(b[i]) != std::isfinite(b[i + d]);
-            if (silhouette) continue;
+            if (onSilhouette(b, w, i)) continue;
             if (std::isfinite(a[i]) != std::isfinite(b[i])) {
                 ++mismatched;
                 continue;

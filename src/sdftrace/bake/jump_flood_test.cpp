@@ -10,15 +10,31 @@
 namespace sdft {
 namespace {
 
+// A shipped mesh, a dense 48-cell grid over it and the exact bake the methods are measured against.
+struct Reference {
+    TriangleMesh mesh;
+    GridShape shape;
+    std::vector<float> exact;
+};
+
+Reference reference(const char* name) {
+    Reference r;
+    r.mesh = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name);
+    SampleOptions o;
+    o.resolution = 48;
+    o.kind = GridKind::Dense;
+    r.shape = gridShapeFor(r.mesh.bounds(), o);
+    MeshBvh bvh(r.mesh);
+    r.exact = bakeExactSamples(bvh, r.shape, SignMethod::WindingNumber);
+    return r;
+}
+
 TEST(JumpFlood, StaysWithinAFractionOfAVoxelOfTheExactDistance) {
     for (const char* name : {"bunny_npm.obj", "elephant-with-holes.obj"}) {
-        TriangleMesh mesh = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name);
-        SampleOptions o;
-        o.resolution = 48;
-        o.kind = GridKind::Dense;
-        GridShape shape = gridShapeFor(mesh.bounds(), o);
-        MeshBvh bvh(mesh);
-        std::vector<float> exact = bakeExactSamples(bvh, shape, SignMethod::WindingNumber);
+        Reference ref = reference(name);
+        const TriangleMesh& mesh = ref.mesh;
+        const GridShape& shape = ref.shape;
+        const std::vector<float>& exact = ref.exact;
         for (JfaVariant v : {JfaVariant::Plain, JfaVariant::OnePlusJfa, JfaVariant::JfaPlusTwo}) {
             JfaStats stats;
             std::vector<float> jfa = bakeJumpFloodSamples(mesh, shape, v, 0, &stats);
@@ -42,13 +58,10 @@ TEST(JumpFlood, StaysWithinAFractionOfAVoxelOfTheExactDistance) {
 // flooding far from the surface, like it near it.
 TEST(Danielsson, StaysWithinAVoxelOfTheExactDistance) {
     for (const char* name : {"bunny_npm.obj", "elephant-with-holes.obj"}) {
-        TriangleMesh mesh = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name);
-        SampleOptions o;
-        o.resolution = 48;
-        o.kind = GridKind::Dense;
-        GridShape shape = gridShapeFor(mesh.bounds(), o);
-        MeshBvh bvh(mesh);
-        std::vector<float> exact = bakeExactSamples(bvh, shape, SignMethod::WindingNumber);
+        Reference ref = reference(name);
+        const TriangleMesh& mesh = ref.mesh;
+        const GridShape& shape = ref.shape;
+        const std::vector<float>& exact = ref.exact;
         std::vector<float> dan = bakeDanielssonSamples(mesh, shape);
         double sum = 0, worst = 0, worstBand = 0;
         for (size_t i = 0; i < dan.size(); ++i) {

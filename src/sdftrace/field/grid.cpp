@@ -122,20 +122,29 @@ GridView Grid::view() const {
     return v;
 }
 
-Bounds3 Grid::surfaceBounds() const {
-    GridView v = view();
-    Bounds3 b;
-    const float h = m_shape.voxelSize;
-    for (int k = 0; k < m_shape.cells[2]; ++k)
-        for (int j = 0; j < m_shape.cells[1]; ++j)
-            for (int i = 0; i < m_shape.cells[0]; ++i) {
+namespace {
+// Calls f(i, j, k, corners) for every cell of the grid, x fastest.
+template <class F>
+void forEachCell(const GridView& v, F&& f) {
+    for (int k = 0; k < v.shape.cells[2]; ++k)
+        for (int j = 0; j < v.shape.cells[1]; ++j)
+            for (int i = 0; i < v.shape.cells[0]; ++i) {
                 float c[8];
                 v.cellCorners(i, j, k, c);
-                if (!cornersChangeSign(c)) continue;
-                Vec3 lo = m_shape.origin + Vec3(i, j, k) * h;
-                b.include(lo);
-                b.include(lo + Vec3(h));
+                f(i, j, k, c);
             }
+}
+}  // namespace
+
+Bounds3 Grid::surfaceBounds() const {
+    Bounds3 b;
+    const float h = m_shape.voxelSize;
+    forEachCell(view(), [&](int i, int j, int k, const float c[8]) {
+        if (!cornersChangeSign(c)) return;
+        Vec3 lo = m_shape.origin + Vec3(i, j, k) * h;
+        b.include(lo);
+        b.include(lo + Vec3(h));
+    });
     return b;
 }
 
@@ -161,33 +170,16 @@ void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
 // differ (the cell contains the surface). Recomputed whenever the block's samples change.
 void Grid::computeCellMasks() {
     const int B = m_blockSize;
-    GridView v = view();
-    const int words = v.wordsPerMask();
+    const int words = (B * B * B + 63) / 64;
     size_t surfaceBlocks = m_blockSamples.size() / (static_cast<size_t>(B + 1) * (B + 1) * (B + 1));
     m_cellMasks.assign(surfaceBlocks * words, 0);
-    v = view();
-    for (int bk = 0; bk < m_blocks[2]; ++bk)
-        for (int bj = 0; bj < m_blocks[1]; ++bj)
-            for (int bi = 0; bi < m_blocks[0]; ++bi) {
-                size_t block = (static_cast<size_t>(bk) * m_blocks[1] + bj) * m_blocks[0] + bi;
-                int32_t data = m_blockData[block];
-                if (data < 0) continue;
-                for (int k = 0; k < B; ++k)
-                    for (int j = 0; j < B; ++j)
-                        for (int i = 0; i < B; ++i) {
-                            int ci = bi * B + i, cj = bj * B + j, ck = bk * B + k;
-                            if (ci >= m_shape.cells[0] || cj >= m_shape.cells[1] ||
-                                ck >= m_shape.cells[2])
-                                continue;
-                            float c[8];
-                            v.cellCorners(ci, cj, ck, c);
-                            if (cornersChangeSign(c)) {
-                                int bit = (k * B + j) * B + i;
-                                m_cellMasks[static_cast<size_t>(data) * words + bit / 64] |=
-                                    uint64_t{1} << (bit % 64);
-                            }
-                        }
-            }
+    forEachCell(view(), [&](int i, int j, int k, const float c[8]) {
+        size_t block = (static_cast<size_t>(k / B) * m_blocks[1] + j / B) * m_blocks[0] + i / B;
+        int32_t data = m_blockData[block];
+        if (data < 0 || !cornersChangeSign(c)) return;
+        int bit = ((k % B) * B + j % B) * B + i % B;
+        m_cellMasks[static_cast<size_t>(data) * words + bit / 64] |= uint64_t{1} << (bit % 64);
+    });
 }
 
 // The trilinear interpolant's derivative along x inside a cell is a bilinear blend of the cell's 4
@@ -195,23 +187,17 @@ void Grid::computeCellMasks() {
 // over cells of the norm of these per-axis maxima bounds the gradient everywhere (the interpolant
 // is continuous across faces within a block).
 void Grid::computeLipschitz() {
-    GridView v = view();
-    v.lipschitz = 1;
     float worst = 0;
     const float h = m_shape.voxelSize;
-    for (int k = 0; k < m_shape.cells[2]; ++k)
-        for (int j = 0; j < m_shape.cells[1]; ++j)
-            for (int i = 0; i < m_shape.cells[0]; ++i) {
-                float c[8];
-                v.cellCorners(i, j, k, c);
-                float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]),
-                                     std::fabs(c[5] - c[4]), std::fabs(c[7] - c[6])});
-                float gy = std::max({std::fabs(c[2] - c[0]), std::fabs(c[3] - c[1]),
-                                     std::fabs(c[6] - c[4]), std::fabs(c[7] - c[5])});
-                float gz = std::max({std::fabs(c[4] - c[0]), std::fabs(c[5] - c[1]),
-                                     std::fabs(c[6] - c[2]), std::fabs(c[7] - c[3])});
-                worst = std::max(worst, std::sqrt(gx * gx + gy * gy + gz * gz) / h);
-            }
+    forEachCell(view(), [&](int, int, int, const float c[8]) {
+        float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]), std::fabs(c[5] - c[4]),
+                             std::fabs(c[7] - c[6])});
+        float gy = std::max({std::fabs(c[2] - c[0]), std::fabs(c[3] - c[1]), std::fabs(c[6] - c[4]),
+                             std::fabs(c[7] - c[5])});
+        float gz = std::max({std::fabs(c[4] - c[0]), std::fabs(c[5] - c[1]), std::fabs(c[6] - c[2]),
+                             std::fabs(c[7] - c[3])});
+        worst = std::max(worst, std::sqrt(gx * gx + gy * gy + gz * gz) / h);
+    });
     // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
     m_lipschitz = std::max(1.0f, worst);
 }

@@ -21,10 +21,6 @@ Sampled sampleTorusAndBox(int resolution, int blockSize) {
     NodePtr n = node::unite(
         {node::torus(0.8f, 0.25f), node::translate(node::box({0.5f, 0.6f, 0.5f}), {0, 0.2f, 0})});
     Tape tape = compileTape(n, {.boundsCulling = false});
-    SampleOptions o;
-    o.resolution = resolution;
-    o.kind = GridKind::Dense;
-    o.bandVoxels = 3;
     Bounds3 region = nodeBounds(*n);
     GridShape shape = gridShapeFor(region, SampleOptions{.resolution = resolution,
                                                          .kind = GridKind::Sparse,

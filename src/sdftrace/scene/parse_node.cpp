@@ -116,13 +116,19 @@ NodePtr parseBlobs(const Reader& r) {
     return node::blobs(blobs, threshold);
 }
 
+// A path from the scene file, relative to its directory unless absolute.
+std::filesystem::path resolvePath(const NodeContext& ctx, const std::string& file) {
+    std::filesystem::path path(file);
+    if (path.is_relative() && !ctx.baseDir.empty())
+        path = std::filesystem::path(ctx.baseDir) / path;
+    return path;
+}
+
 // A grid file, relative to the scene file's directory; its errors carry the JSON path too.
 std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx,
                                            const char* jsonKey = "file") {
     std::string file = r.string(jsonKey);
-    std::filesystem::path path(file);
-    if (path.is_relative() && !ctx.baseDir.empty())
-        path = std::filesystem::path(ctx.baseDir) / path;
+    std::filesystem::path path = resolvePath(ctx, file);
     std::string key = path.lexically_normal().string();
     auto it = ctx.grids.find(key);
     if (it != ctx.grids.end()) return it->second;
@@ -141,9 +147,7 @@ std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx,
 // same options is baked once.
 std::shared_ptr<const Grid> bakeMeshObject(const Reader& r, NodeContext& ctx) {
     std::string file = r.string("mesh");
-    std::filesystem::path path(file);
-    if (path.is_relative() && !ctx.baseDir.empty())
-        path = std::filesystem::path(ctx.baseDir) / path;
+    std::filesystem::path path = resolvePath(ctx, file);
     if (!isMeshFile(path.string())) {
         r.failKey("mesh", "unsupported mesh file '" + file +
                               "'; accepted: .obj, .ply, .stl, .off, .gltf, .glb");
