@@ -74,6 +74,8 @@ class Grid {
     static Grid dense(const GridShape& shape, std::vector<float> samples);
     // A sparse block grid from dense samples: blocks whose samples are all farther than `band`
     // voxels from the surface (and have no sign change) are flagged inside/outside and dropped.
+    // Stored samples are clamped to +-band voxels (as in a narrow-band level set): still a
+    // 1-Lipschitz lower bound of the distance, and exact in the band.
     static Grid sparseFromDense(const GridShape& shape, const std::vector<float>& samples,
                                 int blockSize, float bandVoxels);
 

@@ -1,5 +1,8 @@
 #include "sdftrace/field/grid.h"
 
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -50,6 +53,8 @@ Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& sam
                     for (int j = 0; j < V; ++j)
                         for (int i = 0; i < V; ++i) {
                             float v = dense.vertex(bi * B + i, bj * B + j, bk * B + k);
+                            // Clamped to the band, as a narrow-band level set stores them.
+                            v = v < 0 ? -std::fmin(-v, band) : std::fmin(v, band);
                             local[(static_cast<size_t>(k) * V + j) * V + i] = v;
                             anyNeg |= v < 0;
                             anyPos |= v >= 0;
@@ -124,26 +129,56 @@ GridView Grid::view() const {
 
 namespace {
 // Calls f(i, j, k, corners) for every cell of the grid, x fastest.
+// Calls f(i, j, k, corners) for every cell that can hold a sign change or a slope: all cells of a
+// dense grid, the cells of a sparse grid's surface blocks (the others are constant). In parallel,
+// each task a z slab (dense) or a block (sparse), so per-block writes never race.
 template <class F>
 void forEachCell(const GridView& v, F&& f) {
-    for (int k = 0; k < v.shape.cells[2]; ++k)
-        for (int j = 0; j < v.shape.cells[1]; ++j)
-            for (int i = 0; i < v.shape.cells[0]; ++i) {
-                float c[8];
-                v.cellCorners(i, j, k, c);
-                f(i, j, k, c);
-            }
+    if (v.kind == GridKind::Dense) {
+        tbb::parallel_for(0, v.shape.cells[2], [&](int k) {
+            for (int j = 0; j < v.shape.cells[1]; ++j)
+                for (int i = 0; i < v.shape.cells[0]; ++i) {
+                    float c[8];
+                    v.cellCorners(i, j, k, c);
+                    f(i, j, k, c);
+                }
+        });
+        return;
+    }
+    const int B = v.blockSize;
+    const size_t blocks = static_cast<size_t>(v.blocks[0]) * v.blocks[1] * v.blocks[2];
+    tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+        if (v.blockData[b] < 0) return;
+        int bi = static_cast<int>(b % v.blocks[0]),
+            bj = static_cast<int>((b / v.blocks[0]) % v.blocks[1]),
+            bk = static_cast<int>(b / (static_cast<size_t>(v.blocks[0]) * v.blocks[1]));
+        for (int k = bk * B; k < std::min(bk * B + B, v.shape.cells[2]); ++k)
+            for (int j = bj * B; j < std::min(bj * B + B, v.shape.cells[1]); ++j)
+                for (int i = bi * B; i < std::min(bi * B + B, v.shape.cells[0]); ++i) {
+                    float c[8];
+                    v.cellCorners(i, j, k, c);
+                    f(i, j, k, c);
+                }
+    });
 }
 }  // namespace
 
 Bounds3 Grid::surfaceBounds() const {
-    Bounds3 b;
+    tbb::combinable<Bounds3> perThread;
     const float h = m_shape.voxelSize;
     forEachCell(view(), [&](int i, int j, int k, const float c[8]) {
         if (!cornersChangeSign(c)) return;
         Vec3 lo = m_shape.origin + Vec3(i, j, k) * h;
+        Bounds3& b = perThread.local();
         b.include(lo);
         b.include(lo + Vec3(h));
+    });
+    Bounds3 b;
+    perThread.combine_each([&](const Bounds3& t) {
+        if (!t.empty()) {
+            b.include(t.lo);
+            b.include(t.hi);
+        }
     });
     return b;
 }
@@ -187,9 +222,10 @@ void Grid::computeCellMasks() {
 // over cells of the norm of these per-axis maxima bounds the gradient everywhere (the interpolant
 // is continuous across faces within a block).
 void Grid::computeLipschitz() {
-    float worst = 0;
+    tbb::combinable<float> worstPerThread([] { return 0.0f; });
     const float h = m_shape.voxelSize;
     forEachCell(view(), [&](int, int, int, const float c[8]) {
+        float& worst = worstPerThread.local();
         float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]), std::fabs(c[5] - c[4]),
                              std::fabs(c[7] - c[6])});
         float gy = std::max({std::fabs(c[2] - c[0]), std::fabs(c[3] - c[1]), std::fabs(c[6] - c[4]),
@@ -198,6 +234,7 @@ void Grid::computeLipschitz() {
                              std::fabs(c[7] - c[3])});
         worst = std::max(worst, std::sqrt(gx * gx + gy * gy + gz * gz) / h);
     });
+    float worst = worstPerThread.combine([](float a, float b) { return std::max(a, b); });
     // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
     m_lipschitz = std::max(1.0f, worst);
 }
