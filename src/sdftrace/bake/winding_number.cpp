@@ -31,11 +31,45 @@ double triangleSolidAngle(Vec3 p, Vec3 va, Vec3 vb, Vec3 vc) {
     return 2.0 * std::atan2(num, den);
 }
 
+namespace {
+
+// atan2 to about 1e-5 rad (a minimax polynomial for atan on [0, 1] and octant reduction): the
+// winding number only has to be right about which side of 1/2 it lies.
+inline float fastAtan2(float y, float x) {
+    float ax = std::fabs(x), ay = std::fabs(y);
+    float hi = std::fmax(ax, ay), lo = std::fmin(ax, ay);
+    if (hi == 0) return 0;
+    float a = lo / hi, s = a * a;
+    float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
+    if (ay > ax) r = 1.57079637f - r;
+    if (x < 0) r = 3.14159274f - r;
+    return y < 0 ? -r : r;
+}
+
+// The solid angle of Van Oosterom & Strackee in float, for the hierarchical sum's leaves.
+inline float solidAngleFloat(Vec3 p, const float* t) {
+    Vec3 a(t[0] - p.x, t[1] - p.y, t[2] - p.z), b(t[3] - p.x, t[4] - p.y, t[5] - p.z),
+        c(t[6] - p.x, t[7] - p.y, t[8] - p.z);
+    float la = length(a), lb = length(b), lc = length(c);
+    float num = dot(a, cross(b, c));
+    float den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+    return 2.0f * fastAtan2(num, den);
+}
+
+}  // namespace
+
 WindingNumber::WindingNumber(const TriangleMesh& mesh, double beta) : m_mesh(mesh), m_beta(beta) {
     m_order.resize(mesh.triangles.size());
     std::iota(m_order.begin(), m_order.end(), 0);
     m_nodes.reserve(2 * mesh.triangles.size() / kLeafSize + 2);
     if (!mesh.triangles.empty()) build(0, static_cast<int>(mesh.triangles.size()));
+    // Leaves read their triangles' corners from one contiguous array, in tree order.
+    m_corners.reserve(9 * m_order.size());
+    for (int t : m_order)
+        for (uint32_t v : mesh.triangles[t]) {
+            Vec3 q = mesh.positions[v];
+            m_corners.insert(m_corners.end(), {q.x, q.y, q.z});
+        }
 }
 
 int WindingNumber::build(int first, int count) {
@@ -99,7 +133,13 @@ double WindingNumber::exact(Vec3 p) const {
     return sum / kFourPi;
 }
 
-double WindingNumber::fast(Vec3 p) const {
+bool WindingNumber::inside(Vec3 p) const {
+    double coarse = fast(p, 1.5);
+    if (std::fabs(coarse - 0.5) > 0.3) return coarse > 0.5;
+    return fast(p) > 0.5;
+}
+
+double WindingNumber::fast(Vec3 p, double beta) const {
     if (m_nodes.empty()) return 0;
     double sum = 0;
     int stack[128];
@@ -109,15 +149,14 @@ double WindingNumber::fast(Vec3 p) const {
         const Node& n = m_nodes[stack[--top]];
         double dx = n.cx - p.x, dy = n.cy - p.y, dz = n.cz - p.z;
         double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 > m_beta * m_beta * n.radius * n.radius) {
+        if (d2 > beta * beta * n.radius * n.radius) {
             // Far: the dipole term, Omega ~ (c - p).N / |c - p|^3 (Barill et al. 2018, eq. 8).
             sum += (dx * n.nx + dy * n.ny + dz * n.nz) / (d2 * std::sqrt(d2));
         } else if (n.left < 0) {
-            for (int i = n.first; i < n.first + n.count; ++i) {
-                const auto& t = m_mesh.triangles[m_order[i]];
-                sum += triangleSolidAngle(p, m_mesh.positions[t[0]], m_mesh.positions[t[1]],
-                                          m_mesh.positions[t[2]]);
-            }
+            float leaf = 0;
+            for (int i = n.first; i < n.first + n.count; ++i)
+                leaf += solidAngleFloat(p, m_corners.data() + 9 * static_cast<size_t>(i));
+            sum += leaf;
         } else {
             stack[top++] = n.left;
             stack[top++] = n.right;

@@ -49,5 +49,27 @@ TEST(WindingNumber, HierarchicalMatchesTheExactSumAndItsSign) {
     }
 }
 
+// inside() first asks a coarse beta (1.5) and takes its answer when clear of 1/2 by 0.3; it must
+// agree with fast() > 1/2 everywhere, also near the surface and around holes.
+TEST(WindingNumber, TwoTierInsideAgreesWithTheFullEvaluation) {
+    for (const char* name : {"bunny_npm.obj", "elephant-with-holes.obj", "suzanne.obj"}) {
+        TriangleMesh mesh = load(name);
+        WindingNumber w(mesh);
+        Bounds3 b = mesh.bounds().expanded(0.05f * maxComponent(mesh.bounds().extent()));
+        const int n = 40;
+        int inside = 0;
+        for (int k = 0; k <= n; ++k)
+            for (int j = 0; j <= n; ++j)
+                for (int i = 0; i <= n; ++i) {
+                    Vec3 p = b.lo + b.extent() * Vec3(i, j, k) / static_cast<float>(n);
+                    bool full = w.fast(p) > 0.5;
+                    ASSERT_EQ(w.inside(p), full)
+                        << name << " at " << p.x << "," << p.y << "," << p.z;
+                    inside += full;
+                }
+        EXPECT_GT(inside, 500) << name;
+    }
+}
+
 }  // namespace
 }  // namespace sdft
