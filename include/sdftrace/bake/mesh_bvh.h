@@ -2,6 +2,7 @@
 // inside/outside by crossing parity.
 #pragma once
 
+#include <cmath>
 #include <memory>
 
 #include "sdftrace/io/mesh_io.h"
@@ -15,8 +16,26 @@ class MeshBvh {
     MeshBvh(const MeshBvh&) = delete;
     MeshBvh& operator=(const MeshBvh&) = delete;
 
-    // Distance from p to the nearest point of the mesh (exact up to float rounding).
-    float closestDistance(Vec3 p) const;
+    // Distance from p to the nearest point of the mesh (exact up to float rounding), searching
+    // only within `radius`: +infinity when nothing is that close. A tight radius (a neighbour's
+    // distance plus their spacing, by the 1-Lipschitz property) prunes most of the traversal.
+    float closestDistance(Vec3 p, float radius = INFINITY) const {
+        return closest(p, radius).distance;
+    }
+    struct Closest {
+        float distance = INFINITY;
+        Vec3 point;
+    };
+    // The nearest point itself (distance +infinity when none is within `radius`).
+    Closest closest(Vec3 p, float radius = INFINITY) const;
+    // The first hit of the ray r(t), t > 0: t (+infinity on a miss) and whether it struck the
+    // front of the triangle (against its counter-clockwise normal).
+    struct Hit {
+        float t = INFINITY;
+        bool front = false;
+    };
+    // tnear < 0 also reports hits just behind the origin (origins on the surface).
+    Hit firstHit(const Ray& ray, float tnear = 0) const;
     // Surface crossings of the ray r(t), t > 0.
     int crossings(const Ray& ray) const;
     // Inside by crossing parity, the majority of three fixed, non-axis directions (robust to a ray

@@ -32,6 +32,10 @@ struct MeshReport {
     std::string summary() const;  // one line for stderr
 };
 
+// Every directed edge (a, b) is matched by as many (b, a): the mesh bounds closed regions, so its
+// winding number is an integer, constant between crossings of the surface.
+bool isWatertight(const TriangleMesh& mesh);
+
 TriangleMesh loadMesh(const std::string& path, MeshReport* report = nullptr);
 
 // The cleaning loadMesh applies, for meshes built in memory.

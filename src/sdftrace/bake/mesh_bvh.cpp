@@ -10,27 +10,55 @@
 
 namespace sdft {
 
+// A triangle's vertices and bounds side by side: the closest-point callback reads one cache line
+// pair, and rejects by the box before the exact test.
+struct PackedTriangle {
+    Vec3 a, b, c;
+    Vec3 lo, hi;
+};
+
 struct MeshBvh::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
+    std::vector<PackedTriangle> triangles;
 };
 
 namespace {
+
+RTCRayHit rayHit(Vec3 origin, Vec3 direction, float tnear) {
+    RTCRayHit rh;
+    rh.ray.org_x = origin.x;
+    rh.ray.org_y = origin.y;
+    rh.ray.org_z = origin.z;
+    rh.ray.dir_x = direction.x;
+    rh.ray.dir_y = direction.y;
+    rh.ray.dir_z = direction.z;
+    rh.ray.tnear = tnear;
+    rh.ray.tfar = INFINITY;
+    rh.ray.mask = 0xFFFFFFFF;
+    rh.ray.flags = 0;
+    rh.ray.time = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+}
+
 struct ClosestQuery {
-    const TriangleMesh* mesh;
-    float best;
+    const PackedTriangle* triangles;
+    MeshBvh::Closest best;
 };
 
 bool closestCallback(RTCPointQueryFunctionArguments* args) {
     auto* q = static_cast<ClosestQuery*>(args->userPtr);
-    const auto& t = q->mesh->triangles[args->primID];
+    const PackedTriangle& t = q->triangles[args->primID];
     Vec3 p(args->query->x, args->query->y, args->query->z);
-    Vec3 c = closestPointOnTriangle(p, q->mesh->positions[t[0]], q->mesh->positions[t[1]],
-                                    q->mesh->positions[t[2]]);
+    Vec3 out = max(max(t.lo - p, p - t.hi), Vec3(0.0f));
+    float r = args->query->radius;
+    if (dot(out, out) > r * r) return false;
+    Vec3 c = closestPointOnTriangle(p, t.a, t.b, t.c);
     float d = length(p - c);
-    if (d < args->query->radius) {
+    if (d <= args->query->radius) {
         args->query->radius = d;  // shrink the search
-        q->best = d;
+        q->best = {d, c};
         return true;
     }
     return false;
@@ -55,6 +83,10 @@ MeshBvh::MeshBvh(const TriangleMesh& mesh) : m_impl(std::make_unique<Impl>()), m
         rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                 3 * sizeof(unsigned), mesh.triangles.size()));
     std::memcpy(ib, mesh.triangles.data(), mesh.triangles.size() * 3 * sizeof(unsigned));
+    for (const auto& t : mesh.triangles) {
+        Vec3 a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
+        m_impl->triangles.push_back({a, b, c, min(a, min(b, c)), max(a, max(b, c))});
+    }
     rtcCommitGeometry(geom);
     rtcAttachGeometry(m_impl->scene, geom);
     rtcReleaseGeometry(geom);
@@ -66,18 +98,30 @@ MeshBvh::~MeshBvh() {
     if (m_impl->device) rtcReleaseDevice(m_impl->device);
 }
 
-float MeshBvh::closestDistance(Vec3 p) const {
+MeshBvh::Closest MeshBvh::closest(Vec3 p, float radius) const {
     RTCPointQuery q;
     q.x = p.x;
     q.y = p.y;
     q.z = p.z;
     q.time = 0;
-    q.radius = INFINITY;
+    q.radius = radius;
     RTCPointQueryContext ctx;
     rtcInitPointQueryContext(&ctx);
-    ClosestQuery data{&m_mesh, INFINITY};
+    ClosestQuery data{m_impl->triangles.data(), {}};
     rtcPointQuery(m_impl->scene, &q, &ctx, closestCallback, &data);
     return data.best;
+}
+
+MeshBvh::Hit MeshBvh::firstHit(const Ray& ray, float tnear) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    // Embree wants tnear >= 0: start from the origin moved back by -tnear instead.
+    float back = std::fmin(tnear, 0.0f);
+    RTCRayHit rh = rayHit(ray.origin + ray.direction * back, ray.direction, std::fmax(tnear, 0.0f));
+    rtcIntersect1(m_impl->scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
+    const PackedTriangle& t = m_impl->triangles[rh.hit.primID];
+    return {rh.ray.tfar + back, dot(ray.direction, cross(t.b - t.a, t.c - t.a)) < 0};
 }
 
 int MeshBvh::crossings(const Ray& ray) const {
@@ -86,19 +130,7 @@ int MeshBvh::crossings(const Ray& ray) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     for (int guard = 0; guard < 100000; ++guard) {
-        RTCRayHit rh;
-        rh.ray.org_x = ray.origin.x;
-        rh.ray.org_y = ray.origin.y;
-        rh.ray.org_z = ray.origin.z;
-        rh.ray.dir_x = ray.direction.x;
-        rh.ray.dir_y = ray.direction.y;
-        rh.ray.dir_z = ray.direction.z;
-        rh.ray.tnear = tnear;
-        rh.ray.tfar = INFINITY;
-        rh.ray.mask = 0xFFFFFFFF;
-        rh.ray.flags = 0;
-        rh.ray.time = 0;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        RTCRayHit rh = rayHit(ray.origin, ray.direction, tnear);
         rtcIntersect1(m_impl->scene, &ctx, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
         ++count;

@@ -118,6 +118,18 @@ TriangleMesh cleanMesh(const std::vector<Vec3>& positions,
     return mesh;
 }
 
+bool isWatertight(const TriangleMesh& mesh) {
+    std::vector<std::pair<uint32_t, uint32_t>> forward, backward;
+    for (const auto& t : mesh.triangles)
+        for (int e = 0; e < 3; ++e) {
+            forward.emplace_back(t[e], t[(e + 1) % 3]);
+            backward.emplace_back(t[(e + 1) % 3], t[e]);
+        }
+    std::sort(forward.begin(), forward.end());
+    std::sort(backward.begin(), backward.end());
+    return forward == backward;
+}
+
 TriangleMesh loadMesh(const std::string& path, MeshReport* report) {
     if (!std::filesystem::exists(path))
         throw InputError(path + ": cannot open mesh file (does it exist?)");
