@@ -19,7 +19,8 @@ TEST(MeshCli, BakesAClosedMeshExactlyAndRendersIt) {
     ASSERT_EQ(bake.status, 0) << bake.err;
     EXPECT_NE(bake.err.find("0 boundary edges"), std::string::npos)
         << bake.err;  // the cleaning report
-    EXPECT_NE(bake.err.find("exact bake"), std::string::npos) << bake.err;
+    for (const char* f : {"exact, 48x", "narrow band", "peak memory", "total"})
+        EXPECT_NE(bake.err.find(f), std::string::npos) << f << "\n" << bake.err;
     RunResult info = runCli("info " + dir.file("b.sdfg"), dir);
     ASSERT_EQ(info.status, 0);
     EXPECT_EQ(info.out.find("0 inside"), std::string::npos)
@@ -38,17 +39,19 @@ TEST(MeshCli, JumpFloodingWithVerifyReportsItsErrorAgainstExact) {
                    " --res 40 --method jfa --jfa-variant jfa+2 --verify -o " + dir.file("j.sdfg"),
                dir);
     ASSERT_EQ(r.status, 0) << r.err;
-    for (const char* f : {"jump flooding", "verify jfa, all samples: mean",
-                          "verify jfa, narrow band", "wrong sign"}) {
+    for (const char* f : {"jump flooding", "verify jfa, stored samples", "verify jfa, narrow band",
+                          "wrong sign", "8 passes (offset: time) 32:"}) {
         EXPECT_NE(r.err.find(f), std::string::npos) << f << "\n" << r.err;
     }
     // The reported maximum error stays under the unit test's bound (0.6 voxel).
-    size_t at = r.err.find("narrow band: mean");
+    size_t at = r.err.find("narrow band (");
     ASSERT_NE(at, std::string::npos);
     float mean, p99, max;
-    ASSERT_EQ(
-        std::sscanf(r.err.c_str() + at, "narrow band: mean %f, p99 %f, max %f", &mean, &p99, &max),
-        3);
+    int samples;
+    ASSERT_EQ(std::sscanf(r.err.c_str() + at, "narrow band (%d samples): mean %f, p99 %f, max %f",
+                          &samples, &mean, &p99, &max),
+              4);
+    EXPECT_GT(samples, 1000);
     EXPECT_LT(max, 0.6f);
 }
 
@@ -90,6 +93,32 @@ TEST(MeshCli, MeshObjectsInSceneFilesAreBakedOnLoad) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
 }
 
+// Every method through the CLI: the summary names its stages, and the grid it writes loads and
+// renders.
+TEST(MeshCli, EveryMethodBakesAndSummarizesItsStages) {
+    TempDir dir;
+    struct Case {
+        std::string args, stage;
+    } cases[] = {
+        {"--method exact --dense", "distances"},
+        {"--method jfa --sign flood", "signs (flood fill)"},
+        {"--method danielsson", "danielsson sweeps"},
+        {"--method edt --sign parity", "separable edt"},
+        {"--method rtsdf --rays 8 --mask 2", "rays"},
+    };
+    for (const Case& c : cases) {
+        RunResult r = runCli(
+            "bake " + mesh("teapot.obj") + " --res 32 " + c.args + " -o " + dir.file("t.sdfg"),
+            dir);
+        ASSERT_EQ(r.status, 0) << c.args << ": " << r.err;
+        EXPECT_NE(r.err.find(c.stage), std::string::npos) << c.args << ": " << r.err;
+        RunResult render = runCli(
+            "render -q --width 32 --height 24 " + dir.file("t.sdfg") + " -o " + dir.file("t.png"),
+            dir);
+        EXPECT_EQ(render.status, 0) << c.args << ": " << render.err;
+    }
+}
+
 TEST(MeshCli, BadMeshInputFailsClearly) {
     TempDir dir;
     std::string garbage = dir.write("garbage.stl", "not a mesh");
@@ -100,8 +129,12 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
         {"bake " + garbage + " -o " + dir.file("x.sdfg"), "cannot read mesh"},
         {"bake " + flat + " -o " + dir.file("x.sdfg"), "no (non-degenerate) triangles"},
         {"bake " + dir.file("missing.obj") + " -o " + dir.file("x.sdfg"), "cannot open"},
-        {"bake " + mesh("bunny_npm.obj") + " --method rtsdf -o " + dir.file("x.sdfg"),
-         "accepted: exact, jfa"},
+        {"bake " + mesh("bunny_npm.obj") + " --method sdfgen -o " + dir.file("x.sdfg"),
+         "accepted: exact, jfa, danielsson, edt, rtsdf"},
+        {"bake " + mesh("bunny_npm.obj") + " --sign flood -o " + dir.file("x.sdfg"),
+         "--sign flood: method exact accepts winding or parity"},
+        {"bake " + mesh("bunny_npm.obj") + " --method rtsdf --rays 0 -o " + dir.file("x.sdfg"),
+         "--rays"},
         {"bake " + mesh("bunny_npm.obj") + " --jfa-variant 3+jfa -o " + dir.file("x.sdfg"),
          "--jfa-variant"},
         {"render -q " + garbage + " -o " + dir.file("x.png"), "cannot read mesh"},

@@ -1,4 +1,5 @@
 // sdftrace bake scene.json --res N -o field.sdfg [--dense | --sparse] [--block 4|8] [--band W]
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -8,10 +9,12 @@
 #include <filesystem>
 #include <memory>
 #include <numeric>
+#include <optional>
 
 #include "commands.h"
 #include "sdftrace/bake/exact_bake.h"
-#include "sdftrace/bake/jump_flood.h"
+#include "sdftrace/bake/mesh_bake.h"
+#include "sdftrace/bake/verify_bake.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/io/atomic_file.h"
@@ -35,6 +38,9 @@ struct BakeArgs {
     std::string method = "exact";
     std::string sign = "winding";
     std::string jfaVariant = "plain";
+    float beta = 0.5f;
+    int rays = 64;
+    float mask = 3;
     bool verify = false;
     int threads = 0;
 };
@@ -76,78 +82,91 @@ SampleOptions sampleOptions(const BakeArgs& a) {
     return o;
 }
 
-// Mean, 99th percentile and maximum of |baked| - |exact| in voxels over `mask`, and wrong signs.
-void printVerify(const char* what, const std::vector<float>& baked, const std::vector<float>& exact,
-                 float voxel, float band) {
-    std::vector<double> all, near;
-    size_t wrong = 0;
-    for (size_t i = 0; i < baked.size(); ++i) {
-        double e = std::fabs(std::fabs(baked[i]) - std::fabs(exact[i])) / voxel;
-        all.push_back(e);
-        if (std::fabs(exact[i]) < band) near.push_back(e);
-        wrong += (baked[i] < 0) != (exact[i] < 0);
-    }
-    auto report = [&](const char* where, std::vector<double>& v) {
-        if (v.empty()) return;
-        std::sort(v.begin(), v.end());
-        double mean = std::accumulate(v.begin(), v.end(), 0.0) / v.size();
-        std::fprintf(stderr, "sdftrace bake: verify %s, %s: mean %.4f, p99 %.4f, max %.4f voxels\n",
-                     what, where, mean, v[v.size() * 99 / 100], v.back());
-    };
-    report("all samples", all);
-    report("narrow band", near);
-    std::fprintf(stderr, "sdftrace bake: verify %s: %.4f%% of samples with the wrong sign\n", what,
-                 100.0 * wrong / baked.size());
+double seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
 }
 
-// A mesh file: exact (Embree closest points) or jump flooding (RTSDF §2.2), signed by the
-// winding number or ray parity; --verify compares with the exact bake.
+double peakMemoryMiB() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss / 1024.0;  // KiB on Linux
+}
+
+void printVerify(const char* method, const BakeVerification& v) {
+    auto line = [&](const char* where, const BakeError& e) {
+        if (e.count == 0) return;
+        std::fprintf(stderr,
+                     "sdftrace bake: verify %s, %s (%zu samples): mean %.4f, p99 %.4f, max %.4f "
+                     "voxels\n",
+                     method, where, e.count, e.mean, e.p99, e.max);
+    };
+    line("stored samples", v.all);
+    line("narrow band", v.band);
+    std::fprintf(stderr, "sdftrace bake: verify %s: %.4f%% of %zu vertices with the wrong sign\n",
+                 method, 100.0 * v.wrongSignShare(), v.vertices);
+}
+
+// A mesh file, by any method of mesh_bake.h; --verify compares with the exact bake.
 int bakeMesh(const BakeArgs& a) {
-    if (a.method != "exact" && a.method != "jfa" && a.method != "danielsson") {
-        throw InputError("--method " + a.method +
-                         ": not implemented yet; accepted: exact, jfa, danielsson");
+    MeshBakeOptions o;
+    if (!parseMeshBakeMethod(a.method, o.method)) {
+        throw InputError("--method " + a.method + ": unknown; accepted: " + kMeshBakeMethods);
     }
+    o.sampling = sampleOptions(a);
+    o.sign = a.sign == "parity"  ? SignMethod::RayParity
+             : a.sign == "flood" ? SignMethod::FloodFill
+             : a.sign == "beta"  ? SignMethod::BetaShell
+                                 : SignMethod::WindingNumber;
+    o.jfaVariant = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
+                   : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
+                                             : JfaVariant::Plain;
+    o.betaVoxels = a.beta;
+    o.rtsdf.rays = a.rays;
+    o.rtsdf.maskVoxels = a.mask;
+    o.progress = true;
+    validateMeshBakeOptions(o);
     auto t0 = std::chrono::steady_clock::now();
     MeshReport report;
     TriangleMesh mesh = loadMesh(a.scene, &report);
     std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.scene.c_str(), report.summary().c_str());
     auto t1 = std::chrono::steady_clock::now();
-    SampleOptions o = sampleOptions(a);
-    GridShape shape = gridShapeFor(mesh.bounds(), o);
-    SignMethod sign = a.sign == "parity" ? SignMethod::RayParity : SignMethod::WindingNumber;
-    std::vector<float> samples;
-    std::unique_ptr<MeshBvh> bvh;
-    if (a.method == "exact" || a.verify) bvh = std::make_unique<MeshBvh>(mesh);
-    if (a.method == "exact") {
-        samples = bakeExactSamples(*bvh, shape, sign, a.threads);
-    } else if (a.method == "danielsson") {
-        samples = bakeDanielssonSamples(mesh, shape, a.threads);
-    } else {
-        JfaVariant v = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
-                       : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
-                                                 : JfaVariant::Plain;
-        JfaStats st;
-        samples = bakeJumpFloodSamples(mesh, shape, v, a.threads, &st);
-        std::fprintf(stderr, "sdftrace bake: jump flooding, %d passes, %.3f s\n", st.passes,
-                     st.seconds);
-    }
+    MeshBakeResult r = bakeMesh(mesh, o);
     auto t2 = std::chrono::steady_clock::now();
+    const GridShape& shape = r.grid.shape();
     if (a.verify) {
+        MeshBvh bvh(mesh);
         std::vector<float> exact =
-            bakeExactSamples(*bvh, shape, SignMethod::WindingNumber, a.threads);
-        printVerify(a.method.c_str(), samples, exact, shape.voxelSize, a.band * shape.voxelSize);
+            bakeExactSamples(bvh, shape, SignMethod::WindingNumber, a.threads, nullptr, true);
+        printVerify(a.method.c_str(), verifyBake(r.grid, exact, a.band));
     }
-    Grid grid = o.kind == GridKind::Dense
-                    ? Grid::dense(shape, std::move(samples))
-                    : Grid::sparseFromDense(shape, samples, o.blockSize, o.bandVoxels);
-    saveGridFile(grid, a.output);
-    std::fprintf(
-        stderr,
-        "sdftrace bake: %dx%dx%d cells (voxel %.4g), %s, %.2f MiB; load %.3f s, %s bake %.3f s\n",
-        shape.cells[0], shape.cells[1], shape.cells[2], shape.voxelSize,
-        grid.kind() == GridKind::Dense ? "dense" : "sparse", grid.memoryBytes() / 1048576.0,
-        std::chrono::duration<double>(t1 - t0).count(), a.method.c_str(),
-        std::chrono::duration<double>(t2 - t1).count());
+    auto t3 = std::chrono::steady_clock::now();
+    saveGridFile(r.grid, a.output);
+    auto t4 = std::chrono::steady_clock::now();
+    std::string stages = "load " + std::to_string(seconds(t0, t1)).substr(0, 5) + " s";
+    for (const BakeStage& st : r.stages) {
+        char one[96];
+        std::snprintf(one, sizeof one, ", %s %.3f s", st.name.c_str(), st.seconds);
+        stages += one;
+    }
+    char tail[96];
+    std::snprintf(tail, sizeof tail, ", write %.3f s; total %.3f s", seconds(t3, t4),
+                  seconds(t0, t4) - seconds(t2, t3));
+    stages += tail;
+    if (!r.details.empty())
+        std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.method.c_str(), r.details.c_str());
+    size_t in = 0, out = 0, surf = 0;
+    if (r.grid.kind() == GridKind::Sparse) r.grid.blockCounts(in, out, surf);
+    std::fprintf(stderr,
+                 "sdftrace bake: %s, %dx%dx%d cells (voxel %.4g), %s%s, grid %.2f MiB, peak "
+                 "memory %.0f MiB\nsdftrace bake: %s\n",
+                 a.method.c_str(), shape.cells[0], shape.cells[1], shape.cells[2], shape.voxelSize,
+                 r.grid.kind() == GridKind::Dense ? "dense" : "sparse",
+                 r.grid.kind() == GridKind::Sparse
+                     ? (" (" + std::to_string(surf) + " surface / " + std::to_string(in) +
+                        " inside / " + std::to_string(out) + " outside blocks)")
+                           .c_str()
+                     : "",
+                 r.grid.memoryBytes() / 1048576.0, peakMemoryMiB(), stages.c_str());
     return 0;
 }
 
@@ -212,7 +231,22 @@ void addBakeCommand(CLI::App& app, Action& action) {
         ->required();
     cmd->add_option("--method", args->method,
                     "Meshes: exact (closest points through an Embree BVH), jfa (jump flooding, "
-                    "RTSDF §2.2) or danielsson (two-pass vector distance transform, Liktor §3.2)")
+                    "RTSDF §2.2), danielsson (two-pass vector distance transform, Liktor §3.2), "
+                    "edt (exact separable distance transform of the voxelized surface) or rtsdf "
+                    "(ray-sampled near the surface, jump-flooded coarse field beyond; RTSDF §2.1, "
+                    "§2.3)")
+        ->capture_default_str();
+    cmd->add_option("--rays", args->rays, "rtsdf: rays per vertex near the surface (x)")
+        ->check(CLI::Range(1, 4096))
+        ->capture_default_str();
+    cmd->add_option(
+           "--mask", args->mask,
+           "rtsdf: vertices whose coarse distance is within this many voxels cast rays (d)")
+        ->check(CLI::Range(0.0, 1000.0))
+        ->capture_default_str();
+    cmd->add_option("--beta", args->beta,
+                    "--sign beta: the shell's half thickness in voxels (RTSDF §2.2)")
+        ->check(CLI::Range(0.0, 100.0))
         ->capture_default_str();
     cmd->add_option("--jfa-variant", args->jfaVariant, "Jump flooding: plain, 1+jfa or jfa+2")
         ->check(CLI::IsMember({"plain", "1+jfa", "jfa+2"}))
@@ -222,9 +256,11 @@ void addBakeCommand(CLI::App& app, Action& action) {
         "Meshes: also bake exactly and report mean / p99 / max error in voxels (all samples "
         "and the narrow band) and the share of wrong signs");
     cmd->add_option("--sign", args->sign,
-                    "Meshes: winding (generalized winding number, robust on open meshes) or parity "
-                    "(ray-crossing parity, closed meshes)")
-        ->check(CLI::IsMember({"winding", "parity"}))
+                    "Meshes: winding (generalized winding number, robust on open meshes), parity "
+                    "(ray-crossing parity, closed meshes); for jfa, danielsson and edt also flood "
+                    "(flood fill from the grid's boundary) or beta (|d| - beta: RTSDF's hollow "
+                    "shell)")
+        ->check(CLI::IsMember({"winding", "parity", "flood", "beta"}))
         ->capture_default_str();
     cmd->add_option("--res", args->resolution, "Cells along the longest axis of the region")
         ->check(CLI::Range(8, 4096))

@@ -5,7 +5,7 @@
 #include <optional>
 
 #include "commands.h"
-#include "sdftrace/bake/exact_bake.h"
+#include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/field/tape.h"
@@ -120,7 +120,7 @@ int runRender(const RenderArgs& a) {
         // A mesh rendered directly: baked exactly at the default resolution first.
         MeshReport report;
         TriangleMesh mesh = loadMesh(a.scene, &report);
-        auto grid = std::make_shared<const Grid>(bakeMeshExact(mesh, SampleOptions{}));
+        auto grid = std::make_shared<const Grid>(bakeMesh(mesh, MeshBakeOptions{}).grid);
         std::fprintf(stderr, "sdftrace render: %s: %s; baked exactly at 128 cells\n",
                      a.scene.c_str(), report.summary().c_str());
         scene = sceneForObject(node::grid(grid), grid->surfaceBounds());

@@ -8,53 +8,13 @@
 #include <map>
 
 #include "sdftrace/bake/closest_point.h"
+#include "sdftrace/bake/test_meshes.h"
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/field/primitives.h"
 #include "sdftrace/field/test_util.h"
 
 namespace sdft {
 namespace {
-
-TriangleMesh boxMesh(Vec3 h) {
-    TriangleMesh m;
-    for (int i = 0; i < 8; ++i)
-        m.positions.push_back({(i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z});
-    // Outward winding, two triangles per face.
-    m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                   {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-    return m;
-}
-
-// An icosahedron subdivided `levels` times, vertices pushed onto the unit sphere.
-TriangleMesh icosphere(int levels) {
-    const float t = 1.618034f;
-    TriangleMesh m;
-    for (Vec3 v : {Vec3(-1, t, 0), Vec3(1, t, 0), Vec3(-1, -t, 0), Vec3(1, -t, 0), Vec3(0, -1, t),
-                   Vec3(0, 1, t), Vec3(0, -1, -t), Vec3(0, 1, -t), Vec3(t, 0, -1), Vec3(t, 0, 1),
-                   Vec3(-t, 0, -1), Vec3(-t, 0, 1)})
-        m.positions.push_back(normalize(v));
-    m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                   {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                   {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                   {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-    for (int l = 0; l < levels; ++l) {
-        std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
-        auto midpoint = [&](uint32_t a, uint32_t b) {
-            auto key = std::make_pair(std::min(a, b), std::max(a, b));
-            auto it = mid.find(key);
-            if (it != mid.end()) return it->second;
-            m.positions.push_back(normalize(m.positions[a] + m.positions[b]));
-            return mid[key] = static_cast<uint32_t>(m.positions.size() - 1);
-        };
-        std::vector<std::array<uint32_t, 3>> next;
-        for (auto [a, b, c] : m.triangles) {
-            uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-            next.insert(next.end(), {{a, ab, ca}, {b, bc, ab}, {c, ca, bc}, {ab, bc, ca}});
-        }
-        m.triangles = next;
-    }
-    return m;
-}
 
 TEST(ClosestPoint, MatchesDenseSamplingOfTheTriangle) {
     testing::Rng rng(1);
@@ -96,7 +56,7 @@ TEST(ExactBake, BoxMeshGivesTheBoxSdfToFloatRounding) {
     SampleOptions o;
     o.resolution = 32;
     o.kind = GridKind::Dense;
-    Grid g = bakeMeshExact(boxMesh(half), o);
+    Grid g = bakeMeshExact(testing::boxMesh(half), o);
     GridView v = g.view();
     const GridShape& s = g.shape();
     float k[3] = {half.x, half.y, half.z};
@@ -113,7 +73,7 @@ TEST(ExactBake, BoxMeshGivesTheBoxSdfToFloatRounding) {
 }
 
 TEST(ExactBake, TessellatedSphereWithinItsTessellationGap) {
-    TriangleMesh sphere = icosphere(4);  // 5,120 triangles
+    TriangleMesh sphere = testing::icosphere(4);  // 5,120 triangles
     // The polyhedron lies between radius cos(half the largest edge angle) and 1.
     float gap = 0;
     for (auto [a, b, c] : sphere.triangles)
@@ -130,8 +90,9 @@ TEST(ExactBake, TessellatedSphereWithinItsTessellationGap) {
         Vec3 p = rng.inCube(1.2f);
         float exact = length(p) - 1;
         float baked = v.interpolate(p);
-        if (std::fabs(exact) > 2 * gap)
+        if (std::fabs(exact) > 2 * gap) {
             ASSERT_EQ(baked < 0, exact < 0) << p.x << "," << p.y << "," << p.z;
+        }
         // Near the surface (in the band) the samples are exact distances to the polyhedron;
         // interpolation adds at most half a cell diagonal of error.
         if (std::fabs(exact) < 2 * g.shape().voxelSize) {

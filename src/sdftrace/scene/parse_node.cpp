@@ -4,8 +4,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "sdftrace/bake/exact_bake.h"
-#include "sdftrace/bake/jump_flood.h"
+#include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/field/noise.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_file.h"
@@ -155,24 +154,17 @@ std::shared_ptr<const Grid> bakeMeshObject(const Reader& r, NodeContext& ctx) {
     SampleOptions o;
     o.resolution = r.integer("resolution", 128, 8, 1024);
     std::string method = r.string("method", "exact");
-    if (method != "exact" && method != "jfa")
-        r.failKey("method", "unknown method '" + method + "'; accepted: exact, jfa");
+    MeshBakeOptions bake;
+    if (!parseMeshBakeMethod(method, bake.method))
+        r.failKey("method", "unknown method '" + method + "'; accepted: " + kMeshBakeMethods);
+    bake.sampling = o;
     std::string key =
         path.lexically_normal().string() + "|" + method + "|" + std::to_string(o.resolution);
     auto it = ctx.grids.find(key);
     if (it != ctx.grids.end()) return it->second;
     try {
         TriangleMesh mesh = loadMesh(path.string());
-        GridShape shape = gridShapeFor(mesh.bounds(), o);
-        std::vector<float> samples;
-        if (method == "exact") {
-            MeshBvh bvh(mesh);
-            samples = bakeExactSamples(bvh, shape, SignMethod::WindingNumber);
-        } else {
-            samples = bakeJumpFloodSamples(mesh, shape, JfaVariant::Plain);
-        }
-        auto grid = std::make_shared<const Grid>(
-            Grid::sparseFromDense(shape, samples, o.blockSize, o.bandVoxels));
+        auto grid = std::make_shared<const Grid>(bakeMesh(mesh, bake).grid);
         ctx.grids[key] = grid;
         return grid;
     } catch (const InputError& e) {

@@ -1,0 +1,56 @@
+// Mesh to SDF, every method behind one call: the options a user gives (`sdftrace bake`, scene
+// files' mesh objects, `sdftrace render mesh.obj`), the grid, and what each stage took.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "sdftrace/bake/jump_flood.h"
+#include "sdftrace/bake/rtsdf_bake.h"
+#include "sdftrace/bake/sign_method.h"
+#include "sdftrace/field/grid.h"
+#include "sdftrace/field/sample_grid.h"
+
+namespace sdft {
+
+enum class MeshBakeMethod {
+    Exact,         // closest points through Embree (exact_bake.h); the ground truth
+    JumpFlood,     // RTSDF §2.2 (jump_flood.h)
+    Danielsson,    // Liktor §3.2 (danielsson.h)
+    SeparableEdt,  // exact EDT of the voxelized surface (separable_edt.h)
+    Rtsdf,         // RTSDF §2.1 + §2.3 (rtsdf_bake.h)
+};
+
+struct MeshBakeOptions {
+    MeshBakeMethod method = MeshBakeMethod::Exact;
+    SampleOptions sampling;  // resolution, dense or sparse, block, band, padding, threads
+    SignMethod sign = SignMethod::WindingNumber;
+    JfaVariant jfaVariant = JfaVariant::Plain;
+    float betaVoxels = 0.5f;  // SignMethod::BetaShell
+    RtsdfOptions rtsdf;
+    bool progress = false;  // percentages on stderr for the long stages
+};
+
+struct BakeStage {
+    std::string name;
+    double seconds = 0;
+};
+
+struct MeshBakeResult {
+    Grid grid;
+    std::vector<BakeStage> stages;
+    std::string details;  // method-specific counts for the summary line ("" if none)
+};
+
+// Throws InputError when the sign method does not apply to the method (exact and rtsdf take
+// winding or parity; the propagation methods also flood and beta). bakeMesh checks it first.
+void validateMeshBakeOptions(const MeshBakeOptions& options);
+
+MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& options);
+
+const char* meshBakeMethodName(MeshBakeMethod m);
+// "exact", "jfa", "danielsson", "edt", "rtsdf"; false if unknown.
+bool parseMeshBakeMethod(const std::string& name, MeshBakeMethod& out);
+constexpr const char* kMeshBakeMethods = "exact, jfa, danielsson, edt, rtsdf";
+
+}  // namespace sdft

@@ -1,0 +1,36 @@
+// RTSDF's ray-sampled SDF with a ray mask (Tan et al. 2022, §2.1 and §2.3): a coarse SDF by jump
+// flooding at half the resolution decides which vertices are near the surface (|coarse| <= d);
+// those cast x rays in uniformly random directions through the BVH (Embree) and keep the minimum
+// hit distance, negative when most hits struck back faces (§2.1, after Wright 2015). Vertices
+// beyond d keep the coarse value (§2.3). The minimum over x directions overestimates the distance:
+// by about d (2 / x) on a plane at distance d.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "sdftrace/bake/mesh_bvh.h"
+#include "sdftrace/bake/sign_method.h"
+#include "sdftrace/field/grid.h"
+
+namespace sdft {
+
+struct RtsdfOptions {
+    int rays = 64;         // x, per refined vertex
+    float maskVoxels = 3;  // d, in fine voxels
+    uint32_t seed = 1;     // of the per-vertex direction sequences (the bake is deterministic)
+    SignMethod coarseSign = SignMethod::WindingNumber;
+};
+
+struct RtsdfStats {
+    size_t refined = 0;  // vertices inside the mask
+    size_t rays = 0;
+    size_t missed = 0;  // refined vertices none of whose rays hit (kept the coarse value)
+    double coarseSeconds = 0, raySeconds = 0;
+};
+
+std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh,
+                                    const GridShape& shape, const RtsdfOptions& options,
+                                    int threads = 0, RtsdfStats* stats = nullptr);
+
+}  // namespace sdft

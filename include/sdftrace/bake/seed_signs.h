@@ -1,0 +1,23 @@
+// Signs for the propagation bakes (jump flooding, Danielsson, the separable EDT): their distances
+// are unsigned, so inside and outside come from one of the SignMethods.
+#pragma once
+
+#include <vector>
+
+#include "sdftrace/bake/mesh_bvh.h"
+#include "sdftrace/bake/sign_method.h"
+#include "sdftrace/bake/surface_seeds.h"
+
+namespace sdft {
+
+// `distances` (unsigned) signed in place. `bvh` is needed for RayParity only; `betaVoxels` for
+// BetaShell only.
+void signDistances(std::vector<float>& distances, const TriangleMesh& mesh, const MeshBvh* bvh,
+                   const GridShape& shape, const SurfaceSeeds& seeds, SignMethod method,
+                   float betaVoxels = 0.5f, int threads = 0);
+
+// SignMethod::FloodFill alone: 1 where inside.
+std::vector<uint8_t> floodFillInside(const TriangleMesh& mesh, const GridShape& shape,
+                                     const SurfaceSeeds& seeds);
+
+}  // namespace sdft

@@ -1,0 +1,30 @@
+// The conservative voxelization the propagation bakes (jump flooding, Danielsson, the separable
+// EDT, RTSDF's coarse field) start from: every grid vertex within half a cell diagonal of a
+// triangle holds its closest point on the nearest such triangle (RTSDF §2.2: "check if a grid
+// point contains a model voxel to determine if it is a seed").
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "sdftrace/field/grid.h"
+#include "sdftrace/io/mesh_io.h"
+
+namespace sdft {
+
+constexpr float kNoSeed = 1e30f;  // x of a vertex that holds no point
+
+struct SurfaceSeeds {
+    std::vector<Vec3> point;         // per vertex (x fastest); kNoSeed in x: not a seed
+    std::vector<uint32_t> triangle;  // the triangle the point lies on
+};
+
+// In parallel over slabs of z layers, each visiting the triangles that overlap it in index order,
+// so the result is the same for any thread count.
+SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& shape, int threads = 0);
+
+// The distance from every vertex to its propagated closest point (kNoSeed where none arrived).
+std::vector<float> distancesToPoints(const GridShape& shape, const std::vector<Vec3>& points,
+                                     int threads = 0);
+
+}  // namespace sdft

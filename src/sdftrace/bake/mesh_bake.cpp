@@ -1,0 +1,172 @@
+#include "sdftrace/bake/mesh_bake.h"
+
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cstdio>
+
+#include "sdftrace/bake/danielsson.h"
+#include "sdftrace/bake/exact_bake.h"
+#include "sdftrace/bake/seed_signs.h"
+#include "sdftrace/bake/separable_edt.h"
+#include "sdftrace/core/error.h"
+
+namespace sdft {
+
+const char* meshBakeMethodName(MeshBakeMethod m) {
+    switch (m) {
+        case MeshBakeMethod::Exact:
+            return "exact";
+        case MeshBakeMethod::JumpFlood:
+            return "jfa";
+        case MeshBakeMethod::Danielsson:
+            return "danielsson";
+        case MeshBakeMethod::SeparableEdt:
+            return "edt";
+        case MeshBakeMethod::Rtsdf:
+            return "rtsdf";
+    }
+    return "?";
+}
+
+bool parseMeshBakeMethod(const std::string& name, MeshBakeMethod& out) {
+    for (MeshBakeMethod m :
+         {MeshBakeMethod::Exact, MeshBakeMethod::JumpFlood, MeshBakeMethod::Danielsson,
+          MeshBakeMethod::SeparableEdt, MeshBakeMethod::Rtsdf}) {
+        if (name == meshBakeMethodName(m)) {
+            out = m;
+            return true;
+        }
+    }
+    return false;
+}
+
+namespace {
+
+// Records the time since the previous mark under a stage name.
+class StageClock {
+  public:
+    explicit StageClock(std::vector<BakeStage>& stages) : m_stages(stages) {}
+    void mark(const std::string& name) {
+        auto now = std::chrono::steady_clock::now();
+        m_stages.push_back({name, std::chrono::duration<double>(now - m_last).count()});
+        m_last = now;
+    }
+    void restart() { m_last = std::chrono::steady_clock::now(); }
+
+  private:
+    std::vector<BakeStage>& m_stages;
+    std::chrono::steady_clock::time_point m_last = std::chrono::steady_clock::now();
+};
+
+}  // namespace
+
+void validateMeshBakeOptions(const MeshBakeOptions& o) {
+    const bool seedBased = o.method == MeshBakeMethod::JumpFlood ||
+                           o.method == MeshBakeMethod::Danielsson ||
+                           o.method == MeshBakeMethod::SeparableEdt;
+    if (!seedBased && o.sign != SignMethod::WindingNumber && o.sign != SignMethod::RayParity) {
+        throw InputError(std::string("--sign ") +
+                         (o.sign == SignMethod::FloodFill ? "flood" : "beta") + ": method " +
+                         meshBakeMethodName(o.method) +
+                         " accepts winding or parity (flood and beta need a voxelized surface: "
+                         "jfa, danielsson, edt)");
+    }
+}
+
+namespace {
+
+MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
+    const SampleOptions& so = o.sampling;
+    const int threads = so.threads;
+    GridShape shape = gridShapeFor(mesh.bounds(), so);
+    MeshBakeResult r;
+    StageClock clock(r.stages);
+    char line[256] = "";
+    std::vector<float> samples;
+
+    if (o.method == MeshBakeMethod::Exact) {
+        MeshBvh bvh(mesh);
+        clock.mark("bvh");
+        ExactBakeStats st;
+        if (so.kind == GridKind::Sparse) {
+            r.grid = bakeExactSparse(bvh, shape, so.blockSize, so.bandVoxels, o.sign, threads, &st,
+                                     o.progress);
+            clock.mark("narrow band");
+        } else {
+            r.grid =
+                Grid::dense(shape, bakeExactSamples(bvh, shape, o.sign, threads, &st, o.progress));
+            clock.mark("distances");
+        }
+        std::snprintf(line, sizeof line, "%zu %s, %zu sign evaluations (%s)", st.distanceQueries,
+                      so.kind == GridKind::Sparse ? "vertices within the band" : "distance queries",
+                      st.signEvaluations, signMethodName(o.sign));
+        r.details = line;
+        return r;
+    }
+    if (o.method == MeshBakeMethod::Rtsdf) {
+        MeshBvh bvh(mesh);
+        clock.mark("bvh");
+        RtsdfOptions ro = o.rtsdf;
+        ro.coarseSign = o.sign;
+        RtsdfStats st;
+        samples = bakeRtsdfSamples(mesh, bvh, shape, ro, threads, &st);
+        r.stages.push_back({"coarse jfa", st.coarseSeconds});
+        r.stages.push_back({"rays", st.raySeconds});
+        clock.restart();
+        std::snprintf(line, sizeof line,
+                      "%zu vertices refined by %d rays each (%zu rays), %zu with no hit",
+                      st.refined, ro.rays, st.rays, st.missed);
+        r.details = line;
+    } else {
+        SurfaceSeeds seeds = seedSurfaceVertices(mesh, shape, threads);
+        clock.mark("seeds");
+        std::vector<Vec3> points;
+        if (o.method == MeshBakeMethod::JumpFlood) {
+            JfaStats st;
+            points = jumpFlood(shape, seeds.point, o.jfaVariant, threads, &st);
+            std::string passes;
+            for (size_t i = 0; i < st.offsets.size(); ++i) {
+                char one[48];
+                std::snprintf(one, sizeof one, "%s%d: %.0f ms", i ? ", " : "", st.offsets[i],
+                              st.passSeconds[i] * 1e3);
+                passes += one;
+            }
+            r.details = std::to_string(st.offsets.size()) + " passes (offset: time) " + passes;
+            clock.mark("jump flooding");
+        } else if (o.method == MeshBakeMethod::Danielsson) {
+            points = danielssonTransform(shape, seeds.point);
+            clock.mark("danielsson sweeps");
+        } else {
+            points = separableEdt(shape, seeds.point, threads);
+            clock.mark("separable edt");
+        }
+        samples = distancesToPoints(shape, points, threads);
+        std::unique_ptr<MeshBvh> bvh;
+        if (o.sign == SignMethod::RayParity) bvh = std::make_unique<MeshBvh>(mesh);
+        signDistances(samples, mesh, bvh.get(), shape, seeds, o.sign, o.betaVoxels, threads);
+        clock.mark(std::string("signs (") + signMethodName(o.sign) + ")");
+    }
+    if (so.kind == GridKind::Dense) {
+        r.grid = Grid::dense(shape, std::move(samples));
+    } else {
+        r.grid = Grid::sparseFromDense(shape, samples, so.blockSize, so.bandVoxels);
+        clock.mark("sparsify");
+    }
+    return r;
+}
+
+}  // namespace
+
+MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& o) {
+    validateMeshBakeOptions(o);
+    // Every stage, grid finishing included, on exactly the requested threads.
+    int threads =
+        o.sampling.threads > 0 ? o.sampling.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(threads);
+    MeshBakeResult r;
+    arena.execute([&] { r = bakeInArena(mesh, o); });
+    return r;
+}
+
+}  // namespace sdft

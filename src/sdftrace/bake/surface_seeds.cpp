@@ -1,0 +1,79 @@
+#include "sdftrace/bake/surface_seeds.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+
+#include "sdftrace/bake/closest_point.h"
+#include "sdftrace/field/vertex_loop.h"
+
+namespace sdft {
+
+SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, int threads) {
+    const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
+    const float h = s.voxelSize, reach = 0.87f * h;  // half a cell diagonal, rounded up
+    SurfaceSeeds seeds;
+    seeds.point.assign(s.vertexCount(), Vec3(kNoSeed));
+    seeds.triangle.assign(s.vertexCount(), 0);
+    std::vector<float> best(s.vertexCount(), kNoSeed);
+    // Vertex ranges of each triangle's bounds (one voxel of margin covers the reach).
+    struct Range {
+        int lo[3], hi[3];
+    };
+    std::vector<Range> ranges(mesh.triangles.size());
+    constexpr int kSlab = 4;  // z layers per task
+    const int slabs = (vz + kSlab - 1) / kSlab;
+    std::vector<std::vector<uint32_t>> bySlab(slabs);
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const auto& tri = mesh.triangles[t];
+        Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
+        Vec3 lo = (min(a, min(b, c)) - s.origin) / h - Vec3(1.0f);
+        Vec3 hi = (max(a, max(b, c)) - s.origin) / h + Vec3(1.0f);
+        Range& r = ranges[t];
+        for (int axis = 0; axis < 3; ++axis) {
+            r.lo[axis] = std::max(0, static_cast<int>(std::floor(lo[axis])));
+            r.hi[axis] = std::min(s.vertices(axis) - 1, static_cast<int>(std::ceil(hi[axis])));
+        }
+        if (r.lo[2] > r.hi[2]) continue;
+        for (int slab = r.lo[2] / kSlab; slab <= r.hi[2] / kSlab; ++slab)
+            bySlab[slab].push_back(static_cast<uint32_t>(t));
+    }
+    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    arena.execute([&] {
+        tbb::parallel_for(0, slabs, [&](int slab) {
+            const int k0 = slab * kSlab, k1 = std::min(vz - 1, k0 + kSlab - 1);
+            for (uint32_t t : bySlab[slab]) {
+                const auto& tri = mesh.triangles[t];
+                Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]],
+                     c = mesh.positions[tri[2]];
+                const Range& r = ranges[t];
+                for (int k = std::max(k0, r.lo[2]); k <= std::min(k1, r.hi[2]); ++k)
+                    for (int j = r.lo[1]; j <= r.hi[1]; ++j)
+                        for (int i = r.lo[0]; i <= r.hi[0]; ++i) {
+                            Vec3 p = s.origin + Vec3(i, j, k) * h;
+                            Vec3 q = closestPointOnTriangle(p, a, b, c);
+                            float d = length(p - q);
+                            size_t idx = (static_cast<size_t>(k) * vy + j) * vx + i;
+                            if (d <= reach && d < best[idx]) {
+                                best[idx] = d;
+                                seeds.point[idx] = q;
+                                seeds.triangle[idx] = t;
+                            }
+                        }
+            }
+        });
+    });
+    return seeds;
+}
+
+std::vector<float> distancesToPoints(const GridShape& s, const std::vector<Vec3>& points,
+                                     int threads) {
+    std::vector<float> out(points.size());
+    forEachVertex(s, threads, [&](int, int, int, size_t idx, Vec3 p) {
+        out[idx] = points[idx].x == kNoSeed ? kNoSeed : length(p - points[idx]);
+    });
+    return out;
+}
+
+}  // namespace sdft

@@ -1,0 +1,61 @@
+#include "sdftrace/bake/verify_bake.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "sdftrace/core/macros.h"
+
+namespace sdft {
+
+namespace {
+BakeError summarize(std::vector<double>& e) {
+    BakeError r;
+    r.count = e.size();
+    if (e.empty()) return r;
+    std::sort(e.begin(), e.end());
+    r.mean = std::accumulate(e.begin(), e.end(), 0.0) / e.size();
+    r.p99 = e[std::min(e.size() - 1, e.size() * 99 / 100)];
+    r.max = e.back();
+    return r;
+}
+}  // namespace
+
+BakeVerification verifyBake(const Grid& grid, const std::vector<float>& exact, float bandVoxels) {
+    const GridShape& s = grid.shape();
+    SDFT_CHECK(exact.size() == s.vertexCount());
+    GridView v = grid.view();
+    const float h = s.voxelSize, band = bandVoxels * h;
+    std::vector<double> all, near;
+    BakeVerification r;
+    for (int k = 0; k <= s.cells[2]; ++k)
+        for (int j = 0; j <= s.cells[1]; ++j)
+            for (int i = 0; i <= s.cells[0]; ++i) {
+                size_t idx = (static_cast<size_t>(k) * (s.cells[1] + 1) + j) * (s.cells[0] + 1) + i;
+                float baked = v.vertex(i, j, k), ex = exact[idx];
+                // On the surface itself (within 1% of a voxel) the sign is moot.
+                if (std::fabs(ex) > 0.01f * h) {
+                    r.wrongSigns += (baked < 0) != (ex < 0);
+                    ++r.vertices;
+                }
+                bool stored = true;
+                if (v.kind == GridKind::Sparse) {
+                    // The block of the cell below the vertex, as GridView::vertex reads it.
+                    int B = v.blockSize;
+                    int ci = std::min(i, s.cells[0] - 1) / B, cj = std::min(j, s.cells[1] - 1) / B,
+                        ck = std::min(k, s.cells[2] - 1) / B;
+                    stored =
+                        v.blockData[(static_cast<size_t>(ck) * v.blocks[1] + cj) * v.blocks[0] +
+                                    ci] >= 0;
+                }
+                if (!stored) continue;
+                double e = std::fabs(std::fabs(baked) - std::fabs(ex)) / h;
+                all.push_back(e);
+                if (std::fabs(ex) < band) near.push_back(e);
+            }
+    r.all = summarize(all);
+    r.band = summarize(near);
+    return r;
+}
+
+}  // namespace sdft
