@@ -15,7 +15,8 @@ struct BakeError {
 };
 
 struct BakeVerification {
-    BakeError all;   // every stored sample (dense: every vertex; sparse: surface blocks')
+    BakeError all;   // every stored sample (dense: every vertex; sparse: surface blocks', against
+                     // the exact distance clamped to the band as the grid stores it)
     BakeError band;  // those with |exact| < band
     // Over every vertex more than 1% of a voxel from the surface (sparse: flags count).
     size_t wrongSigns = 0, vertices = 0;

@@ -210,27 +210,22 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     // Uninitialized: every needed owner fills its samples below.
     std::unique_ptr<float[]> owned(new float[static_cast<size_t>(owners) * perOwner]);
 
-    // 3. Distances and signs, one task per row of owners so that signs carry along whole vertex
-    // rows (watertight meshes: the winding number only within a voxel of the surface).
+    // 3. Distances, one task per row of owners.
+    const float step = h * 1.001f;
+    const bool watertight = sampler.watertight();
     {
         Progress bar("sdftrace bake: narrow band", static_cast<uint64_t>(no[1]) * no[2],
                      progress && stderrIsTerminal());
-        const float step = h * 1.001f;
-        const bool watertight = sampler.watertight();
         arena.execute([&] {
             tbb::parallel_for(0, no[1] * no[2], [&](int row) {
                 const int oj = row % no[1], ok = row / no[1];
-                if (!rowNeeded[row]) {
-                    bar.advance();
-                    return;
-                }
-                size_t evaluated = 0, found = 0;
-                for (int oi = 0; oi < no[0]; ++oi) {
-                    int32_t sl = slot[ownerIndex(oi, oj, ok)];
+                size_t found = 0;
+                for (int oi = 0; rowNeeded[row] && oi < no[0]; ++oi) {
+                    size_t o = ownerIndex(oi, oj, ok);
+                    int32_t sl = slot[o];
                     if (sl < 0) continue;
                     float* out = owned.get() + sl * perOwner;
-                    std::fill(out, out + perOwner, INFINITY);
-                    size_t o = ownerIndex(oi, oj, ok);
+                    std::fill(out, out + perOwner, reach);
                     const int i0 = oi * B, j0 = oj * B, k0 = ok * B;
                     for (uint32_t n = listStart[o]; n < listStart[o + 1]; ++n) {
                         const uint32_t t = lists[n];
@@ -238,57 +233,25 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                         const auto& tri = mesh.triangles[t];
                         Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]],
                              c = mesh.positions[tri[2]];
+                        // Vertices farther than the band from the triangle's plane cannot be
+                        // closer than the band to it (large triangles' boxes are mostly such).
+                        Vec3 nrm = cross(b - a, c - a);
+                        float slab = reach * reach * dot(nrm, nrm) * 1.0001f;
                         for (int k = std::max(k0, r.lo[2]); k <= std::min(k0 + B - 1, r.hi[2]); ++k)
                             for (int j = std::max(j0, r.lo[1]); j <= std::min(j0 + B - 1, r.hi[1]);
                                  ++j)
                                 for (int i = std::max(i0, r.lo[0]);
                                      i <= std::min(i0 + B - 1, r.hi[0]); ++i) {
                                     Vec3 p = sampler.position(i, j, k);
+                                    float plane = dot(p - a, nrm);
+                                    if (plane * plane > slab) continue;
                                     float d = length(p - closestPointOnTriangle(p, a, b, c));
                                     float& best = out[((k - k0) * B + (j - j0)) * B + (i - i0)];
                                     best = std::fmin(best, d);
                                 }
                     }
+                    for (size_t v = 0; v < perOwner; ++v) found += out[v] < reach;
                 }
-                for (int k = ok * B; k < std::min(ok * B + B, nv[2]); ++k)
-                    for (int j = oj * B; j < std::min(oj * B + B, nv[1]); ++j) {
-                        float prev = -1;
-                        bool prevInside = false;
-                        for (int i = 0; i < nv[0]; ++i) {
-                            int32_t sl = slot[ownerIndex(i / B, oj, ok)];
-                            if (sl < 0) {
-                                i = (i / B) * B + B - 1;  // skip the owner; the chain breaks
-                                prev = -1;
-                                continue;
-                            }
-                            float& v = owned[sl * perOwner + ((k % B) * B + (j % B)) * B + (i % B)];
-                            float d = std::fmin(v, reach);
-                            found += v < reach;
-                            bool in;
-                            // The neighbour at -y or -z (same owner, already signed) starts a
-                            // chain as well as the one at -x continues it.
-                            float across = -1;
-                            if (watertight && prev < 0 && (j % B != 0 || k % B != 0)) {
-                                across = j % B != 0
-                                             ? owned[sl * perOwner +
-                                                     ((k % B) * B + (j % B - 1)) * B + (i % B)]
-                                             : owned[sl * perOwner +
-                                                     ((k % B - 1) * B + (j % B)) * B + (i % B)];
-                            }
-                            if (watertight && prev >= 0 && (d > step || prev > step)) {
-                                in = prevInside;
-                            } else if (across != -1 && (d > step || std::fabs(across) > step)) {
-                                in = across < 0;
-                            } else {
-                                in = sampler.inside(sampler.position(i, j, k));
-                                ++evaluated;
-                            }
-                            v = in ? -d : d;
-                            prev = d;
-                            prevInside = in;
-                        }
-                    }
-                signs += evaluated;
                 queries += found;
                 bar.advance();
             });
@@ -300,14 +263,94 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
         return owned[sl * perOwner + (static_cast<size_t>(k % B) * B + j % B) * B + i % B];
     };
 
-    // 4. Candidate blocks become surface blocks when a sample is within the band or the signs
-    // differ (the rule of Grid::sparseFromDense); the rest are flagged by their samples' sign.
-    // Blocks without a listed owner take the sign at their centre: on a watertight mesh the
-    // previous block's in the row when that one was not a candidate either (neither holds surface,
-    // and the segment between the centres stays in them).
+    // 4. Surface blocks: a (clamped, unsigned) sample within the band. A sign change needs the
+    // surface between two vertices, hence one within half a cell diagonal: no other block holds
+    // one. Only the vertices of surface blocks are signed one by one.
     const int V = B + 1;
     const size_t perBlock = static_cast<size_t>(V) * V * V;
     std::vector<uint8_t> keep(numBlocks, 0);
+    arena.execute([&] {
+        tbb::parallel_for(size_t(0), numBlocks, [&](size_t b) {
+            if (!candidate[b]) return;
+            int bi = static_cast<int>(b % nb[0]), bj = static_cast<int>((b / nb[0]) % nb[1]),
+                bk = static_cast<int>(b / (static_cast<size_t>(nb[0]) * nb[1]));
+            bool near = false;
+            for (int k = 0; k < V && !near; ++k)
+                for (int j = 0; j < V && !near; ++j)
+                    for (int i = 0; i < V && !near; ++i)
+                        near = vertex(bi * B + i, bj * B + j, bk * B + k) < reach;
+            keep[b] = near;
+        });
+    });
+    // Whether a vertex belongs to a surface block (v / B, or v / B - 1 on a shared face).
+    auto needed = [&](int i, int j, int k) {
+        int lo[3], hi[3], v[3] = {i, j, k};
+        for (int a = 0; a < 3; ++a) {
+            hi[a] = std::min(v[a] / B, nb[a] - 1);
+            lo[a] = v[a] % B == 0 && v[a] > 0 ? v[a] / B - 1 : hi[a];
+        }
+        for (int bk = lo[2]; bk <= hi[2]; ++bk)
+            for (int bj = lo[1]; bj <= hi[1]; ++bj)
+                for (int bi = lo[0]; bi <= hi[0]; ++bi)
+                    if (keep[blockIndex(bi, bj, bk)]) return true;
+        return false;
+    };
+
+    // 5. Signs of the surface blocks' vertices, one task per row of owners so that signs carry
+    // along vertex rows (watertight meshes: the winding number only within a voxel of the
+    // surface, at chain starts, and where a -y or -z neighbour cannot vouch).
+    arena.execute([&] {
+        tbb::parallel_for(0, no[1] * no[2], [&](int row) {
+            const int oj = row % no[1], ok = row / no[1];
+            if (!rowNeeded[row]) return;
+            size_t evaluated = 0;
+            for (int k = ok * B; k < std::min(ok * B + B, nv[2]); ++k)
+                for (int j = oj * B; j < std::min(oj * B + B, nv[1]); ++j) {
+                    float prev = -1;
+                    bool prevInside = false;
+                    for (int i = 0; i < nv[0]; ++i) {
+                        int32_t sl = slot[ownerIndex(i / B, oj, ok)];
+                        if (sl < 0) {
+                            i = (i / B) * B + B - 1;  // skip the owner; the chain breaks
+                            prev = -1;
+                            continue;
+                        }
+                        if (!needed(i, j, k)) {
+                            prev = -1;
+                            continue;
+                        }
+                        float& v = owned[sl * perOwner + ((k % B) * B + (j % B)) * B + (i % B)];
+                        const float d = v;
+                        bool in;
+                        float across = -1;  // the signed -y or -z neighbour in this owner
+                        if (watertight && prev < 0 && (j % B != 0 || k % B != 0)) {
+                            bool ny = j % B != 0;
+                            if (ny ? needed(i, j - 1, k) : needed(i, j, k - 1))
+                                across = ny ? owned[sl * perOwner +
+                                                    ((k % B) * B + (j % B - 1)) * B + (i % B)]
+                                            : owned[sl * perOwner +
+                                                    ((k % B - 1) * B + (j % B)) * B + (i % B)];
+                        }
+                        if (watertight && prev >= 0 && (d > step || prev > step)) {
+                            in = prevInside;
+                        } else if (across != -1 && (d > step || std::fabs(across) > step)) {
+                            in = across < 0;
+                        } else {
+                            in = sampler.inside(sampler.position(i, j, k));
+                            ++evaluated;
+                        }
+                        v = in ? -d : d;
+                        prev = d;
+                        prevInside = in;
+                    }
+                }
+            signs += evaluated;
+        });
+    });
+
+    // 6. The other blocks take the sign at their centre: on a watertight mesh the previous
+    // block's in the row when that one was not a surface block either (neither holds surface, and
+    // the segment between the centres stays in them).
     std::atomic<size_t> centreSigns{0};
     arena.execute([&] {
         tbb::parallel_for(0, nb[1] * nb[2], [&](int row) {
@@ -316,38 +359,23 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
             size_t evaluated = 0;
             for (int bi = 0; bi < nb[0]; ++bi) {
                 size_t b = blockIndex(bi, bj, bk);
-                if (!candidate[b]) {
-                    bool in = prevInside;
-                    if (!(sampler.watertight() && prevFree)) {
-                        Vec3 lo = sampler.position(bi * B, bj * B, bk * B);
-                        Vec3 hi = sampler.position(std::min(bi * B + B, s.cells[0]),
-                                                   std::min(bj * B + B, s.cells[1]),
-                                                   std::min(bk * B + B, s.cells[2]));
-                        in = sampler.inside((lo + hi) * 0.5f);
-                        ++evaluated;
-                    }
-                    flags[b] = static_cast<uint8_t>(in ? BlockFlag::Inside : BlockFlag::Outside);
-                    prevFree = true;
-                    prevInside = in;
+                if (keep[b]) {
+                    flags[b] = static_cast<uint8_t>(BlockFlag::Surface);
+                    prevFree = false;
                     continue;
                 }
-                prevFree = false;
-                bool anyNeg = false, anyPos = false, near = false;
-                for (int k = 0; k < V; ++k)
-                    for (int j = 0; j < V; ++j)
-                        for (int i = 0; i < V; ++i) {
-                            float v = vertex(bi * B + i, bj * B + j, bk * B + k);
-                            anyNeg |= v < 0;
-                            anyPos |= v >= 0;
-                            near |= std::fabs(v) < reach;
-                        }
-                if (near || (anyNeg && anyPos)) {
-                    keep[b] = 1;
-                    flags[b] = static_cast<uint8_t>(BlockFlag::Surface);
-                } else {
-                    flags[b] =
-                        static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
+                bool in = prevInside;
+                if (!(watertight && prevFree)) {
+                    Vec3 lo = sampler.position(bi * B, bj * B, bk * B);
+                    Vec3 hi = sampler.position(std::min(bi * B + B, s.cells[0]),
+                                               std::min(bj * B + B, s.cells[1]),
+                                               std::min(bk * B + B, s.cells[2]));
+                    in = sampler.inside((lo + hi) * 0.5f);
+                    ++evaluated;
                 }
+                flags[b] = static_cast<uint8_t>(in ? BlockFlag::Inside : BlockFlag::Outside);
+                prevFree = true;
+                prevInside = in;
             }
             centreSigns += evaluated;
         });

@@ -144,7 +144,12 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
         samples = distancesToPoints(shape, points, threads);
         std::unique_ptr<MeshBvh> bvh;
         if (o.sign == SignMethod::RayParity) bvh = std::make_unique<MeshBvh>(mesh);
-        signDistances(samples, mesh, bvh.get(), shape, seeds, o.sign, o.betaVoxels, threads);
+        if (so.kind == GridKind::Sparse) {
+            signDistancesSparse(samples, mesh, bvh.get(), shape, seeds, o.sign, o.betaVoxels,
+                                so.blockSize, so.bandVoxels, threads);
+        } else {
+            signDistances(samples, mesh, bvh.get(), shape, seeds, o.sign, o.betaVoxels, threads);
+        }
         clock.mark(std::string("signs (") + signMethodName(o.sign) + ")");
     }
     if (so.kind == GridKind::Dense) {

@@ -1,5 +1,8 @@
 #include "sdftrace/bake/seed_signs.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/core/macros.h"
 #include "sdftrace/field/vertex_loop.h"
@@ -18,6 +21,21 @@ const char* signMethodName(SignMethod m) {
             return "beta shell";
     }
     return "?";
+}
+
+bool parseSignMethod(const std::string& name, SignMethod& out) {
+    static const std::pair<const char*, SignMethod> names[] = {
+        {"winding", SignMethod::WindingNumber},
+        {"parity", SignMethod::RayParity},
+        {"flood", SignMethod::FloodFill},
+        {"beta", SignMethod::BetaShell}};
+    for (const auto& [n, m] : names) {
+        if (name == n) {
+            out = m;
+            return true;
+        }
+    }
+    return false;
 }
 
 std::vector<uint8_t> floodFillInside(const TriangleMesh& mesh, const GridShape& s,
@@ -76,6 +94,26 @@ std::vector<uint8_t> floodFillInside(const TriangleMesh& mesh, const GridShape& 
     return inside;
 }
 
+namespace {
+
+// Inside by the winding number or by ray parity.
+class InsideTest {
+  public:
+    InsideTest(const TriangleMesh& mesh, const MeshBvh* bvh, SignMethod method) : m_bvh(bvh) {
+        SDFT_CHECK(method == SignMethod::WindingNumber || bvh != nullptr);
+        if (method == SignMethod::WindingNumber) m_winding = std::make_unique<WindingNumber>(mesh);
+    }
+    bool inside(Vec3 p) const {
+        return m_winding ? m_winding->inside(p) : m_bvh->insideByParity(p);
+    }
+
+  private:
+    const MeshBvh* m_bvh;
+    std::unique_ptr<WindingNumber> m_winding;
+};
+
+}  // namespace
+
 void signDistances(std::vector<float>& d, const TriangleMesh& mesh, const MeshBvh* bvh,
                    const GridShape& s, const SurfaceSeeds& seeds, SignMethod method,
                    float betaVoxels, int threads) {
@@ -90,11 +128,77 @@ void signDistances(std::vector<float>& d, const TriangleMesh& mesh, const MeshBv
         for (size_t i = 0; i < d.size(); ++i) d[i] = inside[i] ? -std::fabs(d[i]) : std::fabs(d[i]);
         return;
     }
-    SDFT_CHECK(method == SignMethod::WindingNumber || bvh != nullptr);
-    std::unique_ptr<WindingNumber> winding;
-    if (method == SignMethod::WindingNumber) winding = std::make_unique<WindingNumber>(mesh);
+    InsideTest test(mesh, bvh, method);
     forEachVertex(s, threads, [&](int, int, int, size_t idx, Vec3 p) {
-        bool in = winding ? winding->inside(p) : bvh->insideByParity(p);
+        d[idx] = test.inside(p) ? -std::fabs(d[idx]) : std::fabs(d[idx]);
+    });
+}
+
+void signDistancesSparse(std::vector<float>& d, const TriangleMesh& mesh, const MeshBvh* bvh,
+                         const GridShape& s, const SurfaceSeeds& seeds, SignMethod method,
+                         float betaVoxels, int B, float bandVoxels, int threads) {
+    if (method == SignMethod::BetaShell || method == SignMethod::FloodFill) {
+        signDistances(d, mesh, bvh, s, seeds, method, betaVoxels, threads);
+        return;
+    }
+    InsideTest test(mesh, bvh, method);
+    const float band = bandVoxels * s.voxelSize;
+    const int nb[3] = {(s.cells[0] + B - 1) / B, (s.cells[1] + B - 1) / B,
+                       (s.cells[2] + B - 1) / B};
+    const size_t numBlocks = static_cast<size_t>(nb[0]) * nb[1] * nb[2];
+    const int vx = s.vertices(0), vy = s.vertices(1);
+    auto at = [&](int i, int j, int k) {
+        i = std::min(i, s.cells[0]), j = std::min(j, s.cells[1]), k = std::min(k, s.cells[2]);
+        return (static_cast<size_t>(k) * vy + j) * vx + i;
+    };
+    // Per block: 1 = within the band (its vertices need their own sign), else 2 + inside.
+    std::vector<uint8_t> state(numBlocks);
+    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    arena.execute([&] {
+        tbb::parallel_for(size_t(0), numBlocks, [&](size_t b) {
+            int bi = static_cast<int>(b % nb[0]), bj = static_cast<int>((b / nb[0]) % nb[1]),
+                bk = static_cast<int>(b / (static_cast<size_t>(nb[0]) * nb[1]));
+            bool near = false;
+            for (int k = 0; k <= B && !near; ++k)
+                for (int j = 0; j <= B && !near; ++j)
+                    for (int i = 0; i <= B && !near; ++i)
+                        near = std::fabs(d[at(bi * B + i, bj * B + j, bk * B + k)]) < band;
+            if (near) {
+                state[b] = 1;
+                return;
+            }
+            Vec3 lo = s.origin + Vec3(bi * B, bj * B, bk * B) * s.voxelSize;
+            Vec3 hi =
+                s.origin + Vec3(std::min(bi * B + B, s.cells[0]), std::min(bj * B + B, s.cells[1]),
+                                std::min(bk * B + B, s.cells[2])) *
+                               s.voxelSize;
+            state[b] = test.inside((lo + hi) * 0.5f) ? 3 : 2;
+        });
+    });
+    // A vertex needs its own sign when any block holding it is within the band.
+    auto blockOf = [&](int i, int j, int k) {
+        return (static_cast<size_t>(k) * nb[1] + j) * nb[0] + i;
+    };
+    forEachVertex(s, threads, [&](int i, int j, int k, size_t idx, Vec3 p) {
+        // The blocks holding vertex v along an axis: v / B, and v / B - 1 on a shared face.
+        auto range = [&](int v, int n, int& lo, int& hi) {
+            hi = std::min(v / B, n - 1);
+            lo = v % B == 0 && v > 0 ? v / B - 1 : hi;
+        };
+        int bi0, bi1, bj0, bj1, bk0, bk1;
+        range(i, nb[0], bi0, bi1);
+        range(j, nb[1], bj0, bj1);
+        range(k, nb[2], bk0, bk1);
+        bool own = false;
+        uint8_t any = 2;
+        for (int bk = bk0; bk <= bk1; ++bk)
+            for (int bj = bj0; bj <= bj1; ++bj)
+                for (int bi = bi0; bi <= bi1; ++bi) {
+                    uint8_t st = state[blockOf(bi, bj, bk)];
+                    own |= st == 1;
+                    any = st;
+                }
+        bool in = own ? test.inside(p) : any == 3;
         d[idx] = in ? -std::fabs(d[idx]) : std::fabs(d[idx]);
     });
 }
