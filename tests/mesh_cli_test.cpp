@@ -64,7 +64,8 @@ TEST(MeshCli, MeshObjectsInSceneFilesAreBakedOnLoad) {
       "lights": [{"type": "directional", "direction": [-1, -1, -1]}],
       "materials": {"clay": {"color": [0.8, 0.5, 0.4]}},
       "objects": [{"mesh": ")" + mesh("bunny_npm.obj") +
-                                    R"(", "resolution": 48, "method": "jfa", "material": "clay"},
+                                    R"(", "resolution": 48, "method": "jfa", "sign": "flood",
+                   "band": 4, "material": "clay"},
                   {"type": "plane", "normal": [0, 1, 0], "distance": 0.03}]})");
     RunResult r = runCli(
         "render -q " + scene + " -o " + dir.file("m.png") + " --aov depth=" + dir.file("d.pfm"),
@@ -86,11 +87,22 @@ TEST(MeshCli, MeshObjectsInSceneFilesAreBakedOnLoad) {
     for (size_t i = 0; i < depth.size(); ++i)
         covered += std::isfinite(depth[i]) && !(std::fabs(depth[i] - floor[i]) < 1e-3f);
     EXPECT_GT(covered, 200);
-    std::string bad = dir.write("bad.json", R"({"objects": [{"mesh": "missing.obj"}]})");
-    RunResult b = runCli("render -q " + bad + " -o " + dir.file("x.png"), dir);
-    EXPECT_NE(b.status, 0);
-    EXPECT_NE(b.err.find("/objects/0/mesh"), std::string::npos) << b.err;
-    EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
+    struct Bad {
+        std::string objects, path;
+    } bads[] = {
+        {R"({"mesh": "missing.obj"})", "/objects/0/mesh"},
+        {R"({"mesh": ")" + mesh("bunny_npm.obj") + R"(", "sign": "flood"})", "/objects/0/sign"},
+        {R"({"mesh": ")" + mesh("bunny_npm.obj") + R"(", "sign": "magic"})", "/objects/0/sign"},
+        {R"({"mesh": ")" + mesh("bunny_npm.obj") + R"(", "band": 1})", "/objects/0/band"},
+    };
+    for (const Bad& c : bads) {
+        std::string bad = dir.write("bad.json", R"({"objects": [)" + c.objects + "]}");
+        RunResult b = runCli("render -q " + bad + " -o " + dir.file("x.png"), dir);
+        EXPECT_NE(b.status, 0) << c.objects;
+        EXPECT_EQ(std::count(b.err.begin(), b.err.end(), '\n'), 1) << b.err;
+        EXPECT_NE(b.err.find(c.path), std::string::npos) << b.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
+    }
 }
 
 // Every method through the CLI: the summary names its stages, and the grid it writes loads and

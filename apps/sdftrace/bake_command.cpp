@@ -113,10 +113,7 @@ int bakeMesh(const BakeArgs& a) {
         throw InputError("--method " + a.method + ": unknown; accepted: " + kMeshBakeMethods);
     }
     o.sampling = sampleOptions(a);
-    o.sign = a.sign == "parity"  ? SignMethod::RayParity
-             : a.sign == "flood" ? SignMethod::FloodFill
-             : a.sign == "beta"  ? SignMethod::BetaShell
-                                 : SignMethod::WindingNumber;
+    parseSignMethod(a.sign, o.sign);  // CLI11 checked the name
     o.jfaVariant = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
                    : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
                                              : JfaVariant::Plain;

@@ -1,6 +1,8 @@
 // How a mesh bake decides inside from outside.
 #pragma once
 
+#include <string>
+
 namespace sdft {
 
 enum class SignMethod {
@@ -14,5 +16,8 @@ enum class SignMethod {
 };
 
 const char* signMethodName(SignMethod m);
+// "winding", "parity", "flood", "beta" (the CLI's and scene files' names); false if unknown.
+bool parseSignMethod(const std::string& name, SignMethod& out);
+constexpr const char* kSignMethods = "winding, parity, flood, beta";
 
 }  // namespace sdft

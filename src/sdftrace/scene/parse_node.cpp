@@ -157,9 +157,19 @@ std::shared_ptr<const Grid> bakeMeshObject(const Reader& r, NodeContext& ctx) {
     MeshBakeOptions bake;
     if (!parseMeshBakeMethod(method, bake.method))
         r.failKey("method", "unknown method '" + method + "'; accepted: " + kMeshBakeMethods);
+    std::string sign = r.string("sign", "winding");
+    if (!parseSignMethod(sign, bake.sign))
+        r.failKey("sign", "unknown sign '" + sign + "'; accepted: " + kSignMethods);
+    o.bandVoxels = r.number(
+        "band", 3.0f, [](double v) { return v >= 2 && v <= 64; }, "a band in [2, 64] voxels");
     bake.sampling = o;
-    std::string key =
-        path.lexically_normal().string() + "|" + method + "|" + std::to_string(o.resolution);
+    try {
+        validateMeshBakeOptions(bake);
+    } catch (const InputError& e) {
+        r.failKey("sign", e.what());
+    }
+    std::string key = path.lexically_normal().string() + "|" + method + "|" + sign + "|" +
+                      std::to_string(o.resolution) + "|" + std::to_string(o.bandVoxels);
     auto it = ctx.grids.find(key);
     if (it != ctx.grids.end()) return it->second;
     try {
@@ -197,9 +207,11 @@ NodePtr parseNode(const Reader& r, NodeContext& mats) {
         r.allowKeys({"grid", "material", "translate", "rotate", "scale"});
         return finishNode(r, node::grid(loadGridObject(r, mats, "grid")), mats);
     }
-    // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact" | "jfa"}.
+    // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact", "sign":
+    // "winding", "band": 3}.
     if (!r.has("type") && r.has("mesh")) {
-        r.allowKeys({"mesh", "resolution", "method", "material", "translate", "rotate", "scale"});
+        r.allowKeys({"mesh", "resolution", "method", "sign", "band", "material", "translate",
+                     "rotate", "scale"});
         return finishNode(r, node::grid(bakeMeshObject(r, mats)), mats);
     }
     std::string type = r.string("type");
