@@ -147,6 +147,8 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
          "--sign flood: method exact accepts winding or parity"},
         {"bake " + mesh("bunny_npm.obj") + " --method rtsdf --rays 0 -o " + dir.file("x.sdfg"),
          "--rays"},
+        {"bake " + mesh("bunny_npm.obj") + " --method jfa --res 4096 -o " + dir.file("x.sdfg"),
+         "--res 4096: this bake needs about"},
         {"bake " + mesh("bunny_npm.obj") + " --jfa-variant 3+jfa -o " + dir.file("x.sdfg"),
          "--jfa-variant"},
         {"render -q " + garbage + " -o " + dir.file("x.png"), "cannot read mesh"},

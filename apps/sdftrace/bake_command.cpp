@@ -82,6 +82,19 @@ SampleOptions sampleOptions(const BakeArgs& a) {
     return o;
 }
 
+// Refuses work whose dense arrays would take more than 40% of the machine's memory.
+void checkMemory(double bytes, int resolution) {
+    double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+    if (bytes > 0.4 * have) {
+        char line[200];
+        std::snprintf(line, sizeof line,
+                      "--res %d: this bake needs about %.1f GiB, more than this machine can hold "
+                      "(%.1f GiB); use a lower resolution or a sparse exact bake",
+                      resolution, bytes / (1 << 30), have / (1 << 30));
+        throw InputError(line);
+    }
+}
+
 double seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
     return std::chrono::duration<double>(b - a).count();
 }
@@ -125,6 +138,18 @@ int bakeMesh(const BakeArgs& a) {
     auto t0 = std::chrono::steady_clock::now();
     MeshReport report;
     TriangleMesh mesh = loadMesh(a.scene, &report);
+    {
+        // Bytes per vertex of the working arrays: samples (sparse exact: per-block tables only);
+        // rtsdf adds a coarse grid;
+        // the propagation methods hold seed points, triangles and ping-pong or feature arrays.
+        double perVertex = o.method == MeshBakeMethod::Exact
+                               ? (o.sampling.kind == GridKind::Dense ? 4 : 0.2)  // block tables
+                           : o.method == MeshBakeMethod::Rtsdf ? 8
+                                                               : 40;
+        if (a.verify) perVertex += 8;
+        GridShape shape = gridShapeFor(mesh.bounds(), o.sampling);
+        checkMemory(perVertex * static_cast<double>(shape.vertexCount()), a.resolution);
+    }
     std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.scene.c_str(), report.summary().c_str());
     auto t1 = std::chrono::steady_clock::now();
     MeshBakeResult r = bakeMesh(mesh, o);
@@ -184,13 +209,7 @@ int runBake(const BakeArgs& a) {
     }
     SampleOptions o = sampleOptions(a);
     GridShape shape = gridShapeFor(region, o);
-    double bytes = static_cast<double>(shape.vertexCount()) * sizeof(float);
-    double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-    if (bytes > 0.4 * have) {
-        throw InputError("--res " + std::to_string(a.resolution) + ": sampling needs " +
-                         std::to_string(bytes / (1 << 30)) +
-                         " GiB, more than this machine can hold; use a lower resolution");
-    }
+    checkMemory(static_cast<double>(shape.vertexCount()) * sizeof(float), a.resolution);
     auto t0 = std::chrono::steady_clock::now();
     Grid grid = sampleGrid(tape, region, o);
     auto t1 = std::chrono::steady_clock::now();
