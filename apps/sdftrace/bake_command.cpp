@@ -88,8 +88,8 @@ void checkMemory(double bytes, int resolution) {
     if (bytes > 0.4 * have) {
         char line[200];
         std::snprintf(line, sizeof line,
-                      "--res %d: this bake needs about %.1f GiB, more than this machine can hold "
-                      "(%.1f GiB); use a lower resolution or a sparse exact bake",
+                      "--res %d: this bake needs about %.1f GiB, more than 40%% of this machine's "
+                      "%.1f GiB; use a lower resolution or a sparse exact bake",
                       resolution, bytes / (1 << 30), have / (1 << 30));
         throw InputError(line);
     }
