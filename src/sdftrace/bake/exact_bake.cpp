@@ -9,6 +9,7 @@
 
 #include "sdftrace/bake/closest_point.h"
 #include "sdftrace/bake/winding_number.h"
+#include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/exec/progress.h"
 
 namespace sdft {
@@ -31,6 +32,10 @@ class RowSampler {
     bool watertight() const { return m_watertight; }
 
     bool inside(Vec3 p) const { return m_winding ? m_winding->inside(p) : m_bvh.insideByParity(p); }
+    // The integer winding number of a watertight mesh at p (the hierarchical sum, rounded: its
+    // error is a few hundredths). Only with SignMethod::WindingNumber.
+    int windingAt(Vec3 p) const { return static_cast<int>(std::lround(m_winding->fast(p))); }
+    bool hasWinding() const { return m_winding != nullptr; }
 
     // Vertices (i0 + n', j, k), n' < n, into out[0, n).
     void row(int i0, int j, int k, int n, float* out, std::atomic<size_t>& queries,
@@ -115,6 +120,8 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, Sign
 Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVoxels,
                      SignMethod sign, int threads, ExactBakeStats* stats, bool progress) {
     SDFT_CHECK(B == 4 || B == 8);
+    // B is 4 or 8: shifts and masks instead of divisions in the per-vertex index arithmetic.
+    const int shift = B == 4 ? 2 : 3, mask = B - 1;
     SDFT_CHECK(bandVoxels >= 2);
     const TriangleMesh& mesh = bvh.mesh();
     RowSampler sampler(bvh, s, sign);
@@ -126,8 +133,10 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     auto blockIndex = [&](int bi, int bj, int bk) {
         return (static_cast<size_t>(bk) * nb[1] + bj) * nb[0] + bi;
     };
-    // Vertex v belongs to owner v / B; one more owner layer holds the last vertices of each axis.
-    const int no[3] = {s.cells[0] / B + 1, s.cells[1] / B + 1, s.cells[2] / B + 1};
+    // Vertex v belongs to owner (v >> shift); one more owner layer holds the last vertices of each
+    // axis.
+    const int no[3] = {(s.cells[0] >> shift) + 1, (s.cells[1] >> shift) + 1,
+                       (s.cells[2] >> shift) + 1};
     const size_t numOwners = static_cast<size_t>(no[0]) * no[1] * no[2];
     auto ownerIndex = [&](int oi, int oj, int ok) {
         return (static_cast<size_t>(ok) * no[1] + oj) * no[0] + oi;
@@ -143,7 +152,8 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
         int lo[3], hi[3];
     };
     std::vector<Range> ranges(mesh.triangles.size());
-    std::vector<uint32_t> listStart(numOwners + 1, 0);
+    std::vector<uint32_t> listStart;
+    assignHuge(listStart, numOwners + 1, 0u);
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
         const auto& tri = mesh.triangles[t];
         Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
@@ -155,21 +165,22 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
             r.hi[axis] = std::min(nv[axis] - 1, static_cast<int>(std::floor(hi[axis])));
         }
         if (r.lo[0] > r.hi[0] || r.lo[1] > r.hi[1] || r.lo[2] > r.hi[2]) continue;
-        for (int ok = r.lo[2] / B; ok <= r.hi[2] / B; ++ok)
-            for (int oj = r.lo[1] / B; oj <= r.hi[1] / B; ++oj)
-                for (int oi = r.lo[0] / B; oi <= r.hi[0] / B; ++oi)
+        for (int ok = (r.lo[2] >> shift); ok <= (r.hi[2] >> shift); ++ok)
+            for (int oj = (r.lo[1] >> shift); oj <= (r.hi[1] >> shift); ++oj)
+                for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi)
                     ++listStart[ownerIndex(oi, oj, ok) + 1];
     }
     for (size_t o = 0; o < numOwners; ++o) listStart[o + 1] += listStart[o];
-    std::vector<uint32_t> lists(listStart[numOwners]);
+    std::vector<uint32_t> lists;
+    assignHuge(lists, listStart[numOwners], 0u);
     {
         std::vector<uint32_t> fill(listStart.begin(), listStart.end() - 1);
         for (size_t t = 0; t < mesh.triangles.size(); ++t) {
             const Range& r = ranges[t];
             if (r.lo[0] > r.hi[0] || r.lo[1] > r.hi[1] || r.lo[2] > r.hi[2]) continue;
-            for (int ok = r.lo[2] / B; ok <= r.hi[2] / B; ++ok)
-                for (int oj = r.lo[1] / B; oj <= r.hi[1] / B; ++oj)
-                    for (int oi = r.lo[0] / B; oi <= r.hi[0] / B; ++oi)
+            for (int ok = (r.lo[2] >> shift); ok <= (r.hi[2] >> shift); ++ok)
+                for (int oj = (r.lo[1] >> shift); oj <= (r.hi[1] >> shift); ++oj)
+                    for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi)
                         lists[fill[ownerIndex(oi, oj, ok)]++] = static_cast<uint32_t>(t);
         }
     }
@@ -181,9 +192,11 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     // 2. Blocks none of whose owners list a triangle hold no vertex within the band, hence no
     // surface (it would pass within half a cell diagonal of a vertex): one sign for the block. The
     // others are candidates, and need all 8 of their owners.
-    std::vector<uint8_t> flags(numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
-    std::vector<uint8_t> candidate(numBlocks, 0);
-    std::vector<int32_t> slot(numOwners, -1);
+    std::vector<uint8_t> flags, candidate;
+    assignHuge(flags, numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
+    assignHuge(candidate, numBlocks, uint8_t{0});
+    std::vector<int32_t> slot;
+    assignHuge(slot, numOwners, -1);
     std::vector<uint8_t> rowNeeded(static_cast<size_t>(no[1]) * no[2], 0);
     for (int bk = 0; bk < nb[2]; ++bk)
         for (int bj = 0; bj < nb[1]; ++bj)
@@ -207,8 +220,8 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     for (int32_t& sl : slot)
         if (sl == 0) sl = owners++;
     const size_t perOwner = static_cast<size_t>(B) * B * B;
-    // Uninitialized: every needed owner fills its samples below.
-    std::unique_ptr<float[]> owned(new float[static_cast<size_t>(owners) * perOwner]);
+    std::vector<float> owned;
+    assignHuge(owned, static_cast<size_t>(owners) * perOwner, 0.0f);
 
     // 3. Distances, one task per row of owners.
     const float step = h * 1.001f;
@@ -224,7 +237,7 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                     size_t o = ownerIndex(oi, oj, ok);
                     int32_t sl = slot[o];
                     if (sl < 0) continue;
-                    float* out = owned.get() + sl * perOwner;
+                    float* out = owned.data() + sl * perOwner;
                     std::fill(out, out + perOwner, reach);
                     const int i0 = oi * B, j0 = oj * B, k0 = ok * B;
                     for (uint32_t n = listStart[o]; n < listStart[o + 1]; ++n) {
@@ -259,8 +272,9 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     }
     auto vertex = [&](int i, int j, int k) {
         i = std::min(i, s.cells[0]), j = std::min(j, s.cells[1]), k = std::min(k, s.cells[2]);
-        int32_t sl = slot[ownerIndex(i / B, j / B, k / B)];
-        return owned[sl * perOwner + (static_cast<size_t>(k % B) * B + j % B) * B + i % B];
+        int32_t sl = slot[ownerIndex((i >> shift), (j >> shift), (k >> shift))];
+        return owned[sl * perOwner + (static_cast<size_t>((k & mask)) * B + (j & mask)) * B +
+                     (i & mask)];
     };
 
     // 4. Surface blocks: a (clamped, unsigned) sample within the band. A sign change needs the
@@ -268,7 +282,16 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     // one. Only the vertices of surface blocks are signed one by one.
     const int V = B + 1;
     const size_t perBlock = static_cast<size_t>(V) * V * V;
-    std::vector<uint8_t> keep(numBlocks, 0);
+    std::vector<uint8_t> keep;
+    assignHuge(keep, numBlocks, uint8_t{0});
+    // Per owned vertex: whether a surface block holds it (set from every such block).
+    std::vector<uint8_t> neededFlag;
+    assignHuge(neededFlag, static_cast<size_t>(owners) * perOwner, uint8_t{0});
+    auto localIndex = [&](int i, int j, int k) {
+        i = std::min(i, s.cells[0]), j = std::min(j, s.cells[1]), k = std::min(k, s.cells[2]);
+        return slot[ownerIndex((i >> shift), (j >> shift), (k >> shift))] * perOwner +
+               (static_cast<size_t>((k & mask)) * B + (j & mask)) * B + (i & mask);
+    };
     arena.execute([&] {
         tbb::parallel_for(size_t(0), numBlocks, [&](size_t b) {
             if (!candidate[b]) return;
@@ -280,25 +303,65 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                     for (int i = 0; i < V && !near; ++i)
                         near = vertex(bi * B + i, bj * B + j, bk * B + k) < reach;
             keep[b] = near;
+            if (!near) return;
+            // Shared faces are marked by both blocks: relaxed atomic stores of the same 1.
+            for (int k = 0; k < V; ++k)
+                for (int j = 0; j < V; ++j)
+                    for (int i = 0; i < V; ++i)
+                        std::atomic_ref<uint8_t>(
+                            neededFlag[localIndex(bi * B + i, bj * B + j, bk * B + k)])
+                            .store(1, std::memory_order_relaxed);
         });
     });
-    // Whether a vertex belongs to a surface block (v / B, or v / B - 1 on a shared face).
-    auto needed = [&](int i, int j, int k) {
-        int lo[3], hi[3], v[3] = {i, j, k};
-        for (int a = 0; a < 3; ++a) {
-            hi[a] = std::min(v[a] / B, nb[a] - 1);
-            lo[a] = v[a] % B == 0 && v[a] > 0 ? v[a] / B - 1 : hi[a];
+    // Per triangle: bounds, unit normal and twice the area, for the crossing tests.
+    struct Plane {
+        Vec3 lo, hi, normal;
+        float area2;
+    };
+    std::vector<Plane> planes(watertight ? mesh.triangles.size() : 0);
+    for (size_t t = 0; t < planes.size(); ++t) {
+        const auto& tri = mesh.triangles[t];
+        Vec3 t0 = mesh.positions[tri[0]], t1 = mesh.positions[tri[1]], t2 = mesh.positions[tri[2]];
+        Vec3 n = cross(t1 - t0, t2 - t0);
+        float len = length(n);
+        planes[t] = {min(t0, min(t1, t2)), max(t0, max(t1, t2)), len > 0 ? n / len : Vec3(0.0f),
+                     len};
+    }
+    auto crossings = [&](Vec3 a, Vec3 b, size_t o, int& delta) {
+        const float eps = 1e-5f * h;
+        const Vec3 slo = min(a, b) - Vec3(eps), shi = max(a, b) + Vec3(eps);
+        delta = 0;
+        for (uint32_t n = listStart[o]; n < listStart[o + 1]; ++n) {
+            const Plane& pl = planes[lists[n]];
+            if (pl.area2 == 0 || pl.lo.x > shi.x || pl.lo.y > shi.y || pl.lo.z > shi.z ||
+                pl.hi.x < slo.x || pl.hi.y < slo.y || pl.hi.z < slo.z)
+                continue;
+            const auto& tri = mesh.triangles[lists[n]];
+            Vec3 t0 = mesh.positions[tri[0]], t1 = mesh.positions[tri[1]],
+                 t2 = mesh.positions[tri[2]];
+            float da = dot(a - t0, pl.normal), db = dot(b - t0, pl.normal);
+            if ((da > eps && db > eps) || (da < -eps && db < -eps)) continue;
+            if (std::fabs(da - db) < eps) return false;  // along the plane
+            Vec3 x = a + (b - a) * (da / (da - db));
+            float u = dot(cross(t1 - x, t2 - x), pl.normal) / pl.area2,
+                  v = dot(cross(t2 - x, t0 - x), pl.normal) / pl.area2, w = 1 - u - v;
+            float lo = std::fmin(u, std::fmin(v, w));
+            if (lo < -1e-5f) continue;  // misses the triangle
+            // Near an edge or corner, or an end on the surface: undecided.
+            if (lo < 1e-5f || std::fabs(da) <= eps || std::fabs(db) <= eps) return false;
+            delta += da > 0 ? 1 : -1;
         }
-        for (int bk = lo[2]; bk <= hi[2]; ++bk)
-            for (int bj = lo[1]; bj <= hi[1]; ++bj)
-                for (int bi = lo[0]; bi <= hi[0]; ++bi)
-                    if (keep[blockIndex(bi, bj, bk)]) return true;
-        return false;
+        return true;
     };
 
     // 5. Signs of the surface blocks' vertices, one task per row of owners so that signs carry
-    // along vertex rows (watertight meshes: the winding number only within a voxel of the
-    // surface, at chain starts, and where a -y or -z neighbour cannot vouch).
+    // along vertex rows. On a watertight mesh the winding number is an integer: it is carried
+    // from the previous vertex of the row (or the -y / -z one at a chain start) unchanged where
+    // one of the two is farther than a voxel from the surface, and through the signed crossings
+    // of the segment between them otherwise; it is evaluated only where no neighbour can vouch.
+    const bool integerWinding = watertight && sampler.hasWinding();
+    std::vector<int8_t> winding;
+    assignHuge(winding, integerWinding ? static_cast<size_t>(owners) * perOwner : 0, int8_t{0});
     arena.execute([&] {
         tbb::parallel_for(0, no[1] * no[2], [&](int row) {
             const int oj = row % no[1], ok = row / no[1];
@@ -308,40 +371,65 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                 for (int j = oj * B; j < std::min(oj * B + B, nv[1]); ++j) {
                     float prev = -1;
                     bool prevInside = false;
+                    int prevWinding = 0;
                     for (int i = 0; i < nv[0]; ++i) {
-                        int32_t sl = slot[ownerIndex(i / B, oj, ok)];
+                        const size_t o = ownerIndex((i >> shift), oj, ok);
+                        int32_t sl = slot[o];
                         if (sl < 0) {
-                            i = (i / B) * B + B - 1;  // skip the owner; the chain breaks
+                            i = ((i >> shift)) * B + B - 1;  // skip the owner; the chain breaks
                             prev = -1;
                             continue;
                         }
-                        if (!needed(i, j, k)) {
+                        const size_t local =
+                            sl * perOwner + (((k & mask)) * B + ((j & mask))) * B + ((i & mask));
+                        if (!neededFlag[local]) {
                             prev = -1;
                             continue;
                         }
-                        float& v = owned[sl * perOwner + ((k % B) * B + (j % B)) * B + (i % B)];
+                        float& v = owned[local];
                         const float d = v;
-                        bool in;
-                        float across = -1;  // the signed -y or -z neighbour in this owner
-                        if (watertight && prev < 0 && (j % B != 0 || k % B != 0)) {
-                            bool ny = j % B != 0;
-                            if (ny ? needed(i, j - 1, k) : needed(i, j, k - 1))
-                                across = ny ? owned[sl * perOwner +
-                                                    ((k % B) * B + (j % B - 1)) * B + (i % B)]
-                                            : owned[sl * perOwner +
-                                                    ((k % B - 1) * B + (j % B)) * B + (i % B)];
+                        const Vec3 p = sampler.position(i, j, k);
+                        // The vouching neighbour: the previous vertex of the chain, else the
+                        // signed -y or -z one in this owner.
+                        bool have = prev >= 0;
+                        float nd = prev;
+                        bool nInside = prevInside;
+                        int nWinding = prevWinding;
+                        Vec3 np = sampler.position(i - 1, j, k);
+                        if (watertight && !have && ((j & mask) != 0 || (k & mask) != 0)) {
+                            bool ny = (j & mask) != 0;
+                            size_t nl = ny ? local - B : local - B * B;
+                            if (neededFlag[nl]) {
+                                nd = std::fabs(owned[nl]);
+                                nInside = owned[nl] < 0;
+                                if (integerWinding) nWinding = winding[nl];
+                                np = ny ? sampler.position(i, j - 1, k)
+                                        : sampler.position(i, j, k - 1);
+                                have = true;
+                            }
                         }
-                        if (watertight && prev >= 0 && (d > step || prev > step)) {
-                            in = prevInside;
-                        } else if (across != -1 && (d > step || std::fabs(across) > step)) {
-                            in = across < 0;
+                        bool in;
+                        int w = 0;
+                        int delta = 0;
+                        if (watertight && have && (d > step || nd > step)) {
+                            in = nInside;
+                            w = nWinding;
+                        } else if (integerWinding && have && crossings(np, p, o, delta)) {
+                            w = nWinding + delta;
+                            in = w > 0;
+                        } else if (integerWinding) {
+                            w = sampler.windingAt(p);
+                            in = w > 0;
+                            ++evaluated;
                         } else {
-                            in = sampler.inside(sampler.position(i, j, k));
+                            in = sampler.inside(p);
                             ++evaluated;
                         }
+                        if (integerWinding) winding[local] = static_cast<int8_t>(w);
                         v = in ? -d : d;
                         prev = d;
                         prevInside = in;
+                        prevWinding = w;
                     }
                 }
             signs += evaluated;
@@ -384,7 +472,8 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     std::vector<size_t> kept;
     for (size_t b = 0; b < numBlocks; ++b)
         if (keep[b]) kept.push_back(b);
-    std::vector<float> blockSamples(kept.size() * perBlock);
+    std::vector<float> blockSamples;
+    assignHuge(blockSamples, kept.size() * perBlock, 0.0f);
     arena.execute([&] {
         tbb::parallel_for(size_t(0), kept.size(), [&](size_t n) {
             size_t b = kept[n];
@@ -392,8 +481,15 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                 bk = static_cast<int>(b / (static_cast<size_t>(nb[0]) * nb[1]));
             float* out = blockSamples.data() + n * perBlock;
             for (int k = 0; k < V; ++k)
-                for (int j = 0; j < V; ++j)
-                    for (int i = 0; i < V; ++i) *out++ = vertex(bi * B + i, bj * B + j, bk * B + k);
+                for (int j = 0; j < V; ++j) {
+                    // The first B vertices of a row lie in one owner (unless clamped at the end).
+                    int i = 0;
+                    if (bi * B + B <= s.cells[0]) {
+                        const float* row = &owned[localIndex(bi * B, bj * B + j, bk * B + k)];
+                        for (; i < B; ++i) *out++ = row[i];
+                    }
+                    for (; i < V; ++i) *out++ = vertex(bi * B + i, bj * B + j, bk * B + k);
+                }
         });
     });
     report(stats, queries, signs);

@@ -305,6 +305,41 @@ TEST(MeshBake, BakedBunnyRendersLikeRayCastTriangles) {
 namespace sdft {
 namespace {
 
+// Two overlapping closed spheres in one mesh: watertight, winding number 2 in the overlap. The
+// narrow-band bake carries the integer winding number through segment crossings; its signs must
+// match the winding number's everywhere (the overlap is inside, not a parity flip).
+TEST(MeshBake, IntegerWindingThroughSelfIntersectingShells) {
+    TriangleMesh a = testing::icosphere(3), mesh = a;
+    for (const auto& t : a.triangles) {
+        uint32_t o = static_cast<uint32_t>(a.positions.size());
+        mesh.triangles.push_back({t[0] + o, t[1] + o, t[2] + o});
+    }
+    for (Vec3 p : a.positions) mesh.positions.push_back(p + Vec3(0.7f, 0.1f, 0.05f));
+    ASSERT_TRUE(isWatertight(mesh));
+    MeshBvh bvh(mesh);
+    WindingNumber winding(mesh);
+    SampleOptions so;
+    so.resolution = 32;
+    GridShape s = gridShapeFor(mesh.bounds(), so);
+    ExactBakeStats st;
+    Grid g = bakeExactSparse(bvh, s, 4, 3, SignMethod::WindingNumber, 0, &st);
+    GridView v = g.view();
+    size_t checked = 0, overlap = 0;
+    for (int k = 0; k <= s.cells[2]; ++k)
+        for (int j = 0; j <= s.cells[1]; ++j)
+            for (int i = 0; i <= s.cells[0]; ++i) {
+                Vec3 p = s.origin + Vec3(i, j, k) * s.voxelSize;
+                double w = winding.exact(p);
+                if (std::fabs(w - std::round(w)) > 0.01) continue;  // on a surface
+                ASSERT_EQ(v.vertex(i, j, k) < 0, w > 0.5) << i << "," << j << "," << k;
+                ++checked;
+                overlap += w > 1.5;
+            }
+    EXPECT_GT(overlap, 100u);
+    EXPECT_GT(checked, 20000u);
+    EXPECT_LT(st.signEvaluations, checked / 10);  // carried, not evaluated
+}
+
 // Every method gives the same grid on 1 and 2 threads (per-vertex random streams, slab-ordered
 // seeding, owner-ordered scattering).
 TEST(MeshBake, ThreadCountDoesNotChangeTheGrid) {

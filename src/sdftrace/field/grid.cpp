@@ -8,6 +8,7 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
+#include "sdftrace/exec/huge_pages.h"
 
 namespace sdft {
 
@@ -37,8 +38,8 @@ Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& sam
     g.m_background = (bandVoxels - 1) * shape.voxelSize;
     const float band = bandVoxels * shape.voxelSize;
     const size_t numBlocks = static_cast<size_t>(g.m_blocks[0]) * g.m_blocks[1] * g.m_blocks[2];
-    g.m_flags.assign(numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
-    g.m_blockData.assign(numBlocks, -1);
+    assignHuge(g.m_flags, numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
+    assignHuge(g.m_blockData, numBlocks, int32_t{-1});
     const int V = B + 1;
     GridView dense;
     dense.kind = GridKind::Dense;
@@ -88,7 +89,7 @@ Grid Grid::sparseFromBuffers(const GridShape& shape, int B, float background,
     size_t numBlocks = static_cast<size_t>(g.m_blocks[0]) * g.m_blocks[1] * g.m_blocks[2];
     if (flags.size() != numBlocks)
         throw InputError(source + ": block flag count does not match the grid size");
-    g.m_blockData.assign(numBlocks, -1);
+    assignHuge(g.m_blockData, numBlocks, int32_t{-1});
     size_t perBlock = static_cast<size_t>(B + 1) * (B + 1) * (B + 1);
     int32_t next = 0;
     for (size_t b = 0; b < numBlocks; ++b) {
@@ -207,7 +208,7 @@ void Grid::computeCellMasks() {
     const int B = m_blockSize;
     const int words = (B * B * B + 63) / 64;
     size_t surfaceBlocks = m_blockSamples.size() / (static_cast<size_t>(B + 1) * (B + 1) * (B + 1));
-    m_cellMasks.assign(surfaceBlocks * words, 0);
+    assignHuge(m_cellMasks, surfaceBlocks * words, uint64_t{0});
     forEachCell(view(), [&](int i, int j, int k, const float c[8]) {
         size_t block = (static_cast<size_t>(k / B) * m_blocks[1] + j / B) * m_blocks[0] + i / B;
         int32_t data = m_blockData[block];

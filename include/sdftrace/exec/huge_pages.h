@@ -1,0 +1,25 @@
+// Large working arrays backed by transparent huge pages where the kernel offers them on request
+// (THP "madvise" mode, Debian's default): first touches then fault once per 2 MiB instead of once
+// per 4 KiB. On this project's VM the 4 KiB faults were a third of a narrow-band bake.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace sdft {
+
+// Advises the kernel to back [data, data + bytes) with huge pages (the 2 MiB-aligned interior);
+// a no-op where unsupported.
+void adviseHugePages(void* data, size_t bytes);
+
+// v = n copies of value, allocated first, advised, then written (std::vector touches its memory
+// when it fills it, so the advice must come between).
+template <class T>
+void assignHuge(std::vector<T>& v, size_t n, const T& value) {
+    std::vector<T>().swap(v);
+    v.reserve(n);
+    adviseHugePages(v.data(), n * sizeof(T));
+    v.assign(n, value);
+}
+
+}  // namespace sdft
