@@ -32,9 +32,10 @@ class RowSampler {
     bool watertight() const { return m_watertight; }
 
     bool inside(Vec3 p) const { return m_winding ? m_winding->inside(p) : m_bvh.insideByParity(p); }
-    // The integer winding number of a watertight mesh at p (the hierarchical sum, rounded: its
-    // error is a few hundredths). Only with SignMethod::WindingNumber.
-    int windingAt(Vec3 p) const { return static_cast<int>(std::lround(m_winding->fast(p))); }
+    // The integer winding number of a watertight mesh at p: the hierarchical sum at the coarse
+    // beta of WindingNumber::inside (trusted there to 0.3), rounded. Only with
+    // SignMethod::WindingNumber.
+    int windingAt(Vec3 p) const { return static_cast<int>(std::lround(m_winding->fast(p, 1.5))); }
     bool hasWinding() const { return m_winding != nullptr; }
 
     // Vertices (i0 + n', j, k), n' < n, into out[0, n).
@@ -151,39 +152,49 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     struct Range {
         int lo[3], hi[3];
     };
-    std::vector<Range> ranges(mesh.triangles.size());
-    std::vector<uint32_t> listStart;
-    assignHuge(listStart, numOwners + 1, 0u);
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-        const auto& tri = mesh.triangles[t];
-        Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
-        Vec3 lo = (min(a, min(b, c)) - s.origin - Vec3(reach)) / h;
-        Vec3 hi = (max(a, max(b, c)) - s.origin + Vec3(reach)) / h;
-        Range& r = ranges[t];
-        for (int axis = 0; axis < 3; ++axis) {
-            r.lo[axis] = std::max(0, static_cast<int>(std::ceil(lo[axis])));
-            r.hi[axis] = std::min(nv[axis] - 1, static_cast<int>(std::floor(hi[axis])));
-        }
-        if (r.lo[0] > r.hi[0] || r.lo[1] > r.hi[1] || r.lo[2] > r.hi[2]) continue;
-        for (int ok = (r.lo[2] >> shift); ok <= (r.hi[2] >> shift); ++ok)
-            for (int oj = (r.lo[1] >> shift); oj <= (r.hi[1] >> shift); ++oj)
-                for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi)
-                    ++listStart[ownerIndex(oi, oj, ok) + 1];
-    }
-    for (size_t o = 0; o < numOwners; ++o) listStart[o + 1] += listStart[o];
-    std::vector<uint32_t> lists;
-    assignHuge(lists, listStart[numOwners], 0u);
-    {
-        std::vector<uint32_t> fill(listStart.begin(), listStart.end() - 1);
-        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-            const Range& r = ranges[t];
-            if (r.lo[0] > r.hi[0] || r.lo[1] > r.hi[1] || r.lo[2] > r.hi[2]) continue;
+    // Per owner, the triangles whose bounds grown by `grow` overlap its vertices (a prefix-summed
+    // list), and per triangle its vertex range.
+    struct OwnerLists {
+        std::vector<Range> ranges;
+        std::vector<uint32_t> start, items;
+    };
+    auto binTriangles = [&](float grow) {
+        OwnerLists l;
+        l.ranges.resize(mesh.triangles.size());
+        assignHuge(l.start, numOwners + 1, 0u);
+        auto forOwners = [&](const Range& r, auto&& f) {
             for (int ok = (r.lo[2] >> shift); ok <= (r.hi[2] >> shift); ++ok)
                 for (int oj = (r.lo[1] >> shift); oj <= (r.hi[1] >> shift); ++oj)
                     for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi)
-                        lists[fill[ownerIndex(oi, oj, ok)]++] = static_cast<uint32_t>(t);
+                        f(ownerIndex(oi, oj, ok));
+        };
+        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+            const auto& tri = mesh.triangles[t];
+            Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
+            Vec3 lo = (min(a, min(b, c)) - s.origin - Vec3(grow)) / h;
+            Vec3 hi = (max(a, max(b, c)) - s.origin + Vec3(grow)) / h;
+            Range& r = l.ranges[t];
+            for (int axis = 0; axis < 3; ++axis) {
+                r.lo[axis] = std::max(0, static_cast<int>(std::ceil(lo[axis])));
+                r.hi[axis] = std::min(nv[axis] - 1, static_cast<int>(std::floor(hi[axis])));
+            }
+            if (r.lo[0] > r.hi[0] || r.lo[1] > r.hi[1] || r.lo[2] > r.hi[2]) continue;
+            forOwners(r, [&](size_t o) { ++l.start[o + 1]; });
         }
-    }
+        for (size_t o = 0; o < numOwners; ++o) l.start[o + 1] += l.start[o];
+        assignHuge(l.items, l.start[numOwners], 0u);
+        std::vector<uint32_t> fill(l.start.begin(), l.start.end() - 1);
+        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+            const Range& r = l.ranges[t];
+            if (r.lo[0] > r.hi[0] || r.lo[1] > r.hi[1] || r.lo[2] > r.hi[2]) continue;
+            forOwners(r, [&](size_t o) { l.items[fill[o]++] = static_cast<uint32_t>(t); });
+        }
+        return l;
+    };
+    const OwnerLists bandLists = binTriangles(reach);
+    const std::vector<Range>& ranges = bandLists.ranges;
+    const std::vector<uint32_t>& listStart = bandLists.start;
+    const std::vector<uint32_t>& lists = bandLists.items;
     auto listed = [&](int oi, int oj, int ok) {
         size_t o = ownerIndex(oi, oj, ok);
         return listStart[o + 1] > listStart[o];
@@ -246,20 +257,29 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                         const auto& tri = mesh.triangles[t];
                         Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]],
                              c = mesh.positions[tri[2]];
-                        // Vertices farther than the band from the triangle's plane cannot be
-                        // closer than the band to it (large triangles' boxes are mostly such).
+                        // Lower bounds of the distance to the triangle, its plane's and its
+                        // bounding sphere's, skip vertices it cannot bring below their best so
+                        // far (the band to begin with).
                         Vec3 nrm = cross(b - a, c - a);
-                        float slab = reach * reach * dot(nrm, nrm) * 1.0001f;
+                        float invN2 = 1.0f / std::fmax(dot(nrm, nrm), 1e-37f);
+                        Vec3 centre = (a + b + c) / 3.0f;
+                        float radius = std::sqrt(std::fmax(
+                            dot(a - centre, a - centre),
+                            std::fmax(dot(b - centre, b - centre), dot(c - centre, c - centre))));
                         for (int k = std::max(k0, r.lo[2]); k <= std::min(k0 + B - 1, r.hi[2]); ++k)
                             for (int j = std::max(j0, r.lo[1]); j <= std::min(j0 + B - 1, r.hi[1]);
                                  ++j)
                                 for (int i = std::max(i0, r.lo[0]);
                                      i <= std::min(i0 + B - 1, r.hi[0]); ++i) {
                                     Vec3 p = sampler.position(i, j, k);
-                                    float plane = dot(p - a, nrm);
-                                    if (plane * plane > slab) continue;
-                                    float d = length(p - closestPointOnTriangle(p, a, b, c));
                                     float& best = out[((k - k0) * B + (j - j0)) * B + (i - i0)];
+                                    float plane = dot(p - a, nrm);
+                                    // 0.9999: margins far above the rounding of both bounds.
+                                    if (plane * plane * invN2 * 0.9999f > best * best) continue;
+                                    float reachOut = best + radius;
+                                    if (dot(p - centre, p - centre) * 0.9999f > reachOut * reachOut)
+                                        continue;
+                                    float d = length(p - closestPointOnTriangle(p, a, b, c));
                                     best = std::fmin(best, d);
                                 }
                     }
@@ -292,25 +312,30 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
         return slot[ownerIndex((i >> shift), (j >> shift), (k >> shift))] * perOwner +
                (static_cast<size_t>((k & mask)) * B + (j & mask)) * B + (i & mask);
     };
+    // A candidate block is a surface block when one of its samples lies within the band; its
+    // vertices then need signs.
+    auto markSurface = [&](size_t b) {
+        int bi = static_cast<int>(b % nb[0]), bj = static_cast<int>((b / nb[0]) % nb[1]),
+            bk = static_cast<int>(b / (static_cast<size_t>(nb[0]) * nb[1]));
+        bool near = false;
+        for (int k = 0; k < V && !near; ++k)
+            for (int j = 0; j < V && !near; ++j)
+                for (int i = 0; i < V && !near; ++i)
+                    near = vertex(bi * B + i, bj * B + j, bk * B + k) < reach;
+        keep[b] = near;
+        if (!near) return;
+        // Shared faces are marked by both blocks: relaxed atomic stores of the same 1.
+        for (int k = 0; k < V; ++k)
+            for (int j = 0; j < V; ++j)
+                for (int i = 0; i < V; ++i)
+                    std::atomic_ref<uint8_t>(
+                        neededFlag[localIndex(bi * B + i, bj * B + j, bk * B + k)])
+                        .store(1, std::memory_order_relaxed);
+    };
     arena.execute([&] {
-        tbb::parallel_for(size_t(0), numBlocks, [&](size_t b) {
-            if (!candidate[b]) return;
-            int bi = static_cast<int>(b % nb[0]), bj = static_cast<int>((b / nb[0]) % nb[1]),
-                bk = static_cast<int>(b / (static_cast<size_t>(nb[0]) * nb[1]));
-            bool near = false;
-            for (int k = 0; k < V && !near; ++k)
-                for (int j = 0; j < V && !near; ++j)
-                    for (int i = 0; i < V && !near; ++i)
-                        near = vertex(bi * B + i, bj * B + j, bk * B + k) < reach;
-            keep[b] = near;
-            if (!near) return;
-            // Shared faces are marked by both blocks: relaxed atomic stores of the same 1.
-            for (int k = 0; k < V; ++k)
-                for (int j = 0; j < V; ++j)
-                    for (int i = 0; i < V; ++i)
-                        std::atomic_ref<uint8_t>(
-                            neededFlag[localIndex(bi * B + i, bj * B + j, bk * B + k)])
-                            .store(1, std::memory_order_relaxed);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, numBlocks, 1024), [&](const auto& range) {
+            for (size_t b = range.begin(); b != range.end(); ++b)
+                if (candidate[b]) markSurface(b);
         });
     });
     // Per triangle: bounds, unit normal and twice the area, for the crossing tests.
@@ -327,16 +352,21 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
         planes[t] = {min(t0, min(t1, t2)), max(t0, max(t1, t2)), len > 0 ? n / len : Vec3(0.0f),
                      len};
     }
+    // Triangles meeting a segment of length h that ends at a vertex come within h of it: the
+    // crossing tests read lists grown by one voxel only.
+    const OwnerLists nearLists =
+        watertight && sampler.hasWinding() ? binTriangles(1.01f * h) : OwnerLists{};
     auto crossings = [&](Vec3 a, Vec3 b, size_t o, int& delta) {
         const float eps = 1e-5f * h;
         const Vec3 slo = min(a, b) - Vec3(eps), shi = max(a, b) + Vec3(eps);
         delta = 0;
-        for (uint32_t n = listStart[o]; n < listStart[o + 1]; ++n) {
-            const Plane& pl = planes[lists[n]];
+        for (uint32_t n = nearLists.start[o]; n < nearLists.start[o + 1]; ++n) {
+            const uint32_t t = nearLists.items[n];
+            const Plane& pl = planes[t];
             if (pl.area2 == 0 || pl.lo.x > shi.x || pl.lo.y > shi.y || pl.lo.z > shi.z ||
                 pl.hi.x < slo.x || pl.hi.y < slo.y || pl.hi.z < slo.z)
                 continue;
-            const auto& tri = mesh.triangles[lists[n]];
+            const auto& tri = mesh.triangles[t];
             Vec3 t0 = mesh.positions[tri[0]], t1 = mesh.positions[tri[1]],
                  t2 = mesh.positions[tri[2]];
             float da = dot(a - t0, pl.normal), db = dot(b - t0, pl.normal);
@@ -363,12 +393,17 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     std::vector<int8_t> winding;
     assignHuge(winding, integerWinding ? static_cast<size_t>(owners) * perOwner : 0, int8_t{0});
     arena.execute([&] {
-        tbb::parallel_for(0, no[1] * no[2], [&](int row) {
-            const int oj = row % no[1], ok = row / no[1];
-            if (!rowNeeded[row]) return;
+        // One task per slab of owners (B vertex layers in z): within it every vertex's -y and -z
+        // neighbours are signed before it.
+        tbb::parallel_for(0, no[2], [&](int ok) {
             size_t evaluated = 0;
             for (int k = ok * B; k < std::min(ok * B + B, nv[2]); ++k)
-                for (int j = oj * B; j < std::min(oj * B + B, nv[1]); ++j) {
+                for (int j = 0; j < nv[1]; ++j) {
+                    const int oj = j >> shift;
+                    if (!rowNeeded[static_cast<size_t>(ok) * no[1] + oj]) {
+                        j = oj * B + B - 1;
+                        continue;
+                    }
                     float prev = -1;
                     bool prevInside = false;
                     int prevWinding = 0;
@@ -390,24 +425,27 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                         const float d = v;
                         const Vec3 p = sampler.position(i, j, k);
                         // The vouching neighbour: the previous vertex of the chain, else the
-                        // signed -y or -z one in this owner.
+                        // signed -y one, else the -z one in this slab.
                         bool have = prev >= 0;
                         float nd = prev;
                         bool nInside = prevInside;
                         int nWinding = prevWinding;
                         Vec3 np = sampler.position(i - 1, j, k);
-                        if (watertight && !have && ((j & mask) != 0 || (k & mask) != 0)) {
-                            bool ny = (j & mask) != 0;
-                            size_t nl = ny ? local - B : local - B * B;
-                            if (neededFlag[nl]) {
-                                nd = std::fabs(owned[nl]);
-                                nInside = owned[nl] < 0;
-                                if (integerWinding) nWinding = winding[nl];
-                                np = ny ? sampler.position(i, j - 1, k)
-                                        : sampler.position(i, j, k - 1);
-                                have = true;
-                            }
-                        }
+                        auto vouch = [&](int ni, int nj, int nk) {
+                            int32_t ns = slot[ownerIndex(ni >> shift, nj >> shift, nk >> shift)];
+                            if (ns < 0) return false;
+                            size_t nl =
+                                ns * perOwner + ((nk & mask) * B + (nj & mask)) * B + (ni & mask);
+                            if (!neededFlag[nl]) return false;
+                            nd = std::fabs(owned[nl]);
+                            nInside = owned[nl] < 0;
+                            if (integerWinding) nWinding = winding[nl];
+                            np = sampler.position(ni, nj, nk);
+                            return true;
+                        };
+                        if (watertight && !have)
+                            have =
+                                (j > 0 && vouch(i, j - 1, k)) || (k > ok * B && vouch(i, j, k - 1));
                         bool in;
                         int w = 0;
                         int delta = 0;

@@ -148,18 +148,26 @@ void forEachCell(const GridView& v, F&& f) {
     }
     const int B = v.blockSize;
     const size_t blocks = static_cast<size_t>(v.blocks[0]) * v.blocks[1] * v.blocks[2];
-    tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
-        if (v.blockData[b] < 0) return;
-        int bi = static_cast<int>(b % v.blocks[0]),
-            bj = static_cast<int>((b / v.blocks[0]) % v.blocks[1]),
-            bk = static_cast<int>(b / (static_cast<size_t>(v.blocks[0]) * v.blocks[1]));
-        for (int k = bk * B; k < std::min(bk * B + B, v.shape.cells[2]); ++k)
-            for (int j = bj * B; j < std::min(bj * B + B, v.shape.cells[1]); ++j)
-                for (int i = bi * B; i < std::min(bi * B + B, v.shape.cells[0]); ++i) {
-                    float c[8];
-                    v.cellCorners(i, j, k, c);
-                    f(i, j, k, c);
-                }
+    const size_t sy = B + 1, sz = sy * (B + 1), perBlock = sz * (B + 1);
+    // Ranges of blocks per task: most blocks hold no samples and cost one test.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1024), [&](const auto& range) {
+        for (size_t b = range.begin(); b != range.end(); ++b) {
+            if (v.blockData[b] < 0) continue;
+            int bi = static_cast<int>(b % v.blocks[0]),
+                bj = static_cast<int>((b / v.blocks[0]) % v.blocks[1]),
+                bk = static_cast<int>(b / (static_cast<size_t>(v.blocks[0]) * v.blocks[1]));
+            // The block's own (B+1)^3 samples, read directly.
+            const float* data = v.blockSamples + static_cast<size_t>(v.blockData[b]) * perBlock;
+            for (int k = bk * B; k < std::min(bk * B + B, v.shape.cells[2]); ++k)
+                for (int j = bj * B; j < std::min(bj * B + B, v.shape.cells[1]); ++j)
+                    for (int i = bi * B; i < std::min(bi * B + B, v.shape.cells[0]); ++i) {
+                        const float* s =
+                            data + (k - bk * B) * sz + (j - bj * B) * sy + (i - bi * B);
+                        float c[8] = {s[0],  s[1],      s[sy],      s[sy + 1],
+                                      s[sz], s[sz + 1], s[sz + sy], s[sz + sy + 1]};
+                        f(i, j, k, c);
+                    }
+        }
     });
 }
 }  // namespace
