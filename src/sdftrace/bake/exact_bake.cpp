@@ -209,24 +209,36 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     std::vector<int32_t> slot;
     assignHuge(slot, numOwners, -1);
     std::vector<uint8_t> rowNeeded(static_cast<size_t>(no[1]) * no[2], 0);
-    for (int bk = 0; bk < nb[2]; ++bk)
-        for (int bj = 0; bj < nb[1]; ++bj)
-            for (int bi = 0; bi < nb[0]; ++bi) {
-                bool any = false;
-                for (int d = 0; d < 8 && !any; ++d) {
-                    int oi = bi + (d & 1), oj = bj + ((d >> 1) & 1), ok = bk + (d >> 2);
-                    any = oi < no[0] && oj < no[1] && ok < no[2] && listed(oi, oj, ok);
-                }
-                if (!any) continue;
-                candidate[blockIndex(bi, bj, bk)] = 1;
-                for (int d = 0; d < 8; ++d) {
-                    int oi = bi + (d & 1), oj = bj + ((d >> 1) & 1), ok = bk + (d >> 2);
-                    if (oi < no[0] && oj < no[1] && ok < no[2]) {
-                        slot[ownerIndex(oi, oj, ok)] = 0;
-                        rowNeeded[static_cast<size_t>(ok) * no[1] + oj] = 1;
+    arena.execute([&] {
+        tbb::parallel_for(0, nb[2], [&](int bk) {
+            for (int bj = 0; bj < nb[1]; ++bj)
+                for (int bi = 0; bi < nb[0]; ++bi) {
+                    bool any = false;
+                    for (int d = 0; d < 8 && !any; ++d) {
+                        int oi = bi + (d & 1), oj = bj + ((d >> 1) & 1), ok = bk + (d >> 2);
+                        any = oi < no[0] && oj < no[1] && ok < no[2] && listed(oi, oj, ok);
                     }
+                    candidate[blockIndex(bi, bj, bk)] = any;
                 }
+        });
+        // An owner is needed by the candidates among the (up to 8) blocks that use its vertices.
+        tbb::parallel_for(0, no[2], [&](int ok) {
+            for (int oj = 0; oj < no[1]; ++oj) {
+                bool row = false;
+                for (int oi = 0; oi < no[0]; ++oi) {
+                    bool any = false;
+                    for (int d = 0; d < 8 && !any; ++d) {
+                        int bi = oi - (d & 1), bj = oj - ((d >> 1) & 1), bk = ok - (d >> 2);
+                        any = bi >= 0 && bj >= 0 && bk >= 0 && bi < nb[0] && bj < nb[1] &&
+                              bk < nb[2] && candidate[blockIndex(bi, bj, bk)];
+                    }
+                    if (any) slot[ownerIndex(oi, oj, ok)] = 0;
+                    row |= any;
+                }
+                rowNeeded[static_cast<size_t>(ok) * no[1] + oj] = row;
             }
+        });
+    });
     int32_t owners = 0;
     for (int32_t& sl : slot)
         if (sl == 0) sl = owners++;
@@ -323,19 +335,38 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                 for (int i = 0; i < V && !near; ++i)
                     near = vertex(bi * B + i, bj * B + j, bk * B + k) < reach;
         keep[b] = near;
-        if (!near) return;
-        // Shared faces are marked by both blocks: relaxed atomic stores of the same 1.
-        for (int k = 0; k < V; ++k)
-            for (int j = 0; j < V; ++j)
-                for (int i = 0; i < V; ++i)
-                    std::atomic_ref<uint8_t>(
-                        neededFlag[localIndex(bi * B + i, bj * B + j, bk * B + k)])
-                        .store(1, std::memory_order_relaxed);
     };
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, numBlocks, 1024), [&](const auto& range) {
             for (size_t b = range.begin(); b != range.end(); ++b)
                 if (candidate[b]) markSurface(b);
+        });
+        // A vertex is needed when a surface block holds it: block v >> shift, and the one before
+        // on a shared face (v a multiple of B).
+        tbb::parallel_for(0, no[2], [&](int ok) {
+            for (int oj = 0; oj < no[1]; ++oj)
+                for (int oi = 0; oi < no[0]; ++oi) {
+                    int32_t sl = slot[ownerIndex(oi, oj, ok)];
+                    if (sl < 0) continue;
+                    uint8_t* out = neededFlag.data() + sl * perOwner;
+                    for (int lk = 0; lk < B; ++lk)
+                        for (int lj = 0; lj < B; ++lj)
+                            for (int li = 0; li < B; ++li) {
+                                int lo[3], hi[3];
+                                const int v[3] = {oi * B + li, oj * B + lj, ok * B + lk};
+                                for (int a = 0; a < 3; ++a) {
+                                    hi[a] = std::min(v[a] >> shift, nb[a] - 1);
+                                    lo[a] = (v[a] & mask) == 0 && v[a] > 0 ? (v[a] >> shift) - 1
+                                                                           : hi[a];
+                                }
+                                bool any = false;
+                                for (int bk = lo[2]; bk <= hi[2] && !any; ++bk)
+                                    for (int bj = lo[1]; bj <= hi[1] && !any; ++bj)
+                                        for (int bi = lo[0]; bi <= hi[0] && !any; ++bi)
+                                            any = keep[blockIndex(bi, bj, bk)];
+                                out[(lk * B + lj) * B + li] = any;
+                            }
+                }
         });
     });
     // Per triangle: bounds, unit normal and twice the area, for the crossing tests.
