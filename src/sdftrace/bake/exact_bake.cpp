@@ -99,7 +99,8 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, Sign
                                     int threads, ExactBakeStats* stats, bool progress) {
     RowSampler sampler(bvh, s, sign);
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
-    std::vector<float> out(s.vertexCount());
+    std::vector<float> out;
+    assignHuge(out, s.vertexCount(), 0.0f);
     std::atomic<size_t> queries{0}, signs{0};
     Progress bar("sdftrace bake: exact distances", static_cast<uint64_t>(vy) * vz,
                  progress && stderrIsTerminal());

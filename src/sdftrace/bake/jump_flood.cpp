@@ -5,6 +5,8 @@
 
 #include <chrono>
 
+#include "sdftrace/exec/huge_pages.h"
+
 namespace sdft {
 
 std::vector<Vec3> jumpFlood(const GridShape& s, std::vector<Vec3> seed, JfaVariant variant,
@@ -21,7 +23,8 @@ std::vector<Vec3> jumpFlood(const GridShape& s, std::vector<Vec3> seed, JfaVaria
     if (variant == JfaVariant::JfaPlusTwo) offsets.insert(offsets.end(), {2, 1});
 
     // Ping-pong buffers, one parallel sweep per offset.
-    std::vector<Vec3> next(seed.size());
+    std::vector<Vec3> next;
+    assignHuge(next, seed.size(), Vec3(kNoSeed));
     tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
     for (int off : offsets) {
         auto start = std::chrono::steady_clock::now();

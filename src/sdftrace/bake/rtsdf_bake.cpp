@@ -9,6 +9,7 @@
 
 #include "sdftrace/bake/jump_flood.h"
 #include "sdftrace/bake/seed_signs.h"
+#include "sdftrace/exec/huge_pages.h"
 
 namespace sdft {
 
@@ -60,7 +61,8 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
     start = std::chrono::steady_clock::now();
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
     const float mask = o.maskVoxels * s.voxelSize, tiny = 1e-4f * s.voxelSize;
-    std::vector<float> out(s.vertexCount());
+    std::vector<float> out;
+    assignHuge(out, s.vertexCount(), 0.0f);
     std::atomic<size_t> refined{0}, missed{0};
     tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
     arena.execute([&] {

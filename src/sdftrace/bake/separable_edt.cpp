@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "sdftrace/exec/huge_pages.h"
+
 namespace sdft {
 
 namespace {
@@ -51,8 +53,10 @@ std::vector<Vec3> separableEdt(const GridShape& s, const std::vector<Vec3>& seed
     const int n[3] = {s.vertices(0), s.vertices(1), s.vertices(2)};
     const size_t stride[3] = {1, static_cast<size_t>(n[0]), static_cast<size_t>(n[0]) * n[1]};
     const size_t count = s.vertexCount();
-    std::vector<double> dist(count);
-    std::vector<int32_t> feature(count);  // linear index of the nearest seed vertex, -1 if none
+    std::vector<double> dist;
+    assignHuge(dist, count, 0.0);
+    std::vector<int32_t> feature;
+    assignHuge(feature, count, int32_t{-1});  // linear index of the nearest seed vertex, -1 if none
     for (size_t i = 0; i < count; ++i) {
         bool seed = seeds[i].x != kNoSeed;
         int vi = static_cast<int>(i % n[0]), vj = static_cast<int>((i / n[0]) % n[1]),
@@ -84,12 +88,14 @@ std::vector<Vec3> separableEdt(const GridShape& s, const std::vector<Vec3>& seed
             });
         });
     }
-    std::vector<Vec3> points(count, Vec3(kNoSeed));
+    std::vector<Vec3> points;
+    assignHuge(points, count, Vec3(kNoSeed));
     for (size_t i = 0; i < count; ++i)
         if (feature[i] >= 0) points[i] = seeds[feature[i]];
     // The nearest seed *vertex* need not hold the nearest surface point (seeds sit up to 0.87 h
     // from the surface); one pass over the 26 neighbours' points repairs most of that.
-    std::vector<Vec3> out(count);
+    std::vector<Vec3> out;
+    assignHuge(out, count, Vec3(kNoSeed));
     arena.execute([&] {
         tbb::parallel_for(0, n[2], [&](int k) {
             for (int j = 0; j < n[1]; ++j)

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "sdftrace/bake/closest_point.h"
+#include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/field/vertex_loop.h"
 
 namespace sdft {
@@ -14,9 +15,10 @@ SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, i
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
     const float h = s.voxelSize, reach = 0.87f * h;  // half a cell diagonal, rounded up
     SurfaceSeeds seeds;
-    seeds.point.assign(s.vertexCount(), Vec3(kNoSeed));
-    seeds.triangle.assign(s.vertexCount(), 0);
-    std::vector<float> best(s.vertexCount(), kNoSeed);
+    assignHuge(seeds.point, s.vertexCount(), Vec3(kNoSeed));
+    assignHuge(seeds.triangle, s.vertexCount(), 0u);
+    std::vector<float> best;
+    assignHuge(best, s.vertexCount(), kNoSeed);
     // Vertex ranges of each triangle's bounds (one voxel of margin covers the reach).
     struct Range {
         int lo[3], hi[3];
@@ -69,7 +71,8 @@ SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, i
 
 std::vector<float> distancesToPoints(const GridShape& s, const std::vector<Vec3>& points,
                                      int threads) {
-    std::vector<float> out(points.size());
+    std::vector<float> out;
+    assignHuge(out, points.size(), 0.0f);
     forEachVertex(s, threads, [&](int, int, int, size_t idx, Vec3 p) {
         out[idx] = points[idx].x == kNoSeed ? kNoSeed : length(p - points[idx]);
     });
