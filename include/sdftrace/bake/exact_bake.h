@@ -3,15 +3,17 @@
 // truth the other bake methods are measured against.
 //
 // Two things keep it fast without approximating anything:
-//  - along a grid row, |d(p + h x) - d(p)| <= h (the distance is 1-Lipschitz), so each query
-//    searches only within the previous distance plus h;
+//  - along a grid row each query searches only within the distance to the previous vertex's
+//    closest point (a point of the mesh, so a bound of this distance);
 //  - on a watertight mesh the sign can only change where the surface passes between two
 //    neighbours, so the winding number is evaluated only where d < h (and once per row);
 //    elsewhere the neighbour's sign is exact. Open meshes evaluate it at every sample.
 // The sparse bake computes only the narrow band, by scattering each triangle to the vertices within
 // the band of its bounds (a vertex closer than the band to the mesh is within the band of its
 // closest triangle's bounds, so the minimum is exact there); samples beyond the band are clamped to
-// it. It gives the same grid as sparsifying the dense bake.
+// it (decision 0003). Only surface blocks' vertices are signed; on a watertight mesh the integer
+// winding number is carried between neighbours through the signed crossings of the segment between
+// them. It gives the same grid as sparsifying the dense bake.
 #pragma once
 
 #include "sdftrace/bake/mesh_bvh.h"
