@@ -19,7 +19,6 @@
 #include "sdftrace/bake/mesh_bvh.h"
 #include "sdftrace/bake/sign_method.h"
 #include "sdftrace/field/grid.h"
-#include "sdftrace/field/sample_grid.h"
 
 namespace sdft {
 
@@ -39,9 +38,5 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& shape, 
 Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& shape, int blockSize, float bandVoxels,
                      SignMethod sign, int threads = 0, ExactBakeStats* stats = nullptr,
                      bool progress = false);
-
-// The grid over the mesh's bounds as SampleOptions asks (resolution, layout, band, padding).
-Grid bakeMeshExact(const TriangleMesh& mesh, const SampleOptions& options,
-                   SignMethod sign = SignMethod::WindingNumber);
 
 }  // namespace sdft

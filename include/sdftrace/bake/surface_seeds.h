@@ -19,6 +19,14 @@ struct SurfaceSeeds {
     std::vector<uint32_t> triangle;  // the triangle the point lies on
 };
 
+// The vertices of `shape` inside the bounds of triangle (a, b, c) grown by `grow` (clamped to the
+// grid; empty when lo > hi on some axis). Every vertex within `grow` of the triangle is inside.
+struct VertexRange {
+    int lo[3], hi[3];
+    bool empty() const { return lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]; }
+};
+VertexRange triangleVertexRange(const GridShape& shape, Vec3 a, Vec3 b, Vec3 c, float grow);
+
 // In parallel over slabs of z layers, each visiting the triangles that overlap it in index order,
 // so the result is the same for any thread count.
 SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& shape, int threads = 0);

@@ -40,12 +40,4 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, Sign
     return out;
 }
 
-Grid bakeMeshExact(const TriangleMesh& mesh, const SampleOptions& o, SignMethod sign) {
-    MeshBvh bvh(mesh);
-    GridShape shape = gridShapeFor(mesh.bounds(), o);
-    if (o.kind == GridKind::Sparse)
-        return bakeExactSparse(bvh, shape, o.blockSize, o.bandVoxels, sign, o.threads);
-    return Grid::dense(shape, bakeExactSamples(bvh, shape, sign, o.threads));
-}
-
 }  // namespace sdft

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "sdftrace/bake/closest_point.h"
+#include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/test_meshes.h"
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/field/primitives.h"
@@ -56,7 +57,9 @@ TEST(ExactBake, BoxMeshGivesTheBoxSdfToFloatRounding) {
     SampleOptions o;
     o.resolution = 32;
     o.kind = GridKind::Dense;
-    Grid g = bakeMeshExact(testing::boxMesh(half), o);
+    MeshBakeOptions bake;
+    bake.sampling = o;
+    Grid g = bakeMesh(testing::boxMesh(half), bake).grid;
     GridView v = g.view();
     const GridShape& s = g.shape();
     float k[3] = {half.x, half.y, half.z};
@@ -82,7 +85,9 @@ TEST(ExactBake, TessellatedSphereWithinItsTessellationGap) {
             1 - length((sphere.positions[a] + sphere.positions[b] + sphere.positions[c]) / 3.0f));
     SampleOptions o;
     o.resolution = 40;
-    Grid g = bakeMeshExact(sphere, o);  // sparse, band 3
+    MeshBakeOptions bake;
+    bake.sampling = o;
+    Grid g = bakeMesh(sphere, bake).grid;  // exact, sparse, band 3
     GridView v = g.view();
     testing::Rng rng(3);
     int checked = 0;

@@ -17,7 +17,7 @@ namespace sdft::detail {
 class RowSampler {
   public:
     RowSampler(const MeshBvh& bvh, const GridShape& shape, SignMethod sign)
-        : m_bvh(bvh), m_shape(shape), m_sign(sign), m_watertight(isWatertight(bvh.mesh())) {
+        : m_bvh(bvh), m_shape(shape), m_watertight(isWatertight(bvh.mesh())) {
         if (sign == SignMethod::WindingNumber)
             m_winding = std::make_unique<WindingNumber>(bvh.mesh());
     }
@@ -74,7 +74,6 @@ class RowSampler {
   private:
     const MeshBvh& m_bvh;
     const GridShape& m_shape;
-    SignMethod m_sign;
     bool m_watertight;
     std::unique_ptr<WindingNumber> m_winding;
 };

@@ -10,6 +10,7 @@
 #include "exact_sampler.h"
 #include "sdftrace/bake/closest_point.h"
 #include "sdftrace/bake/exact_bake.h"
+#include "sdftrace/bake/surface_seeds.h"
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/exec/progress.h"
 
@@ -50,20 +51,17 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     // triangle's bounds, so each owner block lists the triangles whose bounds, grown by the band,
     // overlap its vertices; the minimum over them is exact there. Vertices farther away are
     // clamped to the band (as a narrow-band level set stores them).
-    struct Range {
-        int lo[3], hi[3];
-    };
     // Per owner, the triangles whose bounds grown by `grow` overlap its vertices (a prefix-summed
     // list), and per triangle its vertex range.
     struct OwnerLists {
-        std::vector<Range> ranges;
+        std::vector<VertexRange> ranges;
         std::vector<uint32_t> start, items;
     };
     auto binTriangles = [&](float grow) {
         OwnerLists l;
         l.ranges.resize(mesh.triangles.size());
         assignHuge(l.start, numOwners + 1, 0u);
-        auto forOwners = [&](const Range& r, auto&& f) {
+        auto forOwners = [&](const VertexRange& r, auto&& f) {
             for (int ok = (r.lo[2] >> shift); ok <= (r.hi[2] >> shift); ++ok)
                 for (int oj = (r.lo[1] >> shift); oj <= (r.hi[1] >> shift); ++oj)
                     for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi)
@@ -71,29 +69,23 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
         };
         for (size_t t = 0; t < mesh.triangles.size(); ++t) {
             const auto& tri = mesh.triangles[t];
-            Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
-            Vec3 lo = (min(a, min(b, c)) - s.origin - Vec3(grow)) / h;
-            Vec3 hi = (max(a, max(b, c)) - s.origin + Vec3(grow)) / h;
-            Range& r = l.ranges[t];
-            for (int axis = 0; axis < 3; ++axis) {
-                r.lo[axis] = std::max(0, static_cast<int>(std::ceil(lo[axis])));
-                r.hi[axis] = std::min(nv[axis] - 1, static_cast<int>(std::floor(hi[axis])));
-            }
-            if (r.lo[0] > r.hi[0] || r.lo[1] > r.hi[1] || r.lo[2] > r.hi[2]) continue;
+            const VertexRange& r = l.ranges[t] = triangleVertexRange(
+                s, mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]], grow);
+            if (r.empty()) continue;
             forOwners(r, [&](size_t o) { ++l.start[o + 1]; });
         }
         for (size_t o = 0; o < numOwners; ++o) l.start[o + 1] += l.start[o];
         assignHuge(l.items, l.start[numOwners], 0u);
         std::vector<uint32_t> fill(l.start.begin(), l.start.end() - 1);
         for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-            const Range& r = l.ranges[t];
-            if (r.lo[0] > r.hi[0] || r.lo[1] > r.hi[1] || r.lo[2] > r.hi[2]) continue;
+            const VertexRange& r = l.ranges[t];
+            if (r.empty()) continue;
             forOwners(r, [&](size_t o) { l.items[fill[o]++] = static_cast<uint32_t>(t); });
         }
         return l;
     };
     const OwnerLists bandLists = binTriangles(reach);
-    const std::vector<Range>& ranges = bandLists.ranges;
+    const std::vector<VertexRange>& ranges = bandLists.ranges;
     const std::vector<uint32_t>& listStart = bandLists.start;
     const std::vector<uint32_t>& lists = bandLists.items;
     auto listed = [&](int oi, int oj, int ok) {
@@ -166,7 +158,7 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
                     const int i0 = oi * B, j0 = oj * B, k0 = ok * B;
                     for (uint32_t n = listStart[o]; n < listStart[o + 1]; ++n) {
                         const uint32_t t = lists[n];
-                        const Range& r = ranges[t];
+                        const VertexRange& r = ranges[t];
                         const auto& tri = mesh.triangles[t];
                         Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]],
                              c = mesh.positions[tri[2]];
@@ -275,7 +267,8 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
         Vec3 lo, hi, normal;
         float area2;
     };
-    std::vector<Plane> planes(watertight ? mesh.triangles.size() : 0);
+    const bool integerWinding = watertight && sampler.hasWinding();
+    std::vector<Plane> planes(integerWinding ? mesh.triangles.size() : 0);
     for (size_t t = 0; t < planes.size(); ++t) {
         const auto& tri = mesh.triangles[t];
         Vec3 t0 = mesh.positions[tri[0]], t1 = mesh.positions[tri[1]], t2 = mesh.positions[tri[2]];
@@ -286,8 +279,7 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     }
     // Triangles meeting a segment of length h that ends at a vertex come within h of it: the
     // crossing tests read lists grown by one voxel only.
-    const OwnerLists nearLists =
-        watertight && sampler.hasWinding() ? binTriangles(1.01f * h) : OwnerLists{};
+    const OwnerLists nearLists = integerWinding ? binTriangles(1.01f * h) : OwnerLists{};
     auto crossings = [&](Vec3 a, Vec3 b, size_t o, int& delta) {
         const float eps = 1e-5f * h;
         const Vec3 slo = min(a, b) - Vec3(eps), shi = max(a, b) + Vec3(eps);
@@ -321,7 +313,6 @@ Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& s, int B, float bandVo
     // from the previous vertex of the row (or the -y / -z one at a chain start) unchanged where
     // one of the two is farther than a voxel from the surface, and through the signed crossings
     // of the segment between them otherwise; it is evaluated only where no neighbour can vouch.
-    const bool integerWinding = watertight && sampler.hasWinding();
     std::vector<int8_t> winding;
     assignHuge(winding, integerWinding ? static_cast<size_t>(owners) * perOwner : 0, int8_t{0});
     arena.execute([&] {

@@ -11,6 +11,17 @@
 
 namespace sdft {
 
+VertexRange triangleVertexRange(const GridShape& s, Vec3 a, Vec3 b, Vec3 c, float grow) {
+    Vec3 lo = (min(a, min(b, c)) - s.origin - Vec3(grow)) / s.voxelSize;
+    Vec3 hi = (max(a, max(b, c)) - s.origin + Vec3(grow)) / s.voxelSize;
+    VertexRange r;
+    for (int axis = 0; axis < 3; ++axis) {
+        r.lo[axis] = std::max(0, static_cast<int>(std::ceil(lo[axis])));
+        r.hi[axis] = std::min(s.vertices(axis) - 1, static_cast<int>(std::floor(hi[axis])));
+    }
+    return r;
+}
+
 SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, int threads) {
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
     const float h = s.voxelSize, reach = 0.87f * h;  // half a cell diagonal, rounded up
@@ -20,24 +31,15 @@ SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, i
     std::vector<float> best;
     assignHuge(best, s.vertexCount(), kNoSeed);
     // Vertex ranges of each triangle's bounds (one voxel of margin covers the reach).
-    struct Range {
-        int lo[3], hi[3];
-    };
-    std::vector<Range> ranges(mesh.triangles.size());
+    std::vector<VertexRange> ranges(mesh.triangles.size());
     constexpr int kSlab = 4;  // z layers per task
     const int slabs = (vz + kSlab - 1) / kSlab;
     std::vector<std::vector<uint32_t>> bySlab(slabs);
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
         const auto& tri = mesh.triangles[t];
-        Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
-        Vec3 lo = (min(a, min(b, c)) - s.origin) / h - Vec3(1.0f);
-        Vec3 hi = (max(a, max(b, c)) - s.origin) / h + Vec3(1.0f);
-        Range& r = ranges[t];
-        for (int axis = 0; axis < 3; ++axis) {
-            r.lo[axis] = std::max(0, static_cast<int>(std::floor(lo[axis])));
-            r.hi[axis] = std::min(s.vertices(axis) - 1, static_cast<int>(std::ceil(hi[axis])));
-        }
-        if (r.lo[2] > r.hi[2]) continue;
+        const VertexRange& r = ranges[t] = triangleVertexRange(
+            s, mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]], h);
+        if (r.empty()) continue;
         for (int slab = r.lo[2] / kSlab; slab <= r.hi[2] / kSlab; ++slab)
             bySlab[slab].push_back(static_cast<uint32_t>(t));
     }
@@ -49,7 +51,7 @@ SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, i
                 const auto& tri = mesh.triangles[t];
                 Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]],
                      c = mesh.positions[tri[2]];
-                const Range& r = ranges[t];
+                const VertexRange& r = ranges[t];
                 for (int k = std::max(k0, r.lo[2]); k <= std::min(k1, r.hi[2]); ++k)
                     for (int j = r.lo[1]; j <= r.hi[1]; ++j)
                         for (int i = r.lo[0]; i <= r.hi[0]; ++i) {
