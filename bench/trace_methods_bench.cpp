@@ -9,8 +9,8 @@
 // over cos(theta), several percent of t on a distant floor), exhausted_% (share of rays that gave
 // up after max_steps evaluations without converging: grazing rays, mostly near the horizon).
 //
-//   build/release/bench/sdftrace_bench --benchmark_filter=Methods --benchmark_repetitions=5 \
-//       --benchmark_report_aggregates_only=true
+//   build/release/bench/sdftrace_bench --benchmark_filter=Methods --benchmark_repetitions=5
+//       --benchmark_report_aggregates_only=true   (one command line)
 #include <benchmark/benchmark.h>
 
 #include <map>

@@ -62,7 +62,9 @@ TEST(Grid, SparseMatchesDenseInsideTheBandAndKeepsTheSignElsewhere) {
                           std::min(int(g.z), s.dense.shape().cells[2] - 1), c);
             bool inBand = true;
             for (float corner : c) inBand &= std::fabs(corner) < 3 * h;
-            if (inBand) ASSERT_EQ(dv, sv) << "B=" << B;
+            if (inBand) {
+                ASSERT_EQ(dv, sv) << "B=" << B;
+            }
             ASSERT_EQ(dv < 0, sv < 0) << "B=" << B;
             // Outside the band the sparse value is a smaller-magnitude bound.
             ASSERT_LE(std::fabs(sv), std::fabs(dv) + 1e-6f);

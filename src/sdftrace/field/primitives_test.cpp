@@ -200,7 +200,9 @@ TEST(Primitives, BoundsContainTheSurface) {
         Bounds3 b = nodeBounds(*n);
         for (int i = 0; i < 20000; ++i) {
             Vec3 p = rng.inCube(1.2f);
-            if (evalTree(*n, p) < 0) ASSERT_TRUE(b.contains(p)) << nodeKindName(n->kind);
+            if (evalTree(*n, p) < 0) {
+                ASSERT_TRUE(b.contains(p)) << nodeKindName(n->kind);
+            }
         }
     }
 }

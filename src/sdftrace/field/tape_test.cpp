@@ -167,7 +167,9 @@ TEST(Bounds, RepeatAndTransformsContainTheSurface) {
     testing::Rng rng(5);
     for (int i = 0; i < 50000; ++i) {
         Vec3 p = rng.inCube(6);
-        if (evalTree(*root, p) < 0 && p.y > -2.9f) ASSERT_TRUE(b.contains(p));
+        if (evalTree(*root, p) < 0 && p.y > -2.9f) {
+            ASSERT_TRUE(b.contains(p));
+        }
     }
 }
 
@@ -210,7 +212,9 @@ TEST(Bounds, DominatingNodesAreAtLeastTheirBoxDistance) {
         for (int i = 0; i < 20000; ++i) {
             Vec3 p = rng.inCube(4);
             float d = xform::boxDistance(p, k);
-            if (d > 0) ASSERT_GE(evalTree(*n, p), d - 1e-5f) << nodeKindName(n->kind);
+            if (d > 0) {
+                ASSERT_GE(evalTree(*n, p), d - 1e-5f) << nodeKindName(n->kind);
+            }
         }
     }
 }
