@@ -19,7 +19,7 @@ TEST(MeshCli, BakesAClosedMeshExactlyAndRendersIt) {
     ASSERT_EQ(bake.status, 0) << bake.err;
     EXPECT_NE(bake.err.find("0 boundary edges"), std::string::npos)
         << bake.err;  // the cleaning report
-    for (const char* f : {"exact, 48x", "narrow band", "peak memory", "total"})
+    for (const char* f : {"exact, 48x", "distances", "signs", "peak memory", "total"})
         EXPECT_NE(bake.err.find(f), std::string::npos) << f << "\n" << bake.err;
     RunResult info = runCli("info " + dir.file("b.sdfg"), dir);
     ASSERT_EQ(info.status, 0);

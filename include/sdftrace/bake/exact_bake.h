@@ -5,16 +5,23 @@
 // Two things keep it fast without approximating anything:
 //  - along a grid row each query searches only within the distance to the previous vertex's
 //    closest point (a point of the mesh, so a bound of this distance);
-//  - on a watertight mesh the sign can only change where the surface passes between two
-//    neighbours, so the winding number is evaluated only where d < h (and once per row);
-//    elsewhere the neighbour's sign is exact. Open meshes evaluate it at every sample.
+//  - signs are carried from sample to sample (closing_film.h): the mesh's boundary is closed by
+//    small films, so the winding number W of mesh + films is an integer that changes only by the
+//    signed crossings of a segment between neighbours (none where one of them is farther than a
+//    voxel from the mesh). The mesh's own winding number is W less the films', carried with an
+//    error bound from the rim's Biot-Savart integral and summed over the films where that error
+//    reaches 1/2. On a watertight mesh there are no films. The hierarchical winding number is
+//    evaluated only where no neighbour can vouch.
 // The sparse bake computes only the narrow band, by scattering each triangle to the vertices within
 // the band of its bounds (a vertex closer than the band to the mesh is within the band of its
 // closest triangle's bounds, so the minimum is exact there); samples beyond the band are clamped to
-// it (decision 0003). Only surface blocks' vertices are signed; on a watertight mesh the integer
-// winding number is carried between neighbours through the signed crossings of the segment between
-// them. It gives the same grid as sparsifying the dense bake.
+// it (decision 0003). Only surface blocks' vertices are signed one by one; the other blocks take
+// the sign of their centre, carried along block rows. It gives the same grid as sparsifying the
+// dense bake, and needs no BVH (but for parity signs).
 #pragma once
+
+#include <utility>
+#include <vector>
 
 #include "sdftrace/bake/mesh_bvh.h"
 #include "sdftrace/bake/sign_method.h"
@@ -24,8 +31,11 @@ namespace sdft {
 
 struct ExactBakeStats {
     size_t distanceQueries = 0;  // dense: BVH queries; sparse: vertices found within the band
-    size_t signEvaluations = 0;  // winding numbers or parity votes actually computed
-    size_t surfaceBlocks = 0;    // sparse: blocks in the band
+    size_t signEvaluations = 0;  // winding numbers or parity votes computed from scratch
+    size_t filmSums =
+        0;  // open meshes: sums over the closing films where a carried sign was unsure
+    size_t surfaceBlocks = 0;                            // sparse: blocks in the band
+    std::vector<std::pair<const char*, double>> phases;  // sparse: seconds per phase
 };
 
 // Every vertex of `shape` (x fastest). `progress`: a percentage on stderr (when it is a terminal).
@@ -35,8 +45,8 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& shape, 
 
 // A sparse block grid sampling only the narrow band (equal to Grid::sparseFromDense of
 // bakeExactSamples with the same block size and band).
-Grid bakeExactSparse(const MeshBvh& bvh, const GridShape& shape, int blockSize, float bandVoxels,
-                     SignMethod sign, int threads = 0, ExactBakeStats* stats = nullptr,
-                     bool progress = false);
+Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& shape, int blockSize,
+                     float bandVoxels, SignMethod sign, int threads = 0,
+                     ExactBakeStats* stats = nullptr, bool progress = false);
 
 }  // namespace sdft

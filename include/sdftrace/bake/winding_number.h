@@ -6,6 +6,7 @@
 // Strackee).
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "sdftrace/io/mesh_io.h"
@@ -16,6 +17,30 @@ namespace sdft {
 // a positive angle from inside).
 double triangleSolidAngle(Vec3 p, Vec3 a, Vec3 b, Vec3 c);
 
+// atan2 in float to 3e-7 rad (measured): Abramowitz & Stegun 4.4.49 for atan on [0, 1], with
+// octant reduction.
+// Branch-free (selects only), so that loops over it vectorize.
+inline float fastAtan2(float y, float x) {
+    float ax = std::fabs(x), ay = std::fabs(y);
+    float hi = ax > ay ? ax : ay, lo = ax > ay ? ay : ax;
+    float a = lo / (hi > 1e-30f ? hi : 1e-30f), s = a * a;
+    float r =
+        ((((((((0.0028662257f * s - 0.0161657367f) * s + 0.0429096138f) * s - 0.0752896400f) * s +
+             0.1065626393f) *
+                s -
+            0.1420889944f) *
+               s +
+           0.1999355085f) *
+              s -
+          0.3333314528f) *
+         s) *
+            a +
+        a;
+    r = ay > ax ? 1.57079637f - r : r;
+    r = x < 0 ? 3.14159274f - r : r;
+    return y < 0 ? -r : r;
+}
+
 class WindingNumber {
   public:
     // beta: a node is approximated when |p - centre| > beta * radius. First-order dipoles (no
@@ -23,7 +48,7 @@ class WindingNumber {
     explicit WindingNumber(const TriangleMesh& mesh, double beta = 3.0);
 
     double exact(Vec3 p) const;  // O(triangles): the reference
-    // Hierarchical; leaves sum float solid angles with a polynomial atan2 (about 1e-5 rad each).
+    // Hierarchical; leaves sum float solid angles with a polynomial atan2 (fastAtan2).
     double fast(Vec3 p) const { return fast(p, m_beta); }
     double fast(Vec3 p, double beta) const;
     // fast(p) > 1/2, first tried with a coarse beta (1.5, about 4x cheaper near the surface)

@@ -5,10 +5,13 @@
 #include <tbb/task_arena.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <memory>
 
+#include "sdftrace/bake/closing_film.h"
 #include "sdftrace/bake/exact_bake.h"
+#include "sdftrace/bake/segment_crossing.h"
 #include "sdftrace/bake/winding_number.h"
 
 namespace sdft::detail {
@@ -16,10 +19,13 @@ namespace sdft::detail {
 // Samples runs of vertices along +x with the row tricks of the header comment.
 class RowSampler {
   public:
-    RowSampler(const MeshBvh& bvh, const GridShape& shape, SignMethod sign)
-        : m_bvh(bvh), m_shape(shape), m_watertight(isWatertight(bvh.mesh())) {
+    // `bvh` (closest points, parity) may be null for the narrow band's winding-number signs.
+    RowSampler(const TriangleMesh& mesh, const MeshBvh* bvh, const GridShape& shape,
+               SignMethod sign)
+        : m_bvh(bvh), m_shape(shape), m_film(std::make_unique<ClosingFilm>(mesh)) {
+        m_watertight = m_film->empty();
         if (sign == SignMethod::WindingNumber)
-            m_winding = std::make_unique<WindingNumber>(bvh.mesh());
+            m_winding = std::make_unique<WindingNumber>(m_film->closedMesh());
     }
 
     Vec3 position(int i, int j, int k) const {
@@ -27,37 +33,123 @@ class RowSampler {
     }
 
     bool watertight() const { return m_watertight; }
-
-    bool inside(Vec3 p) const { return m_winding ? m_winding->inside(p) : m_bvh.insideByParity(p); }
-    // The integer winding number of a watertight mesh at p: the hierarchical sum at the coarse
-    // beta of WindingNumber::inside (trusted there to 0.3), rounded. Only with
-    // SignMethod::WindingNumber.
-    int windingAt(Vec3 p) const { return static_cast<int>(std::lround(m_winding->fast(p, 1.5))); }
+    // With SignMethod::WindingNumber: signs follow the integer winding number of the mesh closed
+    // by its films (closing_film.h), carried between neighbours.
     bool hasWinding() const { return m_winding != nullptr; }
+
+    // The winding numbers carried from sample to sample (closing_film.h): W of the mesh closed
+    // by its films, exact; the mesh's own, w_M = W - w_F, within `error`.
+    struct Carried {
+        int32_t closed = 0;
+        float winding = 0, error = 0;
+        bool inside() const { return winding > 0.5f; }
+        // Whether the carried value can decide the sign.
+        bool decided() const { return std::fabs(winding - 0.5f) > error; }
+    };
+
+    // Whether p is inside: from the winding number, or by ray parity.
+    bool inside(Vec3 p) const {
+        return m_winding ? evaluate(p).inside() : m_bvh->insideByParity(p);
+    }
+    // From scratch: W is the hierarchical sum of mesh and films at a coarse beta (1.5), rounded
+    // (at the default beta where that lands within 0.3 of a half).
+    Carried evaluate(Vec3 p) const {
+        double w = m_winding->fast(p, 1.5);
+        if (std::fabs(w - std::round(w)) > 0.2) w = m_winding->fast(p);
+        return refresh(p, static_cast<int32_t>(std::lround(w)));
+    }
+    // With W known: w_M from the films' float sum, or their exact one when that is within its
+    // error of 1/2.
+    Carried refresh(Vec3 p, int32_t closed) const {
+        if (m_film->empty()) return {closed, static_cast<float>(closed), 0.0f};
+        Carried c{closed, static_cast<float>(closed) - m_film->windingFast(p), m_film->fastError()};
+        if (!c.decided()) c = {closed, static_cast<float>(closed - m_film->winding(p)), 1e-6f};
+        return c;
+    }
+    // From a neighbour's values across a segment with the given signed crossings (of mesh and
+    // films, and of the mesh alone) along which w_M may drift by `drift`; summed over the films
+    // again (counted in `refreshed`) where the sign is then unsure.
+    Carried carry(const Carried& from, int crossings, int meshCrossings, float drift, Vec3 p,
+                  size_t& refreshed) const {
+        Carried c{from.closed + crossings, from.winding + static_cast<float>(meshCrossings),
+                  from.error + drift};
+        if (!c.decided()) {
+            c = refresh(p, c.closed);
+            ++refreshed;
+        }
+        return c;
+    }
+    // Bounds |grad w_M| over the box: a carried w_M changes by at most this times the step (0 on
+    // a watertight mesh, where it is the integer W).
+    float gradientBound(Vec3 lo, Vec3 hi) const {
+        return m_film->empty() ? 0.0f : static_cast<float>(m_film->gradientBound(lo, hi));
+    }
+    // The film triangles whose bounds overlap the box grown by a hair.
+    void filmsNear(Vec3 lo, Vec3 hi, std::vector<uint32_t>& out) const {
+        out.clear();
+        if (!m_film) return;
+        const float eps = 1e-4f * m_shape.voxelSize;
+        const auto& films = m_film->filmTriangles();
+        for (size_t t = 0; t < films.size(); ++t) {
+            const CrossingTriangle& f = films[t];
+            if (f.lo.x <= hi.x + eps && f.lo.y <= hi.y + eps && f.lo.z <= hi.z + eps &&
+                f.hi.x >= lo.x - eps && f.hi.y >= lo.y - eps && f.hi.z >= lo.z - eps)
+                out.push_back(static_cast<uint32_t>(t));
+        }
+    }
+    // The signed crossings of segment a -> b with the listed film triangles, added to `delta`:
+    // false when one is undecided.
+    bool filmCrossings(Vec3 a, Vec3 b, const std::vector<uint32_t>& near, int& delta) const {
+        const float eps = 1e-5f * m_shape.voxelSize;
+        for (uint32_t t : near) {
+            Crossing c = segmentCrossing(a, b, m_film->filmTriangles()[t], eps);
+            if (c == Crossing::Undecided) return false;
+            delta += c == Crossing::Enter ? 1 : c == Crossing::Leave ? -1 : 0;
+        }
+        return true;
+    }
 
     // Vertices (i0 + n', j, k), n' < n, into out[0, n).
     void row(int i0, int j, int k, int n, float* out, std::atomic<size_t>& queries,
-             std::atomic<size_t>& signs) const {
+             std::atomic<size_t>& signs, std::atomic<size_t>& filmSums) const {
         // 0.1% over the spacing: far above the rounding of the distances, so both the search
         // radius and the sign rule stay conservative.
         const float step = m_shape.voxelSize * 1.001f;
         float prev = INFINITY;
         Vec3 prevPoint;
         bool prevInside = false;
-        size_t evaluated = 0;
+        Carried carried;
+        float gradient = 0;
+        size_t evaluated = 0, refreshed = 0;
+        constexpr int kChunk = 8;  // vertices per gradient bound
+        std::vector<uint32_t> films;
+        if (m_winding) filmsNear(position(i0, j, k), position(i0 + n - 1, j, k), films);
         for (int n1 = 0; n1 < n; ++n1) {
             Vec3 p = position(i0 + n1, j, k);
             // The previous closest point bounds this distance (tighter than prev + h).
             MeshBvh::Closest c = prev == INFINITY
-                                     ? m_bvh.closest(p)
-                                     : m_bvh.closest(p, length(p - prevPoint) * 1.0001f + 1e-30f);
-            if (c.distance == INFINITY) c = m_bvh.closest(p);  // unreachable but for rounding
+                                     ? m_bvh->closest(p)
+                                     : m_bvh->closest(p, length(p - prevPoint) * 1.0001f + 1e-30f);
+            if (c.distance == INFINITY) c = m_bvh->closest(p);  // unreachable but for rounding
             float d = c.distance;
             prevPoint = c.point;
-            // Watertight: d > h means the ball around p holds no surface yet holds the previous
-            // vertex, so no crossing lies between them.
+            // d > h means the ball around p holds no surface yet holds the previous vertex, so
+            // the mesh is not crossed between them.
+            const bool meshClear = n1 > 0 && (d > step || prev > step);
             bool in;
-            if (m_watertight && n1 > 0 && (d > step || prev > step)) {
+            if (m_winding) {
+                if (n1 % kChunk == 0)
+                    gradient = gradientBound(position(i0 + n1 - 1, j, k),
+                                             position(std::min(i0 + n1 + kChunk, i0 + n), j, k));
+                int delta = 0;
+                if (meshClear && filmCrossings(position(i0 + n1 - 1, j, k), p, films, delta)) {
+                    carried = carry(carried, delta, 0, gradient * m_shape.voxelSize, p, refreshed);
+                } else {
+                    carried = evaluate(p);
+                    ++evaluated;
+                }
+                in = carried.inside();
+            } else if (m_watertight && meshClear) {
                 in = prevInside;
             } else {
                 in = inside(p);
@@ -69,13 +161,29 @@ class RowSampler {
         }
         queries += n;
         signs += evaluated;
+        filmSums += refreshed;
     }
 
   private:
-    const MeshBvh& m_bvh;
+    const MeshBvh* m_bvh;
     const GridShape& m_shape;
-    bool m_watertight;
+    bool m_watertight = false;
+    std::unique_ptr<ClosingFilm> m_film;
     std::unique_ptr<WindingNumber> m_winding;
+};
+
+// Times the phases of a bake for ExactBakeStats::phases.
+class PhaseClock {
+  public:
+    void mark(const char* name) {
+        auto now = std::chrono::steady_clock::now();
+        phases.emplace_back(name, std::chrono::duration<double>(now - m_last).count());
+        m_last = now;
+    }
+    std::vector<std::pair<const char*, double>> phases;
+
+  private:
+    std::chrono::steady_clock::time_point m_last = std::chrono::steady_clock::now();
 };
 
 inline int arenaThreads(int threads) {
@@ -83,8 +191,9 @@ inline int arenaThreads(int threads) {
 }
 
 inline void report(ExactBakeStats* stats, const std::atomic<size_t>& queries,
-                   const std::atomic<size_t>& signs) {
+                   const std::atomic<size_t>& signs, const std::atomic<size_t>& filmSums) {
     if (!stats) return;
+    stats->filmSums = filmSums.load();
     stats->distanceQueries = queries.load();
     stats->signEvaluations = signs.load();
 }

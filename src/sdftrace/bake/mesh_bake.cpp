@@ -86,21 +86,23 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     std::vector<float> samples;
 
     if (o.method == MeshBakeMethod::Exact) {
-        MeshBvh bvh(mesh);
-        clock.mark("bvh");
         ExactBakeStats st;
         if (so.kind == GridKind::Sparse) {
-            r.grid = bakeExactSparse(bvh, shape, so.blockSize, so.bandVoxels, o.sign, threads, &st,
+            r.grid = bakeExactSparse(mesh, shape, so.blockSize, so.bandVoxels, o.sign, threads, &st,
                                      o.progress);
-            clock.mark("narrow band");
+            for (const auto& [name, seconds] : st.phases) r.stages.push_back({name, seconds});
+            clock.restart();
         } else {
+            MeshBvh bvh(mesh);
+            clock.mark("bvh");
             r.grid =
                 Grid::dense(shape, bakeExactSamples(bvh, shape, o.sign, threads, &st, o.progress));
             clock.mark("distances");
         }
-        std::snprintf(line, sizeof line, "%zu %s, %zu sign evaluations (%s)", st.distanceQueries,
+        std::snprintf(line, sizeof line, "%zu %s, %zu sign evaluations (%s), %zu closing-film sums",
+                      st.distanceQueries,
                       so.kind == GridKind::Sparse ? "vertices within the band" : "distance queries",
-                      st.signEvaluations, signMethodName(o.sign));
+                      st.signEvaluations, signMethodName(o.sign), st.filmSums);
         r.details = line;
         return r;
     }

@@ -216,7 +216,7 @@ TEST(MeshBake, SparseExactBandBakeEqualsTheSparsifiedDenseBake) {
             so.resolution = 44;
             GridShape shape = gridShapeFor(mesh.bounds(), so);
             ExactBakeStats st;
-            Grid band = bakeExactSparse(bvh, shape, block, 3, SignMethod::WindingNumber, 0, &st);
+            Grid band = bakeExactSparse(mesh, shape, block, 3, SignMethod::WindingNumber, 0, &st);
             Grid dense = Grid::sparseFromDense(
                 shape, bakeExactSamples(bvh, shape, SignMethod::WindingNumber), block, 3);
             EXPECT_EQ(band.flags(), dense.flags()) << file << " B=" << block;
@@ -322,7 +322,7 @@ TEST(MeshBake, IntegerWindingThroughSelfIntersectingShells) {
     so.resolution = 32;
     GridShape s = gridShapeFor(mesh.bounds(), so);
     ExactBakeStats st;
-    Grid g = bakeExactSparse(bvh, s, 4, 3, SignMethod::WindingNumber, 0, &st);
+    Grid g = bakeExactSparse(mesh, s, 4, 3, SignMethod::WindingNumber, 0, &st);
     GridView v = g.view();
     size_t checked = 0, overlap = 0;
     for (int k = 0; k <= s.cells[2]; ++k)

@@ -33,19 +33,6 @@ double triangleSolidAngle(Vec3 p, Vec3 va, Vec3 vb, Vec3 vc) {
 
 namespace {
 
-// atan2 to about 1e-5 rad (a minimax polynomial for atan on [0, 1] and octant reduction): the
-// winding number only has to be right about which side of 1/2 it lies.
-inline float fastAtan2(float y, float x) {
-    float ax = std::fabs(x), ay = std::fabs(y);
-    float hi = std::fmax(ax, ay), lo = std::fmin(ax, ay);
-    if (hi == 0) return 0;
-    float a = lo / hi, s = a * a;
-    float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
-    if (ay > ax) r = 1.57079637f - r;
-    if (x < 0) r = 3.14159274f - r;
-    return y < 0 ? -r : r;
-}
-
 // The solid angle of Van Oosterom & Strackee in float, for the hierarchical sum's leaves.
 inline float solidAngleFloat(Vec3 p, const float* t) {
     Vec3 a(t[0] - p.x, t[1] - p.y, t[2] - p.z), b(t[3] - p.x, t[4] - p.y, t[5] - p.z),

@@ -1,0 +1,197 @@
+#include "sdftrace/bake/closing_film.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "sdftrace/bake/winding_number.h"
+#include "sdftrace/core/macros.h"
+#include "sdftrace/math/ray.h"
+
+namespace sdft {
+
+namespace {
+constexpr double kFourPi = 12.566370614359172;
+
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+}
+}  // namespace
+
+ClosingFilm::ClosingFilm(const TriangleMesh& mesh) : m_closed(mesh) {
+    // The boundary chain: per undirected edge (a < b), the count of a -> b minus that of b -> a
+    // (sorted keys, the direction in the lowest bit).
+    SDFT_CHECK(mesh.positions.size() < (size_t(1) << 31));
+    std::vector<uint64_t> keys;
+    keys.reserve(3 * mesh.triangles.size());
+    for (const auto& t : mesh.triangles)
+        for (int e = 0; e < 3; ++e) {
+            uint64_t a = t[e], b = t[(e + 1) % 3];
+            keys.push_back(a < b ? (a << 33 | b << 1) : (b << 33 | a << 1 | 1));
+        }
+    std::sort(keys.begin(), keys.end());
+    std::vector<std::pair<uint32_t, uint32_t>> rim;  // directed boundary edges, with multiplicity
+    for (size_t n = 0; n < keys.size();) {
+        size_t m = n;
+        int count = 0;
+        for (; m < keys.size() && keys[m] >> 1 == keys[n] >> 1; ++m) count += keys[m] & 1 ? -1 : 1;
+        auto a = static_cast<uint32_t>(keys[n] >> 33), b = static_cast<uint32_t>(keys[n] >> 1);
+        for (int c = 0; c < std::abs(count); ++c)
+            rim.push_back(count > 0 ? std::make_pair(a, b) : std::make_pair(b, a));
+        n = m;
+    }
+    if (rim.empty()) return;
+
+    // Connected pieces of the rim (each is itself a cycle: every vertex has as many edges in as
+    // out), one apex each at the mean of its vertices.
+    std::vector<uint32_t> parent(mesh.positions.size());
+    std::iota(parent.begin(), parent.end(), 0u);
+    for (auto [a, b] : rim) parent[findRoot(parent, a)] = findRoot(parent, b);
+    std::map<uint32_t, std::vector<std::pair<uint32_t, uint32_t>>> pieces;
+    for (auto e : rim) pieces[findRoot(parent, e.first)].push_back(e);
+    for (const auto& [root, edges] : pieces) {
+        double sum[3] = {0, 0, 0};
+        for (auto [a, b] : edges) {
+            sum[0] += mesh.positions[a].x, sum[1] += mesh.positions[a].y,
+                sum[2] += mesh.positions[a].z;
+        }
+        Vec3 apex(static_cast<float>(sum[0] / edges.size()),
+                  static_cast<float>(sum[1] / edges.size()),
+                  static_cast<float>(sum[2] / edges.size()));
+        const auto apexIndex = static_cast<uint32_t>(m_closed.positions.size());
+        m_closed.positions.push_back(apex);
+        m_cones.push_back({apex, m_films.size(), edges.size(), -1});
+        for (auto [a, b] : edges) {
+            // Against the rim edge a -> b: the cone's boundary then cancels M's.
+            Vec3 pa = mesh.positions[a], pb = mesh.positions[b];
+            m_closed.triangles.push_back({apexIndex, b, a});
+            m_films.emplace_back(apex, pb, pa);
+            m_edges.push_back({pa, pb});
+            for (int d = 0; d < 3; ++d) {
+                m_corners[d].push_back(pb[d]);
+                m_corners[3 + d].push_back(pa[d]);
+            }
+        }
+    }
+    for (Cone& cone : m_cones)
+        cone.root = build(static_cast<int>(cone.first), static_cast<int>(cone.count));
+}
+
+int ClosingFilm::build(int first, int count) {
+    const int index = static_cast<int>(m_nodes.size());
+    m_nodes.emplace_back();
+    Node n;
+    n.first = first;
+    n.count = count;
+    Bounds3 box;
+    for (int e = first; e < first + count; ++e) {
+        box.include(m_edges[e].a);
+        box.include(m_edges[e].b);
+        n.length += length(m_edges[e].b - m_edges[e].a);
+    }
+    n.centre = (box.lo + box.hi) * 0.5f;
+    for (int e = first; e < first + count; ++e)
+        n.radius = std::fmax(
+            n.radius, std::fmax(length(m_edges[e].a - n.centre), length(m_edges[e].b - n.centre)));
+    // Above the rounding of the lengths: the bound stays conservative.
+    n.radius *= 1.0001f;
+    n.length *= 1.0001f;
+    constexpr int kLeafEdges = 4;
+    if (count > kLeafEdges) {
+        Vec3 ext = box.extent();
+        int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
+        int mid = first + count / 2;
+        std::nth_element(m_edges.begin() + first, m_edges.begin() + mid,
+                         m_edges.begin() + first + count, [&](const Edge& x, const Edge& y) {
+                             return x.a[axis] + x.b[axis] < y.a[axis] + y.b[axis];
+                         });
+        n.left = build(first, mid - first);
+        n.right = build(mid, first + count - mid);
+    }
+    m_nodes[index] = n;
+    return index;
+}
+
+namespace {
+double pointSegmentDistance(Vec3 p, Vec3 a, Vec3 b) {
+    Vec3 ab = b - a;
+    float t = dot(ab, ab) > 0 ? std::clamp(dot(p - a, ab) / dot(ab, ab), 0.0f, 1.0f) : 0.0f;
+    return length(p - (a + ab * t));
+}
+}  // namespace
+
+double ClosingFilm::winding(Vec3 p) const {
+    double sum = 0;
+    for (const auto& t : m_films) sum += triangleSolidAngle(p, t.a, t.b, t.c);
+    return sum / kFourPi;
+}
+
+float ClosingFilm::windingFast(Vec3 p) const {
+    // Van Oosterom & Strackee as in triangleSolidAngle, in float, the apex shared per cone; the
+    // inner loop vectorizes.
+    float sum = 0;
+    const float *bx = m_corners[0].data(), *by = m_corners[1].data(), *bz = m_corners[2].data(),
+                *cx = m_corners[3].data(), *cy = m_corners[4].data(), *cz = m_corners[5].data();
+    for (const Cone& cone : m_cones) {
+        const float ax = cone.apex.x - p.x, ay = cone.apex.y - p.y, az = cone.apex.z - p.z;
+        const float la = std::sqrt(ax * ax + ay * ay + az * az);
+        float part = 0;
+#pragma omp simd reduction(+ : part)
+        for (size_t t = cone.first; t < cone.first + cone.count; ++t) {
+            float ux = bx[t] - p.x, uy = by[t] - p.y, uz = bz[t] - p.z;
+            float vx = cx[t] - p.x, vy = cy[t] - p.y, vz = cz[t] - p.z;
+            float lb = std::sqrt(ux * ux + uy * uy + uz * uz);
+            float lc = std::sqrt(vx * vx + vy * vy + vz * vz);
+            float num =
+                ax * (uy * vz - uz * vy) + ay * (uz * vx - ux * vz) + az * (ux * vy - uy * vx);
+            float den = la * lb * lc + (ax * ux + ay * uy + az * uz) * lc +
+                        (ax * vx + ay * vy + az * vz) * lb + (ux * vx + uy * vy + uz * vz) * la;
+            part += fastAtan2(num, den);
+        }
+        sum += part;
+    }
+    return sum * static_cast<float>(2.0 / kFourPi);
+}
+
+double ClosingFilm::gradientBound(Vec3 lo, Vec3 hi) const {
+    if (m_nodes.empty()) return 0;
+    // Distances from the box are at least those from its centre less its half diagonal.
+    const Vec3 centre = (lo + hi) * 0.5f;
+    const double half = 0.5 * length(hi - lo) * 1.0001 + 1e-30;
+    double sum = 0;
+    for (const Cone& cone : m_cones) {
+        // A far loop: the dipole-like bound (or the plain one where that is smaller).
+        const Node& root = m_nodes[cone.root];
+        double g = length(centre - root.centre) - root.radius - half;
+        if (g > root.radius) {
+            sum += std::min(root.length / (g * g), 2.0 * root.length * root.radius / (g * g * g));
+            continue;
+        }
+        // Near: its edges' tree (balanced, so 64 levels are far more than enough).
+        int stack[64];
+        int top = 0;
+        stack[top++] = cone.root;
+        while (top > 0) {
+            const Node& n = m_nodes[stack[--top]];
+            double g = length(centre - n.centre) - n.radius - half;
+            if (g > 4.0 * n.radius) {
+                sum += n.length / (g * g);  // far: all its length at the ball's distance
+            } else if (n.left < 0) {
+                for (int e = n.first; e < n.first + n.count; ++e) {
+                    double ge =
+                        pointSegmentDistance(centre, m_edges[e].a, m_edges[e].b) * 0.9999 - half;
+                    if (ge <= 0) return INFINITY;
+                    sum += 1.0001 * length(m_edges[e].b - m_edges[e].a) / (ge * ge);
+                }
+            } else {
+                stack[top++] = n.left;
+                stack[top++] = n.right;
+            }
+        }
+    }
+    return sum / kFourPi;
+}
+
+}  // namespace sdft
