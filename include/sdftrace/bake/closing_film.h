@@ -38,7 +38,9 @@ class ClosingFilm {
     double winding(Vec3 p) const;
     // The same in float with a polynomial atan2: within fastError() of winding(p) (but within a
     // hair of a film triangle's plane, where no carried count is trusted either).
-    float windingFast(Vec3 p) const;
+    // With `slack`: cones so far from p that they subtend less than 0.01 are only bounded (a
+    // triangle subtends at most its area over the squared distance), their bounds added to it.
+    float windingFast(Vec3 p, float* slack = nullptr) const;
     float fastError() const { return 1e-4f + 1e-6f * static_cast<float>(m_films.size()); }
     // An upper bound of |grad w_M| over the box [lo, hi] (+infinity when it touches the rim).
     double gradientBound(Vec3 lo, Vec3 hi) const;
@@ -64,6 +66,8 @@ class ClosingFilm {
         Vec3 apex;
         size_t first = 0, count = 0;  // its triangles in m_films, its edges in m_edges
         int root = -1;                // its edges' tree in m_nodes
+        float radius = 0;             // the ball around the apex holding the cone
+        float area = 0;               // of the cone
     };
     std::vector<Cone> m_cones;
     std::vector<float> m_corners[6];  // b.x, b.y, b.z, c.x, c.y, c.z

@@ -68,6 +68,10 @@ ClosingFilm::ClosingFilm(const TriangleMesh& mesh) : m_closed(mesh) {
             Vec3 pa = mesh.positions[a], pb = mesh.positions[b];
             m_closed.triangles.push_back({apexIndex, b, a});
             m_films.emplace_back(apex, pb, pa);
+            m_cones.back().area += 0.5f * m_films.back().area2 * 1.0001f;
+            m_cones.back().radius =
+                std::max(m_cones.back().radius,
+                         std::max(length(pa - apex), length(pb - apex)) * 1.0001f);
             m_edges.push_back({pa, pb});
             for (int d = 0; d < 3; ++d) {
                 m_corners[d].push_back(pb[d]);
@@ -128,7 +132,7 @@ double ClosingFilm::winding(Vec3 p) const {
     return sum / kFourPi;
 }
 
-float ClosingFilm::windingFast(Vec3 p) const {
+float ClosingFilm::windingFast(Vec3 p, float* slack) const {
     // Van Oosterom & Strackee as in triangleSolidAngle, in float, the apex shared per cone; the
     // inner loop vectorizes.
     float sum = 0;
@@ -137,6 +141,14 @@ float ClosingFilm::windingFast(Vec3 p) const {
     for (const Cone& cone : m_cones) {
         const float ax = cone.apex.x - p.x, ay = cone.apex.y - p.y, az = cone.apex.z - p.z;
         const float la = std::sqrt(ax * ax + ay * ay + az * az);
+        if (slack && la > 2 * cone.radius) {
+            const float gap = la - cone.radius;
+            const float bound = cone.area / (static_cast<float>(kFourPi) * gap * gap) * 1.001f;
+            if (bound < 0.01f) {
+                *slack += bound;
+                continue;
+            }
+        }
         float part = 0;
 #pragma omp simd reduction(+ : part)
         for (size_t t = cone.first; t < cone.first + cone.count; ++t) {

@@ -62,7 +62,12 @@ class RowSampler {
     // error of 1/2.
     Carried refresh(Vec3 p, int32_t closed) const {
         if (m_film->empty()) return {closed, static_cast<float>(closed), 0.0f};
-        Carried c{closed, static_cast<float>(closed) - m_film->windingFast(p), m_film->fastError()};
+        // Far cones only bounded first, then all summed, then the exact sum.
+        float slack = 0;
+        const float near = m_film->windingFast(p, &slack);
+        Carried c{closed, static_cast<float>(closed) - near, m_film->fastError() + slack};
+        if (!c.decided() && slack > 0)
+            c = {closed, static_cast<float>(closed) - m_film->windingFast(p), m_film->fastError()};
         if (!c.decided()) c = {closed, static_cast<float>(closed - m_film->winding(p)), 1e-6f};
         return c;
     }

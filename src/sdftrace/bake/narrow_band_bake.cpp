@@ -473,6 +473,10 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
             std::vector<uint32_t> films;
             if (integerWinding)
                 sampler.filmsNear(sampler.position(0, bj * B, bk * B), centre(nb[0] - 1), films);
+            // One gradient bound for the whole row where the rim is far from it (most rows).
+            const float rowGradient =
+                integerWinding ? sampler.gradientBound(centre(0), centre(nb[0] - 1)) : 0.0f;
+            const bool rowBounded = rowGradient * B * h < 1e-3f;
             for (int bi = 0; bi < nb[0]; ++bi) {
                 size_t b = blockIndex(bi, bj, bk);
                 if (keep[b]) {
@@ -505,7 +509,9 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
                         w = sampler.refresh(c, prevCarried.closed);
                         refreshed += !sampler.watertight();
                     } else if (prevFree && sampler.filmCrossings(prevCentre, c, films, delta)) {
-                        float grad = sampler.gradientBound(min(prevCentre, c), max(prevCentre, c));
+                        float grad = rowBounded ? rowGradient
+                                                : sampler.gradientBound(min(prevCentre, c),
+                                                                        max(prevCentre, c));
                         w = sampler.carry(prevCarried, delta, 0, grad * length(c - prevCentre), c,
                                           refreshed);
                     } else {
