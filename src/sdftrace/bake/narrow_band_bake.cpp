@@ -76,21 +76,36 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
                     for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi)
                         f(ownerIndex(oi, oj, ok));
         };
-        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-            const auto& tri = mesh.triangles[t];
-            const VertexRange& r = l.ranges[t] = triangleVertexRange(
-                s, mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]], grow);
-            if (r.empty()) continue;
-            forOwners(r, [&](size_t o) { ++l.start[o + 1]; });
-        }
+        // In parallel: counts and slots by atomic increments. The order within a list varies
+        // from run to run; its users do not depend on it (the distances sort their list, the
+        // crossings sum theirs).
+        arena.execute([&] {
+            tbb::parallel_for(size_t(0), mesh.triangles.size(), [&](size_t t) {
+                const auto& tri = mesh.triangles[t];
+                const VertexRange& r = l.ranges[t] =
+                    triangleVertexRange(s, mesh.positions[tri[0]], mesh.positions[tri[1]],
+                                        mesh.positions[tri[2]], grow);
+                if (r.empty()) return;
+                forOwners(r, [&](size_t o) {
+                    std::atomic_ref<uint32_t>(l.start[o + 1])
+                        .fetch_add(1, std::memory_order_relaxed);
+                });
+            });
+        });
         for (size_t o = 0; o < numOwners; ++o) l.start[o + 1] += l.start[o];
         assignHuge(l.items, l.start[numOwners], 0u);
         std::vector<uint32_t> fill(l.start.begin(), l.start.end() - 1);
-        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-            const VertexRange& r = l.ranges[t];
-            if (r.empty()) continue;
-            forOwners(r, [&](size_t o) { l.items[fill[o]++] = static_cast<uint32_t>(t); });
-        }
+        arena.execute([&] {
+            tbb::parallel_for(size_t(0), mesh.triangles.size(), [&](size_t t) {
+                const VertexRange& r = l.ranges[t];
+                if (r.empty()) return;
+                forOwners(r, [&](size_t o) {
+                    uint32_t at =
+                        std::atomic_ref<uint32_t>(fill[o]).fetch_add(1, std::memory_order_relaxed);
+                    l.items[at] = static_cast<uint32_t>(t);
+                });
+            });
+        });
         return l;
     };
     const OwnerLists bandLists = binTriangles(reach);
