@@ -2,7 +2,8 @@
 // one run (issue 4's benchmark). Each case runs in a forked child, so its peak memory is its own;
 // times are medians of --reps runs of the bake alone (mesh loading excluded, BVH builds included).
 // Accuracy: |baked - exact| in voxels over the stored samples within the band (up to 200k of
-// them, evenly strided), exact = closest-point distance signed by the winding number.
+// them, evenly strided), exact = closest-point distance signed by the winding number (the
+// hierarchical sum, or the exact one where that is within 0.1 of 1/2).
 //
 //   build/release/bench/sdftrace_bake_bench                      # bunny + teapot, everything
 //   build/release/bench/sdftrace_bake_bench --meshes bunny --sparse 256 --dense none
