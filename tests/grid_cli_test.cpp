@@ -152,13 +152,17 @@ TEST(GridCli, DdaRendersLikeSphereTracingAndItsAccelerationsChangeNothing) {
         std::vector<float> other = readPfm(dir.file(name), w, h, ch);
         for (size_t i = 0; i < ref.size(); ++i) {
             ASSERT_EQ(std::isfinite(ref[i]), std::isfinite(other[i])) << name << " " << i;
-            if (std::isfinite(ref[i])) ASSERT_NEAR(ref[i], other[i], 1e-4f * ref[i]) << name;
+            if (std::isfinite(ref[i])) {
+                ASSERT_NEAR(ref[i], other[i], 1e-4f * ref[i]) << name;
+            }
         }
     }
     // The midpoint method hits wherever false position does, one cell test each at most.
     std::vector<float> mid = readPfm(dir.file("midpoint-d.pfm"), w, h, ch);
     for (size_t i = 0; i < a.size(); ++i)
-        if (std::isfinite(a[i])) EXPECT_TRUE(std::isfinite(mid[i])) << i;
+        if (std::isfinite(a[i])) {
+            EXPECT_TRUE(std::isfinite(mid[i])) << i;
+        }
 }
 
 TEST(GridCli, ConvertsToAndFromOpenVdbAndRendersVdbFiles) {
@@ -198,7 +202,9 @@ TEST(GridCli, ConvertsToAndFromOpenVdbAndRendersVdbFiles) {
                        b = readPfm(dir.file("b.pfm"), w, h, ch);
     for (size_t i = 0; i < a.size(); ++i) {
         ASSERT_EQ(std::isfinite(a[i]), std::isfinite(b[i])) << i;
-        if (std::isfinite(a[i])) ASSERT_NEAR(a[i], b[i], 1e-3f * a[i]);
+        if (std::isfinite(a[i])) {
+            ASSERT_NEAR(a[i], b[i], 1e-3f * a[i]);
+        }
     }
     RunResult bad = runCli("convert " + dir.file("f.sdfg") + " " + dir.file("f.png"), dir);
     EXPECT_NE(bad.status, 0);

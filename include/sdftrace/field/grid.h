@@ -105,8 +105,8 @@ class Grid {
                                   const std::string& source);
 
   private:
-    void computeCellMasks();
-    void computeLipschitz();
+    void computeLipschitz();              // dense
+    void computeCellMasksAndLipschitz();  // sparse
 
     GridKind m_kind = GridKind::Dense;
     GridShape m_shape;

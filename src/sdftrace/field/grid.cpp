@@ -72,8 +72,7 @@ Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& sam
                         static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
                 }
             }
-    g.computeCellMasks();
-    g.computeLipschitz();
+    g.computeCellMasksAndLipschitz();
     return g;
 }
 
@@ -107,8 +106,7 @@ Grid Grid::sparseFromBuffers(const GridShape& shape, int B, float background,
     }
     g.m_flags = std::move(flags);
     g.m_blockSamples = std::move(blockSamples);
-    g.computeCellMasks();
-    g.computeLipschitz();
+    g.computeCellMasksAndLipschitz();
     return g;
 }
 
@@ -212,27 +210,16 @@ void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
 
 // Jamriška §4.1: one bit per cell of each surface block, set when the signs of its 8 corner samples
 // differ (the cell contains the surface). Recomputed whenever the block's samples change.
-void Grid::computeCellMasks() {
-    const int B = m_blockSize;
-    const int words = (B * B * B + 63) / 64;
-    size_t surfaceBlocks = m_blockSamples.size() / (static_cast<size_t>(B + 1) * (B + 1) * (B + 1));
-    assignHuge(m_cellMasks, surfaceBlocks * words, uint64_t{0});
-    forEachCell(view(), [&](int i, int j, int k, const float c[8]) {
-        size_t block = (static_cast<size_t>(k / B) * m_blocks[1] + j / B) * m_blocks[0] + i / B;
-        int32_t data = m_blockData[block];
-        if (data < 0 || !cornersChangeSign(c)) return;
-        int bit = ((k % B) * B + j % B) * B + i % B;
-        m_cellMasks[static_cast<size_t>(data) * words + bit / 64] |= uint64_t{1} << (bit % 64);
-    });
-}
-
-// The trilinear interpolant's derivative along x inside a cell is a bilinear blend of the cell's 4
-// x-edge differences, so |df/dx| <= max |edge difference| / h, and likewise for y and z. The max
-// over cells of the norm of these per-axis maxima bounds the gradient everywhere (the interpolant
-// is continuous across faces within a block).
+// One pass over the surface blocks' cells (sparse grids only): the cell masks (cells with a
+// sign change), and the Lipschitz bound of the trilinear reconstruction. Its derivative along x
+// inside a cell is a bilinear blend of the cell's 4 x-edge differences, so |df/dx| <= max |edge
+// difference| / h, and likewise for y and z; the max over cells of the norm of these per-axis
+// maxima bounds the gradient everywhere (the interpolant is continuous across faces within a
+// block).
+// Dense grids: the same Lipschitz bound over every cell (no masks: the DDA tracer reads sparse
+// grids only).
 void Grid::computeLipschitz() {
     tbb::combinable<float> worstPerThread([] { return 0.0f; });
-    const float h = m_shape.voxelSize;
     forEachCell(view(), [&](int, int, int, const float c[8]) {
         float& worst = worstPerThread.local();
         float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]), std::fabs(c[5] - c[4]),
@@ -241,11 +228,58 @@ void Grid::computeLipschitz() {
                              std::fabs(c[7] - c[5])});
         float gz = std::max({std::fabs(c[4] - c[0]), std::fabs(c[5] - c[1]), std::fabs(c[6] - c[2]),
                              std::fabs(c[7] - c[3])});
-        worst = std::max(worst, std::sqrt(gx * gx + gy * gy + gz * gz) / h);
+        worst = std::max(worst, gx * gx + gy * gy + gz * gz);
     });
     float worst = worstPerThread.combine([](float a, float b) { return std::max(a, b); });
+    m_lipschitz = std::max(1.0f, std::sqrt(worst) / m_shape.voxelSize);
+}
+
+void Grid::computeCellMasksAndLipschitz() {
+    const int B = m_blockSize;
+    const int words = (B * B * B + 63) / 64;
+    const size_t sy = B + 1, sz = sy * (B + 1), perBlock = sz * (B + 1);
+    const size_t surfaceBlocks = m_blockSamples.size() / perBlock;
+    assignHuge(m_cellMasks, surfaceBlocks * words, uint64_t{0});
+    const size_t blocks = m_blockData.size();
+    tbb::combinable<float> worstPerThread([] { return 0.0f; });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1024), [&](const auto& range) {
+        float worst = 0;  // of gx^2 + gy^2 + gz^2
+        for (size_t b = range.begin(); b != range.end(); ++b) {
+            const int32_t data = m_blockData[b];
+            if (data < 0) continue;
+            const int bi = static_cast<int>(b % m_blocks[0]),
+                      bj = static_cast<int>((b / m_blocks[0]) % m_blocks[1]),
+                      bk = static_cast<int>(b / (static_cast<size_t>(m_blocks[0]) * m_blocks[1]));
+            const int ni = std::min(B, m_shape.cells[0] - bi * B),
+                      nj = std::min(B, m_shape.cells[1] - bj * B),
+                      nk = std::min(B, m_shape.cells[2] - bk * B);
+            const float* base = m_blockSamples.data() + static_cast<size_t>(data) * perBlock;
+            uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
+            for (int k = 0; k < nk; ++k)
+                for (int j = 0; j < nj; ++j)
+                    for (int i = 0; i < ni; ++i) {
+                        const float* s = base + k * sz + j * sy + i;
+                        const float c[8] = {s[0],  s[1],      s[sy],      s[sy + 1],
+                                            s[sz], s[sz + 1], s[sz + sy], s[sz + sy + 1]};
+                        if (cornersChangeSign(c)) {
+                            const int bit = (k * B + j) * B + i;
+                            mask[bit / 64] |= uint64_t{1} << (bit % 64);
+                        }
+                        float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]),
+                                             std::fabs(c[5] - c[4]), std::fabs(c[7] - c[6])});
+                        float gy = std::max({std::fabs(c[2] - c[0]), std::fabs(c[3] - c[1]),
+                                             std::fabs(c[6] - c[4]), std::fabs(c[7] - c[5])});
+                        float gz = std::max({std::fabs(c[4] - c[0]), std::fabs(c[5] - c[1]),
+                                             std::fabs(c[6] - c[2]), std::fabs(c[7] - c[3])});
+                        worst = std::max(worst, gx * gx + gy * gy + gz * gz);
+                    }
+        }
+        float& w = worstPerThread.local();
+        w = std::max(w, worst);
+    });
+    const float worst = worstPerThread.combine([](float a, float b) { return std::max(a, b); });
     // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
-    m_lipschitz = std::max(1.0f, worst);
+    m_lipschitz = std::max(1.0f, std::sqrt(worst) / m_shape.voxelSize);
 }
 
 }  // namespace sdft

@@ -150,7 +150,9 @@ void compareMethods(const NodePtr& root, float orbit, float target, uint32_t see
                                       {&b, 2e-3f},
                                       {&w, 2e-3f},
                                       {&e, 4 * enhanced.pixelRadius * truth.t / cosine + 2e-3f}}) {
-                    if (r->hit) EXPECT_NEAR(r->t, truth.t, tol);
+                    if (r->hit) {
+                        EXPECT_NEAR(r->t, truth.t, tol);
+                    }
                 }
                 ++depthChecked;
             }
@@ -293,7 +295,9 @@ TEST(SphereTracer, FixedStepModeSpendsTheSameStepsOnEveryRay) {
         if (r.hit) {
             ++hits;
             EXPECT_LT(std::fabs(tape.eval(seg.ray.at(r.t))), o.tau + 1e-5f);
-            if (truth.crosses && truth.clearance > 0.01f) EXPECT_NEAR(r.t, truth.t, 1e-2f);
+            if (truth.crosses && truth.clearance > 0.01f) {
+                EXPECT_NEAR(r.t, truth.t, 1e-2f);
+            }
         }
     }
     EXPECT_GT(hits, 200);

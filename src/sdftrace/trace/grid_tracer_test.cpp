@@ -80,7 +80,9 @@ TEST(GridTracer, BitMasksAndDenseTraversalChangeNoHit) {
         ASSERT_EQ(a.t, b.t);
         ASSERT_EQ(a.traversalSteps, b.traversalSteps);
         ASSERT_EQ(a.hit, c.hit);
-        if (a.hit) ASSERT_NEAR(a.t, c.t, 1e-4f);
+        if (a.hit) {
+            ASSERT_NEAR(a.t, c.t, 1e-4f);
+        }
     }
 }
 
@@ -93,7 +95,9 @@ TEST(GridTracer, MidpointStaysWithinTheHitCell) {
     for (const RaySegment& seg : f.rays) {
         GridTraceResult a = traceGridRay(g, seg.ray, seg.tMin, seg.tMax, fp);
         GridTraceResult b = traceGridRay(g, seg.ray, seg.tMin, seg.tMax, mid);
-        if (b.hit) EXPECT_LE(b.intersectionTests, a.hit ? a.intersectionTests : 1 << 30);
+        if (b.hit) {
+            EXPECT_LE(b.intersectionTests, a.hit ? a.intersectionTests : 1 << 30);
+        }
         if (!a.hit || !b.hit) continue;
         // The midpoint method stops in the first surface cell, at or before false position's cell.
         EXPECT_LE(b.t, a.t + 1.8f * g.shape.voxelSize);
@@ -157,7 +161,9 @@ TEST(GridTracer, MinMaxBuffersChangeNoHitAndSaveTraversalSteps) {
                                                  : GridTraceResult{};
                     ASSERT_EQ(plain.hit, b.hit)
                         << "camera " << c << " res " << res << " pixel " << x << "," << y;
-                    if (plain.hit) ASSERT_NEAR(plain.t, b.t, 1e-4f * plain.t);
+                    if (plain.hit) {
+                        ASSERT_NEAR(plain.t, b.t, 1e-4f * plain.t);
+                    }
                     stepsPlain += plain.traversalSteps;
                     stepsBuffered += b.traversalSteps;
                     hits += plain.hit;
