@@ -70,11 +70,29 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
         OwnerLists l;
         l.ranges.resize(mesh.triangles.size());
         assignHuge(l.start, numOwners + 1, 0u);
-        auto forOwners = [&](const VertexRange& r, auto&& f) {
+        // The owners whose vertices in the triangle's range come within `grow` of its plane (a
+        // large triangle's grown bounds hold many owners far from it).
+        auto forOwners = [&](size_t t, const VertexRange& r, auto&& f) {
+            const auto& tri = mesh.triangles[t];
+            const Vec3 a = mesh.positions[tri[0]];
+            Vec3 n = cross(mesh.positions[tri[1]] - a, mesh.positions[tri[2]] - a);
+            const float len = length(n);
+            n = len > 0 ? n / len : Vec3(0.0f);
+            const Vec3 an(std::fabs(n.x), std::fabs(n.y), std::fabs(n.z));
+            const float limit = grow * 1.001f + 1e-6f * h;
             for (int ok = (r.lo[2] >> shift); ok <= (r.hi[2] >> shift); ++ok)
                 for (int oj = (r.lo[1] >> shift); oj <= (r.hi[1] >> shift); ++oj)
-                    for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi)
+                    for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi) {
+                        const Vec3 lo =
+                            sampler.position(std::max(r.lo[0], oi * B), std::max(r.lo[1], oj * B),
+                                             std::max(r.lo[2], ok * B));
+                        const Vec3 hi = sampler.position(std::min(r.hi[0], oi * B + B - 1),
+                                                         std::min(r.hi[1], oj * B + B - 1),
+                                                         std::min(r.hi[2], ok * B + B - 1));
+                        const Vec3 centre = (lo + hi) * 0.5f, half = (hi - lo) * 0.5f;
+                        if (std::fabs(dot(centre - a, n)) - dot(half, an) > limit) continue;
                         f(ownerIndex(oi, oj, ok));
+                    }
         };
         // In parallel: counts and slots by atomic increments. The order within a list varies
         // from run to run; its users do not depend on it (the distances sort their list, the
@@ -86,7 +104,7 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
                     triangleVertexRange(s, mesh.positions[tri[0]], mesh.positions[tri[1]],
                                         mesh.positions[tri[2]], grow);
                 if (r.empty()) return;
-                forOwners(r, [&](size_t o) {
+                forOwners(t, r, [&](size_t o) {
                     std::atomic_ref<uint32_t>(l.start[o + 1])
                         .fetch_add(1, std::memory_order_relaxed);
                 });
@@ -99,7 +117,7 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
             tbb::parallel_for(size_t(0), mesh.triangles.size(), [&](size_t t) {
                 const VertexRange& r = l.ranges[t];
                 if (r.empty()) return;
-                forOwners(r, [&](size_t o) {
+                forOwners(t, r, [&](size_t o) {
                     uint32_t at =
                         std::atomic_ref<uint32_t>(fill[o]).fetch_add(1, std::memory_order_relaxed);
                     l.items[at] = static_cast<uint32_t>(t);
