@@ -69,9 +69,8 @@ ClosingFilm::ClosingFilm(const TriangleMesh& mesh) : m_closed(mesh) {
             m_closed.triangles.push_back({apexIndex, b, a});
             m_films.emplace_back(apex, pb, pa);
             m_cones.back().area += 0.5f * m_films.back().area2 * 1.0001f;
-            m_cones.back().radius =
-                std::max(m_cones.back().radius,
-                         std::max(length(pa - apex), length(pb - apex)) * 1.0001f);
+            m_cones.back().radius = std::max(
+                m_cones.back().radius, std::max(length(pa - apex), length(pb - apex)) * 1.0001f);
             m_edges.push_back({pa, pb});
             for (int d = 0; d < 3; ++d) {
                 m_corners[d].push_back(pb[d]);
