@@ -20,9 +20,9 @@
 // dense bake, and needs no BVH (but for parity signs).
 #pragma once
 
-#include <utility>
 #include <vector>
 
+#include "sdftrace/bake/bake_stage.h"
 #include "sdftrace/bake/mesh_bvh.h"
 #include "sdftrace/bake/sign_method.h"
 #include "sdftrace/field/grid.h"
@@ -34,8 +34,8 @@ struct ExactBakeStats {
     size_t signEvaluations = 0;  // winding numbers or parity votes computed from scratch
     size_t filmSums =
         0;  // open meshes: sums over the closing films where a carried sign was unsure
-    size_t surfaceBlocks = 0;                            // sparse: blocks in the band
-    std::vector<std::pair<const char*, double>> phases;  // sparse: seconds per phase
+    size_t surfaceBlocks = 0;       // sparse: blocks in the band
+    std::vector<BakeStage> phases;  // sparse: its phases
 };
 
 // Every vertex of `shape` (x fastest). `progress`: a percentage on stderr (when it is a terminal).

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "sdftrace/bake/bake_stage.h"
 #include "sdftrace/bake/jump_flood.h"
 #include "sdftrace/bake/rtsdf_bake.h"
 #include "sdftrace/bake/sign_method.h"
@@ -29,11 +30,6 @@ struct MeshBakeOptions {
     float betaVoxels = 0.5f;  // SignMethod::BetaShell
     RtsdfOptions rtsdf;
     bool progress = false;  // percentages on stderr for the long stages
-};
-
-struct BakeStage {
-    std::string name;
-    double seconds = 0;
 };
 
 struct MeshBakeResult {

@@ -5,7 +5,6 @@
 #include <tbb/task_arena.h>
 
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <memory>
 
@@ -175,20 +174,6 @@ class RowSampler {
     bool m_watertight = false;
     std::unique_ptr<ClosingFilm> m_film;
     std::unique_ptr<WindingNumber> m_winding;
-};
-
-// Times the phases of a bake for ExactBakeStats::phases.
-class PhaseClock {
-  public:
-    void mark(const char* name) {
-        auto now = std::chrono::steady_clock::now();
-        phases.emplace_back(name, std::chrono::duration<double>(now - m_last).count());
-        m_last = now;
-    }
-    std::vector<std::pair<const char*, double>> phases;
-
-  private:
-    std::chrono::steady_clock::time_point m_last = std::chrono::steady_clock::now();
 };
 
 inline int arenaThreads(int threads) {

@@ -41,26 +41,6 @@ bool parseMeshBakeMethod(const std::string& name, MeshBakeMethod& out) {
     return false;
 }
 
-namespace {
-
-// Records the time since the previous mark under a stage name.
-class StageClock {
-  public:
-    explicit StageClock(std::vector<BakeStage>& stages) : m_stages(stages) {}
-    void mark(const std::string& name) {
-        auto now = std::chrono::steady_clock::now();
-        m_stages.push_back({name, std::chrono::duration<double>(now - m_last).count()});
-        m_last = now;
-    }
-    void restart() { m_last = std::chrono::steady_clock::now(); }
-
-  private:
-    std::vector<BakeStage>& m_stages;
-    std::chrono::steady_clock::time_point m_last = std::chrono::steady_clock::now();
-};
-
-}  // namespace
-
 void validateMeshBakeOptions(const MeshBakeOptions& o) {
     const bool seedBased = o.method == MeshBakeMethod::JumpFlood ||
                            o.method == MeshBakeMethod::Danielsson ||
@@ -90,7 +70,7 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
         if (so.kind == GridKind::Sparse) {
             r.grid = bakeExactSparse(mesh, shape, so.blockSize, so.bandVoxels, o.sign, threads, &st,
                                      o.progress);
-            for (const auto& [name, seconds] : st.phases) r.stages.push_back({name, seconds});
+            r.stages.insert(r.stages.end(), st.phases.begin(), st.phases.end());
             clock.restart();
         } else {
             MeshBvh bvh(mesh);

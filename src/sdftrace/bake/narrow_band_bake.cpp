@@ -21,7 +21,6 @@
 namespace sdft {
 
 using detail::arenaThreads;
-using detail::PhaseClock;
 using detail::report;
 using detail::RowSampler;
 
@@ -31,7 +30,8 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
     // B is 4 or 8: shifts and masks instead of divisions in the per-vertex index arithmetic.
     const int shift = B == 4 ? 2 : 3, mask = B - 1;
     SDFT_CHECK(bandVoxels >= 2);
-    PhaseClock phases;
+    std::vector<BakeStage> stages;
+    StageClock phases(stages);
     // Parity signs cast rays; the winding number needs no BVH of the mesh.
     std::unique_ptr<MeshBvh> bvh =
         sign == SignMethod::RayParity ? std::make_unique<MeshBvh>(mesh) : nullptr;
@@ -601,7 +601,7 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
                                        std::move(blockSamples), "exact bake");
     });
     phases.mark("grid");  // cell masks and the Lipschitz bound
-    if (stats) stats->phases = phases.phases;
+    if (stats) stats->phases = std::move(stages);
     return grid;
 }
 

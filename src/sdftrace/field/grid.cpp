@@ -211,24 +211,30 @@ void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
 // Jamriška §4.1: one bit per cell of each surface block, set when the signs of its 8 corner samples
 // differ (the cell contains the surface). Recomputed whenever the block's samples change.
 // One pass over the surface blocks' cells (sparse grids only): the cell masks (cells with a
-// sign change), and the Lipschitz bound of the trilinear reconstruction. Its derivative along x
-// inside a cell is a bilinear blend of the cell's 4 x-edge differences, so |df/dx| <= max |edge
-// difference| / h, and likewise for y and z; the max over cells of the norm of these per-axis
-// maxima bounds the gradient everywhere (the interpolant is continuous across faces within a
-// block).
+// sign change), and the Lipschitz bound of the trilinear reconstruction, the max over cells of
+// cellGradientBound2 (the interpolant is continuous across faces within a block).
+namespace {
+// The squared bound of the trilinear interpolant's gradient in a cell, times h^2: its derivative
+// along x is a bilinear blend of the cell's 4 x-edge differences, so |df/dx| <= max |edge
+// difference| / h, and likewise for y and z.
+float cellGradientBound2(const float c[8]) {
+    float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]), std::fabs(c[5] - c[4]),
+                         std::fabs(c[7] - c[6])});
+    float gy = std::max({std::fabs(c[2] - c[0]), std::fabs(c[3] - c[1]), std::fabs(c[6] - c[4]),
+                         std::fabs(c[7] - c[5])});
+    float gz = std::max({std::fabs(c[4] - c[0]), std::fabs(c[5] - c[1]), std::fabs(c[6] - c[2]),
+                         std::fabs(c[7] - c[3])});
+    return gx * gx + gy * gy + gz * gz;
+}
+}  // namespace
+
 // Dense grids: the same Lipschitz bound over every cell (no masks: the DDA tracer reads sparse
 // grids only).
 void Grid::computeLipschitz() {
     tbb::combinable<float> worstPerThread([] { return 0.0f; });
     forEachCell(view(), [&](int, int, int, const float c[8]) {
         float& worst = worstPerThread.local();
-        float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]), std::fabs(c[5] - c[4]),
-                             std::fabs(c[7] - c[6])});
-        float gy = std::max({std::fabs(c[2] - c[0]), std::fabs(c[3] - c[1]), std::fabs(c[6] - c[4]),
-                             std::fabs(c[7] - c[5])});
-        float gz = std::max({std::fabs(c[4] - c[0]), std::fabs(c[5] - c[1]), std::fabs(c[6] - c[2]),
-                             std::fabs(c[7] - c[3])});
-        worst = std::max(worst, gx * gx + gy * gy + gz * gz);
+        worst = std::max(worst, cellGradientBound2(c));
     });
     float worst = worstPerThread.combine([](float a, float b) { return std::max(a, b); });
     m_lipschitz = std::max(1.0f, std::sqrt(worst) / m_shape.voxelSize);
@@ -265,13 +271,7 @@ void Grid::computeCellMasksAndLipschitz() {
                             const int bit = (k * B + j) * B + i;
                             mask[bit / 64] |= uint64_t{1} << (bit % 64);
                         }
-                        float gx = std::max({std::fabs(c[1] - c[0]), std::fabs(c[3] - c[2]),
-                                             std::fabs(c[5] - c[4]), std::fabs(c[7] - c[6])});
-                        float gy = std::max({std::fabs(c[2] - c[0]), std::fabs(c[3] - c[1]),
-                                             std::fabs(c[6] - c[4]), std::fabs(c[7] - c[5])});
-                        float gz = std::max({std::fabs(c[4] - c[0]), std::fabs(c[5] - c[1]),
-                                             std::fabs(c[6] - c[2]), std::fabs(c[7] - c[3])});
-                        worst = std::max(worst, gx * gx + gy * gy + gz * gz);
+                        worst = std::max(worst, cellGradientBound2(c));
                     }
         }
         float& w = worstPerThread.local();
