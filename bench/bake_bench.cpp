@@ -8,6 +8,8 @@
 //   build/release/bench/sdftrace_bake_bench                      # bunny + teapot, everything
 //   build/release/bench/sdftrace_bake_bench --meshes bunny --sparse 256 --dense none
 //       --methods exact,openvdb --threads 2 --reps 5
+//   build/release/bench/sdftrace_bake_bench --sparse none --dense 128,256
+//       --methods exact,exact-bvh --threads 1,2 --reps 3   # closest point transform vs BVH
 //
 // Prints a markdown table on stdout.
 #include <openvdb/openvdb.h>
@@ -118,7 +120,11 @@ Result runOnce(const TriangleMesh& mesh, const Case& c, bool measure) {
         }
     } else {
         MeshBakeOptions o;
-        if (!parseMeshBakeMethod(c.method, o.method)) {
+        // exact-bvh: the dense exact bake by a BVH query per vertex (the transform's baseline).
+        if (c.method == "exact-bvh") {
+            o.method = MeshBakeMethod::Exact;
+            o.closest = ClosestPoints::Bvh;
+        } else if (!parseMeshBakeMethod(c.method, o.method)) {
             std::fprintf(stderr, "unknown method %s\n", c.method.c_str());
             std::exit(2);
         }

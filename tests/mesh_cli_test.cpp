@@ -112,7 +112,8 @@ TEST(MeshCli, EveryMethodBakesAndSummarizesItsStages) {
     struct Case {
         std::string args, stage;
     } cases[] = {
-        {"--method exact --dense", "distances"},
+        {"--method exact --dense", "closest point transform"},
+        {"--method exact --dense --closest bvh", "distances and signs"},
         {"--method jfa --sign flood", "signs (flood fill)"},
         {"--method danielsson", "danielsson sweeps"},
         {"--method edt --sign parity", "separable edt"},
@@ -151,6 +152,8 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
          "--res 4096: this bake needs about"},
         {"bake " + mesh("bunny_npm.obj") + " --jfa-variant 3+jfa -o " + dir.file("x.sdfg"),
          "--jfa-variant"},
+        {"bake " + mesh("bunny_npm.obj") + " --dense --closest octree -o " + dir.file("x.sdfg"),
+         "--closest"},
         {"render -q " + garbage + " -o " + dir.file("x.png"), "cannot read mesh"},
     };
     for (const Case& c : cases) {

@@ -37,6 +37,7 @@ struct BakeArgs {
     std::string bounds;
     std::string method = "exact";
     std::string sign = "winding";
+    std::string closest = "transform";
     std::string jfaVariant = "plain";
     float beta = 0.5f;
     int rays = 64;
@@ -126,7 +127,8 @@ int bakeMesh(const BakeArgs& a) {
         throw InputError("--method " + a.method + ": unknown; accepted: " + kMeshBakeMethods);
     }
     o.sampling = sampleOptions(a);
-    parseSignMethod(a.sign, o.sign);  // CLI11 checked the name
+    parseSignMethod(a.sign, o.sign);           // CLI11 checked the name
+    parseClosestPoints(a.closest, o.closest);  // likewise
     o.jfaVariant = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
                    : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
                                              : JfaVariant::Plain;
@@ -246,7 +248,8 @@ void addBakeCommand(CLI::App& app, Action& action) {
                     "Output grid (.sdfg or .vdb, docs/file-formats.md)")
         ->required();
     cmd->add_option("--method", args->method,
-                    "Meshes: exact (closest points through an Embree BVH), jfa (jump flooding, "
+                    "Meshes: exact (exact closest points: a closest point transform when dense, "
+                    "triangles scattered over the band when sparse), jfa (jump flooding, "
                     "RTSDF §2.2), danielsson (two-pass vector distance transform, Liktor §3.2), "
                     "edt (exact separable distance transform of the voxelized surface) or rtsdf "
                     "(ray-sampled near the surface, jump-flooded coarse field beyond; RTSDF §2.1, "
@@ -277,6 +280,12 @@ void addBakeCommand(CLI::App& app, Action& action) {
                     "(flood fill from the grid's boundary) or beta (|d| - beta: RTSDF's hollow "
                     "shell)")
         ->check(CLI::IsMember({"winding", "parity", "flood", "beta"}))
+        ->capture_default_str();
+    cmd->add_option("--closest", args->closest,
+                    "Exact, dense: transform (scan-convert each face's, edge's and vertex's "
+                    "region once; Mauch's closest point transform) or bvh (an Embree point query "
+                    "per vertex)")
+        ->check(CLI::IsMember({"transform", "bvh"}))
         ->capture_default_str();
     cmd->add_option("--res", args->resolution, "Cells along the longest axis of the region")
         ->check(CLI::Range(8, 4096))

@@ -2,8 +2,11 @@
 // queries) with the sign by the generalized winding number (or ray-crossing parity). The ground
 // truth the other bake methods are measured against.
 //
-// Two things keep it fast without approximating anything:
-//  - along a grid row each query searches only within the distance to the previous vertex's
+// Three things keep it fast without approximating anything:
+//  - the dense bake's distances come from the closest point transform (closest_point_transform.h):
+//    each face's, edge's and vertex's region is scan-converted once instead of a BVH search per
+//    vertex. The BVH path (ClosestPoints::Bvh) stays as the baseline it is measured against:
+//    along a grid row each query searches only within the distance to the previous vertex's
 //    closest point (a point of the mesh, so a bound of this distance);
 //  - signs are carried from sample to sample (closing_film.h): the mesh's boundary is closed by
 //    small films, so the winding number W of mesh + films is an integer that changes only by the
@@ -20,6 +23,7 @@
 // dense bake, and needs no BVH (but for parity signs).
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "sdftrace/bake/bake_stage.h"
@@ -29,19 +33,29 @@
 
 namespace sdft {
 
+// How the dense bake finds distances.
+enum class ClosestPoints {
+    Transform,  // scan-converted feature regions (closest_point_transform.h); the default
+    Bvh,        // an Embree point query per vertex
+};
+const char* closestPointsName(ClosestPoints c);  // "transform", "bvh"
+bool parseClosestPoints(const std::string& name, ClosestPoints& out);
+
 struct ExactBakeStats {
     size_t distanceQueries = 0;  // dense: BVH queries; sparse: vertices found within the band
+    size_t transformRows = 0, transformEvaluations = 0;  // dense, ClosestPoints::Transform
     size_t signEvaluations = 0;  // winding numbers or parity votes computed from scratch
     size_t filmSums =
         0;  // open meshes: sums over the closing films where a carried sign was unsure
     size_t surfaceBlocks = 0;       // sparse: blocks in the band
-    std::vector<BakeStage> phases;  // sparse: its phases
+    std::vector<BakeStage> phases;  // its phases
 };
 
 // Every vertex of `shape` (x fastest). `progress`: a percentage on stderr (when it is a terminal).
 std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& shape, SignMethod sign,
                                     int threads = 0, ExactBakeStats* stats = nullptr,
-                                    bool progress = false);
+                                    bool progress = false,
+                                    ClosestPoints closest = ClosestPoints::Transform);
 
 // A sparse block grid sampling only the narrow band (equal to Grid::sparseFromDense of
 // bakeExactSamples with the same block size and band).

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "sdftrace/bake/bake_stage.h"
+#include "sdftrace/bake/exact_bake.h"
 #include "sdftrace/bake/jump_flood.h"
 #include "sdftrace/bake/rtsdf_bake.h"
 #include "sdftrace/bake/sign_method.h"
@@ -26,6 +27,7 @@ struct MeshBakeOptions {
     MeshBakeMethod method = MeshBakeMethod::Exact;
     SampleOptions sampling;  // resolution, dense or sparse, block, band, padding, threads
     SignMethod sign = SignMethod::WindingNumber;
+    ClosestPoints closest = ClosestPoints::Transform;  // exact, dense
     JfaVariant jfaVariant = JfaVariant::Plain;
     float betaVoxels = 0.5f;  // SignMethod::BetaShell
     RtsdfOptions rtsdf;

@@ -113,9 +113,11 @@ class RowSampler {
         return true;
     }
 
-    // Vertices (i0 + n', j, k), n' < n, into out[0, n).
+    // Vertices (i0 + n', j, k), n' < n, into out[0, n). With `known` (may be `out`), their
+    // distances are given (a non-finite one is queried) and only the signs are found.
     void row(int i0, int j, int k, int n, float* out, std::atomic<size_t>& queries,
-             std::atomic<size_t>& signs, std::atomic<size_t>& filmSums) const {
+             std::atomic<size_t>& signs, std::atomic<size_t>& filmSums,
+             const float* known = nullptr) const {
         // 0.1% over the spacing: far above the rounding of the distances, so both the search
         // radius and the sign rule stay conservative.
         const float step = m_shape.voxelSize * 1.001f;
@@ -124,19 +126,27 @@ class RowSampler {
         bool prevInside = false;
         Carried carried;
         float gradient = 0;
-        size_t evaluated = 0, refreshed = 0;
+        size_t evaluated = 0, refreshed = 0, queried = 0;
         constexpr int kChunk = 8;  // vertices per gradient bound
         std::vector<uint32_t> films;
         if (m_winding) filmsNear(position(i0, j, k), position(i0 + n - 1, j, k), films);
         for (int n1 = 0; n1 < n; ++n1) {
             Vec3 p = position(i0 + n1, j, k);
-            // The previous closest point bounds this distance (tighter than prev + h).
-            MeshBvh::Closest c = prev == INFINITY
-                                     ? m_bvh->closest(p)
-                                     : m_bvh->closest(p, length(p - prevPoint) * 1.0001f + 1e-30f);
-            if (c.distance == INFINITY) c = m_bvh->closest(p);  // unreachable but for rounding
-            float d = c.distance;
-            prevPoint = c.point;
+            float d;
+            if (known && std::isfinite(known[n1])) {
+                d = known[n1];
+                prevPoint = Vec3(INFINITY);  // no closest point to bound the next query by
+            } else {
+                // The previous closest point bounds this distance (tighter than prev + h).
+                MeshBvh::Closest c =
+                    prev == INFINITY || !std::isfinite(prevPoint.x)
+                        ? m_bvh->closest(p)
+                        : m_bvh->closest(p, length(p - prevPoint) * 1.0001f + 1e-30f);
+                if (c.distance == INFINITY) c = m_bvh->closest(p);  // unreachable but rounding
+                d = c.distance;
+                prevPoint = c.point;
+                ++queried;
+            }
             // d > h means the ball around p holds no surface yet holds the previous vertex, so
             // the mesh is not crossed between them.
             const bool meshClear = n1 > 0 && (d > step || prev > step);
@@ -163,7 +173,7 @@ class RowSampler {
             prev = d;
             prevInside = in;
         }
-        queries += n;
+        queries += queried;
         signs += evaluated;
         filmSums += refreshed;
     }

@@ -62,7 +62,7 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     GridShape shape = gridShapeFor(mesh.bounds(), so);
     MeshBakeResult r;
     StageClock clock(r.stages);
-    char line[256] = "";
+    char line[400] = "";
     std::vector<float> samples;
 
     if (o.method == MeshBakeMethod::Exact) {
@@ -75,14 +75,27 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
         } else {
             MeshBvh bvh(mesh);
             clock.mark("bvh");
-            r.grid =
-                Grid::dense(shape, bakeExactSamples(bvh, shape, o.sign, threads, &st, o.progress));
-            clock.mark("distances");
+            std::vector<float> exact =
+                bakeExactSamples(bvh, shape, o.sign, threads, &st, o.progress, o.closest);
+            r.stages.insert(r.stages.end(), st.phases.begin(), st.phases.end());
+            clock.restart();
+            r.grid = Grid::dense(shape, std::move(exact));
+            clock.mark("grid");
         }
-        std::snprintf(line, sizeof line, "%zu %s, %zu sign evaluations (%s), %zu closing-film sums",
-                      st.distanceQueries,
-                      so.kind == GridKind::Sparse ? "vertices within the band" : "distance queries",
-                      st.signEvaluations, signMethodName(o.sign), st.filmSums);
+        char distances[160];
+        if (so.kind == GridKind::Dense && o.closest == ClosestPoints::Transform) {
+            std::snprintf(distances, sizeof distances,
+                          "closest point transform: %zu rows, %zu distance evaluations (%.1f per "
+                          "vertex)",
+                          st.transformRows, st.transformEvaluations,
+                          double(st.transformEvaluations) / double(shape.vertexCount()));
+        } else {
+            std::snprintf(
+                distances, sizeof distances, "%zu %s", st.distanceQueries,
+                so.kind == GridKind::Sparse ? "vertices within the band" : "distance queries");
+        }
+        std::snprintf(line, sizeof line, "%s, %zu sign evaluations (%s), %zu closing-film sums",
+                      distances, st.signEvaluations, signMethodName(o.sign), st.filmSums);
         r.details = line;
         return r;
     }

@@ -217,10 +217,23 @@ TEST(MeshBake, SparseExactBandBakeEqualsTheSparsifiedDenseBake) {
             GridShape shape = gridShapeFor(mesh.bounds(), so);
             ExactBakeStats st;
             Grid band = bakeExactSparse(mesh, shape, block, 3, SignMethod::WindingNumber, 0, &st);
-            Grid dense = Grid::sparseFromDense(
-                shape, bakeExactSamples(bvh, shape, SignMethod::WindingNumber), block, 3);
+            // Bit for bit against the BVH's distances (both in world units); within rounding
+            // against the closest point transform's (in voxel units).
+            Grid dense =
+                Grid::sparseFromDense(shape,
+                                      bakeExactSamples(bvh, shape, SignMethod::WindingNumber, 0,
+                                                       nullptr, false, ClosestPoints::Bvh),
+                                      block, 3);
             EXPECT_EQ(band.flags(), dense.flags()) << file << " B=" << block;
             EXPECT_EQ(band.blockSamples(), dense.blockSamples()) << file << " B=" << block;
+            Grid transform = Grid::sparseFromDense(
+                shape, bakeExactSamples(bvh, shape, SignMethod::WindingNumber), block, 3);
+            EXPECT_EQ(band.flags(), transform.flags()) << file << " B=" << block;
+            ASSERT_EQ(band.blockSamples().size(), transform.blockSamples().size());
+            for (size_t i = 0; i < band.blockSamples().size(); ++i)
+                ASSERT_NEAR(band.blockSamples()[i], transform.blockSamples()[i],
+                            1e-5f * so.resolution * shape.voxelSize)
+                    << file << " B=" << block << " sample " << i;
             EXPECT_LT(st.distanceQueries, shape.vertexCount()) << file;
             size_t in, out, surf;
             band.blockCounts(in, out, surf);
