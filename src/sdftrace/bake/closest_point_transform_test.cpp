@@ -82,5 +82,43 @@ TEST(ClosestPointTransform, GridCuttingTheMesh) {
                     << x << " " << y << " " << z;
 }
 
+// Degenerate inputs: one triangle, a flat sheet of coplanar triangles (every inner edge's region
+// is a sheet), and a grid wholly beside the mesh.
+TEST(ClosestPointTransform, SingleTrianglesFlatSheetsAndDistantGrids) {
+    TriangleMesh one;
+    one.positions = {{0, 0, 0}, {1, 0.2f, 0.1f}, {0.3f, 0.9f, -0.2f}};
+    one.triangles = {{0, 1, 2}};
+    TriangleMesh sheet;
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) sheet.positions.push_back({i * 0.3f, j * 0.3f, 0.0f});
+    for (uint32_t j = 0; j < 3; ++j)
+        for (uint32_t i = 0; i < 3; ++i) {
+            const uint32_t v = j * 4 + i;
+            sheet.triangles.push_back({v, v + 1, v + 5});
+            sheet.triangles.push_back({v, v + 5, v + 4});
+        }
+    for (const TriangleMesh* mesh : {&one, &sheet}) {
+        MeshBvh bvh(*mesh);
+        for (Vec3 origin : {Vec3(-0.5f, -0.5f, -0.5f), Vec3(2.0f, 1.5f, 0.7f)}) {
+            GridShape shape;
+            shape.cells[0] = 20;
+            shape.cells[1] = 18;
+            shape.cells[2] = 16;
+            shape.voxelSize = 0.1f;
+            shape.origin = origin;
+            std::vector<float> cpt(shape.vertexCount());
+            closestPointTransform(*mesh, shape, cpt.data());
+            size_t i = 0;
+            for (int z = 0; z <= shape.cells[2]; ++z)
+                for (int y = 0; y <= shape.cells[1]; ++y)
+                    for (int x = 0; x <= shape.cells[0]; ++x, ++i)
+                        ASSERT_NEAR(cpt[i],
+                                    bvh.closestDistance(origin + Vec3(x, y, z) * shape.voxelSize),
+                                    1e-5f)
+                            << x << " " << y << " " << z;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace sdft
