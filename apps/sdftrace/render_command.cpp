@@ -42,6 +42,9 @@ struct RenderArgs {
     Switch screenSpace, forceHit, fixedSteps, hybrid, shadows, boundsCulling, bitMasks;
     std::string normals;
     std::string gridTracer, cellMethod, gridNormals;
+    std::string shadowMethod;
+    std::optional<int> shadowRays;
+    Switch ao;
     std::optional<int> cellIterations, occluder, minMax;
     bool quiet = false;
 };
@@ -87,6 +90,9 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.normals == "central") s.normals = NormalEstimator::Central;
     if (a.normals == "tetrahedral") s.normals = NormalEstimator::Tetrahedral;
     if (a.shadows.given()) s.shadows = a.shadows.value;
+    if (!a.shadowMethod.empty()) parseShadowMethod(a.shadowMethod, s.shadowMethod);
+    if (a.shadowRays) s.shadowRays = *a.shadowRays;
+    if (a.ao.given()) s.ambientOcclusion = a.ao.value;
     if (a.boundsCulling.given()) s.boundsCulling = a.boundsCulling.value;
     if (a.maxDistance) s.maxDistance = *a.maxDistance;
     if (a.threads) s.threads = *a.threads;
@@ -105,7 +111,7 @@ int runRender(const RenderArgs& a) {
             throw InputError(
                 "--aov " + spec +
                 ": expected NAME=PATH with NAME one of color, depth, normal, steps, error, "
-                "trav_steps, isect_tests");
+                "trav_steps, isect_tests, shadow, ao");
         }
         std::string path = spec.substr(eq + 1);
         imageFormatFromPath(path, "--aov " + spec.substr(0, eq));
@@ -179,7 +185,9 @@ void addRenderCommand(CLI::App& app, Action& action) {
         "--aov", args->aovs,
         "Extra output NAME=PATH, repeatable. NAME: color (linear radiance), depth (t along the "
         "unit primary ray, inf on a miss), normal, steps (field evaluations of the primary "
-        "ray), error (f at the hit point). PATH: .exr, .pfm, or .png (heat map with legend)");
+        "ray), error (f at the hit point), trav_steps and isect_tests (grid DDA), shadow (the "
+        "first shadowing light's visibility), ao (ambient occlusion). PATH: .exr, .pfm, or .png "
+        "(heat map with legend)");
     auto* camera = cmd->add_option_group("Camera", "Override the scene's camera");
     camera->add_option("--eye", args->eye, "Camera position x,y,z");
     camera->add_option("--target", args->target, "Point looked at x,y,z");
@@ -244,7 +252,17 @@ void addRenderCommand(CLI::App& app, Action& action) {
                      "Gradient estimator: central (6 taps) or tetrahedral (4 taps)")
         ->check(CLI::IsMember({"central", "tetrahedral"}));
     args->shadows.option = shading->add_flag("--shadows,!--no-shadows", args->shadows.value,
-                                             "Hard shadows by tracing to each light");
+                                             "Shadows of the lights that cast them");
+    shading
+        ->add_option("--shadow-method", args->shadowMethod,
+                     "hard (a ray to the light's centre), soft (SDF soft shadows, one march; RTSDF "
+                     "§2.4-2.5), distributed (rays to points on the light: the ground truth), pcf "
+                     "or evsm (shadow maps)")
+        ->check(CLI::IsMember({"hard", "soft", "distributed", "pcf", "evsm"}));
+    shading->add_option("--shadow-rays", args->shadowRays, "distributed: rays per point and light")
+        ->check(CLI::Range(1, 65536));
+    args->ao.option = shading->add_flag("--ao,!--no-ao", args->ao.value,
+                                        "SDF ambient occlusion on the ambient term");
 
     auto* grid = cmd->add_option_group(
         "Grids", "Single-grid scenes, e.g. a .sdfg rendered directly (Jamriska 2010)");

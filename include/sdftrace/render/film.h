@@ -8,9 +8,10 @@
 
 namespace sdft {
 
-enum class Aov { Color, Depth, Normal, Steps, Error, TravSteps, IsectTests };
+enum class Aov { Color, Depth, Normal, Steps, Error, TravSteps, IsectTests, Shadow, Ao };
 
-// Names as on the command line: color, depth, normal, steps, error, trav_steps, isect_tests.
+// Names as on the command line: color, depth, normal, steps, error, trav_steps, isect_tests,
+// shadow, ao.
 const char* aovName(Aov aov);
 bool parseAov(const std::string& name, Aov& out);
 int aovChannels(Aov aov);
@@ -24,7 +25,9 @@ struct Film {
     std::vector<float> error;      // f(p) at the chosen hit point, 0 on a miss
     std::vector<float> travSteps;  // grid tracer: blocks + cells visited by primary and shadow rays
     std::vector<float>
-        isectTests;  // grid tracer: surface-cell intersection tests (Jamriška fig. 7)
+        isectTests;             // grid tracer: surface-cell intersection tests (Jamriška fig. 7)
+    std::vector<float> shadow;  // visibility of the first light that casts shadows; 1 on a miss
+    std::vector<float> ao;      // ambient occlusion (1: none, or off); 1 on a miss
 
     Film(int w, int h);
     size_t pixels() const { return static_cast<size_t>(width) * height; }

@@ -16,14 +16,29 @@ struct Material {
     float shininess = 32.0f;       // Blinn-Phong exponent
 };
 
+// Lights of the direct-lighting integrator. Sphere and rectangle lights have a size: their
+// shadows have penumbrae (soft_shadow.h estimates them in one march, light_sample.h samples them
+// for distributed shadow rays). A directional light may subtend an angle (the sun: 0.53 degrees).
 struct Light {
-    enum class Kind { Directional, Point };
+    enum class Kind { Directional, Point, Sphere, Rect };
     Kind kind = Kind::Directional;
-    Vec3 direction{-1, -1, -1};  // directional: the direction light travels
-    Vec3 position{0, 5, 0};      // point
+    Vec3 direction{-1, -1, -1};   // directional: the direction light travels (unit)
+    float angle = 0;              // directional: angular diameter, radians, [0, pi/2)
+    Vec3 position{0, 5, 0};       // point, sphere, rect: the centre
+    float radius = 0;             // sphere: > 0
+    Vec3 u{1, 0, 0}, v{0, 0, 1};  // rect: edge vectors; it emits on the side of u x v
     Vec3 color{1, 1, 1};
-    float intensity = 1.0f;  // directional: irradiance scale; point: intensity (falls off as 1/d^2)
+    // directional: irradiance scale; point, sphere: intensity (falls off as 1/d^2); rect: the
+    // intensity along its normal, times the cosine off it (a Lambertian emitter).
+    float intensity = 1.0f;
     bool castShadows = true;
+
+    bool positional() const { return kind != Kind::Directional; }
+    // Whether its shadows have a penumbra.
+    bool hasSize() const {
+        return kind == Kind::Sphere || kind == Kind::Rect ||
+               (kind == Kind::Directional && angle > 0);
+    }
 };
 
 struct Lighting {

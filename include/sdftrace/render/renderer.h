@@ -1,5 +1,7 @@
 // The direct-lighting renderer: tiles of primary rays traced as packets, gradient normals,
-// Lambert + Blinn-Phong shading, hard shadows by tracing to each light (Liktor 2008, §4.1).
+// Lambert + Blinn-Phong shading, shadows by the settings' method (hard rays, Liktor 2008 §4.1;
+// SDF soft shadows, RTSDF §2.4-2.5; distributed rays; shadow maps with PCF or EVSM), and SDF
+// ambient occlusion. Shadow-map evaluations count as shadow evaluations.
 #pragma once
 
 #include <cstdint>
@@ -14,13 +16,13 @@ struct RenderStats {
     double seconds = 0;
     int threads = 0;
     uint64_t primaryRays = 0, primaryEvaluations = 0, hits = 0, fallbacks = 0;
-    uint64_t normalEvaluations = 0, shadowRays = 0, shadowEvaluations = 0;
+    uint64_t normalEvaluations = 0, shadowRays = 0, shadowEvaluations = 0, aoEvaluations = 0;
     // Single-grid scenes traced by DDA (Jamriška): blocks + cells visited, surface cells tested.
     uint64_t traversalSteps = 0, intersectionTests = 0;
     bool gridTracer = false;
 
     uint64_t totalEvaluations() const {
-        return primaryEvaluations + normalEvaluations + shadowEvaluations;
+        return primaryEvaluations + normalEvaluations + shadowEvaluations + aoEvaluations;
     }
 };
 

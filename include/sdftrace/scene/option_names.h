@@ -34,4 +34,14 @@ inline const char* gridNormalNames() {
     return "analytic, difference-of-interpolations, interpolation-of-differences";
 }
 
+inline bool parseShadowMethod(const std::string& s, ShadowMethod& out) {
+    if (s == "hard") return out = ShadowMethod::Hard, true;
+    if (s == "soft") return out = ShadowMethod::Soft, true;
+    if (s == "distributed") return out = ShadowMethod::Distributed, true;
+    if (s == "pcf") return out = ShadowMethod::Pcf, true;
+    if (s == "evsm") return out = ShadowMethod::Evsm, true;
+    return false;
+}
+inline const char* shadowMethodNames() { return "hard, soft, distributed, pcf, evsm"; }
+
 }  // namespace sdft

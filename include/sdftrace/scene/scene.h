@@ -5,8 +5,11 @@
 #include <vector>
 
 #include "sdftrace/field/node.h"
+#include "sdftrace/render/ambient_occlusion.h"
 #include "sdftrace/render/camera.h"
 #include "sdftrace/render/lighting.h"
+#include "sdftrace/render/shadow_map.h"
+#include "sdftrace/render/soft_shadow.h"
 #include "sdftrace/trace/grid_tracer.h"
 #include "sdftrace/trace/trace_options.h"
 
@@ -18,10 +21,26 @@ enum class NormalEstimator { Central, Tetrahedral };
 // two-level DDA (§4) or sphere tracing the trilinear field like any other object.
 enum class GridTracerKind { Dda, SphereTrace };
 
+// How shadows of the lights are found (RTSDF §3 compares the last four).
+enum class ShadowMethod {
+    Hard,         // one ray to the light's centre (Liktor 2008, §4.1)
+    Soft,         // SDF soft shadows: one march (soft_shadow.h, RTSDF §2.4-2.5)
+    Distributed,  // ground truth: rays to points sampled on the light (Cook et al. 1984)
+    Pcf,          // shadow map, percentage-closer filtered (shadow_map.h)
+    Evsm,         // shadow map, exponential variance (shadow_map.h)
+};
+
 struct RenderSettings {
     TraceOptions trace;  // primary rays
     NormalEstimator normals = NormalEstimator::Tetrahedral;
-    bool shadows = true;            // hard shadows by tracing to each light (Liktor 2008, §4.1)
+    bool shadows = true;  // lights with `castShadows` cast them, by `shadowMethod`
+    ShadowMethod shadowMethod = ShadowMethod::Hard;
+    SoftShadowOptions soft;
+    int shadowRays = 64;  // Distributed: stratified samples of the light per point
+    ShadowMapOptions shadowMap;
+    bool ambientOcclusion = false;  // scales the ambient term (ambient_occlusion.h)
+    AmbientOcclusionOptions ao;
+    uint32_t frame = 0;             // seeds the per-pixel jitter of soft shadows and light samples
     float maxDistance = 100.0f;     // t_max of primary rays (the scene bounds clip it further)
     float shadowOffsetMin = 1e-3f;  // eps_min of the shadow-ray origin offset
     bool boundsCulling = true;  // skip far union operands (docs/decisions/0002-bounds-culling.md)

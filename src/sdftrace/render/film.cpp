@@ -20,13 +20,17 @@ const char* aovName(Aov aov) {
             return "trav_steps";
         case Aov::IsectTests:
             return "isect_tests";
+        case Aov::Shadow:
+            return "shadow";
+        case Aov::Ao:
+            return "ao";
     }
     return "?";
 }
 
 bool parseAov(const std::string& name, Aov& out) {
     for (Aov a : {Aov::Color, Aov::Depth, Aov::Normal, Aov::Steps, Aov::Error, Aov::TravSteps,
-                  Aov::IsectTests}) {
+                  Aov::IsectTests, Aov::Shadow, Aov::Ao}) {
         if (name == aovName(a)) {
             out = a;
             return true;
@@ -46,10 +50,12 @@ Film::Film(int w, int h) : width(w), height(h) {
     error.assign(n, 0.0f);
     travSteps.assign(n, 0.0f);
     isectTests.assign(n, 0.0f);
+    shadow.assign(n, 1.0f);
+    ao.assign(n, 1.0f);
 }
 
 double Film::bytesNeeded(int w, int h) {
-    return static_cast<double>(w) * static_cast<double>(h) * sizeof(float) * 11.0;
+    return static_cast<double>(w) * static_cast<double>(h) * sizeof(float) * 13.0;
 }
 
 const std::vector<float>& Film::channel(Aov aov) const {
@@ -68,6 +74,10 @@ const std::vector<float>& Film::channel(Aov aov) const {
             return travSteps;
         case Aov::IsectTests:
             return isectTests;
+        case Aov::Shadow:
+            return shadow;
+        case Aov::Ao:
+            return ao;
     }
     return color;
 }

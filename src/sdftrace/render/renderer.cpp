@@ -9,9 +9,12 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include "sdftrace/exec/progress.h"
+#include "sdftrace/math/sampling.h"
 #include "sdftrace/render/camera.h"
+#include "sdftrace/render/light_sample.h"
 #include "sdftrace/trace/field_tracer.h"
 #include "sdftrace/trace/grid_tracer.h"
 #include "sdftrace/trace/minmax_buffer.h"
@@ -44,7 +47,8 @@ struct TileScratch {
     std::vector<TraceResult> shadowResults;
     std::vector<int> shadowOwner;
     std::vector<Vec3> radiance;
-    int x0 = 0, y0 = 0, tw = 0;  // the tile being rendered
+    std::vector<float> shadow, ao;  // per hit: the first shadowing light's visibility; AO
+    int x0 = 0, y0 = 0, tw = 0;     // the tile being rendered
     RenderStats stats;
 };
 
@@ -61,20 +65,6 @@ Material blendMaterial(const std::vector<Material>& table, const MaterialBlend& 
         m.shininess += src.shininess * w;
     }
     return m;
-}
-
-// Direction to the light and the distance to it (inf for directional lights).
-void toLight(const Light& light, Vec3 p, Vec3& dir, float& dist, float& scale) {
-    if (light.kind == Light::Kind::Directional) {
-        dir = normalize(-light.direction);
-        dist = kInfinity;
-        scale = light.intensity;
-    } else {
-        Vec3 d = light.position - p;
-        dist = length(d);
-        dir = d / std::fmax(dist, 1e-12f);
-        scale = light.intensity / std::fmax(dist * dist, 1e-12f);
-    }
 }
 
 class TileRenderer {
@@ -101,12 +91,46 @@ class TileRenderer {
                 m_useMinMax = true;
             }
         }
+        const ShadowMethod method = m_settings.shadowMethod;
+        if (m_settings.shadows && (method == ShadowMethod::Pcf || method == ShadowMethod::Evsm)) {
+            const Bounds3 region = shadowRegion();
+            for (const Light& light : scene.lighting.lights) {
+                m_maps.push_back(nullptr);
+                if (!light.castShadows || region.empty()) continue;
+                m_maps.back() = std::make_unique<ShadowMap>(
+                    tape, light, region, m_shadow,
+                    method == ShadowMethod::Pcf ? ShadowMapFilter::Pcf : ShadowMapFilter::Evsm,
+                    m_settings.shadowMap);
+                m_mapEvaluations += m_maps.back()->evaluations();
+            }
+        }
     }
+
+    uint64_t mapEvaluations() const { return m_mapEvaluations; }
 
     void renderTile(int x0, int y0, int x1, int y1, TileScratch& s);
 
   private:
+    // Where shading points can lie: the scene's bounds, or (unbounded scenes) the bounds of the
+    // hits of a coarse grid of primary rays, grown by a tenth.
+    Bounds3 shadowRegion() const;
+    // visible[h] in [0, 1]: how much of `light` hit h sees, by the settings' shadow method.
+    void lightVisibility(TileScratch& s, std::vector<float>& visible, const Light& light,
+                         int lightIndex);
     void traceShadows(TileScratch& s, std::vector<float>& visible, const Light& light);
+    // Traces s.shadowSegments into s.shadowResults (grid DDA or sphere-traced packets).
+    void traceShadowSegments(TileScratch& s);
+    void softShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
+                     int lightIndex);
+    void distributedShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
+                            int lightIndex);
+    // The shadow ray's origin offset along the normal (Keinert et al. 2014, §3.3).
+    float shadowOffset(const TileScratch& s, int h) const;
+    // A pixel's index in the film, for seeding its random numbers.
+    uint32_t pixelIndex(const TileScratch& s, int h) const {
+        const int i = s.hitPixel[h];
+        return static_cast<uint32_t>((s.y0 + i / s.tw) * m_film.width + (s.x0 + i % s.tw));
+    }
     void tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw);
     void gridNormals(TileScratch& s);
     void stencilNormals(TileScratch& s);
@@ -121,8 +145,28 @@ class TileRenderer {
     const GridView* m_grid = nullptr;
     GridView m_gridView;
     bool m_useMinMax = false;
-    MinMaxBuffer m_minMax;  // Jamriška §6, built once per render
+    MinMaxBuffer m_minMax;                           // Jamriška §6, built once per render
+    std::vector<std::unique_ptr<ShadowMap>> m_maps;  // per light, shadow-map methods
+    uint64_t m_mapEvaluations = 0;
 };
+
+Bounds3 TileRenderer::shadowRegion() const {
+    const Bounds3 all = m_tape.bounds();
+    if (all.finite() && !all.empty()) return all;
+    Bounds3 hits;
+    const CameraDesc& d = m_camera.desc();
+    const int nx = std::min(d.width, 160), ny = std::min(d.height, 120);
+    TraceOptions opts = m_shadow;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const Ray ray =
+                m_camera.rayThrough((i + 0.5f) * d.width / nx, (j + 0.5f) * d.height / ny);
+            const TraceResult r = traceRay(m_tape, {ray, 0.0f, m_settings.maxDistance}, opts);
+            if (r.hit) hits.include(ray.at(r.t));
+        }
+    if (hits.empty()) return hits;
+    return hits.expanded(0.1f * length(hits.extent()) + 1e-3f);
+}
 
 void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     int tw = x1 - x0;
@@ -168,15 +212,33 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
         mats[h] = blendMaterial(m_scene.materials, m_tape.evalMaterial(s.hitPoint[h]));
         s.radiance[h] = m_scene.lighting.ambient * mats[h].color;
     }
+    // Keinert-style SDF ambient occlusion scales the ambient term.
+    s.ao.assign(hits, 1.0f);
+    if (m_settings.ambientOcclusion) {
+        for (int h = 0; h < hits; ++h) {
+            const AmbientOcclusionResult ao =
+                ambientOcclusion(m_tape, s.hitPoint[h], s.hitNormal[h], m_settings.ao);
+            s.ao[h] = ao.ao;
+            s.radiance[h] *= ao.ao;
+            s.stats.aoEvaluations += ao.evaluations;
+        }
+    }
     std::vector<float> visible;
-    for (const Light& light : m_scene.lighting.lights) {
+    s.shadow.assign(hits, 1.0f);
+    bool firstShadow = true;
+    for (size_t li = 0; li < m_scene.lighting.lights.size(); ++li) {
+        const Light& light = m_scene.lighting.lights[li];
         visible.assign(hits, 1.0f);
-        if (m_settings.shadows && light.castShadows) traceShadows(s, visible, light);
+        if (m_settings.shadows && light.castShadows) {
+            lightVisibility(s, visible, light, static_cast<int>(li));
+            if (firstShadow) s.shadow = visible;
+            firstShadow = false;
+        }
         for (int h = 0; h < hits; ++h) {
             if (visible[h] == 0) continue;
-            Vec3 l;
-            float dist, scale;
-            toLight(light, s.hitPoint[h], l, dist, scale);
+            const LightDirection to = towardLight(light, s.hitPoint[h]);
+            const Vec3 l = to.dir;
+            const float scale = to.scale * visible[h];
             Vec3 n = s.hitNormal[h];
             float ndotl = dot(n, l);
             if (ndotl <= 0) continue;
@@ -208,6 +270,8 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
         }
         m_film.depth[p] = s.results[i].t;
         m_film.error[p] = s.results[i].value;
+        m_film.shadow[p] = s.shadow[h];
+        m_film.ao[p] = s.ao[h];
     }
 }
 
@@ -286,23 +350,19 @@ void TileRenderer::traceShadows(TileScratch& s, std::vector<float>& visible, con
     s.shadowSegments.clear();
     s.shadowOwner.clear();
     for (int h = 0; h < hits; ++h) {
-        Vec3 l;
-        float dist, scale;
-        toLight(light, s.hitPoint[h], l, dist, scale);
+        const LightDirection to = towardLight(light, s.hitPoint[h]);
         Vec3 n = s.hitNormal[h];
-        if (dot(n, l) <= 0) continue;  // facing away: unlit anyway
-        // Keinert et al. 2014, §3.3: offset the origin by 2 max(eps_min, |f(p)|) along the normal,
-        // so it clears the surface however far from it the march stopped.
-        float f = std::fabs(s.results[s.hitPixel[h]].value) / m_tape.lipschitz();
-        // A DDA hit has f = 0 by construction; the trilinear field can stay <= 0 for a fraction of
-        // a voxel along the gradient estimate near creases, so grids need eps_min of half a voxel.
-        float epsMin = m_grid
-                           ? std::fmax(m_settings.shadowOffsetMin, 0.5f * m_grid->shape.voxelSize)
-                           : m_settings.shadowOffsetMin;
-        float offset = 2.0f * std::fmax(epsMin, f);
-        s.shadowSegments.push_back({{s.hitPoint[h] + n * offset, l}, 0.0f, dist});
+        if (dot(n, to.dir) <= 0) continue;  // facing away: unlit anyway
+        s.shadowSegments.push_back(
+            {{s.hitPoint[h] + n * shadowOffset(s, h), to.dir}, 0.0f, to.dist});
         s.shadowOwner.push_back(h);
     }
+    traceShadowSegments(s);
+    for (size_t j = 0; j < s.shadowSegments.size(); ++j)
+        if (s.shadowResults[j].hit) visible[s.shadowOwner[j]] = 0.0f;
+}
+
+void TileRenderer::traceShadowSegments(TileScratch& s) {
     s.shadowResults.resize(s.shadowSegments.size());
     if (m_grid) {
         // Jamriška §7: optionally the volumetric-occluder traversal.
@@ -321,11 +381,104 @@ void TileRenderer::traceShadows(TileScratch& s, std::vector<float>& visible, con
     } else {
         tracePacket(m_tape, s.shadowSegments, m_shadow, s.shadowResults, s.packet);
     }
-    for (size_t j = 0; j < s.shadowSegments.size(); ++j) {
-        s.stats.shadowEvaluations += s.shadowResults[j].evaluations;
-        if (s.shadowResults[j].hit) visible[s.shadowOwner[j]] = 0.0f;
-    }
+    for (const TraceResult& r : s.shadowResults) s.stats.shadowEvaluations += r.evaluations;
     s.stats.shadowRays += s.shadowSegments.size();
+}
+
+float TileRenderer::shadowOffset(const TileScratch& s, int h) const {
+    // Keinert et al. 2014, §3.3: offset the origin by 2 max(eps_min, |f(p)|) along the normal,
+    // so it clears the surface however far from it the march stopped.
+    const float f = std::fabs(s.results[s.hitPixel[h]].value) / m_tape.lipschitz();
+    // A DDA hit has f = 0 by construction; the trilinear field can stay <= 0 for a fraction of
+    // a voxel along the gradient estimate near creases, so grids need eps_min of half a voxel.
+    const float epsMin = m_grid
+                             ? std::fmax(m_settings.shadowOffsetMin, 0.5f * m_grid->shape.voxelSize)
+                             : m_settings.shadowOffsetMin;
+    return 2.0f * std::fmax(epsMin, f);
+}
+
+void TileRenderer::lightVisibility(TileScratch& s, std::vector<float>& visible, const Light& light,
+                                   int lightIndex) {
+    switch (m_settings.shadowMethod) {
+        case ShadowMethod::Hard:
+            traceShadows(s, visible, light);
+            return;
+        case ShadowMethod::Soft:
+            softShadows(s, visible, light, lightIndex);
+            return;
+        case ShadowMethod::Distributed:
+            if (!light.hasSize()) {
+                traceShadows(s, visible, light);  // one point: one ray is exact
+            } else {
+                distributedShadows(s, visible, light, lightIndex);
+            }
+            return;
+        case ShadowMethod::Pcf:
+        case ShadowMethod::Evsm: {
+            const ShadowMap* map = m_maps[lightIndex].get();
+            if (!map) return;
+            for (size_t h = 0; h < visible.size(); ++h) {
+                if (dot(s.hitNormal[h], towardLight(light, s.hitPoint[h]).dir) <= 0) continue;
+                visible[h] = map->visibility(s.hitPoint[h], s.hitNormal[h]);
+            }
+            return;
+        }
+    }
+}
+
+// RTSDF §2.4-2.5: one march per point towards the light's centre.
+void TileRenderer::softShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
+                               int lightIndex) {
+    SoftShadowOptions o = m_settings.soft;
+    o.epsilon = m_grid ? std::fmax(m_settings.shadowOffsetMin, 0.5f * m_grid->shape.voxelSize)
+                       : std::fmax(o.epsilon, m_settings.trace.tau);
+    o.maxSteps = std::max(o.maxSteps, m_settings.trace.maxSteps);
+    for (size_t h = 0; h < visible.size(); ++h) {
+        const LightDirection to = towardLight(light, s.hitPoint[h]);
+        const Vec3 n = s.hitNormal[h];
+        if (dot(n, to.dir) <= 0) continue;
+        Rng rng(pixelIndex(s, static_cast<int>(h)), m_settings.frame, 0x50F7u + lightIndex);
+        const SoftShadowResult r =
+            softShadow(m_tape, s.hitPoint[h] + n * shadowOffset(s, static_cast<int>(h)), to.dir,
+                       0.0f, std::fmin(to.dist, m_settings.maxDistance),
+                       lightTanRadius(light, s.hitPoint[h]), o, rng.uniform());
+        visible[h] = r.visibility;
+        s.stats.shadowEvaluations += r.evaluations;
+        ++s.stats.shadowRays;
+    }
+}
+
+// Cook et al. 1984: the share of stratified points on the light the point sees (a light point
+// below the surface's tangent plane counts as hidden).
+void TileRenderer::distributedShadows(TileScratch& s, std::vector<float>& visible,
+                                      const Light& light, int lightIndex) {
+    const int hits = static_cast<int>(visible.size());
+    const int side = std::max(1, static_cast<int>(std::ceil(std::sqrt(m_settings.shadowRays))));
+    const int n = side * side;
+    s.shadowSegments.clear();
+    s.shadowOwner.clear();
+    std::vector<int> seen(hits, 0);
+    for (int h = 0; h < hits; ++h) {
+        const Vec3 nrm = s.hitNormal[h];
+        const Vec3 origin = s.hitPoint[h] + nrm * shadowOffset(s, h);
+        Rng rng(pixelIndex(s, h), m_settings.frame, 0xD157u + lightIndex);
+        for (int k = 0; k < n; ++k) {
+            const float u1 = ((k % side) + rng.uniform()) / side;
+            const float u2 = ((k / side) + rng.uniform()) / side;
+            const LightSample ls = sampleLight(light, s.hitPoint[h], u1, u2);
+            if (ls.dist <= 0) {  // inside the light
+                ++seen[h];
+                continue;
+            }
+            if (dot(nrm, ls.dir) <= 0) continue;
+            s.shadowSegments.push_back({{origin, ls.dir}, 0.0f, ls.dist});
+            s.shadowOwner.push_back(h);
+        }
+    }
+    traceShadowSegments(s);
+    for (size_t j = 0; j < s.shadowSegments.size(); ++j)
+        if (!s.shadowResults[j].hit) ++seen[s.shadowOwner[j]];
+    for (int h = 0; h < hits; ++h) visible[h] = static_cast<float>(seen[h]) / n;
 }
 
 }  // namespace
@@ -346,10 +499,13 @@ RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progre
 
     const int ts = std::max(1, scene.settings.tileSize);
     const int tilesX = (film.width + ts - 1) / ts, tilesY = (film.height + ts - 1) / ts;
-    TileRenderer renderer(scene, tape, film);
+    std::unique_ptr<TileRenderer> tiles;
     tbb::enumerable_thread_specific<TileScratch> scratch;
     Progress bar("render", static_cast<uint64_t>(tilesX) * tilesY, progress);
     arena.execute([&] {
+        // Shadow maps render here, on the same threads.
+        tiles = std::make_unique<TileRenderer>(scene, tape, film);
+        TileRenderer& renderer = *tiles;
         tbb::parallel_for(
             tbb::blocked_range<int>(0, tilesX * tilesY, 1),
             [&](const tbb::blocked_range<int>& range) {
@@ -374,9 +530,11 @@ RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progre
         total.normalEvaluations += t.normalEvaluations;
         total.shadowRays += t.shadowRays;
         total.shadowEvaluations += t.shadowEvaluations;
+        total.aoEvaluations += t.aoEvaluations;
         total.traversalSteps += t.traversalSteps;
         total.intersectionTests += t.intersectionTests;
     }
+    total.shadowEvaluations += tiles->mapEvaluations();
     total.threads = threads;
     total.gridTracer =
         scene.root->kind == NodeKind::Grid && scene.settings.gridTracer == GridTracerKind::Dda;

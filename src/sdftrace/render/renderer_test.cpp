@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/scene/parse_scene.h"
+#include "shadow_test_scenes.h"
 
 namespace sdft {
 namespace {
@@ -64,6 +67,29 @@ TEST(Renderer, ThreadCountDoesNotChangeTheImage) {
     EXPECT_EQ(render(scene, tape, two).threads, 2);
     EXPECT_EQ(one.color, two.color);
     EXPECT_EQ(one.depth, two.depth);
+}
+
+// Every shadow method, with ambient occlusion, on sphere, rectangle, sun and point lights: no NaN
+// or infinite pixel, and the shadow and ao AOVs stay in [0, 1].
+TEST(Renderer, EveryShadowMethodGivesFinitePixels) {
+    for (const char* light :
+         {testing::kSphereLight,
+          R"({"type": "rect", "position": [-1, 4, 1], "u": [1, 0, 0], "v": [0, 0, 0.5]})",
+          R"({"type": "directional", "direction": [0.6, -1, 0.5], "angle": 2})",
+          R"({"type": "point", "position": [-2.5, 5, 1.5]})"}) {
+        for (const char* method : {"hard", "soft", "distributed", "pcf", "evsm"}) {
+            const testing::Rendered r = testing::renderText(testing::shadowScene(
+                light, std::string(R"({"shadow_method": ")") + method +
+                           R"(", "shadow_rays": 16, "shadow_map_resolution": 128, "ao": true})"));
+            for (float c : r.film.color) ASSERT_TRUE(std::isfinite(c)) << light << " " << method;
+            for (size_t i = 0; i < r.film.pixels(); ++i) {
+                ASSERT_TRUE(r.film.shadow[i] >= 0 && r.film.shadow[i] <= 1) << method;
+                ASSERT_TRUE(r.film.ao[i] >= 0 && r.film.ao[i] <= 1) << method;
+            }
+            EXPECT_GT(r.stats.shadowEvaluations, 0u) << light << " " << method;
+            EXPECT_GT(r.stats.aoEvaluations, 0u);
+        }
+    }
 }
 
 }  // namespace

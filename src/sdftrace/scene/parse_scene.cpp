@@ -62,17 +62,35 @@ Light parseLight(const Reader& r) {
     Light l;
     std::string type = r.string("type");
     if (type == "directional") {
-        r.allowKeys({"type", "direction", "color", "intensity", "shadows"});
+        r.allowKeys({"type", "direction", "angle", "color", "intensity", "shadows"});
         l.kind = Light::Kind::Directional;
         l.direction = r.vec3("direction");
         if (length(l.direction) <= 0) r.failKey("direction", "expected a non-zero direction");
         l.direction = normalize(l.direction);
+        l.angle = r.number(
+                      "angle", 0.0f, [](double v) { return v >= 0 && v < 90; },
+                      "an angular diameter in [0, 90) degrees") *
+                  3.14159265f / 180.0f;
     } else if (type == "point") {
         r.allowKeys({"type", "position", "color", "intensity", "shadows"});
         l.kind = Light::Kind::Point;
         l.position = r.vec3("position");
+    } else if (type == "sphere") {
+        r.allowKeys({"type", "position", "radius", "color", "intensity", "shadows"});
+        l.kind = Light::Kind::Sphere;
+        l.position = r.vec3("position");
+        l.radius = r.number("radius", positive, "a positive radius (use a point light for 0)");
+    } else if (type == "rect") {
+        r.allowKeys({"type", "position", "u", "v", "color", "intensity", "shadows"});
+        l.kind = Light::Kind::Rect;
+        l.position = r.vec3("position");
+        l.u = r.vec3("u");
+        l.v = r.vec3("v");
+        if (!(length(cross(l.u, l.v)) > 1e-12f * std::max(1.0f, dot(l.u, l.u) + dot(l.v, l.v))))
+            r.failKey("v", "expected edge vectors u and v spanning a non-zero area");
     } else {
-        r.failKey("type", "unknown light type '" + type + "'; accepted: directional, point");
+        r.failKey("type",
+                  "unknown light type '" + type + "'; accepted: directional, point, sphere, rect");
     }
     l.color = r.vec3("color", l.color, nonNegative, "non-negative linear RGB");
     l.intensity = r.number("intensity", l.intensity, nonNegative, "a non-negative intensity");
@@ -104,7 +122,21 @@ void parseRender(const Reader& r, RenderSettings& s) {
                  "bit_masks",
                  "grid_normals",
                  "occluder_threshold",
-                 "minmax_resolution"});
+                 "minmax_resolution",
+                 "shadow_method",
+                 "shadow_rays",
+                 "soft_max_step",
+                 "soft_bias",
+                 "soft_triangulation",
+                 "soft_jitter",
+                 "soft_centered",
+                 "shadow_map_resolution",
+                 "pcf_radius",
+                 "evsm_radius",
+                 "ao",
+                 "ao_samples",
+                 "ao_step",
+                 "ao_strength"});
     TraceOptions& t = s.trace;
     t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
     t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
@@ -145,6 +177,24 @@ void parseRender(const Reader& r, RenderSettings& s) {
     s.maxDistance = r.number("max_distance", s.maxDistance, positive, "a positive distance");
     s.shadowOffsetMin =
         r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");
+    // Soft shadows, distributed shadows, shadow maps and ambient occlusion.
+    named("shadow_method", parseShadowMethod, shadowMethodNames(), s.shadowMethod);
+    s.shadowRays = r.integer("shadow_rays", s.shadowRays, 1, 65536);
+    const auto nonNegativeLength = [](double v) { return v >= 0 && v < 1e30; };
+    s.soft.maxStep = r.number("soft_max_step", s.soft.maxStep, nonNegativeLength,
+                              "a non-negative distance (0: unlimited)");
+    s.soft.bias = r.number("soft_bias", s.soft.bias, nonNegativeLength, "a non-negative distance");
+    s.soft.triangulate = r.boolean("soft_triangulation", s.soft.triangulate);
+    s.soft.jitter = r.boolean("soft_jitter", s.soft.jitter);
+    s.soft.centered = r.boolean("soft_centered", s.soft.centered);
+    s.shadowMap.resolution = r.integer("shadow_map_resolution", s.shadowMap.resolution, 16, 8192);
+    s.shadowMap.pcfRadius = r.integer("pcf_radius", s.shadowMap.pcfRadius, 0, 64);
+    s.shadowMap.evsmRadius = r.integer("evsm_radius", s.shadowMap.evsmRadius, 0, 64);
+    s.ambientOcclusion = r.boolean("ao", s.ambientOcclusion);
+    s.ao.samples = r.integer("ao_samples", s.ao.samples, 1, 64);
+    s.ao.step = r.number("ao_step", s.ao.step, positive, "a positive distance");
+    s.ao.strength =
+        r.number("ao_strength", s.ao.strength, nonNegativeLength, "a non-negative weight");
 }
 
 Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {
