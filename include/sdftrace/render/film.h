@@ -25,9 +25,11 @@ struct Film {
     std::vector<float> error;      // f(p) at the chosen hit point, 0 on a miss
     std::vector<float> travSteps;  // grid tracer: blocks + cells visited by primary and shadow rays
     std::vector<float>
-        isectTests;             // grid tracer: surface-cell intersection tests (Jamriška fig. 7)
-    std::vector<float> shadow;  // visibility of the first light that casts shadows; 1 on a miss
-    std::vector<float> ao;      // ambient occlusion (1: none, or off); 1 on a miss
+        isectTests;  // grid tracer: surface-cell intersection tests (Jamriška fig. 7)
+    // visibility of the first light that casts shadows (0 where its centre is below the
+    // horizon); 1 on a miss
+    std::vector<float> shadow;
+    std::vector<float> ao;  // ambient occlusion (1: none, or off); 1 on a miss
 
     Film(int w, int h);
     size_t pixels() const { return static_cast<size_t>(width) * height; }

@@ -18,6 +18,9 @@
 //    the ground truth's does, instead of widening outwards.
 #pragma once
 
+#include <cmath>
+#include <vector>
+
 #include "sdftrace/field/tape.h"
 
 namespace sdft {
@@ -37,10 +40,45 @@ struct SoftShadowResult {
     int evaluations = 0;
 };
 
-// Marches origin + t dir (dir unit) for t in [tMin, tMax). `tanRadius`: the tangent of the
-// light's angular radius at the origin (light_sample.h; 0: a hard shadow, +inf: inside the light).
-// `jitter01` in [0, 1): the start offset in units of the max step.
+// One march as a state machine (as the sphere tracer's, DESIGN.md): start(), then step() with each
+// distance at point() until it returns false; result() then holds the visibility. Scalar and
+// packet drivers below share it.
+class SoftShadowMarch {
+  public:
+    // Marches origin + t dir (dir unit) for t in [tMin, tMax). `tanRadius`: the tangent of the
+    // light's angular radius at the origin (light_sample.h; 0: a hard shadow, +inf: inside the
+    // light). `jitter01` in [0, 1): the start offset in units of the max step.
+    void start(Vec3 origin, Vec3 dir, float tMin, float tMax, float tanRadius,
+               const SoftShadowOptions& options, float jitter01);
+    bool active() const { return m_active; }
+    Vec3 point() const { return m_origin + m_dir * m_t; }
+    // Takes the distance bound f/L at point(); false once the march is over.
+    bool step(float distance, const SoftShadowOptions& options);
+    SoftShadowResult result() const;
+
+  private:
+    Vec3 m_origin, m_dir;
+    float m_t = 0, m_tMax = 0, m_k = 0, m_prev = INFINITY, m_s = 1;
+    int m_evaluations = 0;
+    bool m_centered = false, m_active = false, m_inside = false;
+};
+
 SoftShadowResult softShadow(const Tape& tape, Vec3 origin, Vec3 dir, float tMin, float tMax,
                             float tanRadius, const SoftShadowOptions& options, float jitter01);
+
+// Marches every ray together, the live ones' points evaluated in one batch per step.
+struct SoftShadowRay {
+    Vec3 origin, dir;
+    float tMin = 0, tMax = 0, tanRadius = 0, jitter01 = 0;
+};
+struct SoftShadowScratch {
+    std::vector<SoftShadowMarch> marches;
+    std::vector<int> live;
+    std::vector<float> x, y, z, f;
+    BatchScratch batch;
+};
+void softShadowPacket(const Tape& tape, const std::vector<SoftShadowRay>& rays,
+                      const SoftShadowOptions& options, std::vector<SoftShadowResult>& out,
+                      SoftShadowScratch& scratch);
 
 }  // namespace sdft

@@ -46,6 +46,9 @@ struct TileScratch {
     std::vector<RaySegment> shadowSegments;
     std::vector<TraceResult> shadowResults;
     std::vector<int> shadowOwner;
+    std::vector<SoftShadowRay> softRays;
+    std::vector<SoftShadowResult> softResults;
+    SoftShadowScratch soft;
     std::vector<Vec3> radiance;
     std::vector<float> shadow, ao;  // per hit: the first shadowing light's visibility; AO
     int x0 = 0, y0 = 0, tw = 0;     // the tile being rendered
@@ -352,7 +355,10 @@ void TileRenderer::traceShadows(TileScratch& s, std::vector<float>& visible, con
     for (int h = 0; h < hits; ++h) {
         const LightDirection to = towardLight(light, s.hitPoint[h]);
         Vec3 n = s.hitNormal[h];
-        if (dot(n, to.dir) <= 0) continue;  // facing away: unlit anyway
+        if (dot(n, to.dir) <= 0) {  // facing away: the light is below the horizon
+            visible[h] = 0;
+            continue;
+        }
         s.shadowSegments.push_back(
             {{s.hitPoint[h] + n * shadowOffset(s, h), to.dir}, 0.0f, to.dist});
         s.shadowOwner.push_back(h);
@@ -418,34 +424,44 @@ void TileRenderer::lightVisibility(TileScratch& s, std::vector<float>& visible, 
             const ShadowMap* map = m_maps[lightIndex].get();
             if (!map) return;
             for (size_t h = 0; h < visible.size(); ++h) {
-                if (dot(s.hitNormal[h], towardLight(light, s.hitPoint[h]).dir) <= 0) continue;
-                visible[h] = map->visibility(s.hitPoint[h], s.hitNormal[h]);
+                visible[h] = dot(s.hitNormal[h], towardLight(light, s.hitPoint[h]).dir) <= 0
+                                 ? 0.0f
+                                 : map->visibility(s.hitPoint[h], s.hitNormal[h]);
             }
             return;
         }
     }
 }
 
-// RTSDF §2.4-2.5: one march per point towards the light's centre.
+// RTSDF §2.4-2.5: one march per point towards the light's centre, the tile's marches stepped
+// together.
 void TileRenderer::softShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
                                int lightIndex) {
     SoftShadowOptions o = m_settings.soft;
     o.epsilon = m_grid ? std::fmax(m_settings.shadowOffsetMin, 0.5f * m_grid->shape.voxelSize)
                        : std::fmax(o.epsilon, m_settings.trace.tau);
     o.maxSteps = std::max(o.maxSteps, m_settings.trace.maxSteps);
+    s.softRays.clear();
+    s.shadowOwner.clear();
     for (size_t h = 0; h < visible.size(); ++h) {
         const LightDirection to = towardLight(light, s.hitPoint[h]);
         const Vec3 n = s.hitNormal[h];
-        if (dot(n, to.dir) <= 0) continue;
+        if (dot(n, to.dir) <= 0) {
+            visible[h] = 0;
+            continue;
+        }
         Rng rng(pixelIndex(s, static_cast<int>(h)), m_settings.frame, 0x50F7u + lightIndex);
-        const SoftShadowResult r =
-            softShadow(m_tape, s.hitPoint[h] + n * shadowOffset(s, static_cast<int>(h)), to.dir,
-                       0.0f, std::fmin(to.dist, m_settings.maxDistance),
-                       lightTanRadius(light, s.hitPoint[h]), o, rng.uniform());
-        visible[h] = r.visibility;
-        s.stats.shadowEvaluations += r.evaluations;
-        ++s.stats.shadowRays;
+        s.softRays.push_back({s.hitPoint[h] + n * shadowOffset(s, static_cast<int>(h)), to.dir,
+                              0.0f, std::fmin(to.dist, m_settings.maxDistance),
+                              lightTanRadius(light, s.hitPoint[h]), rng.uniform()});
+        s.shadowOwner.push_back(static_cast<int>(h));
     }
+    softShadowPacket(m_tape, s.softRays, o, s.softResults, s.soft);
+    for (size_t j = 0; j < s.softRays.size(); ++j) {
+        visible[s.shadowOwner[j]] = s.softResults[j].visibility;
+        s.stats.shadowEvaluations += s.softResults[j].evaluations;
+    }
+    s.stats.shadowRays += s.softRays.size();
 }
 
 // Cook et al. 1984: the share of stratified points on the light the point sees (a light point
