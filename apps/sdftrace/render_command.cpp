@@ -14,6 +14,7 @@
 #include "sdftrace/io/image_io.h"
 #include "sdftrace/io/mesh_file.h"
 #include "sdftrace/render/renderer.h"
+#include "sdftrace/render/temporal.h"
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/scene/option_names.h"
 #include "sdftrace/scene/parse_scene.h"
@@ -44,6 +45,10 @@ struct RenderArgs {
     std::string gridTracer, cellMethod, gridNormals;
     std::string shadowMethod;
     std::optional<int> shadowRays;
+    int frames = 1;
+    std::optional<float> taaAlpha;
+    float orbit = 0;
+    std::string framePattern;
     Switch ao;
     std::optional<int> cellIterations, occluder, minMax;
     bool quiet = false;
@@ -98,10 +103,41 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.threads) s.threads = *a.threads;
 }
 
+// The path of frame k from a pattern holding one printf integer field (%d, %04d, ...).
+std::string framePath(const std::string& pattern, int k) {
+    std::vector<char> buf(pattern.size() + 32);
+    std::snprintf(buf.data(), buf.size(), pattern.c_str(), k);
+    return buf.data();
+}
+
+void validateFramePattern(const std::string& pattern) {
+    // Exactly one conversion, an integer one: %d with an optional zero-padded width.
+    size_t at = pattern.find('%'), count = 0;
+    bool ok = true;
+    while (at != std::string::npos) {
+        size_t i = at + 1;
+        if (i < pattern.size() && pattern[i] == '%') {
+            at = pattern.find('%', i + 1);
+            continue;
+        }
+        while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) ++i;
+        ok = ok && i < pattern.size() && pattern[i] == 'd' && i - at <= 4;
+        ++count;
+        at = pattern.find('%', i + 1);
+    }
+    if (!ok || count != 1) {
+        throw InputError("--frame-pattern " + pattern +
+                         ": expected one frame-number field such as %d or %04d, e.g. out_%04d.png");
+    }
+    imageFormatFromPath(framePath(pattern, 0), "--frame-pattern");
+    checkWritablePath(framePath(pattern, 0), "--frame-pattern");
+}
+
 int runRender(const RenderArgs& a) {
     // Validate every output before the (possibly long) render starts.
     imageFormatFromPath(a.output, "--output");
     checkWritablePath(a.output, "--output");
+    if (!a.framePattern.empty()) validateFramePattern(a.framePattern);
     std::vector<std::pair<Aov, std::string>> aovs;
     for (const std::string& spec : a.aovs) {
         auto eq = spec.find('=');
@@ -143,7 +179,22 @@ int runRender(const RenderArgs& a) {
     applyOverrides(a, scene);
     Tape tape = compileTape(scene.root, {.boundsCulling = scene.settings.boundsCulling});
     Film film(scene.camera.width, scene.camera.height);
-    RenderStats st = render(scene, tape, film, !a.quiet && stderrIsTerminal());
+    RenderStats st;
+    if (a.frames > 1 || a.orbit != 0) {
+        TemporalOptions t;
+        t.frames = a.frames;
+        t.orbitDegrees = a.orbit;
+        if (a.taaAlpha) t.alpha = *a.taaAlpha;
+        std::function<void(int, const Film&)> onFrame;
+        if (!a.framePattern.empty()) {
+            onFrame = [&](int k, const Film& f) {
+                writeAov(f, Aov::Color, framePath(a.framePattern, k));
+            };
+        }
+        st = renderFrames(scene, tape, film, t, onFrame, !a.quiet && stderrIsTerminal());
+    } else {
+        st = render(scene, tape, film, !a.quiet && stderrIsTerminal());
+    }
 
     writeAov(film, Aov::Color, a.output);
     for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
@@ -290,6 +341,27 @@ void addRenderCommand(CLI::App& app, Action& action) {
                      "Shadow rays by volumetric occluders (§7) with restart threshold N; 0 = off")
         ->check(CLI::Range(0, 100000));
 
+    auto* frames = cmd->add_option_group(
+        "Frames", "Temporal accumulation of jittered frames (RTSDF §2.5.2; TAA after Karis 2014)");
+    frames
+        ->add_option("--frames", args->frames,
+                     "Render N frames, each with a subpixel camera offset and new soft-shadow and "
+                     "light-sample jitter, blended into the output (a running mean for stills)")
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
+    frames
+        ->add_option("--taa-alpha", args->taaAlpha,
+                     "History weight of the blend in [0, 1) (default: running mean; 0.9 with "
+                     "--orbit)")
+        ->check(CLI::Range(0.0, 0.999999));
+    frames
+        ->add_option("--orbit", args->orbit,
+                     "Animate: the camera orbits its target by this many degrees per frame; the "
+                     "history is reprojected through depth and clamped to each frame's "
+                     "neighbourhood")
+        ->check(CLI::Range(-180.0, 180.0));
+    frames->add_option("--frame-pattern", args->framePattern,
+                       "Also write every accumulated frame, e.g. frames/out_%04d.png");
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));
     cmd->add_flag("-q,--quiet", args->quiet,

@@ -35,6 +35,26 @@ class Rng {
     uint32_t m_state;
 };
 
+// The radical inverse of i in `base` (the Halton sequence's coordinate), in [0, 1).
+SDFT_HOST_DEVICE inline float radicalInverse(uint32_t i, uint32_t base) {
+    float f = 1, r = 0;
+    while (i > 0) {
+        f /= static_cast<float>(base);
+        r += f * static_cast<float>(i % base);
+        i /= base;
+    }
+    return r;
+}
+
+// Point i of the Halton (2, 3) sequence shifted by (r1, r2) modulo 1 (a Cranley-Patterson
+// rotation, so that each pixel has its own well-spread sequence).
+SDFT_HOST_DEVICE inline void rotatedHalton(uint32_t i, float r1, float r2, float& u1, float& u2) {
+    u1 = radicalInverse(i, 2) + r1;
+    u2 = radicalInverse(i, 3) + r2;
+    u1 -= u1 >= 1.0f ? 1.0f : 0.0f;
+    u2 -= u2 >= 1.0f ? 1.0f : 0.0f;
+}
+
 // An orthonormal basis around unit n (Duff et al. 2017, branchless).
 SDFT_HOST_DEVICE inline void orthonormalBasis(Vec3 n, Vec3& t, Vec3& b) {
     float sign = std::copysign(1.0f, n.z);

@@ -35,6 +35,17 @@ class Camera {
     }
     SDFT_HOST_DEVICE Ray pixelRay(int x, int y) const { return rayThrough(x + 0.5f, y + 0.5f); }
 
+    // Where p lands on the image (pixel coordinates, centres at +0.5); false behind the eye.
+    SDFT_HOST_DEVICE bool project(Vec3 p, float& px, float& py) const {
+        const Vec3 d = p - m_desc.eye;
+        const float z = dot(d, m_forward);
+        if (z <= 0) return false;
+        const float sx = dot(d, m_right) / z, sy = dot(d, m_up) / z;
+        px = (sx / (m_tanHalf * m_aspect) + 1.0f) * 0.5f * m_desc.width;
+        py = (1.0f - sy / m_tanHalf) * 0.5f * m_desc.height;
+        return true;
+    }
+
     // Radius of half a pixel at distance 1 (Keinert et al. 2014, Listing 2's pixelRadius).
     float pixelRadius() const { return m_tanHalf / m_desc.height; }
     const CameraDesc& desc() const { return m_desc; }

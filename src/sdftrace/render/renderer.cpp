@@ -180,7 +180,9 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     s.segments.resize(count);
     s.results.resize(count);
     for (int i = 0; i < count; ++i) {
-        s.segments[i] = {m_camera.pixelRay(x0 + i % tw, y0 + i / tw), 0.0f, m_settings.maxDistance};
+        s.segments[i] = {m_camera.rayThrough(x0 + i % tw + 0.5f + m_settings.pixelJitter[0],
+                                             y0 + i / tw + 0.5f + m_settings.pixelJitter[1]),
+                         0.0f, m_settings.maxDistance};
     }
     if (m_grid) {
         tracePrimaryGrid(s, x0, y0, tw);
@@ -464,23 +466,25 @@ void TileRenderer::softShadows(TileScratch& s, std::vector<float>& visible, cons
     s.stats.shadowRays += s.softRays.size();
 }
 
-// Cook et al. 1984: the share of stratified points on the light the point sees (a light point
-// below the surface's tangent plane counts as hidden).
+// Cook et al. 1984: the share of points on the light the point sees (a light point below the
+// surface's tangent plane counts as hidden). The points follow a per-pixel rotated Halton
+// sequence continued from frame to frame, so accumulated frames converge as one frame with
+// their rays together would.
 void TileRenderer::distributedShadows(TileScratch& s, std::vector<float>& visible,
                                       const Light& light, int lightIndex) {
     const int hits = static_cast<int>(visible.size());
-    const int side = std::max(1, static_cast<int>(std::ceil(std::sqrt(m_settings.shadowRays))));
-    const int n = side * side;
+    const int n = std::max(1, m_settings.shadowRays);
     s.shadowSegments.clear();
     s.shadowOwner.clear();
     std::vector<int> seen(hits, 0);
     for (int h = 0; h < hits; ++h) {
         const Vec3 nrm = s.hitNormal[h];
         const Vec3 origin = s.hitPoint[h] + nrm * shadowOffset(s, h);
-        Rng rng(pixelIndex(s, h), m_settings.frame, 0xD157u + lightIndex);
+        Rng rng(pixelIndex(s, h), 0xD157u + lightIndex);
+        const float r1 = rng.uniform(), r2 = rng.uniform();
         for (int k = 0; k < n; ++k) {
-            const float u1 = ((k % side) + rng.uniform()) / side;
-            const float u2 = ((k / side) + rng.uniform()) / side;
+            float u1, u2;
+            rotatedHalton(m_settings.frame * static_cast<uint32_t>(n) + k, r1, r2, u1, u2);
             const LightSample ls = sampleLight(light, s.hitPoint[h], u1, u2);
             if (ls.dist <= 0) {  // inside the light
                 ++seen[h];
