@@ -44,7 +44,9 @@ struct RenderArgs {
     std::string normals;
     std::string gridTracer, cellMethod, gridNormals;
     std::string shadowMethod;
-    std::optional<int> shadowRays;
+    std::optional<int> shadowRays, maxReflections, maxRefractions;
+    std::string epsilon;
+    std::optional<float> globalEpsilon;
     int frames = 1;
     std::optional<float> taaAlpha;
     float orbit = 0;
@@ -97,6 +99,10 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.shadows.given()) s.shadows = a.shadows.value;
     if (!a.shadowMethod.empty()) parseShadowMethod(a.shadowMethod, s.shadowMethod);
     if (a.shadowRays) s.shadowRays = *a.shadowRays;
+    if (a.maxReflections) s.maxReflections = *a.maxReflections;
+    if (a.maxRefractions) s.maxRefractions = *a.maxRefractions;
+    if (!a.epsilon.empty()) s.dynamicEpsilon = a.epsilon == "dynamic";
+    if (a.globalEpsilon) s.globalEpsilon = *a.globalEpsilon;
     if (a.ao.given()) s.ambientOcclusion = a.ao.value;
     if (a.boundsCulling.given()) s.boundsCulling = a.boundsCulling.value;
     if (a.maxDistance) s.maxDistance = *a.maxDistance;
@@ -208,6 +214,13 @@ int runRender(const RenderArgs& a) {
                       st.traversalSteps / rays, st.intersectionTests / rays);
         gridCounters = buf;
     }
+    if (st.secondaryRays) {
+        char buf[160];
+        std::snprintf(
+            buf, sizeof buf, ", Whitted: %.2f secondary rays per pixel, %llu self-intersections",
+            st.secondaryRays / rays, static_cast<unsigned long long>(st.selfIntersections));
+        gridCounters += buf;
+    }
     std::fprintf(
         stderr,
         "sdftrace render: %dx%d in %.3f s on %d threads, %.3f Mrays/s, %.2f evaluations per "
@@ -314,6 +327,21 @@ void addRenderCommand(CLI::App& app, Action& action) {
         ->check(CLI::Range(1, 65536));
     args->ao.option = shading->add_flag("--ao,!--no-ao", args->ao.value,
                                         "SDF ambient occlusion on the ambient term");
+    shading
+        ->add_option("--max-reflections", args->maxReflections,
+                     "Whitted: mirror and Fresnel reflection bounces per ray (Keinert §4)")
+        ->check(CLI::Range(0, 64));
+    shading
+        ->add_option("--max-refractions", args->maxRefractions,
+                     "Whitted: refraction bounces per ray")
+        ->check(CLI::Range(0, 64));
+    shading
+        ->add_option("--epsilon", args->epsilon,
+                     "Secondary-ray origin offset: dynamic, 2 max(eps_min, |f(p)|) (Keinert "
+                     "§3.3), or global (--global-epsilon along the normal)")
+        ->check(CLI::IsMember({"dynamic", "global"}));
+    shading->add_option("--global-epsilon", args->globalEpsilon, "The global offset")
+        ->check(CLI::PositiveNumber);
 
     auto* grid = cmd->add_option_group(
         "Grids", "Single-grid scenes, e.g. a .sdfg rendered directly (Jamriska 2010)");

@@ -9,11 +9,17 @@
 namespace sdft {
 
 struct Material {
+    // Plastic: Lambert + Blinn-Phong. Mirror: reflects, tinted by `color`. Dielectric: glass-like,
+    // Fresnel-weighted reflection and refraction (Whitted 1980, Keinert et al. 2014 §4).
+    enum class Kind { Plastic, Mirror, Dielectric };
     std::string name;
-    Vec3 color{0.8f, 0.8f, 0.8f};  // base (diffuse) colour, linear RGB
+    Vec3 color{0.8f, 0.8f, 0.8f};  // base (diffuse) colour, linear RGB; a mirror's tint
     float diffuse = 1.0f;          // Lambert weight
     float specular = 0.2f;         // Blinn-Phong weight
     float shininess = 32.0f;       // Blinn-Phong exponent
+    Kind kind = Kind::Plastic;
+    float ior = 1.5f;          // dielectric: index of refraction (outside: 1)
+    Vec3 absorption{0, 0, 0};  // dielectric: Beer-Lambert coefficients per unit length
 };
 
 // Lights of the direct-lighting integrator. Sphere and rectangle lights have a size: their

@@ -17,12 +17,16 @@ struct RenderStats {
     int threads = 0;
     uint64_t primaryRays = 0, primaryEvaluations = 0, hits = 0, fallbacks = 0;
     uint64_t normalEvaluations = 0, shadowRays = 0, shadowEvaluations = 0, aoEvaluations = 0;
+    // Whitted reflection and refraction rays, their evaluations, and those that struck the
+    // surface they left within twice their offset (Keinert §3.3's self-intersections).
+    uint64_t secondaryRays = 0, secondaryEvaluations = 0, selfIntersections = 0;
     // Single-grid scenes traced by DDA (Jamriška): blocks + cells visited, surface cells tested.
     uint64_t traversalSteps = 0, intersectionTests = 0;
     bool gridTracer = false;
 
     uint64_t totalEvaluations() const {
-        return primaryEvaluations + normalEvaluations + shadowEvaluations + aoEvaluations;
+        return primaryEvaluations + normalEvaluations + shadowEvaluations + aoEvaluations +
+               secondaryEvaluations;
     }
 };
 

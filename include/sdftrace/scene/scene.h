@@ -40,6 +40,12 @@ struct RenderSettings {
     ShadowMapOptions shadowMap;
     bool ambientOcclusion = false;  // scales the ambient term (ambient_occlusion.h)
     AmbientOcclusionOptions ao;
+    // Whitted reflection and refraction (Keinert §4): bounce budgets per kind, and the secondary
+    // ray's origin offset: Keinert §3.3's dynamic 2 max(eps_min, |f(p)|) (eps_min is
+    // shadowOffsetMin), or a global epsilon along the normal.
+    int maxReflections = 2, maxRefractions = 8;
+    bool dynamicEpsilon = true;
+    float globalEpsilon = 1e-3f;
     uint32_t frame = 0;             // seeds the per-pixel jitter of soft shadows and light samples
     float pixelJitter[2] = {0, 0};  // primary rays through (x + 0.5 + jx, y + 0.5 + jy)
     float maxDistance = 100.0f;     // t_max of primary rays (the scene bounds clip it further)

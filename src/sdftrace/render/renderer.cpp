@@ -15,6 +15,7 @@
 #include "sdftrace/math/sampling.h"
 #include "sdftrace/render/camera.h"
 #include "sdftrace/render/light_sample.h"
+#include "sdftrace/render/whitted.h"
 #include "sdftrace/trace/field_tracer.h"
 #include "sdftrace/trace/grid_tracer.h"
 #include "sdftrace/trace/minmax_buffer.h"
@@ -55,21 +56,6 @@ struct TileScratch {
     RenderStats stats;
 };
 
-Material blendMaterial(const std::vector<Material>& table, const MaterialBlend& blend) {
-    Material m;
-    m.color = Vec3(0.0f);
-    m.diffuse = m.specular = m.shininess = 0;
-    for (int i = 0; i < blend.count; ++i) {
-        const Material& src = table[std::clamp(blend.id[i], 0, static_cast<int>(table.size()) - 1)];
-        float w = blend.weight[i];
-        m.color += src.color * w;
-        m.diffuse += src.diffuse * w;
-        m.specular += src.specular * w;
-        m.shininess += src.shininess * w;
-    }
-    return m;
-}
-
 class TileRenderer {
   public:
     TileRenderer(const Scene& scene, const Tape& tape, Film& film)
@@ -94,6 +80,10 @@ class TileRenderer {
                 m_useMinMax = true;
             }
         }
+        m_whitted = std::make_unique<WhittedTracer>(
+            scene, tape, [this](Vec3 p, Vec3 n, const Light& light, int li) {
+                return visibilityAt(p, n, light, li);
+            });
         const ShadowMethod method = m_settings.shadowMethod;
         if (m_settings.shadows && (method == ShadowMethod::Pcf || method == ShadowMethod::Evsm)) {
             const Bounds3 region = shadowRegion();
@@ -127,6 +117,8 @@ class TileRenderer {
                      int lightIndex);
     void distributedShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
                             int lightIndex);
+    // One point's visibility of a light by the shadow method (secondary hits of Whitted rays).
+    float visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex) const;
     // The shadow ray's origin offset along the normal (Keinert et al. 2014, §3.3).
     float shadowOffset(const TileScratch& s, int h) const;
     // A pixel's index in the film, for seeding its random numbers.
@@ -151,7 +143,50 @@ class TileRenderer {
     MinMaxBuffer m_minMax;                           // Jamriška §6, built once per render
     std::vector<std::unique_ptr<ShadowMap>> m_maps;  // per light, shadow-map methods
     uint64_t m_mapEvaluations = 0;
+    std::unique_ptr<WhittedTracer> m_whitted;  // mirrors and dielectrics (Keinert §4)
 };
+
+float TileRenderer::visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex) const {
+    const LightDirection to = towardLight(light, p);
+    if (dot(n, to.dir) <= 0) return 0.0f;
+    const float eps = 2.0f * m_settings.shadowOffsetMin;
+    const Vec3 origin = p + n * eps;
+    const float tMax = std::fmin(to.dist, m_settings.maxDistance);
+    switch (m_settings.shadowMethod) {
+        case ShadowMethod::Hard:
+            return traceRay(m_tape, {{origin, to.dir}, 0.0f, tMax}, m_shadow).hit ? 0.0f : 1.0f;
+        case ShadowMethod::Soft: {
+            SoftShadowOptions o = m_settings.soft;
+            o.epsilon = std::fmax(o.epsilon, m_settings.trace.tau);
+            o.jitter = false;
+            return softShadow(m_tape, origin, to.dir, 0.0f, tMax, lightTanRadius(light, p), o, 0)
+                .visibility;
+        }
+        case ShadowMethod::Distributed: {
+            if (!light.hasSize())
+                return traceRay(m_tape, {{origin, to.dir}, 0.0f, tMax}, m_shadow).hit ? 0.0f : 1.0f;
+            const int rays = std::max(1, m_settings.shadowRays);
+            int seen = 0;
+            for (int k = 0; k < rays; ++k) {
+                float u1, u2;
+                rotatedHalton(static_cast<uint32_t>(k), 0.5f, 0.5f, u1, u2);
+                const LightSample ls = sampleLight(light, p, u1, u2);
+                if (ls.dist <= 0) {
+                    ++seen;
+                } else if (dot(n, ls.dir) > 0) {
+                    seen += !traceRay(m_tape, {{origin, ls.dir}, 0.0f, ls.dist}, m_shadow).hit;
+                }
+            }
+            return static_cast<float>(seen) / rays;
+        }
+        case ShadowMethod::Pcf:
+        case ShadowMethod::Evsm: {
+            const ShadowMap* map = m_maps[lightIndex].get();
+            return map ? map->visibility(p, n) : 1.0f;
+        }
+    }
+    return 1.0f;
+}
 
 Bounds3 TileRenderer::shadowRegion() const {
     const Bounds3 all = m_tape.bounds();
@@ -214,7 +249,7 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     s.radiance.assign(hits, Vec3(0.0f));
     std::vector<Material> mats(hits);
     for (int h = 0; h < hits; ++h) {
-        mats[h] = blendMaterial(m_scene.materials, m_tape.evalMaterial(s.hitPoint[h]));
+        mats[h] = m_whitted->materialAt(s.hitPoint[h]);
         s.radiance[h] = m_scene.lighting.ambient * mats[h].color;
     }
     // Keinert-style SDF ambient occlusion scales the ambient term.
@@ -253,6 +288,20 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
             Vec3 c = mats[h].color * (mats[h].diffuse * ndotl) + Vec3(mats[h].specular * spec);
             s.radiance[h] += c * light.color * scale;
         }
+    }
+
+    // Mirrors and dielectrics: Whitted rays from the hit (Keinert §4).
+    WhittedStats ws;
+    for (int h = 0; h < hits; ++h) {
+        if (mats[h].kind == Material::Kind::Plastic) continue;
+        const int i = s.hitPixel[h];
+        s.radiance[h] = m_whitted->shadeSpecular(s.hitPoint[h], s.hitNormal[h], s.results[i].value,
+                                                 s.segments[i].ray.direction, mats[h], ws);
+    }
+    if (ws.rays) {
+        s.stats.secondaryRays += ws.rays;
+        s.stats.secondaryEvaluations += ws.evaluations;
+        s.stats.selfIntersections += ws.selfIntersections;
     }
 
     // Write the film.
@@ -551,6 +600,9 @@ RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progre
         total.shadowRays += t.shadowRays;
         total.shadowEvaluations += t.shadowEvaluations;
         total.aoEvaluations += t.aoEvaluations;
+        total.secondaryRays += t.secondaryRays;
+        total.secondaryEvaluations += t.secondaryEvaluations;
+        total.selfIntersections += t.selfIntersections;
         total.traversalSteps += t.traversalSteps;
         total.intersectionTests += t.intersectionTests;
     }

@@ -92,5 +92,24 @@ TEST(Renderer, EveryShadowMethodGivesFinitePixels) {
     }
 }
 
+// Mirrors and glass under every shadow method (secondary hits are shaded with it): finite pixels.
+TEST(Renderer, WhittedScenesGiveFinitePixels) {
+    Scene base = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/glass.json");
+    for (ShadowMethod m : {ShadowMethod::Hard, ShadowMethod::Soft, ShadowMethod::Distributed,
+                           ShadowMethod::Pcf, ShadowMethod::Evsm}) {
+        Scene scene = base;
+        scene.camera.width = 64;
+        scene.camera.height = 40;
+        scene.settings.shadowMethod = m;
+        scene.settings.shadowRays = 4;
+        scene.settings.shadowMap.resolution = 64;
+        Tape tape = compileTape(scene.root);
+        Film film(64, 40);
+        const RenderStats st = render(scene, tape, film);
+        for (float c : film.color) ASSERT_TRUE(std::isfinite(c));
+        EXPECT_GT(st.secondaryRays, 100u);
+    }
+}
+
 }  // namespace
 }  // namespace sdft

@@ -36,6 +36,9 @@ void add(RenderStats& total, const RenderStats& s) {
     total.shadowRays += s.shadowRays;
     total.shadowEvaluations += s.shadowEvaluations;
     total.aoEvaluations += s.aoEvaluations;
+    total.secondaryRays += s.secondaryRays;
+    total.secondaryEvaluations += s.secondaryEvaluations;
+    total.selfIntersections += s.selfIntersections;
     total.traversalSteps += s.traversalSteps;
     total.intersectionTests += s.intersectionTests;
     total.gridTracer = s.gridTracer;

@@ -45,9 +45,26 @@ void parseCamera(const Reader& r, CameraDesc& cam) {
 
 Material parseMaterial(const Reader& r, const std::string& name) {
     r.requireObject("a material");
-    r.allowKeys({"color", "diffuse", "specular", "shininess"});
+    r.allowKeys({"type", "color", "diffuse", "specular", "shininess", "ior", "absorption"});
     Material m;
     m.name = name;
+    const std::string type = r.string("type", "plastic");
+    if (type == "plastic") {
+        m.kind = Material::Kind::Plastic;
+    } else if (type == "mirror") {
+        m.kind = Material::Kind::Mirror;
+        m.color = Vec3(0.95f);
+    } else if (type == "dielectric") {
+        m.kind = Material::Kind::Dielectric;
+    } else {
+        r.failKey("type",
+                  "unknown material type '" + type + "'; accepted: plastic, mirror, dielectric");
+    }
+    m.ior = r.number(
+        "ior", m.ior, [](double v) { return v >= 1 && v <= 10; },
+        "an index of refraction in [1, 10]");
+    m.absorption = r.vec3("absorption", m.absorption, nonNegative,
+                          "non-negative absorption coefficients per unit length");
     m.color = r.vec3("color", m.color, nonNegative, "non-negative linear RGB");
     m.diffuse = r.number("diffuse", m.diffuse, nonNegative, "a non-negative weight");
     m.specular = r.number("specular", m.specular, nonNegative, "a non-negative weight");
@@ -136,7 +153,11 @@ void parseRender(const Reader& r, RenderSettings& s) {
                  "ao",
                  "ao_samples",
                  "ao_step",
-                 "ao_strength"});
+                 "ao_strength",
+                 "max_reflections",
+                 "max_refractions",
+                 "secondary_epsilon",
+                 "global_epsilon"});
     TraceOptions& t = s.trace;
     t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
     t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
@@ -195,6 +216,14 @@ void parseRender(const Reader& r, RenderSettings& s) {
     s.ao.step = r.number("ao_step", s.ao.step, positive, "a positive distance");
     s.ao.strength =
         r.number("ao_strength", s.ao.strength, nonNegativeLength, "a non-negative weight");
+    // Whitted rays (Keinert §4) and their origin offset (§3.3).
+    s.maxReflections = r.integer("max_reflections", s.maxReflections, 0, 64);
+    s.maxRefractions = r.integer("max_refractions", s.maxRefractions, 0, 64);
+    const std::string eps = r.string("secondary_epsilon", s.dynamicEpsilon ? "dynamic" : "global");
+    if (eps != "dynamic" && eps != "global")
+        r.failKey("secondary_epsilon", "unknown offset '" + eps + "'; accepted: dynamic, global");
+    s.dynamicEpsilon = eps == "dynamic";
+    s.globalEpsilon = r.number("global_epsilon", s.globalEpsilon, positive, "a positive distance");
 }
 
 Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {

@@ -1,0 +1,183 @@
+#include "sdftrace/render/whitted.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "sdftrace/render/light_sample.h"
+#include "sdftrace/render/renderer.h"
+#include "sdftrace/trace/field_tracer.h"
+
+namespace sdft {
+
+float fresnelDielectric(float cosI, float n1, float n2) {
+    cosI = std::clamp(cosI, 0.0f, 1.0f);
+    const float sinT = n1 / n2 * std::sqrt(std::max(0.0f, 1.0f - cosI * cosI));
+    if (sinT >= 1.0f) return 1.0f;
+    const float cosT = std::sqrt(std::max(0.0f, 1.0f - sinT * sinT));
+    const float rs = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
+    const float rp = (n1 * cosT - n2 * cosI) / (n1 * cosT + n2 * cosI);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+namespace {
+
+// Refraction of unit d through unit n (facing against d) with eta = n1 / n2; false under total
+// internal reflection.
+bool refract(Vec3 d, Vec3 n, float eta, Vec3& out) {
+    const float cosI = -dot(d, n);
+    const float k = 1.0f - eta * eta * (1.0f - cosI * cosI);
+    if (k < 0) return false;
+    out = normalize(d * eta + n * (eta * cosI - std::sqrt(k)));
+    return true;
+}
+
+Vec3 reflect(Vec3 d, Vec3 n) { return d - n * (2.0f * dot(d, n)); }
+
+}  // namespace
+
+WhittedTracer::WhittedTracer(const Scene& scene, const Tape& tape, Visibility visibility)
+    : m_scene(scene), m_tape(tape), m_visibility(std::move(visibility)) {
+    m_trace = scene.settings.trace;
+    m_trace.screenSpace = false;  // a secondary ray has no pixel footprint of its own
+    m_trace.forceHit = false;
+    m_trace.discontinuityIters = 0;
+    m_trace.fixedSteps = false;
+}
+
+Material WhittedTracer::materialAt(Vec3 p) const {
+    const MaterialBlend b = m_tape.evalMaterial(p);
+    const auto& table = m_scene.materials;
+    Material m;
+    m.color = Vec3(0.0f);
+    m.diffuse = m.specular = m.shininess = 0;
+    m.absorption = Vec3(0.0f);
+    m.ior = 0;
+    float heaviest = -1;
+    for (int i = 0; i < b.count; ++i) {
+        const Material& src = table[std::clamp(b.id[i], 0, static_cast<int>(table.size()) - 1)];
+        const float w = b.weight[i];
+        m.color += src.color * w;
+        m.diffuse += src.diffuse * w;
+        m.specular += src.specular * w;
+        m.shininess += src.shininess * w;
+        m.ior += src.ior * w;
+        m.absorption += src.absorption * w;
+        if (w > heaviest) {
+            heaviest = w;
+            m.kind = src.kind;
+            m.name = src.name;
+        }
+    }
+    return m;
+}
+
+// Keinert et al. 2014, §3.3.
+float WhittedTracer::offset(float f) const {
+    const RenderSettings& s = m_scene.settings;
+    return s.dynamicEpsilon ? 2.0f * std::max(s.shadowOffsetMin, std::fabs(f) / m_tape.lipschitz())
+                            : s.globalEpsilon;
+}
+
+Vec3 WhittedTracer::normalAt(Vec3 p) const {
+    const Vec3 n = estimateNormal(m_tape, p, 1e-4f, m_scene.settings.normals);
+    return length(n) > 0 ? n : Vec3(0, 1, 0);
+}
+
+Vec3 WhittedTracer::shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m) const {
+    Vec3 c = m_scene.lighting.ambient * m.color;
+    const auto& lights = m_scene.lighting.lights;
+    for (size_t li = 0; li < lights.size(); ++li) {
+        const LightDirection to = towardLight(lights[li], p);
+        const float ndotl = dot(n, to.dir);
+        if (ndotl <= 0) continue;
+        float vis = 1;
+        if (m_scene.settings.shadows && lights[li].castShadows)
+            vis = m_visibility(p, n, lights[li], static_cast<int>(li));
+        if (vis <= 0) continue;
+        const Vec3 half = normalize(to.dir - d);
+        const float spec = std::pow(std::max(dot(n, half), 0.0f), std::max(m.shininess, 1.0f));
+        c += (m.color * (m.diffuse * ndotl) + Vec3(m.specular * spec)) * lights[li].color *
+             (to.scale * vis);
+    }
+    return c;
+}
+
+Vec3 WhittedTracer::shadeSpecular(Vec3 p, Vec3 n, float f, Vec3 d, const Material& m,
+                                  WhittedStats& stats) const {
+    return shade(p, n, f, d, m, m_scene.settings.maxReflections, m_scene.settings.maxRefractions,
+                 stats);
+}
+
+Vec3 WhittedTracer::shade(Vec3 p, Vec3 n, float f, Vec3 d, const Material& m, int reflections,
+                          int refractions, WhittedStats& stats) const {
+    if (dot(n, d) > 0) n = -n;  // seen from behind (an open or thin surface)
+    const float eps = offset(f);
+    switch (m.kind) {
+        case Material::Kind::Plastic:
+            return shadeDirect(p, n, d, m);
+        case Material::Kind::Mirror:
+            if (reflections <= 0) return Vec3(0.0f);
+            return m.color * traceOutside(p + n * eps, reflect(d, n), reflections - 1, refractions,
+                                          eps, stats);
+        case Material::Kind::Dielectric: {
+            const float cosI = -dot(d, n);
+            const float r = fresnelDielectric(cosI, 1.0f, m.ior);
+            Vec3 c(0.0f);
+            if (reflections > 0)
+                c += traceOutside(p + n * eps, reflect(d, n), reflections - 1, refractions, eps,
+                                  stats) *
+                     r;
+            Vec3 t;
+            if (refractions > 0 && r < 1 && refract(d, n, 1.0f / m.ior, t))
+                c += traceInside(p - n * eps, t, m, reflections, refractions - 1, eps, stats) *
+                     (1 - r);
+            return c;
+        }
+    }
+    return Vec3(0.0f);
+}
+
+Vec3 WhittedTracer::traceOutside(Vec3 origin, Vec3 d, int reflections, int refractions, float eps,
+                                 WhittedStats& stats) const {
+    const TraceResult r =
+        traceRay(m_tape, {{origin, d}, 0.0f, m_scene.settings.maxDistance}, m_trace);
+    ++stats.rays;
+    stats.evaluations += r.evaluations;
+    if (!r.hit) return m_scene.lighting.background;
+    if (r.t <= 2 * eps) ++stats.selfIntersections;
+    const Vec3 p = origin + d * r.t;
+    return shade(p, normalAt(p), r.value, d, materialAt(p), reflections, refractions, stats);
+}
+
+// Inside a dielectric: sphere trace -f to the exit, attenuate, then split at the exit.
+Vec3 WhittedTracer::traceInside(Vec3 origin, Vec3 d, const Material& m, int reflections,
+                                int refractions, float eps, WhittedStats& stats) const {
+    SphereTraceState s;
+    const float invL = 1.0f / m_tape.lipschitz();
+    sphereTraceBegin(s, {origin, d}, 0.0f, m_scene.settings.maxDistance, Bounds3::everything(),
+                     m_trace);
+    while (!s.done()) sphereTraceAdvance(s, -m_tape.eval(s.queryPoint()), invL, m_trace);
+    ++stats.rays;
+    stats.evaluations += s.result.evaluations;
+    if (!s.result.hit) return Vec3(0.0f);
+    if (s.result.t <= 2 * eps) ++stats.selfIntersections;
+    const float dist = s.result.t;
+    const Vec3 att(std::exp(-m.absorption.x * dist), std::exp(-m.absorption.y * dist),
+                   std::exp(-m.absorption.z * dist));
+    const Vec3 q = origin + d * dist;
+    const Vec3 nOut = normalAt(q);  // the outward normal: d leaves along it
+    const float e = offset(s.result.value);
+    const float cosI = dot(d, nOut);
+    const float r = fresnelDielectric(cosI, m.ior, 1.0f);
+    Vec3 c(0.0f);
+    Vec3 t;
+    if (r < 1 && refract(d, -nOut, m.ior, t))
+        c += traceOutside(q + nOut * e, t, reflections, refractions, e, stats) * (1 - r);
+    if (refractions > 0)
+        c += traceInside(q - nOut * e, reflect(d, -nOut), m, reflections, refractions - 1, e,
+                         stats) *
+             r;
+    return c * att;
+}
+
+}  // namespace sdft
