@@ -51,7 +51,7 @@ struct RenderArgs {
     std::optional<float> taaAlpha;
     float orbit = 0;
     std::string framePattern;
-    Switch ao;
+    Switch ao, convexBounds;
     std::optional<int> cellIterations, occluder, minMax;
     bool quiet = false;
 };
@@ -103,6 +103,7 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.maxRefractions) s.maxRefractions = *a.maxRefractions;
     if (!a.epsilon.empty()) s.dynamicEpsilon = a.epsilon == "dynamic";
     if (a.globalEpsilon) s.globalEpsilon = *a.globalEpsilon;
+    if (a.convexBounds.given()) s.convexBounds = a.convexBounds.value;
     if (a.ao.given()) s.ambientOcclusion = a.ao.value;
     if (a.boundsCulling.given()) s.boundsCulling = a.boundsCulling.value;
     if (a.maxDistance) s.maxDistance = *a.maxDistance;
@@ -342,6 +343,9 @@ void addRenderCommand(CLI::App& app, Action& action) {
         ->check(CLI::IsMember({"dynamic", "global"}));
     shading->add_option("--global-epsilon", args->globalEpsilon, "The global offset")
         ->check(CLI::PositiveNumber);
+    args->convexBounds.option = shading->add_flag(
+        "--convex-bounds,!--no-convex-bounds", args->convexBounds.value,
+        "Rays inside convex objects jump to the bounding box and trace back (Keinert §3.5)");
 
     auto* grid = cmd->add_option_group(
         "Grids", "Single-grid scenes, e.g. a .sdfg rendered directly (Jamriska 2010)");

@@ -5,10 +5,16 @@
 // reflections, 8 refractions); a ray out of budget is dark. Secondary rays start off the surface by
 // Keinert §3.3's dynamic epsilon, 2 max(eps_min, |f(p)|), or by a global epsilon (selectable, to
 // show the acne the global one gives when hits lie up to half a pixel from the surface).
+//
+// Keinert §3.5, convex objects in convex bounds: a refracted ray inside a convex object (a
+// top-level object built from convex primitives by intersections and transforms) does not march
+// through the interior; it jumps to where it leaves the object's bounding box and sphere traces
+// back along -d on the object's own field, which finds the same exit point in fewer steps.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "sdftrace/field/tape.h"
 #include "sdftrace/scene/scene.h"
@@ -40,6 +46,9 @@ class WhittedTracer {
                       WhittedStats& stats) const;
     Vec3 traceInside(Vec3 origin, Vec3 d, const Material& m, int reflections, int refractions,
                      float offset, WhittedStats& stats) const;
+    // Distance along d from origin (inside the scene's solid) to where the ray leaves it, and the
+    // field there; false if it never does. By the convex bound when one holds origin.
+    bool exitDistance(Vec3 origin, Vec3 d, float& dist, float& value, WhittedStats& stats) const;
     Vec3 shade(Vec3 p, Vec3 n, float f, Vec3 d, const Material& m, int reflections, int refractions,
                WhittedStats& stats) const;
     Vec3 shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m) const;
@@ -50,7 +59,15 @@ class WhittedTracer {
     const Tape& m_tape;
     Visibility m_visibility;
     TraceOptions m_trace;
+    struct ConvexObject {
+        Tape tape;
+        Bounds3 bounds;
+    };
+    std::vector<ConvexObject> m_convex;  // Keinert §3.5, when the settings enable it
 };
+
+// Whether the solid of `node` is convex: convex primitives, their intersections and transforms.
+bool isConvex(const Node& node);
 
 // Fresnel reflectance of unpolarized light from a medium of index n1 into n2 at incidence cosine
 // cosI (1 under total internal reflection).

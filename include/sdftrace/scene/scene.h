@@ -46,6 +46,7 @@ struct RenderSettings {
     int maxReflections = 2, maxRefractions = 8;
     bool dynamicEpsilon = true;
     float globalEpsilon = 1e-3f;
+    bool convexBounds = true;       // Keinert §3.5 for rays inside convex objects
     uint32_t frame = 0;             // seeds the per-pixel jitter of soft shadows and light samples
     float pixelJitter[2] = {0, 0};  // primary rays through (x + 0.5 + jx, y + 0.5 + jy)
     float maxDistance = 100.0f;     // t_max of primary rays (the scene bounds clip it further)

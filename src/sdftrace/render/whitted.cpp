@@ -35,6 +35,30 @@ Vec3 reflect(Vec3 d, Vec3 n) { return d - n * (2.0f * dot(d, n)); }
 
 }  // namespace
 
+bool isConvex(const Node& n) {
+    switch (n.kind) {
+        case NodeKind::Sphere:
+        case NodeKind::Box:
+        case NodeKind::RoundBox:
+        case NodeKind::Capsule:
+        case NodeKind::Cylinder:
+        case NodeKind::Cone:
+        case NodeKind::Ellipsoid:
+        case NodeKind::Octahedron:
+        case NodeKind::Dodecahedron:
+            return true;
+        case NodeKind::Intersection:
+        case NodeKind::Translate:
+        case NodeKind::Rotate:
+        case NodeKind::Scale:
+            for (const NodePtr& c : n.children)
+                if (!isConvex(*c)) return false;
+            return !n.children.empty();
+        default:
+            return false;
+    }
+}
+
 WhittedTracer::WhittedTracer(const Scene& scene, const Tape& tape, Visibility visibility)
     : m_scene(scene), m_tape(tape), m_visibility(std::move(visibility)) {
     m_trace = scene.settings.trace;
@@ -42,6 +66,17 @@ WhittedTracer::WhittedTracer(const Scene& scene, const Tape& tape, Visibility vi
     m_trace.forceHit = false;
     m_trace.discontinuityIters = 0;
     m_trace.fixedSteps = false;
+    if (scene.settings.convexBounds && scene.root) {
+        std::vector<NodePtr> objects;
+        if (scene.root->kind == NodeKind::Union)
+            objects = scene.root->children;
+        else
+            objects.push_back(scene.root);
+        for (const NodePtr& o : objects) {
+            const Bounds3 b = nodeBounds(*o);
+            if (isConvex(*o) && b.finite() && !b.empty()) m_convex.push_back({compileTape(o), b});
+        }
+    }
 }
 
 Material WhittedTracer::materialAt(Vec3 p) const {
@@ -149,24 +184,59 @@ Vec3 WhittedTracer::traceOutside(Vec3 origin, Vec3 d, int reflections, int refra
     return shade(p, normalAt(p), r.value, d, materialAt(p), reflections, refractions, stats);
 }
 
-// Inside a dielectric: sphere trace -f to the exit, attenuate, then split at the exit.
-Vec3 WhittedTracer::traceInside(Vec3 origin, Vec3 d, const Material& m, int reflections,
-                                int refractions, float eps, WhittedStats& stats) const {
+bool WhittedTracer::exitDistance(Vec3 origin, Vec3 d, float& dist, float& value,
+                                 WhittedStats& stats) const {
+    // Keinert §3.5: inside a convex object, from its bound's far side back along -d.
+    for (const ConvexObject& c : m_convex) {
+        if (!c.bounds.contains(origin)) continue;
+        const float f = c.tape.eval(origin);
+        ++stats.evaluations;
+        if (f >= 0) continue;
+        float tFar = INFINITY;
+        for (int a = 0; a < 3; ++a) {
+            if (d[a] > 0) tFar = std::min(tFar, (c.bounds.hi[a] - origin[a]) / d[a]);
+            if (d[a] < 0) tFar = std::min(tFar, (c.bounds.lo[a] - origin[a]) / d[a]);
+        }
+        const float margin = 1e-3f * length(c.bounds.extent()) + 1e-6f;
+        const float start = tFar + margin;
+        const Vec3 q = origin + d * start;
+        const TraceResult back = traceRay(c.tape, {{q, -d}, 0.0f, start}, m_trace);
+        stats.evaluations += back.evaluations;
+        if (!back.hit) break;  // rounding: march through the interior instead
+        // The object's exit is the scene's only where no other object covers it (objects that
+        // overlap, e.g. one sunk into the floor, march through the interior instead).
+        const float scene = m_tape.eval(q - d * back.t) / m_tape.lipschitz();
+        ++stats.evaluations;
+        if (scene < back.value / c.tape.lipschitz() - 2 * m_trace.tau) break;
+        dist = std::max(0.0f, start - back.t);
+        value = -back.value;
+        return true;
+    }
     SphereTraceState s;
     const float invL = 1.0f / m_tape.lipschitz();
     sphereTraceBegin(s, {origin, d}, 0.0f, m_scene.settings.maxDistance, Bounds3::everything(),
                      m_trace);
     while (!s.done()) sphereTraceAdvance(s, -m_tape.eval(s.queryPoint()), invL, m_trace);
-    ++stats.rays;
     stats.evaluations += s.result.evaluations;
-    if (!s.result.hit) return Vec3(0.0f);
-    if (s.result.t <= 2 * eps) ++stats.selfIntersections;
-    const float dist = s.result.t;
+    if (!s.result.hit) return false;
+    dist = s.result.t;
+    value = s.result.value;
+    return true;
+}
+
+// Inside a dielectric: find the exit (through the interior, or Keinert §3.5's bound), attenuate,
+// then split at the exit.
+Vec3 WhittedTracer::traceInside(Vec3 origin, Vec3 d, const Material& m, int reflections,
+                                int refractions, float eps, WhittedStats& stats) const {
+    float dist = 0, value = 0;
+    ++stats.rays;
+    if (!exitDistance(origin, d, dist, value, stats)) return Vec3(0.0f);
+    if (dist <= 2 * eps) ++stats.selfIntersections;
     const Vec3 att(std::exp(-m.absorption.x * dist), std::exp(-m.absorption.y * dist),
                    std::exp(-m.absorption.z * dist));
     const Vec3 q = origin + d * dist;
     const Vec3 nOut = normalAt(q);  // the outward normal: d leaves along it
-    const float e = offset(s.result.value);
+    const float e = offset(value);
     const float cosI = dot(d, nOut);
     const float r = fresnelDielectric(cosI, m.ior, 1.0f);
     Vec3 c(0.0f);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "sdftrace/field/node.h"
 #include "shadow_test_scenes.h"
 
 namespace sdft {
@@ -78,6 +79,46 @@ TEST(Whitted, DynamicEpsilonPreventsSelfIntersection) {
     };
     EXPECT_GT(dark(global.film), 50);
     EXPECT_EQ(dark(dynamic.film), 0);
+}
+
+TEST(Whitted, ConvexityOfObjects) {
+    EXPECT_TRUE(isConvex(*node::sphere(1)));
+    EXPECT_TRUE(isConvex(*node::translate(
+        node::intersect({node::box(Vec3(1.0f)), node::sphere(1.2f)}), Vec3(1, 2, 3))));
+    EXPECT_FALSE(isConvex(*node::torus(1, 0.3f)));
+    EXPECT_FALSE(isConvex(*node::unite({node::sphere(1), node::box(Vec3(0.5f))})));
+    EXPECT_FALSE(isConvex(*node::plane(Vec3(0, 1, 0), 0)));
+}
+
+// Keinert §3.5: rays inside convex glass (a sphere, a rotated box, a dodecahedron, an
+// intersection) jump to the bound and trace back: the same image, fewer evaluations.
+TEST(Whitted, ConvexBoundsFindTheSameExitsWithFewerEvaluations) {
+    auto scene = [](bool convex) {
+        return std::string(R"({"camera": {"eye": [0, 1, 6], "target": [0, 0.3, 0], "width": 96,
+                                          "height": 64},
+          "background": [0.5, 0.6, 0.7], "ambient": [0.2, 0.2, 0.2],
+          "materials": {"glass": {"type": "dielectric", "ior": 1.5, "absorption": [0.2, 0.1, 0]},
+                        "floor": {"color": [0.8, 0.7, 0.6]}},
+          "lights": [{"type": "directional", "direction": [-0.3, -1, -0.4]}],
+          "objects": [
+            {"type": "box", "size": [10, 0.2, 10], "translate": [0, -0.6, 0], "material": "floor"},
+            {"type": "sphere", "radius": 0.5, "translate": [-1.5, 0, 0], "material": "glass"},
+            {"type": "box", "size": [0.8, 0.8, 0.8], "rotate": [30, 40, 10], "material": "glass"},
+            {"type": "dodecahedron", "radius": 0.45, "translate": [1.5, 0, 0], "material": "glass"},
+            {"type": "intersection", "translate": [0, 1.2, 0], "material": "glass", "children": [
+              {"type": "sphere", "radius": 0.6}, {"type": "box", "size": [0.9, 0.9, 0.9]}]}],
+          "render": {"convex_bounds": )") +
+               (convex ? "true" : "false") + "}}";
+    };
+    const testing::Rendered on = testing::renderText(scene(true));
+    const testing::Rendered off = testing::renderText(scene(false));
+    size_t differ = 0;
+    for (size_t i = 0; i < on.film.color.size(); ++i)
+        differ += std::fabs(on.film.color[i] - off.film.color[i]) > 2e-3f;
+    EXPECT_LT(differ, on.film.color.size() / 200);  // grazing rays at silhouettes
+    EXPECT_NEAR(double(on.stats.secondaryRays), double(off.stats.secondaryRays),
+                0.01 * off.stats.secondaryRays);  // the same paths but for grazing rays
+    EXPECT_LT(on.stats.secondaryEvaluations, 0.9 * off.stats.secondaryEvaluations);
 }
 
 }  // namespace

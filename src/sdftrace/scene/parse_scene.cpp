@@ -157,7 +157,8 @@ void parseRender(const Reader& r, RenderSettings& s) {
                  "max_reflections",
                  "max_refractions",
                  "secondary_epsilon",
-                 "global_epsilon"});
+                 "global_epsilon",
+                 "convex_bounds"});
     TraceOptions& t = s.trace;
     t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
     t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
@@ -224,6 +225,7 @@ void parseRender(const Reader& r, RenderSettings& s) {
         r.failKey("secondary_epsilon", "unknown offset '" + eps + "'; accepted: dynamic, global");
     s.dynamicEpsilon = eps == "dynamic";
     s.globalEpsilon = r.number("global_epsilon", s.globalEpsilon, positive, "a positive distance");
+    s.convexBounds = r.boolean("convex_bounds", s.convexBounds);
 }
 
 Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {
