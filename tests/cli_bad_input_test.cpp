@@ -163,6 +163,27 @@ INSTANTIATE_TEST_SUITE_P(
                     "render": {"secondary_epsilon": "adaptive"}})",
                 "",
                 {"bad.json", "/render/secondary_epsilon", "dynamic, global"}},
+        BadCase{"unknown_integrator",
+                R"({"objects": [{"type": "sphere", "radius": 1}],
+                    "render": {"integrator": "bidirectional"}})",
+                "",
+                {"bad.json", "/render/integrator", "direct, path"}},
+        BadCase{"zero_spp",
+                R"({"objects": [{"type": "sphere", "radius": 1}],
+                    "render": {"integrator": "path", "spp": 0}})",
+                "",
+                {"bad.json", "/render/spp"}},
+        BadCase{"roughness_out_of_range",
+                R"({"materials": {"m": {"roughness": 1.5}},
+                    "objects": [{"type": "sphere", "radius": 1, "material": "m"}]})",
+                "",
+                {"bad.json", "/materials/m/roughness", "[0, 1]"}},
+        BadCase{"negative_environment",
+                R"({"environment": [0.5, -1, 0.5], "objects": [{"type": "sphere", "radius": 1}]})",
+                "",
+                {"bad.json", "/environment", "non-negative"}},
+        BadCase{"integrator_flag", "", "--integrator photon", {"--integrator", "photon"}},
+        BadCase{"max_depth_flag", "", "--integrator path --max-depth 0", {"--max-depth"}},
         BadCase{"frame_pattern_without_number",
                 "",
                 "--frames 2 --frame-pattern frames.png",
@@ -197,9 +218,11 @@ TEST(Cli, HelpDocumentsEveryFlag) {
     RunResult r = runCli("render --help", dir);
     EXPECT_EQ(r.status, 0);
     for (const char* flag :
-         {"--output", "--aov", "--eye", "--target", "--up", "--fov", "--width", "--height",
-          "--threads", "--omega", "--screen-space", "--force-hit", "--discontinuity",
-          "--fixed-steps", "--hybrid", "--max-steps", "--tau", "--normals", "--classic"}) {
+         {"--output",       "--aov",       "--eye",           "--target",      "--up",
+          "--fov",          "--width",     "--height",        "--threads",     "--omega",
+          "--screen-space", "--force-hit", "--discontinuity", "--fixed-steps", "--hybrid",
+          "--max-steps",    "--tau",       "--normals",       "--classic",     "--integrator",
+          "--spp",          "--max-depth"}) {
         EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
     }
 }

@@ -45,6 +45,8 @@ struct RenderArgs {
     std::string gridTracer, cellMethod, gridNormals;
     std::string shadowMethod;
     std::optional<int> shadowRays, maxReflections, maxRefractions;
+    std::string integrator;
+    std::optional<int> spp, maxDepth;
     std::string epsilon;
     std::optional<float> globalEpsilon;
     int frames = 1;
@@ -100,6 +102,9 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (!a.shadowMethod.empty()) parseShadowMethod(a.shadowMethod, s.shadowMethod);
     if (a.shadowRays) s.shadowRays = *a.shadowRays;
     if (a.maxReflections) s.maxReflections = *a.maxReflections;
+    if (!a.integrator.empty()) s.pathTracing = a.integrator == "path";
+    if (a.spp) s.samplesPerPixel = *a.spp;
+    if (a.maxDepth) s.maxDepth = *a.maxDepth;
     if (a.maxRefractions) s.maxRefractions = *a.maxRefractions;
     if (!a.epsilon.empty()) s.dynamicEpsilon = a.epsilon == "dynamic";
     if (a.globalEpsilon) s.globalEpsilon = *a.globalEpsilon;
@@ -207,6 +212,18 @@ int runRender(const RenderArgs& a) {
     for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
 
     double rays = static_cast<double>(st.primaryRays);
+    if (scene.settings.pathTracing) {
+        const double rayCount =
+            static_cast<double>(st.primaryRays + st.secondaryRays + st.shadowRays);
+        std::fprintf(stderr,
+                     "sdftrace render: %dx%d path traced, %.0f paths per pixel, in %.3f s on %d "
+                     "threads, %.3f Mpaths/s, %.2f rays per path (%.2f shadow rays), %.2f "
+                     "evaluations per path, L = %.3g\n",
+                     film.width, film.height, rays / static_cast<double>(film.pixels()), st.seconds,
+                     st.threads, rays / st.seconds * 1e-6, rayCount / rays, st.shadowRays / rays,
+                     st.totalEvaluations() / rays, tape.lipschitz());
+        return 0;
+    }
     std::string gridCounters;
     if (st.gridTracer) {
         char buf[160];
@@ -312,6 +329,17 @@ void addRenderCommand(CLI::App& app, Action& action) {
         ->check(CLI::PositiveNumber);
 
     auto* shading = cmd->add_option_group("Shading");
+    shading
+        ->add_option("--integrator", args->integrator,
+                     "direct (direct lighting, shadows by --shadow-method, Whitted mirrors and "
+                     "glass) or path (a path tracer with next-event estimation; Keinert fig. 1)")
+        ->check(CLI::IsMember({"direct", "path"}));
+    shading->add_option("--spp", args->spp, "path: samples (paths) per pixel and frame")
+        ->check(CLI::Range(1, 1 << 20));
+    shading
+        ->add_option("--max-depth", args->maxDepth,
+                     "path: scattering events per path (1: direct light only)")
+        ->check(CLI::Range(1, 1024));
     shading
         ->add_option("--normals", args->normals,
                      "Gradient estimator: central (6 taps) or tetrahedral (4 taps)")

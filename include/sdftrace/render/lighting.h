@@ -19,6 +19,7 @@ struct Material {
     float shininess = 32.0f;       // Blinn-Phong exponent
     Kind kind = Kind::Plastic;
     float ior = 1.5f;          // dielectric: index of refraction (outside: 1)
+    float roughness = -1;      // path tracer: GGX alpha; < 0: from shininess
     Vec3 absorption{0, 0, 0};  // dielectric: Beer-Lambert coefficients per unit length
 };
 
@@ -51,6 +52,9 @@ struct Lighting {
     std::vector<Light> lights;
     Vec3 ambient{0.05f, 0.05f, 0.05f};
     Vec3 background{0.0f, 0.0f, 0.0f};
+    // Path tracer: the radiance of the environment that rays escaping the scene see (the camera's
+    // escaping rays see `background`).
+    Vec3 environment{0.0f, 0.0f, 0.0f};
 };
 
 }  // namespace sdft

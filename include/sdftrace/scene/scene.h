@@ -47,6 +47,10 @@ struct RenderSettings {
     bool dynamicEpsilon = true;
     float globalEpsilon = 1e-3f;
     bool convexBounds = true;       // Keinert §3.5 for rays inside convex objects
+    // The integrator: direct lighting (the tile renderer) or the path tracer (path_tracer.h).
+    bool pathTracing = false;
+    int samplesPerPixel = 16;  // path tracer
+    int maxDepth = 5;          // path tracer: scattering events per path
     uint32_t frame = 0;             // seeds the per-pixel jitter of soft shadows and light samples
     float pixelJitter[2] = {0, 0};  // primary rays through (x + 0.5 + jx, y + 0.5 + jy)
     float maxDistance = 100.0f;     // t_max of primary rays (the scene bounds clip it further)

@@ -15,6 +15,7 @@
 #include "sdftrace/math/sampling.h"
 #include "sdftrace/render/camera.h"
 #include "sdftrace/render/light_sample.h"
+#include "sdftrace/render/path_tracer.h"
 #include "sdftrace/render/whitted.h"
 #include "sdftrace/trace/field_tracer.h"
 #include "sdftrace/trace/grid_tracer.h"
@@ -560,6 +561,7 @@ Vec3 estimateNormal(const Tape& tape, Vec3 p, float h, NormalEstimator estimator
 }
 
 RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progress) {
+    if (scene.settings.pathTracing) return renderPaths(scene, tape, film, progress);
     auto start = std::chrono::steady_clock::now();
     int threads = scene.settings.threads > 0 ? scene.settings.threads
                                              : tbb::this_task_arena::max_concurrency();

@@ -45,7 +45,8 @@ void parseCamera(const Reader& r, CameraDesc& cam) {
 
 Material parseMaterial(const Reader& r, const std::string& name) {
     r.requireObject("a material");
-    r.allowKeys({"type", "color", "diffuse", "specular", "shininess", "ior", "absorption"});
+    r.allowKeys(
+        {"type", "color", "diffuse", "specular", "shininess", "roughness", "ior", "absorption"});
     Material m;
     m.name = name;
     const std::string type = r.string("type", "plastic");
@@ -71,6 +72,10 @@ Material parseMaterial(const Reader& r, const std::string& name) {
     m.shininess = r.number(
         "shininess", m.shininess, [](double v) { return v >= 1 && v <= 1e5; },
         "a Blinn-Phong exponent in [1, 100000]");
+    if (r.has("roughness"))
+        m.roughness = r.number(
+            "roughness", 0.5f, [](double v) { return v >= 0 && v <= 1; },
+            "a GGX roughness (alpha) in [0, 1]");
     return m;
 }
 
@@ -158,7 +163,10 @@ void parseRender(const Reader& r, RenderSettings& s) {
                  "max_refractions",
                  "secondary_epsilon",
                  "global_epsilon",
-                 "convex_bounds"});
+                 "convex_bounds",
+                 "integrator",
+                 "spp",
+                 "max_depth"});
     TraceOptions& t = s.trace;
     t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
     t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
@@ -226,12 +234,20 @@ void parseRender(const Reader& r, RenderSettings& s) {
     s.dynamicEpsilon = eps == "dynamic";
     s.globalEpsilon = r.number("global_epsilon", s.globalEpsilon, positive, "a positive distance");
     s.convexBounds = r.boolean("convex_bounds", s.convexBounds);
+    // The integrator: direct lighting or the path tracer.
+    const std::string integrator = r.string("integrator", s.pathTracing ? "path" : "direct");
+    if (integrator != "direct" && integrator != "path")
+        r.failKey("integrator", "unknown integrator '" + integrator + "'; accepted: direct, path");
+    s.pathTracing = integrator == "path";
+    s.samplesPerPixel = r.integer("spp", s.samplesPerPixel, 1, 1 << 20);
+    s.maxDepth = r.integer("max_depth", s.maxDepth, 1, 1024);
 }
 
 Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {
     Reader r(root, source, "");
     r.requireObject("a scene");
-    r.allowKeys({"camera", "lights", "ambient", "background", "materials", "objects", "render"});
+    r.allowKeys({"camera", "lights", "ambient", "background", "environment", "materials", "objects",
+                 "render"});
     Scene scene;
     scene.materials.push_back(Material{"default"});
     NodeContext context;
@@ -263,6 +279,8 @@ Scene parseRoot(const Json& root, const std::string& source, const std::string& 
         r.vec3("ambient", scene.lighting.ambient, nonNegative, "non-negative linear RGB");
     scene.lighting.background =
         r.vec3("background", scene.lighting.background, nonNegative, "non-negative linear RGB");
+    scene.lighting.environment =
+        r.vec3("environment", scene.lighting.environment, nonNegative, "non-negative linear RGB");
     if (r.has("render")) parseRender(r.child("render"), scene.settings);
     if (!r.has("objects")) r.fail("missing required key 'objects' (a list of at least one object)");
     Reader objs = r.child("objects");

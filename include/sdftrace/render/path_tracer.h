@@ -1,0 +1,26 @@
+// A progressive path tracer over the same scenes (Keinert et al. 2014, fig. 1 right; Kajiya 1986):
+// unidirectional paths from the camera with
+//  - next-event estimation at every non-specular vertex: one sampled point of each light and a
+//    shadow ray (lights are not geometry: only next-event estimation reaches them, so mirrors and
+//    glass do not show them);
+//  - BSDFs: plastic is Lambertian diffuse (albedo colour x diffuse) plus a GGX microfacet lobe
+//    (weight `specular`, alpha = roughness or sqrt(2 / (shininess + 2)), Schlick F0 = 0.04),
+//    sampled by one-sample mixture of a cosine lobe and the GGX normal distribution; mirrors
+//    reflect; dielectrics reflect or refract by Fresnel, absorbing inside (Beer-Lambert);
+//  - an environment of constant radiance (Lighting::environment) for escaping rays;
+//  - Russian roulette after three bounces.
+// A light's intensity means the same as for the direct integrator: a white Lambertian surface
+// facing a point light of intensity I at distance d has radiance I / d^2. With one bounce
+// (max depth 1), no environment and no ambient, the estimate's mean is the direct integrator's
+// image with distributed shadows (tested).
+#pragma once
+
+#include "sdftrace/render/renderer.h"
+
+namespace sdft {
+
+// Renders scene.settings.samplesPerPixel paths per pixel into `film` (colour; depth, normal and
+// steps of the first sample). Stats: primary rays are paths, secondary rays every further ray.
+RenderStats renderPaths(const Scene& scene, const Tape& tape, Film& film, bool progress = false);
+
+}  // namespace sdft

@@ -1,0 +1,297 @@
+#include "sdftrace/render/path_tracer.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "sdftrace/exec/progress.h"
+#include "sdftrace/math/sampling.h"
+#include "sdftrace/render/camera.h"
+#include "sdftrace/render/light_sample.h"
+#include "sdftrace/render/whitted.h"
+#include "sdftrace/trace/field_tracer.h"
+#include "sdftrace/trace/sphere_tracer.h"
+
+namespace sdft {
+
+namespace {
+
+constexpr float kPi = 3.14159265f;
+
+float maxComponent3(Vec3 v) { return std::max(v.x, std::max(v.y, v.z)); }
+
+// GGX (Trowbridge-Reitz) normal distribution and Smith's shadowing for alpha.
+float ggxD(float nh, float a) {
+    const float a2 = a * a, k = nh * nh * (a2 - 1) + 1;
+    return a2 / (kPi * k * k);
+}
+float smithG1(float nv, float a) {
+    const float a2 = a * a;
+    return 2 * nv / (nv + std::sqrt(a2 + (1 - a2) * nv * nv));
+}
+
+struct Plastic {
+    Vec3 albedo;
+    float specular, alpha, pDiffuse;
+};
+
+Plastic plastic(const Material& m) {
+    Plastic p;
+    p.albedo = min(m.color * m.diffuse, Vec3(0.999f));
+    p.specular = std::min(m.specular, 1.0f);
+    p.alpha = m.roughness >= 0 ? std::max(m.roughness, 1e-3f)
+                               : std::sqrt(2.0f / (std::max(m.shininess, 1.0f) + 2.0f));
+    const float wd = maxComponent3(p.albedo), ws = p.specular * 0.04f;
+    p.pDiffuse = wd + ws > 0 ? wd / (wd + ws) : 1.0f;
+    return p;
+}
+
+// f(wo, wi) cos(wi) of plastic, and the mixture pdf of sampling wi.
+Vec3 evalPlastic(const Plastic& m, Vec3 n, Vec3 wo, Vec3 wi, float& pdf) {
+    const float ni = dot(n, wi), no = dot(n, wo);
+    pdf = 0;
+    if (ni <= 0 || no <= 0) return Vec3(0.0f);
+    // The diffuse base sees what the coat's Fresnel lets through, on the way in and out
+    // (Ashikhmin & Shirley 2000 in spirit), so that the sum reflects no more than it receives.
+    const auto schlick = [](float c) { return 0.04f + 0.96f * std::pow(1 - c, 5.0f); };
+    Vec3 f = m.albedo * ((1 - m.specular * schlick(ni)) * (1 - m.specular * schlick(no)) / kPi);
+    const Vec3 h = normalize(wo + wi);
+    const float nh = std::max(dot(n, h), 0.0f), oh = std::max(dot(wo, h), 1e-6f);
+    const float D = ggxD(nh, m.alpha);
+    if (m.specular > 0) {
+        const float F = schlick(oh);
+        const float G = smithG1(no, m.alpha) * smithG1(ni, m.alpha);
+        f += Vec3(m.specular * D * G * F / (4 * no * ni));
+    }
+    pdf = m.pDiffuse * ni / kPi + (1 - m.pDiffuse) * D * nh / (4 * oh);
+    return f * ni;
+}
+
+Vec3 sampleGgx(Vec3 n, Vec3 wo, float alpha, float u1, float u2) {
+    const float phi = 2 * kPi * u1;
+    const float cosT = std::sqrt((1 - u2) / (1 + (alpha * alpha - 1) * u2));
+    const float sinT = std::sqrt(std::max(0.0f, 1 - cosT * cosT));
+    Vec3 t, b;
+    orthonormalBasis(n, t, b);
+    const Vec3 h = t * (sinT * std::cos(phi)) + b * (sinT * std::sin(phi)) + n * cosT;
+    return h * (2 * dot(wo, h)) - wo;
+}
+
+class PathTracer {
+  public:
+    PathTracer(const Scene& scene, const Tape& tape)
+        : m_scene(scene), m_tape(tape), m_camera(scene.camera), m_whitted(scene, tape, nullptr) {
+        m_primary = scene.settings.trace;
+        m_primary.pixelRadius = m_camera.pixelRadius();
+        m_secondary = scene.settings.trace;
+        m_secondary.screenSpace = false;
+        m_secondary.forceHit = false;
+        m_secondary.discontinuityIters = 0;
+        m_secondary.fixedSteps = false;
+    }
+
+    Vec3 radiance(int x, int y, int sample, RenderStats& st, float* depth, Vec3* normal,
+                  int* steps) const;
+
+  private:
+    bool trace(const Ray& ray, bool inside, bool primary, float& t, float& value,
+               RenderStats& st) const;
+    Vec3 nextEvent(Vec3 p, Vec3 n, float eps, Vec3 wo, const Plastic& m, Rng& rng,
+                   RenderStats& st) const;
+    float epsilon(float f) const {
+        return 2.0f * std::max(m_scene.settings.shadowOffsetMin, std::fabs(f) / m_tape.lipschitz());
+    }
+
+    const Scene& m_scene;
+    const Tape& m_tape;
+    Camera m_camera;
+    WhittedTracer m_whitted;  // material lookup
+    TraceOptions m_primary, m_secondary;
+};
+
+bool PathTracer::trace(const Ray& ray, bool inside, bool primary, float& t, float& value,
+                       RenderStats& st) const {
+    const TraceOptions& o = primary ? m_primary : m_secondary;
+    SphereTraceState s;
+    const float invL = 1.0f / m_tape.lipschitz();
+    sphereTraceBegin(s, ray, 0.0f, m_scene.settings.maxDistance,
+                     inside ? Bounds3::everything() : m_tape.bounds(), o);
+    const float sign = inside ? -1.0f : 1.0f;
+    while (!s.done()) sphereTraceAdvance(s, sign * m_tape.eval(s.queryPoint()), invL, o);
+    (primary ? st.primaryEvaluations : st.secondaryEvaluations) += s.result.evaluations;
+    if (!primary) ++st.secondaryRays;
+    t = s.result.t;
+    value = s.result.value;
+    return s.result.hit;
+}
+
+// One sampled point of each light, seen from p through a shadow ray that starts at p + n eps.
+Vec3 PathTracer::nextEvent(Vec3 p, Vec3 n, float eps, Vec3 wo, const Plastic& m, Rng& rng,
+                           RenderStats& st) const {
+    Vec3 sum(0.0f);
+    const auto& lights = m_scene.lighting.lights;
+    for (const Light& light : lights) {
+        const LightDirection to = towardLight(light, p);
+        const LightSample ls = sampleLight(light, p, rng.uniform(), rng.uniform());
+        float pdf;
+        const Vec3 fcos = evalPlastic(m, n, wo, ls.dir, pdf);
+        if (maxComponent3(fcos) <= 0) continue;
+        if (m_scene.settings.shadows && light.castShadows && ls.dist > 0) {
+            ++st.shadowRays;
+            const Ray shadow{p + n * eps, ls.dir};
+            const TraceOptions& o = m_secondary;
+            SphereTraceState s;
+            const float invL = 1.0f / m_tape.lipschitz();
+            sphereTraceBegin(s, shadow, 0.0f, std::min(ls.dist, m_scene.settings.maxDistance),
+                             m_tape.bounds(), o);
+            while (!s.done()) sphereTraceAdvance(s, m_tape.eval(s.queryPoint()), invL, o);
+            st.shadowEvaluations += s.result.evaluations;
+            if (s.result.hit) continue;
+        }
+        // The direct integrator's light model: pi * scale makes a white Lambertian surface's
+        // radiance scale * cos.
+        sum += fcos * light.color * (kPi * to.scale);
+    }
+    return sum;
+}
+
+Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* depthOut,
+                          Vec3* normalOut, int* stepsOut) const {
+    const RenderSettings& set = m_scene.settings;
+    Rng rng(static_cast<uint32_t>(y * m_scene.camera.width + x),
+            set.frame * static_cast<uint32_t>(set.samplesPerPixel) + sample, 0x9A7Bu);
+    Ray ray = m_camera.rayThrough(x + rng.uniform(), y + rng.uniform());
+    Vec3 L(0.0f), beta(1.0f);
+    bool inside = false;
+    Material medium;  // the dielectric a ray inside is in
+    for (int depth = 0; depth < set.maxDepth || depth == 0; ++depth) {
+        float t, value;
+        const uint64_t before = st.primaryEvaluations;
+        const bool hit = trace(ray, inside, depth == 0, t, value, st);
+        if (depth == 0) {
+            ++st.primaryRays;
+            if (stepsOut) *stepsOut = static_cast<int>(st.primaryEvaluations - before);
+        }
+        if (!hit) {
+            L += beta * (depth == 0 ? m_scene.lighting.background : m_scene.lighting.environment);
+            break;
+        }
+        if (depth == 0) ++st.hits;
+        const Vec3 p = ray.at(t);
+        if (inside) {
+            beta =
+                beta * Vec3(std::exp(-medium.absorption.x * t), std::exp(-medium.absorption.y * t),
+                            std::exp(-medium.absorption.z * t));
+        }
+        Vec3 n = estimateNormal(m_tape, p, 1e-4f, set.normals);
+        st.normalEvaluations += 4;
+        if (!(length(n) > 0)) n = -ray.direction;
+        if (depth == 0) {
+            if (depthOut) *depthOut = t;
+            if (normalOut) *normalOut = n;
+        }
+        const Material m = inside ? medium : m_whitted.materialAt(p);
+        const Vec3 wo = -ray.direction;
+        const float eps = epsilon(value);
+        if (m.kind == Material::Kind::Dielectric) {
+            // n points out of the solid; entering from outside, leaving from inside.
+            const bool entering = !inside;
+            const Vec3 nf = entering ? n : -n;  // facing the incoming ray
+            const float n1 = entering ? 1.0f : m.ior, n2 = entering ? m.ior : 1.0f;
+            const float cosI = std::clamp(dot(wo, nf), 0.0f, 1.0f);
+            const float F = fresnelDielectric(cosI, n1, n2);
+            if (rng.uniform() < F) {
+                ray = {p + nf * eps, normalize(ray.direction + nf * (2 * cosI))};
+            } else {
+                const float eta = n1 / n2;
+                const float k = 1 - eta * eta * (1 - cosI * cosI);
+                const Vec3 dir = normalize(ray.direction * eta + nf * (eta * cosI - std::sqrt(k)));
+                ray = {p - nf * eps, dir};
+                inside = entering;
+                medium = m;
+            }
+        } else if (m.kind == Material::Kind::Mirror) {
+            const Vec3 nf = dot(n, wo) > 0 ? n : -n;
+            beta = beta * m.color;
+            ray = {p + nf * eps, normalize(ray.direction + nf * (2 * dot(wo, nf)))};
+        } else {
+            const Vec3 nf = dot(n, wo) > 0 ? n : -n;
+            const Plastic pm = plastic(m);
+            L += beta * nextEvent(p, nf, eps, wo, pm, rng, st);
+            if (depth + 1 >= set.maxDepth) break;
+            // Sample the mixture: cosine lobe or GGX reflection.
+            const float u1 = rng.uniform(), u2 = rng.uniform();
+            const Vec3 wi = rng.uniform() < pm.pDiffuse ? sampleCosine(nf, u1, u2)
+                                                        : sampleGgx(nf, wo, pm.alpha, u1, u2);
+            float pdf;
+            const Vec3 fcos = evalPlastic(pm, nf, wo, wi, pdf);
+            if (!(pdf > 0) || maxComponent3(fcos) <= 0) break;
+            beta = beta * fcos / pdf;
+            ray = {p + nf * eps, wi};
+        }
+        // Russian roulette after three bounces.
+        if (depth >= 3) {
+            const float q = std::max(0.05f, 1 - maxComponent3(beta));
+            if (rng.uniform() < q) break;
+            beta = beta / (1 - q);
+        }
+    }
+    return isFinite(L) ? L : Vec3(0.0f);
+}
+
+}  // namespace
+
+RenderStats renderPaths(const Scene& scene, const Tape& tape, Film& film, bool progress) {
+    const auto start = std::chrono::steady_clock::now();
+    const int threads = scene.settings.threads > 0 ? scene.settings.threads
+                                                   : tbb::this_task_arena::max_concurrency();
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    tbb::task_arena arena(threads);
+    PathTracer tracer(scene, tape);
+    const int spp = std::max(1, scene.settings.samplesPerPixel);
+    tbb::enumerable_thread_specific<RenderStats> stats;
+    Progress bar("path tracing", static_cast<uint64_t>(film.height), progress);
+    arena.execute([&] {
+        tbb::parallel_for(0, film.height, [&](int y) {
+            RenderStats& st = stats.local();
+            for (int x = 0; x < film.width; ++x) {
+                const size_t p = static_cast<size_t>(y) * film.width + x;
+                Vec3 sum(0.0f), normal(0.0f);
+                float depth = INFINITY;
+                int steps = 0;
+                for (int k = 0; k < spp; ++k)
+                    sum += tracer.radiance(x, y, k, st, k == 0 ? &depth : nullptr,
+                                           k == 0 ? &normal : nullptr, k == 0 ? &steps : nullptr);
+                const Vec3 c = sum / static_cast<float>(spp);
+                for (int a = 0; a < 3; ++a) {
+                    film.color[3 * p + a] = c[a];
+                    film.normal[3 * p + a] = normal[a];
+                }
+                film.depth[p] = depth;
+                film.steps[p] = static_cast<float>(steps);
+            }
+            bar.advance();
+        });
+    });
+    RenderStats total;
+    for (const RenderStats& s : stats) {
+        total.primaryRays += s.primaryRays;
+        total.primaryEvaluations += s.primaryEvaluations;
+        total.hits += s.hits;
+        total.normalEvaluations += s.normalEvaluations;
+        total.shadowRays += s.shadowRays;
+        total.shadowEvaluations += s.shadowEvaluations;
+        total.secondaryRays += s.secondaryRays;
+        total.secondaryEvaluations += s.secondaryEvaluations;
+    }
+    total.threads = threads;
+    total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return total;
+}
+
+}  // namespace sdft
