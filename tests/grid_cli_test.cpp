@@ -212,6 +212,65 @@ TEST(GridCli, ConvertsToAndFromOpenVdbAndRendersVdbFiles) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("f.png")));
 }
 
+// Liktor §5.5.2 through the CLI: bake --texcoords stores (u, v) beside the distances, info reports
+// them, a grid-projected texture uses them (the image differs from the tri-planar fallback the
+// same texture gets without them), and a .vdb, which holds distances only, is refused or warned.
+TEST(GridCli, BakedTextureCoordinatesReachTheRenderer) {
+    TempDir dir;
+    std::string scene = dir.write("blob.json", R"({"objects": [{"type": "blobs", "threshold": 0.45,
+      "blobs": [{"center": [0, 0, 0], "radius": 0.9}, {"center": [0.5, 0.5, 0], "radius": 0.6}]}]})");
+    RunResult bake =
+        runCli("bake " + scene + " --res 48 --texcoords sphere -o " + dir.file("uv.sdfg"), dir);
+    ASSERT_EQ(bake.status, 0) << bake.err;
+    EXPECT_NE(bake.err.find("texture coordinates (sphere helper"), std::string::npos) << bake.err;
+    ASSERT_EQ(runCli("bake " + scene + " --res 48 -o " + dir.file("plain.sdfg"), dir).status, 0);
+    RunResult info = runCli("info " + dir.file("uv.sdfg"), dir);
+    ASSERT_EQ(info.status, 0) << info.err;
+    EXPECT_NE(info.out.find("projected from a sphere"), std::string::npos) << info.out;
+    EXPECT_NE(runCli("info " + dir.file("plain.sdfg"), dir).out.find("texcoords:   none"),
+              std::string::npos);
+
+    const std::string image = std::string(SDFT_SOURCE_DIR) + "/examples/textures/globe.png";
+    auto sceneFor = [&](const std::string& grid) {
+        return dir.write(grid + ".json",
+                         R"({"camera": {"eye": [0, 0.5, 2.4], "target": [0.1, 0.2, 0],
+          "fov": 45, "width": 96, "height": 72}, "ambient": [0.3, 0.3, 0.3],
+          "lights": [{"type": "directional", "direction": [-0.3, -0.5, -1], "intensity": 1}],
+          "textures": {"globe": {"type": "image", "file": ")" +
+                             image + R"(", "projection": "grid"}},
+          "materials": {"m": {"color": "globe"}},
+          "objects": [{"type": "grid", "file": ")" +
+                             grid + R"(.sdfg", "material": "m"}]})");
+    };
+    for (const char* g : {"uv", "plain"}) {
+        RunResult r =
+            runCli("render -q " + sceneFor(g) + " -o " + dir.file(std::string(g) + ".png") +
+                       " --aov color=" + dir.file(std::string(g) + ".pfm"),
+                   dir);
+        ASSERT_EQ(r.status, 0) << r.err;
+    }
+    int w, h, ch;
+    std::vector<float> a = readPfm(dir.file("uv.pfm"), w, h, ch),
+                       b = readPfm(dir.file("plain.pfm"), w, h, ch);
+    ASSERT_EQ(a.size(), b.size());
+    size_t differ = 0, finite = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        finite += std::isfinite(a[i]) && std::isfinite(b[i]);
+        differ += std::fabs(a[i] - b[i]) > 0.05f;
+    }
+    EXPECT_EQ(finite, a.size());
+    EXPECT_GT(differ, a.size() / 20) << "the grid's coordinates changed too few pixels";
+
+    RunResult vdb =
+        runCli("bake " + scene + " --res 48 --texcoords sphere -o " + dir.file("x.vdb"), dir);
+    EXPECT_NE(vdb.status, 0);
+    EXPECT_NE(vdb.err.find("--texcoords"), std::string::npos) << vdb.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.vdb")));
+    RunResult convert = runCli("convert " + dir.file("uv.sdfg") + " " + dir.file("uv.vdb"), dir);
+    ASSERT_EQ(convert.status, 0) << convert.err;
+    EXPECT_NE(convert.err.find("warning"), std::string::npos) << convert.err;
+}
+
 TEST(GridCli, BadGridInputFailsClearly) {
     TempDir dir;
     std::string scene = dir.write("object.json", kObject);

@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "sdftrace/bake/exact_bake.h"
 #include "sdftrace/bake/mesh_bake.h"
+#include "sdftrace/bake/texture_coords.h"
 #include "sdftrace/bake/verify_bake.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/sample_grid.h"
@@ -44,6 +45,8 @@ struct BakeArgs {
     float mask = 3;
     bool verify = false;
     int threads = 0;
+    std::string texcoords;  // "", sphere, cylinder
+    std::string texcoordCenter, texcoordAxis;
 };
 
 Bounds3 parseBoundsArg(const std::string& text) {
@@ -98,6 +101,39 @@ void checkMemory(double bytes, int resolution) {
 
 double seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
     return std::chrono::duration<double>(b - a).count();
+}
+
+// Liktor 2008, §5.5.2: texture coordinates by particles traced along the gradient of `field`.
+// `stopLevel`: TexcoordOptions::stopLevel (a narrow band's inner level for mesh grids).
+void addTexcoords(const BakeArgs& a, Grid& grid, const std::function<float(Vec3)>& field,
+                  float stopLevel = INFINITY) {
+    if (a.texcoords.empty()) return;
+    TexcoordOptions o;
+    parseTexcoordKind(a.texcoords, o.helper);  // checked by the flag
+    o.stopLevel = stopLevel;
+    if (!a.texcoordCenter.empty()) {
+        const Vec3Arg c = parseVec3Arg("--texcoord-center", a.texcoordCenter);
+        o.center = {c.x, c.y, c.z};
+        o.autoCenter = false;
+    }
+    if (!a.texcoordAxis.empty()) {
+        const Vec3Arg v = parseVec3Arg("--texcoord-axis", a.texcoordAxis);
+        o.axis = {v.x, v.y, v.z};
+        if (!(length(o.axis) > 0) || !std::isfinite(length(o.axis)))
+            throw InputError("--texcoord-axis " + a.texcoordAxis + ": expected a non-zero vector");
+    }
+    o.threads = a.threads;
+    const auto t0 = std::chrono::steady_clock::now();
+    const TexcoordStats st = bakeTexcoords(grid, field, o);
+    std::fprintf(
+        stderr,
+        "sdftrace bake: texture coordinates (%s helper, centre %.3g,%.3g,%.3g, radius "
+        "%.3g): %zu particles, %.1f steps and %.0f field evaluations each, %zu stopped where "
+        "the field stops rising, %zu at the band's level, %zu unfinished, %zu samples off the band "
+        "projected, %.3f s\n",
+        a.texcoords.c_str(), st.center.x, st.center.y, st.center.z, st.radius, st.particles,
+        st.meanSteps, st.fieldEvaluations, st.ridges, st.atLevel, st.unfinished, st.projected,
+        seconds(t0, std::chrono::steady_clock::now()));
 }
 
 double peakMemoryMiB() {
@@ -163,6 +199,16 @@ int bakeMesh(const BakeArgs& a) {
             bakeExactSamples(bvh, shape, SignMethod::WindingNumber, a.threads, nullptr, true);
         printVerify(a.method.c_str(), verifyBake(r.grid, exact, a.band));
     }
+    if (!a.texcoords.empty()) {
+        const GridView v = r.grid.view();
+        // Particles follow the grid's reconstruction, a distance up to a voxel short of the band
+        // where the sparse grid clamps it.
+        const float stop = r.grid.kind() == GridKind::Sparse
+                               ? (a.band - 1) * r.grid.shape().voxelSize
+                               : static_cast<float>(INFINITY);
+        addTexcoords(
+            a, r.grid, [v](Vec3 p) { return v.sample(p); }, stop);
+    }
     auto t3 = std::chrono::steady_clock::now();
     saveGridFile(r.grid, a.output);
     auto t4 = std::chrono::steady_clock::now();
@@ -198,6 +244,10 @@ int runBake(const BakeArgs& a) {
     if (!isGridFile(a.output))
         throw InputError("--output " + a.output + ": accepted extensions: .sdfg, .vdb");
     checkWritablePath(a.output, "--output");
+    if (!a.texcoords.empty() && std::filesystem::path(a.output).extension() != ".sdfg") {
+        throw InputError("--texcoords: texture coordinates are stored in .sdfg files only, not " +
+                         a.output);
+    }
     if (isMeshFile(a.scene)) return bakeMesh(a);
     Scene scene = parseSceneFile(a.scene);
     // The field's definition (no culling): sampled values should be the field, not a looser bound.
@@ -214,6 +264,7 @@ int runBake(const BakeArgs& a) {
     checkMemory(static_cast<double>(shape.vertexCount()) * sizeof(float), a.resolution);
     auto t0 = std::chrono::steady_clock::now();
     Grid grid = sampleGrid(tape, region, o);
+    addTexcoords(a, grid, [&tape](Vec3 p) { return tape.eval(p); });
     auto t1 = std::chrono::steady_clock::now();
     saveGridFile(grid, a.output);
     auto t2 = std::chrono::steady_clock::now();
@@ -305,6 +356,15 @@ void addBakeCommand(CLI::App& app, Action& action) {
                     "Region x0,y0,z0,x1,y1,z1 (default: the scene's bounds)");
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));
+    cmd->add_option("--texcoords", args->texcoords,
+                    "Also store texture coordinates (.sdfg): particles traced along the gradient "
+                    "to an enclosing sphere or cylinder helper (Liktor §4.2.2, §5.5.2)")
+        ->check(CLI::IsMember({"sphere", "cylinder"}));
+    cmd->add_option("--texcoord-center", args->texcoordCenter,
+                    "The helper's centre x,y,z (default: the centre of the surface's bounds)");
+    cmd->add_option("--texcoord-axis", args->texcoordAxis,
+                    "The helper's axis x,y,z: the sphere's poles, the cylinder's axis (default "
+                    "0,1,0)");
     cmd->callback([&action, args] { action = [args] { return runBake(*args); }; });
 }
 

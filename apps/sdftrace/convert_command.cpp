@@ -1,5 +1,6 @@
 // sdftrace convert in.{sdfg,vdb} out.{sdfg,vdb}
 #include <cstdio>
+#include <filesystem>
 
 #include "commands.h"
 #include "sdftrace/core/error.h"
@@ -18,6 +19,13 @@ int runConvert(const ConvertArgs& a) {
         throw InputError("output " + a.output + ": accepted extensions: .sdfg, .vdb");
     checkWritablePath(a.output, "output");
     Grid g = loadGridFile(a.input);
+    if (g.texcoordKind() != TexcoordKind::None &&
+        std::filesystem::path(a.output).extension() == ".vdb")
+        std::fprintf(
+            stderr,
+            "sdftrace convert: warning: %s has texture coordinates; a .vdb level set holds "
+            "distances only, so they are not written (keep the .sdfg to texture it)\n",
+            a.input.c_str());
     saveGridFile(g, a.output);
     const GridShape& s = g.shape();
     std::fprintf(stderr, "sdftrace convert: %s -> %s, %dx%dx%d cells, voxel %.4g\n",

@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "commands.h"
+#include "sdftrace/bake/texture_coords.h"
 #include "sdftrace/io/grid_file.h"
 
 namespace sdft::cli {
@@ -20,6 +21,11 @@ int runInfo(const std::string& path) {
                 b.hi.x, b.hi.y, b.hi.z);
     std::printf("memory:      %.3f MiB\n", g.memoryBytes() / 1048576.0);
     std::printf("lipschitz:   %.4f (of the trilinear reconstruction)\n", g.lipschitz());
+    if (g.texcoordKind() != TexcoordKind::None)
+        std::printf("texcoords:   projected from a %s helper, 3 floats per sample (%.3f MiB)\n",
+                    texcoordKindName(g.texcoordKind()), g.texcoords().size() * 4 / 1048576.0);
+    else
+        std::printf("texcoords:   none\n");
     if (g.kind() == GridKind::Sparse) {
         size_t in, out, surf;
         g.blockCounts(in, out, surf);

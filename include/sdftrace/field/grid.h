@@ -51,6 +51,11 @@ struct GridView {
     const float* blockSamples = nullptr;  // surface blocks' samples, x fastest inside a block
     const uint64_t* cellMasks = nullptr;  // per surface block: B^3 bits, (B^3 + 63) / 64 words
     float background = 1;  // |value| assumed in non-surface blocks (a lower bound of the distance)
+    // Optional texture coordinates (Liktor 2008, §5.5.2): 3 floats per stored sample, beside the
+    // distance (dense: per vertex; sparse: per surface-block sample), mapped to (u, v) by
+    // `texcoordKind` (TexcoordKind).
+    const float* texcoords = nullptr;
+    int texcoordKind = 0;
 
     SDFT_HOST_DEVICE int wordsPerMask() const {
         return (blockSize * blockSize * blockSize + 63) / 64;
@@ -63,8 +68,24 @@ struct GridView {
     // Trilinear reconstruction inside the grid; outside, a distance bound through the nearest grid
     // point q: sqrt(|p - q|^2 + max(f(q), 0)^2) (the surface lies in the box, which is convex).
     SDFT_HOST_DEVICE float sample(Vec3 p) const;
+    // The cell (i, j, k) holding p, clamped to the grid, and p's position (u, v, w) in it.
+    SDFT_HOST_DEVICE void locate(Vec3 p, int& i, int& j, int& k, float& u, float& v,
+                                 float& w) const;
     // Trilinear interpolation at p, clamped to the grid (no outside extension).
     SDFT_HOST_DEVICE float interpolate(Vec3 p) const;
+    // Indices of the 8 corner samples of cell (i, j, k) into `samples` (dense) or `blockSamples`
+    // (sparse); false for a sparse block without samples.
+    SDFT_HOST_DEVICE bool cornerIndices(int i, int j, int k, size_t idx[8]) const;
+    // (u, v) at p from the interpolated texture-coordinate vectors; false without them.
+    SDFT_HOST_DEVICE bool texcoordsAt(Vec3 p, float& u, float& v) const;
+};
+
+// How a grid's 3-vector texture coordinates map to (u, v): the vectors are the points where
+// particles traced along the gradient left a helper surface, in the helper's frame (axis = z).
+enum class TexcoordKind : int {
+    None = 0,
+    Sphere = 1,    // unit direction: u = longitude / 2 pi + 1/2, v = 1 - colatitude / pi
+    Cylinder = 2,  // (cos, sin, height in [0, 1]): u = angle / 2 pi + 1/2, v = height
 };
 
 // Owner of the buffers a view points into.
@@ -97,6 +118,16 @@ class Grid {
     const std::vector<int32_t>& blockData() const { return m_blockData; }
     const std::vector<float>& blockSamples() const { return m_blockSamples; }
     const std::vector<uint64_t>& cellMasks() const { return m_cellMasks; }
+    // Texture coordinates beside the distances (GridView::texcoords); empty when none.
+    const std::vector<float>& texcoords() const { return m_texcoords; }
+    TexcoordKind texcoordKind() const { return m_texcoordKind; }
+    // Number of stored samples (dense: vertices; sparse: surface-block samples).
+    size_t storedSamples() const {
+        return m_kind == GridKind::Dense ? m_samples.size() : m_blockSamples.size();
+    }
+    // Attaches 3 floats per stored sample; throws InputError naming `source` on a size mismatch or
+    // non-finite values.
+    void setTexcoords(TexcoordKind kind, std::vector<float> texcoords, const std::string& source);
 
     // Rebuilds a sparse grid from its stored buffers (file loading); recomputes the cell masks and
     // the Lipschitz bound. Throws InputError naming `source` if the buffers are inconsistent.
@@ -119,6 +150,8 @@ class Grid {
     std::vector<int32_t> m_blockData;
     std::vector<float> m_blockSamples;
     std::vector<uint64_t> m_cellMasks;
+    std::vector<float> m_texcoords;
+    TexcoordKind m_texcoordKind = TexcoordKind::None;
 };
 
 // ---- inline view functions (GPU-ready) ----
@@ -149,46 +182,91 @@ SDFT_HOST_DEVICE inline float GridView::vertex(int i, int j, int k) const {
 }
 
 SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[8]) const {
-    if (kind == GridKind::Dense) {
-        const size_t sx = 1, sy = shape.cells[0] + 1, sz = sy * (shape.cells[1] + 1);
-        const float* s = samples + k * sz + j * sy + i * sx;
-        c[0] = s[0], c[1] = s[sx], c[2] = s[sy], c[3] = s[sy + sx];
-        c[4] = s[sz], c[5] = s[sz + sx], c[6] = s[sz + sy], c[7] = s[sz + sy + sx];
-        return;
-    }
-    // Jamriška §3: each surface block stores the (B+1)^3 vertices of its own cells.
-    const int B = blockSize;
-    int bi = i / B, bj = j / B, bk = k / B;
-    size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
-    int32_t data = blockData[block];
-    if (data < 0) {
+    // Jamriška §3: each surface block stores the (B+1)^3 vertices of its own cells; other blocks
+    // are constant at +-background by their flag.
+    size_t idx[8];
+    if (!cornerIndices(i, j, k, idx)) {
+        const int B = blockSize;
+        size_t block = (static_cast<size_t>(k / B) * blocks[1] + j / B) * blocks[0] + i / B;
         float v =
             flags[block] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
         for (int n = 0; n < 8; ++n) c[n] = v;
         return;
     }
-    const size_t sx = 1, sy = B + 1, sz = sy * (B + 1);
-    const float* s = blockSamples + static_cast<size_t>(data) * sz * (B + 1) + (k - bk * B) * sz +
-                     (j - bj * B) * sy + (i - bi * B);
-    c[0] = s[0], c[1] = s[sx], c[2] = s[sy], c[3] = s[sy + sx];
-    c[4] = s[sz], c[5] = s[sz + sx], c[6] = s[sz + sy], c[7] = s[sz + sy + sx];
+    const float* s = kind == GridKind::Dense ? samples : blockSamples;
+    for (int n = 0; n < 8; ++n) c[n] = s[idx[n]];
 }
 
-SDFT_HOST_DEVICE inline float GridView::interpolate(Vec3 p) const {
+SDFT_HOST_DEVICE inline void GridView::locate(Vec3 p, int& i, int& j, int& k, float& u, float& v,
+                                              float& w) const {
     Vec3 g = (p - shape.origin) / shape.voxelSize;
     float fx = clampf(g.x, 0.0f, static_cast<float>(shape.cells[0]));
     float fy = clampf(g.y, 0.0f, static_cast<float>(shape.cells[1]));
     float fz = clampf(g.z, 0.0f, static_cast<float>(shape.cells[2]));
-    int i = clampi(static_cast<int>(fx), 0, shape.cells[0] - 1);
-    int j = clampi(static_cast<int>(fy), 0, shape.cells[1] - 1);
-    int k = clampi(static_cast<int>(fz), 0, shape.cells[2] - 1);
-    float u = fx - i, v = fy - j, w = fz - k;
+    i = clampi(static_cast<int>(fx), 0, shape.cells[0] - 1);
+    j = clampi(static_cast<int>(fy), 0, shape.cells[1] - 1);
+    k = clampi(static_cast<int>(fz), 0, shape.cells[2] - 1);
+    u = fx - i, v = fy - j, w = fz - k;
+}
+
+SDFT_HOST_DEVICE inline float GridView::interpolate(Vec3 p) const {
+    int i, j, k;
+    float u, v, w;
+    locate(p, i, j, k, u, v, w);
     float c[8];
     cellCorners(i, j, k, c);
     float c00 = c[0] + (c[1] - c[0]) * u, c10 = c[2] + (c[3] - c[2]) * u;
     float c01 = c[4] + (c[5] - c[4]) * u, c11 = c[6] + (c[7] - c[6]) * u;
     float c0 = c00 + (c10 - c00) * v, c1 = c01 + (c11 - c01) * v;
     return c0 + (c1 - c0) * w;
+}
+
+SDFT_HOST_DEVICE inline bool GridView::cornerIndices(int i, int j, int k, size_t idx[8]) const {
+    size_t base, sy, sz;
+    if (kind == GridKind::Dense) {
+        sy = shape.cells[0] + 1;
+        sz = sy * (shape.cells[1] + 1);
+        base = k * sz + j * sy + i;
+    } else {
+        const int B = blockSize;
+        int bi = i / B, bj = j / B, bk = k / B;
+        size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
+        int32_t data = blockData[block];
+        if (data < 0) return false;
+        sy = B + 1;
+        sz = sy * (B + 1);
+        base = static_cast<size_t>(data) * sz * (B + 1) + (k - bk * B) * sz + (j - bj * B) * sy +
+               (i - bi * B);
+    }
+    idx[0] = base, idx[1] = base + 1, idx[2] = base + sy, idx[3] = base + sy + 1;
+    idx[4] = base + sz, idx[5] = base + sz + 1, idx[6] = base + sz + sy;
+    idx[7] = base + sz + sy + 1;
+    return true;
+}
+
+SDFT_HOST_DEVICE inline bool GridView::texcoordsAt(Vec3 p, float& u, float& v) const {
+    if (!texcoords || texcoordKind == 0) return false;
+    int i, j, k;
+    float a, b, c;
+    locate(p, i, j, k, a, b, c);
+    size_t idx[8];
+    if (!cornerIndices(i, j, k, idx)) return false;
+    Vec3 t(0.0f);
+    for (int n = 0; n < 8; ++n) {
+        float w = ((n & 1) ? a : 1 - a) * ((n & 2) ? b : 1 - b) * ((n & 4) ? c : 1 - c);
+        const float* q = texcoords + 3 * idx[n];
+        t += Vec3(q[0], q[1], q[2]) * w;
+    }
+    constexpr float kInvTwoPi = 0.159154943f, kInvPi = 0.318309886f;
+    u = 0.5f + std::atan2(t.y, t.x) * kInvTwoPi;
+    if (texcoordKind == static_cast<int>(TexcoordKind::Sphere)) {
+        float len = length(t);
+        if (!(len > 0)) return false;
+        v = 1.0f - std::acos(clampf(t.z / len, -1.0f, 1.0f)) * kInvPi;
+    } else {
+        v = t.z;
+    }
+    return true;
 }
 
 SDFT_HOST_DEVICE inline float GridView::sample(Vec3 p) const {

@@ -1,5 +1,6 @@
-// Gradient noise (Perlin 2002, "improved noise") and its fractal sum, for displacement and later
-// for procedural textures. Header-only, GPU-ready: the permutation table is a constexpr array.
+// Gradient noise (Perlin 2002, "improved noise") and its fractal sum, for displacement and
+// procedural textures (Liktor 2008, §5.5.1). Header-only, GPU-ready: the permutation table is a
+// constexpr array.
 #pragma once
 
 #include <array>
@@ -85,6 +86,18 @@ SDFT_HOST_DEVICE inline float fbm(Vec3 p, int octaves, float gain) {
     float sum = 0, amp = 1;
     for (int i = 0; i < octaves; ++i) {
         sum += amp * perlin(p);
+        p = p * 2.0f;
+        amp *= gain;
+    }
+    return sum;
+}
+
+// Perlin's turbulence (Perlin 1985): sum_i gain^i |perlin(p * 2^i)|, i < octaves; the sharp
+// creases of |noise| at every scale make veins (marble) and flames.
+SDFT_HOST_DEVICE inline float turbulence(Vec3 p, int octaves, float gain) {
+    float sum = 0, amp = 1;
+    for (int i = 0; i < octaves; ++i) {
+        sum += amp * std::fabs(perlin(p));
         p = p * 2.0f;
         amp *= gain;
     }

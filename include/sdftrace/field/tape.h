@@ -56,10 +56,11 @@ enum class Op : uint8_t {
 struct Instr {
     Op op;
     uint16_t out = 0, a = 0, b = 0;
-    uint32_t k = 0;         // offset of this instruction's constants
-    int32_t material = -1;  // for primitives: the material of the surface they make
-    uint32_t jump = 0;      // CullIfFar: index of the first instruction after the union step
-    int32_t cull = -1;      // CullIfFar and the Union it guards: the lane-mask slot in batches
+    uint32_t k = 0;              // offset of this instruction's constants
+    int32_t material = -1;       // for primitives: the material of the surface they make
+    uint16_t materialPoint = 0;  // for primitives: the point register of the material's frame
+    uint32_t jump = 0;           // CullIfFar: index of the first instruction after the union step
+    int32_t cull = -1;           // CullIfFar and the Union it guards: the lane-mask slot in batches
 };
 
 struct CompileOptions {
@@ -74,10 +75,17 @@ struct MaterialBlend {
     static constexpr int kMax = 4;
     int id[kMax] = {-1, -1, -1, -1};
     float weight[kMax] = {0, 0, 0, 0};
+    // Per entry, for textures: the point in the frame of the node that assigned the material
+    // (inside that object's own transforms), and texture coordinates where the surface comes
+    // from a grid that stores them (Liktor 2008, §5.5.2).
+    Vec3 local[kMax];
+    float u[kMax] = {0, 0, 0, 0}, v[kMax] = {0, 0, 0, 0};
+    bool hasUv[kMax] = {false, false, false, false};
     int count = 0;
 
-    static MaterialBlend single(int material);
-    // (1-t) * a + t * b, keeping the kMax heaviest entries.
+    static MaterialBlend single(int material, Vec3 local = Vec3(0.0f));
+    // (1-t) * a + t * b, keeping the kMax heaviest entries; entries of one material average
+    // their points and coordinates.
     static MaterialBlend mix(const MaterialBlend& a, const MaterialBlend& b, float t);
 };
 

@@ -10,7 +10,9 @@
 
 namespace sdft {
 
-constexpr uint32_t kSdfgVersion = 1;
+// Version 1: distances only. Version 2 appends texture coordinates (Liktor 2008, §5.5.2); it is
+// written only for grids that carry them, and both versions are read.
+constexpr uint32_t kSdfgVersion = 2;
 
 void saveSdfg(const Grid& grid, const std::string& path);  // atomic (temporary name + rename)
 Grid loadSdfg(const std::string& path);

@@ -20,6 +20,7 @@ struct Material {
     Kind kind = Kind::Plastic;
     float ior = 1.5f;          // dielectric: index of refraction (outside: 1)
     float roughness = -1;      // path tracer: GGX alpha; < 0: from shininess
+    int colorTexture = -1;     // index into Scene::textures replacing `color`; -1: none
     Vec3 absorption{0, 0, 0};  // dielectric: Beer-Lambert coefficients per unit length
 };
 

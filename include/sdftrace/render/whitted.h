@@ -39,7 +39,7 @@ class WhittedTracer {
                        WhittedStats& stats) const;
 
     // The material at p (the blend's heaviest kind, mixed colours).
-    Material materialAt(Vec3 p) const;
+    Material materialAt(Vec3 p, Vec3 n) const;
 
   private:
     Vec3 traceOutside(Vec3 origin, Vec3 d, int reflections, int refractions, float offset,

@@ -10,6 +10,7 @@
 #include "sdftrace/render/lighting.h"
 #include "sdftrace/render/shadow_map.h"
 #include "sdftrace/render/soft_shadow.h"
+#include "sdftrace/render/texture.h"
 #include "sdftrace/trace/grid_tracer.h"
 #include "sdftrace/trace/trace_options.h"
 
@@ -46,11 +47,11 @@ struct RenderSettings {
     int maxReflections = 2, maxRefractions = 8;
     bool dynamicEpsilon = true;
     float globalEpsilon = 1e-3f;
-    bool convexBounds = true;       // Keinert §3.5 for rays inside convex objects
+    bool convexBounds = true;  // Keinert §3.5 for rays inside convex objects
     // The integrator: direct lighting (the tile renderer) or the path tracer (path_tracer.h).
     bool pathTracing = false;
-    int samplesPerPixel = 16;  // path tracer
-    int maxDepth = 5;          // path tracer: scattering events per path
+    int samplesPerPixel = 16;       // path tracer
+    int maxDepth = 5;               // path tracer: scattering events per path
     uint32_t frame = 0;             // seeds the per-pixel jitter of soft shadows and light samples
     float pixelJitter[2] = {0, 0};  // primary rays through (x + 0.5 + jx, y + 0.5 + jy)
     float maxDistance = 100.0f;     // t_max of primary rays (the scene bounds clip it further)
@@ -69,6 +70,8 @@ struct RenderSettings {
 struct Scene {
     NodePtr root;
     std::vector<Material> materials;
+    std::vector<Texture> textures;     // referenced by materials
+    std::vector<TextureImage> images;  // decoded image files, referenced by textures
     Lighting lighting;
     CameraDesc camera;
     RenderSettings settings;

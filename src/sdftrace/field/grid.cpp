@@ -123,7 +123,29 @@ GridView Grid::view() const {
     v.blockSamples = m_blockSamples.data();
     v.cellMasks = m_cellMasks.data();
     v.background = m_background;
+    if (!m_texcoords.empty()) {
+        v.texcoords = m_texcoords.data();
+        v.texcoordKind = static_cast<int>(m_texcoordKind);
+    }
     return v;
+}
+
+void Grid::setTexcoords(TexcoordKind kind, std::vector<float> texcoords,
+                        const std::string& source) {
+    if (kind == TexcoordKind::None) {
+        m_texcoords.clear();
+        m_texcoordKind = kind;
+        return;
+    }
+    if (texcoords.size() != 3 * storedSamples()) {
+        throw InputError(source + ": " + std::to_string(texcoords.size()) +
+                         " texture-coordinate values for " + std::to_string(storedSamples()) +
+                         " samples; expected 3 per sample");
+    }
+    for (float t : texcoords)
+        if (!std::isfinite(t)) throw InputError(source + ": non-finite texture coordinate");
+    m_texcoords = std::move(texcoords);
+    m_texcoordKind = kind;
 }
 
 namespace {

@@ -53,6 +53,7 @@ class Compiler {
         in.b = b;
         in.k = k;
         in.material = material;
+        in.materialPoint = m_materialPoint;
         m_instrs.push_back(in);
     }
     uint16_t emitUnion(const Node& n, uint16_t point, int material);
@@ -74,6 +75,9 @@ class Compiler {
     std::vector<uint16_t> m_freeScalar, m_freePoint;
     int m_nextScalar = 0;
     int m_nextPoint = 1;  // point register 0 is the input point
+    // The point register of the node that assigned the current material (its frame is the
+    // textures' frame); live while its subtree is emitted.
+    uint16_t m_materialPoint = 0;
 };
 
 static_assert(static_cast<int>(Op::Grid) - static_cast<int>(Op::Sphere) ==
@@ -87,7 +91,16 @@ Op primitiveOp(NodeKind kind) {
 }
 
 uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
-    if (n.material >= 0) material = n.material;
+    if (n.material >= 0) {
+        material = n.material;
+        const uint16_t outer = m_materialPoint;
+        m_materialPoint = point;
+        Node inner = n;
+        inner.material = -1;
+        const uint16_t r = emit(inner, point, material);
+        m_materialPoint = outer;
+        return r;
+    }
     if (n.kind == NodeKind::Grid) {
         uint16_t out = allocScalar();
         m_grids.push_back(n.grid);

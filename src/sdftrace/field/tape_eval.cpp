@@ -106,10 +106,11 @@ inline float displacement(Vec3 p, const float* k) {
 }
 }  // namespace
 
-MaterialBlend MaterialBlend::single(int material) {
+MaterialBlend MaterialBlend::single(int material, Vec3 local) {
     MaterialBlend b;
     b.id[0] = material;
     b.weight[0] = 1;
+    b.local[0] = local;
     b.count = 1;
     return b;
 }
@@ -117,33 +118,48 @@ MaterialBlend MaterialBlend::single(int material) {
 MaterialBlend MaterialBlend::mix(const MaterialBlend& a, const MaterialBlend& b, float t) {
     if (t <= 0) return a;
     if (t >= 1) return b;
-    int ids[2 * kMax];
-    float ws[2 * kMax];
+    struct Entry {
+        int id;
+        float w;
+        Vec3 local;
+        float u, v, uvWeight;
+    };
+    Entry e[2 * kMax];
     int n = 0;
-    auto add = [&](int id, float w) {
-        for (int i = 0; i < n; ++i) {
-            if (ids[i] == id) {
-                ws[i] += w;
+    auto add = [&](const MaterialBlend& m, int i, float w) {
+        const float uw = m.hasUv[i] ? w : 0.0f;
+        for (int j = 0; j < n; ++j) {
+            if (e[j].id == m.id[i]) {
+                e[j].local += m.local[i] * w;
+                e[j].u += m.u[i] * uw;
+                e[j].v += m.v[i] * uw;
+                e[j].uvWeight += uw;
+                e[j].w += w;
                 return;
             }
         }
-        ids[n] = id;
-        ws[n++] = w;
+        e[n++] = {m.id[i], w, m.local[i] * w, m.u[i] * uw, m.v[i] * uw, uw};
     };
-    for (int i = 0; i < a.count; ++i) add(a.id[i], a.weight[i] * (1 - t));
-    for (int i = 0; i < b.count; ++i) add(b.id[i], b.weight[i] * t);
+    for (int i = 0; i < a.count; ++i) add(a, i, a.weight[i] * (1 - t));
+    for (int i = 0; i < b.count; ++i) add(b, i, b.weight[i] * t);
     // Keep the heaviest kMax entries, renormalized.
     MaterialBlend out;
     float total = 0;
     for (int slot = 0; slot < kMax && slot < n; ++slot) {
         int best = slot;
         for (int i = slot + 1; i < n; ++i)
-            if (ws[i] > ws[best]) best = i;
-        std::swap(ids[slot], ids[best]);
-        std::swap(ws[slot], ws[best]);
-        out.id[slot] = ids[slot];
-        out.weight[slot] = ws[slot];
-        total += ws[slot];
+            if (e[i].w > e[best].w) best = i;
+        std::swap(e[slot], e[best]);
+        const Entry& x = e[slot];
+        out.id[slot] = x.id;
+        out.weight[slot] = x.w;
+        out.local[slot] = x.w > 0 ? x.local / x.w : Vec3(0.0f);
+        out.hasUv[slot] = x.uvWeight > 0;
+        if (out.hasUv[slot]) {
+            out.u[slot] = x.u / x.uvWeight;
+            out.v[slot] = x.v / x.uvWeight;
+        }
+        total += x.w;
         out.count = slot + 1;
     }
     for (int i = 0; i < out.count; ++i) out.weight[i] /= total;
@@ -170,7 +186,15 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
             s[in.out] = op == Op::Grid
                             ? gridValue(m_gridViews[static_cast<size_t>(k[0])], pts[in.a])
                             : evalPrimitive(op, pts[in.a], k);
-            if constexpr (kMaterial) mats[in.out] = MaterialBlend::single(in.material);
+            if constexpr (kMaterial) {
+                mats[in.out] = MaterialBlend::single(in.material, pts[in.materialPoint]);
+                if (op == Op::Grid) {
+                    const GridView& g = m_gridViews[static_cast<size_t>(k[0])];
+                    if (g.texcoords)
+                        mats[in.out].hasUv[0] =
+                            g.texcoordsAt(pts[in.a], mats[in.out].u[0], mats[in.out].v[0]);
+                }
+            }
         } else if (op <= Op::Morph) {
             float h;
             s[in.out] = evalBinary(op, s[in.a], s[in.b], k, h);

@@ -91,6 +91,31 @@ TEST(Tape, MaterialFollowsTheNearestSurfaceAndBlends) {
     EXPECT_NEAR(mid.weight[0] + mid.weight[1], 1.0f, 1e-6f);
 }
 
+// Textures live in the frame of the node that assigned the material: the blend carries the point
+// there, inside that node's transforms (and the outer ones), but not the transforms below it.
+TEST(Tape, MaterialCarriesThePointInTheMaterialsFrame) {
+    const Mat3 R = rotationAxisAngle(normalize(Vec3(1, 2, 3)), 40.0f);
+    // translate(rotate(scale(material(union(sphere, translate(box))))))
+    NodePtr inner =
+        node::unite({node::sphere(0.5f), node::translate(node::box(Vec3(0.2f)), Vec3(0.6f, 0, 0))});
+    NodePtr object = node::translate(
+        node::rotate(node::scale(node::withMaterial(inner, 3), Vec3(2.0f)), R), {1, -2, 0.5f});
+    Tape tape = compileTape(node::unite({object, node::withMaterial(node::sphere(0.1f), 1)}));
+    testing::Rng rng(99);
+    int checked = 0;
+    for (int i = 0; i < 200; ++i) {
+        const Vec3 p = Vec3(1, -2, 0.5f) + rng.inCube(1.2f);
+        const MaterialBlend b = tape.evalMaterial(p);
+        if (b.id[0] != 3) continue;
+        ++checked;
+        // The object's frame: undo translate, rotate (R^T), scale.
+        const Vec3 q = p - Vec3(1, -2, 0.5f);
+        const Vec3 expected = (R.transposed() * q) / 2.0f;
+        for (int a = 0; a < 3; ++a) ASSERT_NEAR(b.local[0][a], expected[a], 1e-5f) << i;
+    }
+    EXPECT_GT(checked, 100);
+}
+
 // |f(a) - f(b)| <= L |a - b| on random pairs, far apart and very close (local slope).
 void expectLipschitz(const NodePtr& n, const char* what, uint32_t seed) {
     // The field's definition, without the culling shortcut (which is discontinuous by design).

@@ -54,7 +54,8 @@ void saveSdfg(const Grid& grid, const std::string& path) {
     const GridShape& s = grid.shape();
     Header h{};
     std::memcpy(h.magic, kMagic, 4);
-    h.version = kSdfgVersion;
+    const bool tex = !grid.texcoords().empty();
+    h.version = tex ? 2 : 1;
     h.kind = static_cast<uint32_t>(grid.kind());
     for (int a = 0; a < 3; ++a) {
         h.cells[a] = s.cells[a];
@@ -72,6 +73,12 @@ void saveSdfg(const Grid& grid, const std::string& path) {
         sum = fnv1a64(grid.flags().data(), grid.flags().size(), sum);
         sum = fnv1a64(grid.blockSamples().data(), grid.blockSamples().size() * sizeof(float), sum);
     }
+    const uint32_t texHeader[2] = {static_cast<uint32_t>(grid.texcoordKind()), 0};
+    if (tex) {
+        h.payloadBytes += sizeof texHeader + grid.texcoords().size() * sizeof(float);
+        sum = fnv1a64(texHeader, sizeof texHeader, sum);
+        sum = fnv1a64(grid.texcoords().data(), grid.texcoords().size() * sizeof(float), sum);
+    }
     h.checksum = sum;
 
     AtomicOutput out(path);
@@ -87,6 +94,11 @@ void saveSdfg(const Grid& grid, const std::string& path) {
                        grid.flags().size();
         ok = ok && std::fwrite(grid.blockSamples().data(), sizeof(float),
                                grid.blockSamples().size(), file.f) == grid.blockSamples().size();
+    }
+    if (tex) {
+        ok = ok && std::fwrite(texHeader, sizeof texHeader, 1, file.f) == 1;
+        ok = ok && std::fwrite(grid.texcoords().data(), sizeof(float), grid.texcoords().size(),
+                               file.f) == grid.texcoords().size();
     }
     ok = std::fclose(file.f) == 0 && ok;
     file.f = nullptr;
@@ -107,11 +119,14 @@ Grid loadSdfg(const std::string& path) {
     }
     if (std::memcmp(h.magic, kMagic, 4) != 0)
         throw InputError(path + ": not an .sdfg file (bad magic)");
-    if (h.version != kSdfgVersion) {
+    if (h.version < 1 || h.version > kSdfgVersion) {
         throw InputError(path + ": .sdfg version " + std::to_string(h.version) +
-                         " is not supported (this build reads version " +
+                         " is not supported (this build reads versions 1 to " +
                          std::to_string(kSdfgVersion) + ")");
     }
+    // Version 2: after the distances, u32 kind, u32 reserved, 3 floats per stored sample.
+    const bool tex = h.version == 2;
+    const uint64_t texHeaderBytes = tex ? 8 : 0, floatsPerSample = tex ? 4 : 1;
     if (h.kind > 1)
         throw InputError(path + ": unknown grid kind " + std::to_string(h.kind) +
                          " (accepted: 0 dense, 1 sparse)");
@@ -136,7 +151,8 @@ Grid loadSdfg(const std::string& path) {
     uint64_t expected = 0;
     uint64_t numBlocks = 0, perBlockBytes = 0;
     if (kind == GridKind::Dense) {
-        expected = static_cast<uint64_t>(s.vertexCount()) * sizeof(float);
+        expected = static_cast<uint64_t>(s.vertexCount()) * sizeof(float) * floatsPerSample +
+                   texHeaderBytes;
     } else {
         if (h.blockSize != 4 && h.blockSize != 8)
             throw InputError(path + ": block size " + std::to_string(h.blockSize) +
@@ -147,8 +163,10 @@ Grid loadSdfg(const std::string& path) {
             numBlocks = (a == 0 ? 1 : numBlocks) * ((s.cells[a] + h.blockSize - 1) / h.blockSize);
         perBlockBytes = static_cast<uint64_t>(h.blockSize + 1) * (h.blockSize + 1) *
                         (h.blockSize + 1) * sizeof(float);
-        if (h.payloadBytes < numBlocks || (h.payloadBytes - numBlocks) % perBlockBytes != 0 ||
-            (h.payloadBytes - numBlocks) / perBlockBytes > numBlocks) {
+        perBlockBytes *= floatsPerSample;
+        if (h.payloadBytes < numBlocks + texHeaderBytes ||
+            (h.payloadBytes - numBlocks - texHeaderBytes) % perBlockBytes != 0 ||
+            (h.payloadBytes - numBlocks - texHeaderBytes) / perBlockBytes > numBlocks) {
             throw InputError(path + ": corrupt header: payload size does not fit the block layout");
         }
         expected = h.payloadBytes;
@@ -170,26 +188,41 @@ Grid loadSdfg(const std::string& path) {
             throw InputError(path + ": truncated payload");
     };
     uint64_t sum = 0xcbf29ce484222325ull;
+    std::vector<float> samples;
+    std::vector<uint8_t> flags;
     if (kind == GridKind::Dense) {
-        std::vector<float> samples(s.vertexCount());
-        readExact(samples.data(), expected);
-        sum = fnv1a64(samples.data(), expected, sum);
-        if (sum != h.checksum) throw InputError(path + ": corrupt: payload checksum mismatch");
-        for (float v : samples)
-            if (!std::isfinite(v)) throw InputError(path + ": corrupt: non-finite sample");
-        return Grid::dense(s, std::move(samples));
+        samples.resize(s.vertexCount());
+    } else {
+        flags.resize(numBlocks);
+        readExact(flags.data(), numBlocks);
+        sum = fnv1a64(flags.data(), flags.size(), sum);
+        samples.resize((expected - numBlocks - texHeaderBytes) / floatsPerSample / sizeof(float));
     }
-    std::vector<uint8_t> flags(numBlocks);
-    readExact(flags.data(), numBlocks);
-    std::vector<float> blockSamples((expected - numBlocks) / sizeof(float));
-    readExact(blockSamples.data(), expected - numBlocks);
-    sum = fnv1a64(flags.data(), flags.size(), sum);
-    sum = fnv1a64(blockSamples.data(), blockSamples.size() * sizeof(float), sum);
+    readExact(samples.data(), samples.size() * sizeof(float));
+    sum = fnv1a64(samples.data(), samples.size() * sizeof(float), sum);
+    uint32_t texHeader[2] = {0, 0};
+    std::vector<float> texcoords;
+    if (tex) {
+        readExact(texHeader, sizeof texHeader);
+        texcoords.resize(3 * samples.size());
+        readExact(texcoords.data(), texcoords.size() * sizeof(float));
+        sum = fnv1a64(texHeader, sizeof texHeader, sum);
+        sum = fnv1a64(texcoords.data(), texcoords.size() * sizeof(float), sum);
+    }
     if (sum != h.checksum) throw InputError(path + ": corrupt: payload checksum mismatch");
-    for (float v : blockSamples)
+    for (float v : samples)
         if (!std::isfinite(v)) throw InputError(path + ": corrupt: non-finite sample");
-    return Grid::sparseFromBuffers(s, static_cast<int>(h.blockSize), h.background, std::move(flags),
-                                   std::move(blockSamples), path);
+    if (tex && texHeader[0] != static_cast<uint32_t>(TexcoordKind::Sphere) &&
+        texHeader[0] != static_cast<uint32_t>(TexcoordKind::Cylinder)) {
+        throw InputError(path + ": unknown texture-coordinate kind " +
+                         std::to_string(texHeader[0]) + " (accepted: 1 sphere, 2 cylinder)");
+    }
+    Grid grid = kind == GridKind::Dense
+                    ? Grid::dense(s, std::move(samples))
+                    : Grid::sparseFromBuffers(s, static_cast<int>(h.blockSize), h.background,
+                                              std::move(flags), std::move(samples), path);
+    if (tex) grid.setTexcoords(static_cast<TexcoordKind>(texHeader[0]), std::move(texcoords), path);
+    return grid;
 }
 
 }  // namespace sdft

@@ -55,6 +55,37 @@ TEST(Sdfg, RoundTripIsExactForBothLayouts) {
     }
 }
 
+// Version 2 stores texture coordinates beside the distances; grids without them stay version 1.
+TEST(Sdfg, TextureCoordinatesRoundTripAsVersionTwo) {
+    for (GridKind kind : {GridKind::Dense, GridKind::Sparse}) {
+        Grid g = makeGrid(kind);
+        std::string path = tempPath("v1.sdfg");
+        saveSdfg(g, path);
+        uint32_t version = 0;
+        std::memcpy(&version, readAll(path).data() + 4, 4);
+        EXPECT_EQ(version, 1u);
+        std::vector<float> tex(3 * g.storedSamples());
+        for (size_t i = 0; i < tex.size(); ++i) tex[i] = 0.001f * static_cast<float>(i % 997);
+        g.setTexcoords(TexcoordKind::Cylinder, tex, "test");
+        saveSdfg(g, path);
+        std::memcpy(&version, readAll(path).data() + 4, 4);
+        EXPECT_EQ(version, 2u);
+        Grid back = loadSdfg(path);
+        EXPECT_EQ(back.texcoordKind(), TexcoordKind::Cylinder);
+        EXPECT_EQ(back.texcoords(), tex);
+        EXPECT_EQ(back.samples(), g.samples());
+        EXPECT_EQ(back.blockSamples(), g.blockSamples());
+        // A flipped texture-coordinate byte fails the checksum.
+        std::string bytes = readAll(path);
+        bytes[bytes.size() - 5] ^= 0x10;
+        writeAll(path, bytes);
+        EXPECT_THROW(loadSdfg(path), InputError);
+        std::filesystem::remove(path);
+    }
+    Grid g = makeGrid(GridKind::Dense);
+    EXPECT_THROW(g.setTexcoords(TexcoordKind::Sphere, std::vector<float>(5), "test"), InputError);
+}
+
 void expectRejected(const std::string& bytes, const std::string& fragment) {
     std::string path = tempPath("bad.sdfg");
     writeAll(path, bytes);

@@ -195,7 +195,7 @@ Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* dept
             if (depthOut) *depthOut = t;
             if (normalOut) *normalOut = n;
         }
-        const Material m = inside ? medium : m_whitted.materialAt(p);
+        const Material m = inside ? medium : m_whitted.materialAt(p, n);
         const Vec3 wo = -ray.direction;
         const float eps = epsilon(value);
         if (m.kind == Material::Kind::Dielectric) {

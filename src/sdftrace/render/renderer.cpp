@@ -250,7 +250,7 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     s.radiance.assign(hits, Vec3(0.0f));
     std::vector<Material> mats(hits);
     for (int h = 0; h < hits; ++h) {
-        mats[h] = m_whitted->materialAt(s.hitPoint[h]);
+        mats[h] = m_whitted->materialAt(s.hitPoint[h], s.hitNormal[h]);
         s.radiance[h] = m_scene.lighting.ambient * mats[h].color;
     }
     // Keinert-style SDF ambient occlusion scales the ambient term.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "sdftrace/render/light_sample.h"
+#include "sdftrace/render/material_at.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/trace/field_tracer.h"
 
@@ -79,31 +80,8 @@ WhittedTracer::WhittedTracer(const Scene& scene, const Tape& tape, Visibility vi
     }
 }
 
-Material WhittedTracer::materialAt(Vec3 p) const {
-    const MaterialBlend b = m_tape.evalMaterial(p);
-    const auto& table = m_scene.materials;
-    Material m;
-    m.color = Vec3(0.0f);
-    m.diffuse = m.specular = m.shininess = 0;
-    m.absorption = Vec3(0.0f);
-    m.ior = 0;
-    float heaviest = -1;
-    for (int i = 0; i < b.count; ++i) {
-        const Material& src = table[std::clamp(b.id[i], 0, static_cast<int>(table.size()) - 1)];
-        const float w = b.weight[i];
-        m.color += src.color * w;
-        m.diffuse += src.diffuse * w;
-        m.specular += src.specular * w;
-        m.shininess += src.shininess * w;
-        m.ior += src.ior * w;
-        m.absorption += src.absorption * w;
-        if (w > heaviest) {
-            heaviest = w;
-            m.kind = src.kind;
-            m.name = src.name;
-        }
-    }
-    return m;
+Material WhittedTracer::materialAt(Vec3 p, Vec3 n) const {
+    return sdft::materialAt(m_scene, m_tape, p, n);
 }
 
 // Keinert et al. 2014, §3.3.
@@ -181,7 +159,8 @@ Vec3 WhittedTracer::traceOutside(Vec3 origin, Vec3 d, int reflections, int refra
     if (!r.hit) return m_scene.lighting.background;
     if (r.t <= 2 * eps) ++stats.selfIntersections;
     const Vec3 p = origin + d * r.t;
-    return shade(p, normalAt(p), r.value, d, materialAt(p), reflections, refractions, stats);
+    const Vec3 n = normalAt(p);
+    return shade(p, n, r.value, d, materialAt(p, n), reflections, refractions, stats);
 }
 
 bool WhittedTracer::exitDistance(Vec3 origin, Vec3 d, float& dist, float& value,

@@ -5,7 +5,10 @@
 #include <vector>
 
 #include "sdftrace/bake/mesh_bake.h"
+#include "sdftrace/bake/texture_coords.h"
 #include "sdftrace/field/noise.h"
+#include "sdftrace/field/sample_grid.h"
+#include "sdftrace/field/tape.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_file.h"
 
@@ -182,9 +185,41 @@ std::shared_ptr<const Grid> bakeMeshObject(const Reader& r, NodeContext& ctx) {
     }
 }
 
+// {"type": "bake", "child": {...}}: the child's field sampled into a sparse grid on load,
+// optionally with projected texture coordinates (Liktor 2008, §5.5.2).
+std::shared_ptr<const Grid> bakeSubtree(const Reader& r, NodeContext& ctx) {
+    const NodePtr child = parseSingleChild(r, ctx);
+    const Tape tape = compileTape(child, {.boundsCulling = false});
+    if (!tape.bounds().finite() || tape.bounds().empty())
+        r.failKey("child", "unbounded (a plane or a complement?); a bake needs a bounded field");
+    SampleOptions o;
+    o.resolution = r.integer("resolution", 96, 8, 1024);
+    o.bandVoxels = r.number(
+        "band", 3.0f, [](double v) { return v >= 2 && v <= 64; }, "a band in [2, 64] voxels");
+    Grid grid = sampleGrid(tape, tape.bounds(), o);
+    if (r.has("texcoords")) {
+        TexcoordOptions t;
+        const std::string helper = r.string("texcoords");
+        if (!parseTexcoordKind(helper, t.helper))
+            r.failKey("texcoords", "unknown helper '" + helper + "'; accepted: sphere, cylinder");
+        t.axis = r.vec3("texcoord_axis", t.axis);
+        if (!(length(t.axis) > 0)) r.failKey("texcoord_axis", "expected a non-zero vector");
+        if (r.has("texcoord_center")) {
+            t.center = r.vec3("texcoord_center");
+            t.autoCenter = false;
+        }
+        bakeTexcoords(
+            grid, [&tape](Vec3 p) { return tape.eval(p); }, t);
+    } else if (r.has("texcoord_axis") || r.has("texcoord_center")) {
+        r.fail("texcoord_axis and texcoord_center need \"texcoords\": \"sphere\" or \"cylinder\"");
+    }
+    return std::make_shared<const Grid>(std::move(grid));
+}
+
 // The keys every object may carry: inline transforms, then the material.
+// The material goes on the object inside its transforms, so that its textures see the object's
+// own frame (texture.h); the transforms pass it on unchanged.
 NodePtr finishNode(const Reader& r, NodePtr n, const NodeContext& mats) {
-    n = applyInlineTransforms(r, n);
     if (r.has("material")) {
         std::string name = r.string("material");
         auto it = mats.materials.find(name);
@@ -195,7 +230,7 @@ NodePtr finishNode(const Reader& r, NodePtr n, const NodeContext& mats) {
         }
         n = node::withMaterial(n, it->second);
     }
-    return n;
+    return applyInlineTransforms(r, n);
 }
 
 }  // namespace
@@ -314,6 +349,9 @@ NodePtr parseNode(const Reader& r, NodeContext& mats) {
             "weight", [](double v) { return v >= 0 && v <= 1; }, "a weight in [0, 1]");
         auto c = parseChildren(r, mats, 2, 2);
         n = node::morph(c[0], c[1], w);
+    } else if (type == "bake") {
+        allow({"child", "resolution", "band", "texcoords", "texcoord_axis", "texcoord_center"});
+        n = node::grid(bakeSubtree(r, mats));
     } else if (type == "translate") {
         allow({"child", "offset"});
         n = node::translate(parseSingleChild(r, mats), r.vec3("offset"));

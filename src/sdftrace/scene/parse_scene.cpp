@@ -10,6 +10,7 @@
 
 #include "json_reader.h"
 #include "parse_node.h"
+#include "parse_texture.h"
 #include "sdftrace/render/film.h"
 #include "sdftrace/scene/option_names.h"
 
@@ -43,7 +44,8 @@ void parseCamera(const Reader& r, CameraDesc& cam) {
     }
 }
 
-Material parseMaterial(const Reader& r, const std::string& name) {
+Material parseMaterial(const Reader& r, const std::string& name, Scene& scene,
+                       TextureContext& textures) {
     r.requireObject("a material");
     r.allowKeys(
         {"type", "color", "diffuse", "specular", "shininess", "roughness", "ior", "absorption"});
@@ -66,7 +68,7 @@ Material parseMaterial(const Reader& r, const std::string& name) {
         "an index of refraction in [1, 10]");
     m.absorption = r.vec3("absorption", m.absorption, nonNegative,
                           "non-negative absorption coefficients per unit length");
-    m.color = r.vec3("color", m.color, nonNegative, "non-negative linear RGB");
+    m.colorTexture = parseColorInput(r, "color", m.color, scene, textures);
     m.diffuse = r.number("diffuse", m.diffuse, nonNegative, "a non-negative weight");
     m.specular = r.number("specular", m.specular, nonNegative, "a non-negative weight");
     m.shininess = r.number(
@@ -246,21 +248,29 @@ void parseRender(const Reader& r, RenderSettings& s) {
 Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {
     Reader r(root, source, "");
     r.requireObject("a scene");
-    r.allowKeys({"camera", "lights", "ambient", "background", "environment", "materials", "objects",
-                 "render"});
+    r.allowKeys({"camera", "lights", "ambient", "background", "environment", "textures",
+                 "materials", "objects", "render"});
     Scene scene;
     scene.materials.push_back(Material{"default"});
     NodeContext context;
     context.baseDir = baseDir;
     std::map<std::string, int>& materialIndex = context.materials;
     materialIndex["default"] = 0;
+    TextureContext textures;
+    textures.baseDir = baseDir;
+    if (r.has("textures")) {
+        Reader t = r.child("textures");
+        t.requireObject("a map from texture names to textures");
+        for (auto it = t.value().begin(); it != t.value().end(); ++it)
+            textures.named[it.key()] = parseTexture(t.child(it.key()), it.key(), scene, textures);
+    }
     if (r.has("materials")) {
         Reader m = r.child("materials");
         m.requireObject("a map from material names to materials");
         for (auto it = m.value().begin(); it != m.value().end(); ++it) {
             int index = static_cast<int>(scene.materials.size());
             if (it.key() == "default") index = 0;
-            Material mat = parseMaterial(m.child(it.key()), it.key());
+            Material mat = parseMaterial(m.child(it.key()), it.key(), scene, textures);
             if (index == 0)
                 scene.materials[0] = mat;
             else
