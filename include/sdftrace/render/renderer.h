@@ -24,6 +24,23 @@ struct RenderStats {
     uint64_t traversalSteps = 0, intersectionTests = 0;
     bool gridTracer = false;
 
+    // Sums the counters of `o` (per-thread or per-tile statistics); not seconds, threads or flags.
+    void add(const RenderStats& o) {
+        primaryRays += o.primaryRays;
+        primaryEvaluations += o.primaryEvaluations;
+        hits += o.hits;
+        fallbacks += o.fallbacks;
+        normalEvaluations += o.normalEvaluations;
+        shadowRays += o.shadowRays;
+        shadowEvaluations += o.shadowEvaluations;
+        aoEvaluations += o.aoEvaluations;
+        secondaryRays += o.secondaryRays;
+        secondaryEvaluations += o.secondaryEvaluations;
+        selfIntersections += o.selfIntersections;
+        traversalSteps += o.traversalSteps;
+        intersectionTests += o.intersectionTests;
+    }
+
     uint64_t totalEvaluations() const {
         return primaryEvaluations + normalEvaluations + shadowEvaluations + aoEvaluations +
                secondaryEvaluations;

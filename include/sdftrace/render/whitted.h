@@ -73,4 +73,10 @@ bool isConvex(const Node& node);
 // cosI (1 under total internal reflection).
 float fresnelDielectric(float cosI, float n1, float n2);
 
+// Refraction of unit d through unit n (facing against d) with eta = n1 / n2; false under total
+// internal reflection.
+bool refract(Vec3 d, Vec3 n, float eta, Vec3& out);
+// Mirror reflection of d about unit n.
+inline Vec3 reflect(Vec3 d, Vec3 n) { return d - n * (2.0f * dot(d, n)); }
+
 }  // namespace sdft

@@ -28,8 +28,9 @@ Material materialAt(const Scene& scene, const Tape& tape, Vec3 p, Vec3 n) {
             in.u = b.u[i];
             in.v = b.v[i];
             if (t.projection != Texture::Projection::Solid || t.kind == Texture::Kind::Image) {
-                // The normal in the object's frame: where its frame maps a small step along n
-                // (exact for the affine transforms objects carry).
+                // The normal in the object's frame: where its frame maps a small step along n.
+                // Exact under rotation and uniform scale; a non-uniform scale tilts it toward
+                // the squashed axis (only the projection's blend weights see that).
                 const float h = 1e-3f * std::max(1.0f, length(p));
                 if (!haveOffset) offset = tape.evalMaterial(p + n * h);
                 haveOffset = true;

@@ -13,6 +13,7 @@
 #include "sdftrace/math/sampling.h"
 #include "sdftrace/render/camera.h"
 #include "sdftrace/render/light_sample.h"
+#include "sdftrace/render/material_at.h"
 #include "sdftrace/render/whitted.h"
 #include "sdftrace/trace/field_tracer.h"
 #include "sdftrace/trace/sphere_tracer.h"
@@ -85,7 +86,7 @@ Vec3 sampleGgx(Vec3 n, Vec3 wo, float alpha, float u1, float u2) {
 class PathTracer {
   public:
     PathTracer(const Scene& scene, const Tape& tape)
-        : m_scene(scene), m_tape(tape), m_camera(scene.camera), m_whitted(scene, tape, nullptr) {
+        : m_scene(scene), m_tape(tape), m_camera(scene.camera) {
         m_primary = scene.settings.trace;
         m_primary.pixelRadius = m_camera.pixelRadius();
         m_secondary = scene.settings.trace;
@@ -101,6 +102,9 @@ class PathTracer {
   private:
     bool trace(const Ray& ray, bool inside, bool primary, float& t, float& value,
                RenderStats& st) const;
+    // Sphere traces ray on f (or -f inside) up to tMax; adds its evaluations to `evaluations`.
+    bool march(const Ray& ray, float tMax, bool inside, const TraceOptions& o, float& t,
+               float& value, uint64_t& evaluations) const;
     Vec3 nextEvent(Vec3 p, Vec3 n, float eps, Vec3 wo, const Plastic& m, Rng& rng,
                    RenderStats& st) const;
     float epsilon(float f) const {
@@ -110,24 +114,27 @@ class PathTracer {
     const Scene& m_scene;
     const Tape& m_tape;
     Camera m_camera;
-    WhittedTracer m_whitted;  // material lookup
     TraceOptions m_primary, m_secondary;
 };
 
-bool PathTracer::trace(const Ray& ray, bool inside, bool primary, float& t, float& value,
-                       RenderStats& st) const {
-    const TraceOptions& o = primary ? m_primary : m_secondary;
+bool PathTracer::march(const Ray& ray, float tMax, bool inside, const TraceOptions& o, float& t,
+                       float& value, uint64_t& evaluations) const {
     SphereTraceState s;
     const float invL = 1.0f / m_tape.lipschitz();
-    sphereTraceBegin(s, ray, 0.0f, m_scene.settings.maxDistance,
-                     inside ? Bounds3::everything() : m_tape.bounds(), o);
+    sphereTraceBegin(s, ray, 0.0f, tMax, inside ? Bounds3::everything() : m_tape.bounds(), o);
     const float sign = inside ? -1.0f : 1.0f;
     while (!s.done()) sphereTraceAdvance(s, sign * m_tape.eval(s.queryPoint()), invL, o);
-    (primary ? st.primaryEvaluations : st.secondaryEvaluations) += s.result.evaluations;
-    if (!primary) ++st.secondaryRays;
+    evaluations += s.result.evaluations;
     t = s.result.t;
     value = s.result.value;
     return s.result.hit;
+}
+
+bool PathTracer::trace(const Ray& ray, bool inside, bool primary, float& t, float& value,
+                       RenderStats& st) const {
+    if (!primary) ++st.secondaryRays;
+    return march(ray, m_scene.settings.maxDistance, inside, primary ? m_primary : m_secondary, t,
+                 value, primary ? st.primaryEvaluations : st.secondaryEvaluations);
 }
 
 // One sampled point of each light, seen from p through a shadow ray that starts at p + n eps.
@@ -143,15 +150,10 @@ Vec3 PathTracer::nextEvent(Vec3 p, Vec3 n, float eps, Vec3 wo, const Plastic& m,
         if (maxComponent3(fcos) <= 0) continue;
         if (m_scene.settings.shadows && light.castShadows && ls.dist > 0) {
             ++st.shadowRays;
-            const Ray shadow{p + n * eps, ls.dir};
-            const TraceOptions& o = m_secondary;
-            SphereTraceState s;
-            const float invL = 1.0f / m_tape.lipschitz();
-            sphereTraceBegin(s, shadow, 0.0f, std::min(ls.dist, m_scene.settings.maxDistance),
-                             m_tape.bounds(), o);
-            while (!s.done()) sphereTraceAdvance(s, m_tape.eval(s.queryPoint()), invL, o);
-            st.shadowEvaluations += s.result.evaluations;
-            if (s.result.hit) continue;
+            float t, value;
+            if (march({p + n * eps, ls.dir}, std::min(ls.dist, m_scene.settings.maxDistance), false,
+                      m_secondary, t, value, st.shadowEvaluations))
+                continue;
         }
         // The direct integrator's light model: pi * scale makes a white Lambertian surface's
         // radiance scale * cos.
@@ -195,7 +197,7 @@ Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* dept
             if (depthOut) *depthOut = t;
             if (normalOut) *normalOut = n;
         }
-        const Material m = inside ? medium : m_whitted.materialAt(p, n);
+        const Material m = inside ? medium : materialAt(m_scene, m_tape, p, n);
         const Vec3 wo = -ray.direction;
         const float eps = epsilon(value);
         if (m.kind == Material::Kind::Dielectric) {
@@ -205,12 +207,10 @@ Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* dept
             const float n1 = entering ? 1.0f : m.ior, n2 = entering ? m.ior : 1.0f;
             const float cosI = std::clamp(dot(wo, nf), 0.0f, 1.0f);
             const float F = fresnelDielectric(cosI, n1, n2);
-            if (rng.uniform() < F) {
-                ray = {p + nf * eps, normalize(ray.direction + nf * (2 * cosI))};
+            Vec3 dir;
+            if (rng.uniform() < F || !refract(ray.direction, nf, n1 / n2, dir)) {
+                ray = {p + nf * eps, reflect(ray.direction, nf)};
             } else {
-                const float eta = n1 / n2;
-                const float k = 1 - eta * eta * (1 - cosI * cosI);
-                const Vec3 dir = normalize(ray.direction * eta + nf * (eta * cosI - std::sqrt(k)));
                 ray = {p - nf * eps, dir};
                 inside = entering;
                 medium = m;
@@ -218,7 +218,7 @@ Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* dept
         } else if (m.kind == Material::Kind::Mirror) {
             const Vec3 nf = dot(n, wo) > 0 ? n : -n;
             beta = beta * m.color;
-            ray = {p + nf * eps, normalize(ray.direction + nf * (2 * dot(wo, nf)))};
+            ray = {p + nf * eps, reflect(ray.direction, nf)};
         } else {
             const Vec3 nf = dot(n, wo) > 0 ? n : -n;
             const Plastic pm = plastic(m);
@@ -279,16 +279,7 @@ RenderStats renderPaths(const Scene& scene, const Tape& tape, Film& film, bool p
         });
     });
     RenderStats total;
-    for (const RenderStats& s : stats) {
-        total.primaryRays += s.primaryRays;
-        total.primaryEvaluations += s.primaryEvaluations;
-        total.hits += s.hits;
-        total.normalEvaluations += s.normalEvaluations;
-        total.shadowRays += s.shadowRays;
-        total.shadowEvaluations += s.shadowEvaluations;
-        total.secondaryRays += s.secondaryRays;
-        total.secondaryEvaluations += s.secondaryEvaluations;
-    }
+    for (const RenderStats& s : stats) total.add(s);
     total.threads = threads;
     total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return total;

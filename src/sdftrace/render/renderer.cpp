@@ -592,22 +592,7 @@ RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progre
     });
 
     RenderStats total;
-    for (const TileScratch& s : scratch) {
-        const RenderStats& t = s.stats;
-        total.primaryRays += t.primaryRays;
-        total.primaryEvaluations += t.primaryEvaluations;
-        total.hits += t.hits;
-        total.fallbacks += t.fallbacks;
-        total.normalEvaluations += t.normalEvaluations;
-        total.shadowRays += t.shadowRays;
-        total.shadowEvaluations += t.shadowEvaluations;
-        total.aoEvaluations += t.aoEvaluations;
-        total.secondaryRays += t.secondaryRays;
-        total.secondaryEvaluations += t.secondaryEvaluations;
-        total.selfIntersections += t.selfIntersections;
-        total.traversalSteps += t.traversalSteps;
-        total.intersectionTests += t.intersectionTests;
-    }
+    for (const TileScratch& s : scratch) total.add(s.stats);
     total.shadowEvaluations += tiles->mapEvaluations();
     total.threads = threads;
     total.gridTracer =

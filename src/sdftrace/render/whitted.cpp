@@ -20,10 +20,6 @@ float fresnelDielectric(float cosI, float n1, float n2) {
     return 0.5f * (rs * rs + rp * rp);
 }
 
-namespace {
-
-// Refraction of unit d through unit n (facing against d) with eta = n1 / n2; false under total
-// internal reflection.
 bool refract(Vec3 d, Vec3 n, float eta, Vec3& out) {
     const float cosI = -dot(d, n);
     const float k = 1.0f - eta * eta * (1.0f - cosI * cosI);
@@ -31,10 +27,6 @@ bool refract(Vec3 d, Vec3 n, float eta, Vec3& out) {
     out = normalize(d * eta + n * (eta * cosI - std::sqrt(k)));
     return true;
 }
-
-Vec3 reflect(Vec3 d, Vec3 n) { return d - n * (2.0f * dot(d, n)); }
-
-}  // namespace
 
 bool isConvex(const Node& n) {
     switch (n.kind) {
