@@ -16,12 +16,21 @@
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/render/temporal.h"
 #include "sdftrace/scene/grid_scene.h"
-#include "sdftrace/scene/option_names.h"
 #include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/render_options.h"
 
 namespace sdft::cli {
 
 namespace {
+
+// A render option given on the command line: its row of the option table and what was given.
+struct OptionArg {
+    const RenderOption* option = nullptr;
+    std::string text;    // non-bool options: the value as written
+    bool value = false;  // bool options: --x or --no-x
+    CLI::Option* cli = nullptr;
+    bool given() const { return cli && cli->count() > 0; }
+};
 
 struct RenderArgs {
     std::string scene;
@@ -30,38 +39,19 @@ struct RenderArgs {
     std::string eye, target, up;
     std::optional<float> fov;
     std::optional<int> width, height, threads;
-    // tracer
     bool classic = false;
-    std::optional<int> maxSteps, discontinuity, falsiIters;
-    std::optional<float> tau, omega, hybridEpsilon, hybridStep, maxDistance;
-    // On/off switches: applied only when given (CLI11 would reset a std::optional<bool> flag).
-    struct Switch {
-        bool value = false;
-        CLI::Option* option = nullptr;
-        bool given() const { return option && option->count() > 0; }
-    };
-    Switch screenSpace, forceHit, fixedSteps, hybrid, shadows, boundsCulling, bitMasks;
-    std::string normals;
-    std::string gridTracer, cellMethod, gridNormals;
-    std::string shadowMethod;
-    std::optional<int> shadowRays, maxReflections, maxRefractions;
-    std::string integrator;
-    std::optional<int> spp, maxDepth;
-    std::string epsilon;
-    std::optional<float> globalEpsilon;
+    std::vector<OptionArg> options;  // one per row of renderOptions(), in its order
     int frames = 1;
     std::optional<float> taaAlpha;
     float orbit = 0;
     std::string framePattern;
-    Switch ao, convexBounds;
-    std::optional<int> cellIterations, occluder, minMax;
     bool quiet = false;
+    bool listOptions = false;
 };
 
 Vec3 toVec3(const Vec3Arg& a) { return {a.x, a.y, a.z}; }
 
-void applyOverrides(const RenderArgs& a, Scene& scene) {
-    CameraDesc& cam = scene.camera;
+void applyCamera(const RenderArgs& a, CameraDesc& cam) {
     if (!a.eye.empty()) cam.eye = toVec3(parseVec3Arg("--eye", a.eye));
     if (!a.target.empty()) cam.target = toVec3(parseVec3Arg("--target", a.target));
     if (!a.up.empty()) cam.up = toVec3(parseVec3Arg("--up", a.up));
@@ -74,44 +64,23 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
         throw InputError("--up: must not be parallel to the viewing direction");
     }
     validateImageSize(cam.width, cam.height, "--width/--height");
+}
 
+// Flags override the scene's render block; --classic resets the tracer before them.
+void applyOverrides(const RenderArgs& a, Scene& scene) {
+    applyCamera(a, scene.camera);
     RenderSettings& s = scene.settings;
-    TraceOptions& t = s.trace;
-    if (a.classic) t = TraceOptions::classic();
-    if (a.maxSteps) t.maxSteps = *a.maxSteps;
-    if (a.tau) t.tau = *a.tau;
-    if (a.omega) t.omega = *a.omega;
-    if (a.screenSpace.given()) t.screenSpace = a.screenSpace.value;
-    if (a.forceHit.given()) t.forceHit = a.forceHit.value;
-    if (a.discontinuity) t.discontinuityIters = *a.discontinuity;
-    if (a.fixedSteps.given()) t.fixedSteps = a.fixedSteps.value;
-    if (a.hybrid.given()) t.hybrid = a.hybrid.value;
-    if (a.hybridEpsilon) t.hybridEpsilon = *a.hybridEpsilon;
-    if (a.hybridStep) t.hybridStep = *a.hybridStep;
-    if (a.falsiIters) t.falsiIters = *a.falsiIters;
-    if (!a.gridTracer.empty()) parseGridTracer(a.gridTracer, s.gridTracer);
-    if (!a.cellMethod.empty()) parseCellIntersection(a.cellMethod, s.gridTrace.cellMethod);
-    if (!a.gridNormals.empty()) parseGridNormal(a.gridNormals, s.gridNormals);
-    if (a.cellIterations) s.gridTrace.falsiIters = *a.cellIterations;
-    if (a.occluder) s.occluderThreshold = *a.occluder;
-    if (a.minMax) s.minMaxResolution = *a.minMax;
-    if (a.bitMasks.given()) s.gridTrace.bitMasks = a.bitMasks.value;
-    if (a.normals == "central") s.normals = NormalEstimator::Central;
-    if (a.normals == "tetrahedral") s.normals = NormalEstimator::Tetrahedral;
-    if (a.shadows.given()) s.shadows = a.shadows.value;
-    if (!a.shadowMethod.empty()) parseShadowMethod(a.shadowMethod, s.shadowMethod);
-    if (a.shadowRays) s.shadowRays = *a.shadowRays;
-    if (a.maxReflections) s.maxReflections = *a.maxReflections;
-    if (!a.integrator.empty()) s.pathTracing = a.integrator == "path";
-    if (a.spp) s.samplesPerPixel = *a.spp;
-    if (a.maxDepth) s.maxDepth = *a.maxDepth;
-    if (a.maxRefractions) s.maxRefractions = *a.maxRefractions;
-    if (!a.epsilon.empty()) s.dynamicEpsilon = a.epsilon == "dynamic";
-    if (a.globalEpsilon) s.globalEpsilon = *a.globalEpsilon;
-    if (a.convexBounds.given()) s.convexBounds = a.convexBounds.value;
-    if (a.ao.given()) s.ambientOcclusion = a.ao.value;
-    if (a.boundsCulling.given()) s.boundsCulling = a.boundsCulling.value;
-    if (a.maxDistance) s.maxDistance = *a.maxDistance;
+    if (a.classic) s.trace = TraceOptions::classic();
+    for (const OptionArg& arg : a.options) {
+        if (!arg.given()) continue;
+        double v = arg.value ? 1 : 0;
+        if (arg.option->type != OptionType::Bool) {
+            // Validated while parsing (addOptionFlags); parsed again here for the value.
+            if (std::string error = arg.option->parse(arg.text, v); !error.empty())
+                throw InputError(arg.option->mainFlag() + " " + arg.text + ": " + error);
+        }
+        arg.option->set(s, v);
+    }
     if (a.threads) s.threads = *a.threads;
 }
 
@@ -146,6 +115,10 @@ void validateFramePattern(const std::string& pattern) {
 }
 
 int runRender(const RenderArgs& a) {
+    if (a.listOptions) {
+        std::fputs(renderOptionsMarkdown().c_str(), stdout);
+        return 0;
+    }
     // Validate every output before the (possibly long) render starts.
     imageFormatFromPath(a.output, "--output");
     checkWritablePath(a.output, "--output");
@@ -252,14 +225,85 @@ int runRender(const RenderArgs& a) {
 
 }  // namespace
 
+namespace {
+
+// One flag per row of the option table, grouped as the table groups them; values are checked by the
+// table while parsing, so a bad one is reported as CLI11 reports any bad flag.
+void addOptionFlags(CLI::App* cmd, RenderArgs& args) {
+    std::map<std::string, CLI::Option_group*> groups;
+    const auto options = renderOptions();
+    args.options.resize(options.size());  // fixed from here on: CLI11 keeps pointers into it
+    for (size_t i = 0; i < options.size(); ++i) {
+        const RenderOption& o = options[i];
+        OptionArg& arg = args.options[i];
+        arg.option = &o;
+        CLI::Option_group*& group = groups[o.group];
+        if (!group) group = cmd->add_option_group(o.group);
+        const std::string help = std::string(o.doc) + " [" + o.defaultText() + "]";
+        if (o.type == OptionType::Bool) {
+            const std::string names = o.mainFlag() + ",!--no-" + o.mainFlag().substr(2);
+            arg.cli = group->add_flag(names, arg.value, help);
+            continue;
+        }
+        CLI::Validator valid(
+            [&o](std::string& text) {
+                double v = 0;
+                return o.parse(text, v);
+            },
+            o.type == OptionType::Choice ? o.choiceList() : o.accepted());
+        const char* type = o.type == OptionType::Choice ? "NAME"
+                           : o.type == OptionType::Int  ? "INT"
+                                                        : "FLOAT";
+        arg.cli = group->add_option(o.flags, arg.text, help)->type_name(type)->check(valid);
+    }
+}
+
+void addCameraFlags(CLI::App* cmd, RenderArgs& args) {
+    auto* camera = cmd->add_option_group("Camera", "Override the scene's camera");
+    camera->add_option("--eye", args.eye, "Camera position x,y,z");
+    camera->add_option("--target", args.target, "Point looked at x,y,z");
+    camera->add_option("--up", args.up, "Up vector x,y,z");
+    camera->add_option("--fov", args.fov, "Vertical field of view in degrees, in (0, 180)")
+        ->check(CLI::Range(1e-3, 179.999));
+    camera->add_option("--width", args.width, "Image width in pixels")->check(CLI::Range(1, 65536));
+    camera->add_option("--height", args.height, "Image height in pixels")
+        ->check(CLI::Range(1, 65536));
+}
+
+void addFrameFlags(CLI::App* cmd, RenderArgs& args) {
+    auto* frames = cmd->add_option_group(
+        "Frames", "Temporal accumulation of jittered frames (RTSDF §2.5.2; TAA after Karis 2014)");
+    frames
+        ->add_option("--frames", args.frames,
+                     "Render N frames, each with a subpixel camera offset and new soft-shadow and "
+                     "light-sample jitter, blended into the output (a running mean for stills)")
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
+    frames
+        ->add_option("--taa-alpha", args.taaAlpha,
+                     "History weight of the blend in [0, 1) (default: running mean; 0.9 with "
+                     "--orbit)")
+        ->check(CLI::Range(0.0, 0.999999));
+    frames
+        ->add_option("--orbit", args.orbit,
+                     "Animate: the camera orbits its target by this many degrees per frame; the "
+                     "history is reprojected through depth and clamped to each frame's "
+                     "neighbourhood")
+        ->check(CLI::Range(-180.0, 180.0));
+    frames->add_option("--frame-pattern", args.framePattern,
+                       "Also write every accumulated frame, e.g. frames/out_%04d.png");
+}
+
+}  // namespace
+
 void addRenderCommand(CLI::App& app, Action& action) {
     auto args = std::make_shared<RenderArgs>();
     CLI::App* cmd = app.add_subcommand(
         "render",
         "Ray trace a scene file (or the built-in demo scene when none is given) to an image");
     cmd->add_option("scene", args->scene,
-                    "Scene file (JSON, see docs/scene-format.md) or grid file (.sdfg, framed "
-                    "automatically); default: the demo");
+                    "Scene file (JSON, see docs/scene-format.md), grid file (.sdfg, .vdb) or mesh, "
+                    "framed automatically; default: the demo");
     cmd->add_option("-o,--output", args->output,
                     "Output image: .png (tone-mapped sRGB), .exr or .pfm (linear)")
         ->capture_default_str();
@@ -270,162 +314,19 @@ void addRenderCommand(CLI::App& app, Action& action) {
         "ray), error (f at the hit point), trav_steps and isect_tests (grid DDA), shadow (the "
         "first shadowing light's visibility), ao (ambient occlusion). PATH: .exr, .pfm, or .png "
         "(heat map with legend)");
-    auto* camera = cmd->add_option_group("Camera", "Override the scene's camera");
-    camera->add_option("--eye", args->eye, "Camera position x,y,z");
-    camera->add_option("--target", args->target, "Point looked at x,y,z");
-    camera->add_option("--up", args->up, "Up vector x,y,z");
-    camera->add_option("--fov", args->fov, "Vertical field of view in degrees, in (0, 180)")
-        ->check(CLI::Range(1e-3, 179.999));
-    camera->add_option("--width", args->width, "Image width in pixels")
-        ->check(CLI::Range(1, 65536));
-    camera->add_option("--height", args->height, "Image height in pixels")
-        ->check(CLI::Range(1, 65536));
-
-    auto* tracer = cmd->add_option_group(
-        "Tracer", "Sphere tracing switches (override the scene's render block)");
-    tracer->add_flag(
-        "--classic", args->classic,
-        "Plain sphere tracing (Hart): omega 1, no screen-space selection, no discontinuity "
-        "reduction; later flags still apply");
-    tracer->add_option("--max-steps", args->maxSteps, "March evaluations per ray")
-        ->check(CLI::Range(1, 100000));
-    tracer->add_option("--tau", args->tau, "Hit threshold on f/L (without screen-space selection)")
-        ->check(CLI::PositiveNumber);
-    tracer
-        ->add_option("--omega", args->omega,
-                     "Over-relaxation factor in [1, 2) (Keinert §3.1; 1 = off)")
-        ->check(CLI::Range(1.0, 1.999999));
-    args->screenSpace.option = tracer->add_flag(
-        "--screen-space,!--no-screen-space", args->screenSpace.value,
-        "Screen-space intersection selection and half-pixel early exit (Keinert §3.2)");
-    args->forceHit.option = tracer->add_flag(
-        "--force-hit,!--no-force-hit", args->forceHit.value,
-        "Use the best candidate even when the march did not converge (Keinert §3.2)");
-    tracer
-        ->add_option("--discontinuity", args->discontinuity,
-                     "Fixed-point iterations after the march (Keinert §3.4; 0 = off)")
-        ->check(CLI::Range(0, 64));
-    args->fixedSteps.option =
-        tracer->add_flag("--fixed-steps,!--no-fixed-steps", args->fixedSteps.value,
-                         "Every ray takes exactly --max-steps steps (Liktor §5.4)");
-    args->hybrid.option = tracer->add_flag(
-        "--hybrid,!--no-hybrid", args->hybrid.value,
-        "Sphere tracing / linear search hybrid with regula falsi (Liktor §5.3-5.4)");
-    tracer
-        ->add_option("--hybrid-epsilon", args->hybridEpsilon,
-                     "Distance under which the hybrid searches linearly")
-        ->check(CLI::PositiveNumber);
-    tracer->add_option("--hybrid-step", args->hybridStep, "Linear-search step of the hybrid")
-        ->check(CLI::PositiveNumber);
-    tracer
-        ->add_option("--falsi-iterations", args->falsiIters,
-                     "Regula falsi iterations of the hybrid")
-        ->check(CLI::Range(0, 64));
-    args->boundsCulling.option =
-        tracer->add_flag("--bounds-culling,!--no-bounds-culling", args->boundsCulling.value,
-                         "Skip union operands whose bounding box is no nearer than the running "
-                         "minimum (decision 0002)");
-    tracer->add_option("--max-distance", args->maxDistance, "Largest t of a primary ray")
-        ->check(CLI::PositiveNumber);
-
-    auto* shading = cmd->add_option_group("Shading");
-    shading
-        ->add_option("--integrator", args->integrator,
-                     "direct (direct lighting, shadows by --shadow-method, Whitted mirrors and "
-                     "glass) or path (a path tracer with next-event estimation; Keinert fig. 1)")
-        ->check(CLI::IsMember({"direct", "path"}));
-    shading->add_option("--spp", args->spp, "path: samples (paths) per pixel and frame")
-        ->check(CLI::Range(1, 1 << 20));
-    shading
-        ->add_option("--max-depth", args->maxDepth,
-                     "path: scattering events per path (1: direct light only)")
-        ->check(CLI::Range(1, 1024));
-    shading
-        ->add_option("--normals", args->normals,
-                     "Gradient estimator: central (6 taps) or tetrahedral (4 taps)")
-        ->check(CLI::IsMember({"central", "tetrahedral"}));
-    args->shadows.option = shading->add_flag("--shadows,!--no-shadows", args->shadows.value,
-                                             "Shadows of the lights that cast them");
-    shading
-        ->add_option("--shadow-method", args->shadowMethod,
-                     "hard (a ray to the light's centre), soft (SDF soft shadows, one march; RTSDF "
-                     "§2.4-2.5), distributed (rays to points on the light: the ground truth), pcf "
-                     "or evsm (shadow maps)")
-        ->check(CLI::IsMember({"hard", "soft", "distributed", "pcf", "evsm"}));
-    shading->add_option("--shadow-rays", args->shadowRays, "distributed: rays per point and light")
-        ->check(CLI::Range(1, 65536));
-    args->ao.option = shading->add_flag("--ao,!--no-ao", args->ao.value,
-                                        "SDF ambient occlusion on the ambient term");
-    shading
-        ->add_option("--max-reflections", args->maxReflections,
-                     "Whitted: mirror and Fresnel reflection bounces per ray (Keinert §4)")
-        ->check(CLI::Range(0, 64));
-    shading
-        ->add_option("--max-refractions", args->maxRefractions,
-                     "Whitted: refraction bounces per ray")
-        ->check(CLI::Range(0, 64));
-    shading
-        ->add_option("--epsilon", args->epsilon,
-                     "Secondary-ray origin offset: dynamic, 2 max(eps_min, |f(p)|) (Keinert "
-                     "§3.3), or global (--global-epsilon along the normal)")
-        ->check(CLI::IsMember({"dynamic", "global"}));
-    shading->add_option("--global-epsilon", args->globalEpsilon, "The global offset")
-        ->check(CLI::PositiveNumber);
-    args->convexBounds.option = shading->add_flag(
-        "--convex-bounds,!--no-convex-bounds", args->convexBounds.value,
-        "Rays inside convex objects jump to the bounding box and trace back (Keinert §3.5)");
-
-    auto* grid = cmd->add_option_group(
-        "Grids", "Single-grid scenes, e.g. a .sdfg rendered directly (Jamriska 2010)");
-    grid->add_option("--grid-tracer", args->gridTracer,
-                     "dda: two-level 3D-DDA over blocks and cells (§4); sphere: sphere tracing")
-        ->check(CLI::IsMember({"dda", "sphere"}));
-    grid->add_option("--cell", args->cellMethod,
-                     "Surface-cell intersection (§4.2): midpoint or false-position")
-        ->check(CLI::IsMember({"midpoint", "false-position"}));
-    grid->add_option("--cell-iterations", args->cellIterations, "False-position iterations (§4.2)")
-        ->check(CLI::Range(1, 16));
-    args->bitMasks.option =
-        grid->add_flag("--bit-masks,!--no-bit-masks", args->bitMasks.value,
-                       "Test per-block cell bit masks instead of 8 corner signs (§4.1)");
-    grid->add_option("--grid-normals", args->gridNormals,
-                     "Gradient estimator (§5): analytic, difference-of-interpolations, "
-                     "interpolation-of-differences")
-        ->check(CLI::IsMember(
-            {"analytic", "difference-of-interpolations", "interpolation-of-differences"}));
-    grid->add_option("--minmax", args->minMax,
-                     "Min/max-buffer resolution for primary rays (§6), e.g. 64, 128, 256; 0 = off "
-                     "(default 128)")
-        ->check(CLI::Range(0, 4096));
-    grid->add_option("--occluder", args->occluder,
-                     "Shadow rays by volumetric occluders (§7) with restart threshold N; 0 = off")
-        ->check(CLI::Range(0, 100000));
-
-    auto* frames = cmd->add_option_group(
-        "Frames", "Temporal accumulation of jittered frames (RTSDF §2.5.2; TAA after Karis 2014)");
-    frames
-        ->add_option("--frames", args->frames,
-                     "Render N frames, each with a subpixel camera offset and new soft-shadow and "
-                     "light-sample jitter, blended into the output (a running mean for stills)")
-        ->check(CLI::Range(1, 100000))
-        ->capture_default_str();
-    frames
-        ->add_option("--taa-alpha", args->taaAlpha,
-                     "History weight of the blend in [0, 1) (default: running mean; 0.9 with "
-                     "--orbit)")
-        ->check(CLI::Range(0.0, 0.999999));
-    frames
-        ->add_option("--orbit", args->orbit,
-                     "Animate: the camera orbits its target by this many degrees per frame; the "
-                     "history is reprojected through depth and clamped to each frame's "
-                     "neighbourhood")
-        ->check(CLI::Range(-180.0, 180.0));
-    frames->add_option("--frame-pattern", args->framePattern,
-                       "Also write every accumulated frame, e.g. frames/out_%04d.png");
+    addCameraFlags(cmd, *args);
+    cmd->add_flag("--classic", args->classic,
+                  "Plain sphere tracing (Hart): omega 1, no screen-space selection, no "
+                  "discontinuity reduction; the option flags still apply after it");
+    addOptionFlags(cmd, *args);
+    addFrameFlags(cmd, *args);
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));
     cmd->add_flag("-q,--quiet", args->quiet,
                   "No progress on stderr (the summary line is still printed)");
+    cmd->add_flag("--list-options", args->listOptions,
+                  "Print every render option (scene key, flag, default, accepted values) as a "
+                  "Markdown table and exit");
     cmd->callback([&action, args] { action = [args] { return runRender(*args); }; });
 }
 

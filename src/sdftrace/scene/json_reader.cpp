@@ -33,12 +33,16 @@ void Reader::requireArray(const char* what) const {
 }
 
 void Reader::allowKeys(std::initializer_list<const char*> allowed) const {
+    allowKeys(std::vector<std::string>(allowed.begin(), allowed.end()));
+}
+
+void Reader::allowKeys(const std::vector<std::string>& allowed) const {
     for (auto it = m_value.begin(); it != m_value.end(); ++it) {
         bool ok = false;
-        for (const char* a : allowed) ok = ok || it.key() == a;
+        for (const std::string& a : allowed) ok = ok || it.key() == a;
         if (ok) continue;
         std::string list;
-        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
         failKey(it.key(), "unknown key; accepted here: " + list);
     }
 }

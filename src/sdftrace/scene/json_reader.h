@@ -6,6 +6,7 @@
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/math/vec.h"
@@ -41,6 +42,7 @@ class Reader {
     void requireArray(const char* what) const;
     // Rejects keys outside `allowed` (typos would otherwise be silently ignored).
     void allowKeys(std::initializer_list<const char*> allowed) const;
+    void allowKeys(const std::vector<std::string>& allowed) const;
 
     // A finite number satisfying `ok`, described by `accepted` ("a positive number").
     float number(const std::string& key, const std::function<bool(double)>& ok,

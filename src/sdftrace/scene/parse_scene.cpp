@@ -12,7 +12,7 @@
 #include "parse_node.h"
 #include "parse_texture.h"
 #include "sdftrace/render/film.h"
-#include "sdftrace/scene/option_names.h"
+#include "sdftrace/scene/render_options.h"
 
 namespace sdft {
 
@@ -122,127 +122,32 @@ Light parseLight(const Reader& r) {
     return l;
 }
 
+// The render block: one key per row of the option table (render_options.h).
 void parseRender(const Reader& r, RenderSettings& s) {
     r.requireObject("render settings");
-    r.allowKeys({"max_steps",
-                 "tau",
-                 "omega",
-                 "screen_space",
-                 "force_hit",
-                 "discontinuity_iterations",
-                 "fixed_steps",
-                 "hybrid",
-                 "hybrid_epsilon",
-                 "hybrid_step",
-                 "falsi_iterations",
-                 "normals",
-                 "shadows",
-                 "max_distance",
-                 "shadow_offset",
-                 "bounds_culling",
-                 "grid_tracer",
-                 "cell_intersection",
-                 "cell_iterations",
-                 "bit_masks",
-                 "grid_normals",
-                 "occluder_threshold",
-                 "minmax_resolution",
-                 "shadow_method",
-                 "shadow_rays",
-                 "soft_max_step",
-                 "soft_bias",
-                 "soft_triangulation",
-                 "soft_jitter",
-                 "soft_centered",
-                 "shadow_map_resolution",
-                 "pcf_radius",
-                 "evsm_radius",
-                 "ao",
-                 "ao_samples",
-                 "ao_step",
-                 "ao_strength",
-                 "max_reflections",
-                 "max_refractions",
-                 "secondary_epsilon",
-                 "global_epsilon",
-                 "convex_bounds",
-                 "integrator",
-                 "spp",
-                 "max_depth"});
-    TraceOptions& t = s.trace;
-    t.maxSteps = r.integer("max_steps", t.maxSteps, 1, 100000);
-    t.tau = r.number("tau", t.tau, positive, "a positive hit threshold");
-    t.omega = r.number(
-        "omega", t.omega, [](double v) { return v >= 1 && v < 2; },
-        "an over-relaxation factor in [1, 2)");
-    t.screenSpace = r.boolean("screen_space", t.screenSpace);
-    t.forceHit = r.boolean("force_hit", t.forceHit);
-    t.discontinuityIters = r.integer("discontinuity_iterations", t.discontinuityIters, 0, 64);
-    t.fixedSteps = r.boolean("fixed_steps", t.fixedSteps);
-    t.hybrid = r.boolean("hybrid", t.hybrid);
-    t.hybridEpsilon = r.number("hybrid_epsilon", t.hybridEpsilon, positive, "a positive distance");
-    t.hybridStep = r.number("hybrid_step", t.hybridStep, positive, "a positive step length");
-    t.falsiIters = r.integer("falsi_iterations", t.falsiIters, 0, 64);
-    std::string normals = r.string("normals", "tetrahedral");
-    if (normals == "central")
-        s.normals = NormalEstimator::Central;
-    else if (normals == "tetrahedral")
-        s.normals = NormalEstimator::Tetrahedral;
-    else
-        r.failKey("normals", "unknown estimator '" + normals + "'; accepted: central, tetrahedral");
-    s.shadows = r.boolean("shadows", s.shadows);
-    s.boundsCulling = r.boolean("bounds_culling", s.boundsCulling);
-    // Jamriška 2010: single-grid scenes.
-    auto named = [&](const char* key, auto parse, const char* names, auto& out) {
-        if (!r.has(key)) return;
-        std::string v = r.string(key);
-        if (!parse(v, out)) r.failKey(key, "unknown value '" + v + "'; accepted: " + names);
-    };
-    named("grid_tracer", parseGridTracer, gridTracerNames(), s.gridTracer);
-    named("cell_intersection", parseCellIntersection, cellIntersectionNames(),
-          s.gridTrace.cellMethod);
-    named("grid_normals", parseGridNormal, gridNormalNames(), s.gridNormals);
-    s.gridTrace.falsiIters = r.integer("cell_iterations", s.gridTrace.falsiIters, 1, 16);
-    s.gridTrace.bitMasks = r.boolean("bit_masks", s.gridTrace.bitMasks);
-    s.occluderThreshold = r.integer("occluder_threshold", s.occluderThreshold, 0, 100000);
-    s.minMaxResolution = r.integer("minmax_resolution", s.minMaxResolution, 0, 4096);
-    s.maxDistance = r.number("max_distance", s.maxDistance, positive, "a positive distance");
-    s.shadowOffsetMin =
-        r.number("shadow_offset", s.shadowOffsetMin, positive, "a positive distance");
-    // Soft shadows, distributed shadows, shadow maps and ambient occlusion.
-    named("shadow_method", parseShadowMethod, shadowMethodNames(), s.shadowMethod);
-    s.shadowRays = r.integer("shadow_rays", s.shadowRays, 1, 65536);
-    const auto nonNegativeLength = [](double v) { return v >= 0 && v < 1e30; };
-    s.soft.maxStep = r.number("soft_max_step", s.soft.maxStep, nonNegativeLength,
-                              "a non-negative distance (0: unlimited)");
-    s.soft.bias = r.number("soft_bias", s.soft.bias, nonNegativeLength, "a non-negative distance");
-    s.soft.triangulate = r.boolean("soft_triangulation", s.soft.triangulate);
-    s.soft.jitter = r.boolean("soft_jitter", s.soft.jitter);
-    s.soft.centered = r.boolean("soft_centered", s.soft.centered);
-    s.shadowMap.resolution = r.integer("shadow_map_resolution", s.shadowMap.resolution, 16, 8192);
-    s.shadowMap.pcfRadius = r.integer("pcf_radius", s.shadowMap.pcfRadius, 0, 64);
-    s.shadowMap.evsmRadius = r.integer("evsm_radius", s.shadowMap.evsmRadius, 0, 64);
-    s.ambientOcclusion = r.boolean("ao", s.ambientOcclusion);
-    s.ao.samples = r.integer("ao_samples", s.ao.samples, 1, 64);
-    s.ao.step = r.number("ao_step", s.ao.step, positive, "a positive distance");
-    s.ao.strength =
-        r.number("ao_strength", s.ao.strength, nonNegativeLength, "a non-negative weight");
-    // Whitted rays (Keinert §4) and their origin offset (§3.3).
-    s.maxReflections = r.integer("max_reflections", s.maxReflections, 0, 64);
-    s.maxRefractions = r.integer("max_refractions", s.maxRefractions, 0, 64);
-    const std::string eps = r.string("secondary_epsilon", s.dynamicEpsilon ? "dynamic" : "global");
-    if (eps != "dynamic" && eps != "global")
-        r.failKey("secondary_epsilon", "unknown offset '" + eps + "'; accepted: dynamic, global");
-    s.dynamicEpsilon = eps == "dynamic";
-    s.globalEpsilon = r.number("global_epsilon", s.globalEpsilon, positive, "a positive distance");
-    s.convexBounds = r.boolean("convex_bounds", s.convexBounds);
-    // The integrator: direct lighting or the path tracer.
-    const std::string integrator = r.string("integrator", s.pathTracing ? "path" : "direct");
-    if (integrator != "direct" && integrator != "path")
-        r.failKey("integrator", "unknown integrator '" + integrator + "'; accepted: direct, path");
-    s.pathTracing = integrator == "path";
-    s.samplesPerPixel = r.integer("spp", s.samplesPerPixel, 1, 1 << 20);
-    s.maxDepth = r.integer("max_depth", s.maxDepth, 1, 1024);
+    std::vector<std::string> keys;
+    for (const RenderOption& o : renderOptions()) keys.push_back(o.key);
+    r.allowKeys(keys);
+    for (const RenderOption& o : renderOptions()) {
+        if (!r.has(o.key)) continue;
+        double v = 0;
+        switch (o.type) {
+            case OptionType::Bool:
+                v = r.boolean(o.key, false) ? 1 : 0;
+                break;
+            case OptionType::Choice:
+                if (std::string error = o.parse(r.string(o.key), v); !error.empty())
+                    r.failKey(o.key, error);
+                break;
+            case OptionType::Int:
+            case OptionType::Float:
+                v = r.number(o.key, json_reader::anyFinite, o.accepted());
+                if (std::string error = o.check(r.value().at(o.key).get<double>()); !error.empty())
+                    r.failKey(o.key, error);
+                break;
+        }
+        o.set(s, v);
+    }
 }
 
 Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {

@@ -1,0 +1,59 @@
+// The render options, written once: each RenderSettings member a user can set is one row of a
+// table (scene-file key, CLI flags, type, accepted range or names, default, one-line doc). The
+// scene file's "render" block, the `render` subcommand's flags and the option table in
+// docs/cli.md all come from it (pbrt-v4's ParameterDictionary, Mitsuba's Properties), so a
+// setting is named, range-checked and documented in one place.
+#pragma once
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "sdftrace/render/render_settings.h"
+
+namespace sdft {
+
+enum class OptionType { Bool, Int, Float, Choice };
+
+struct OptionRange {
+    double lo = 0, hi = 0;
+    bool loOpen = false, hiOpen = false;  // excluded end points (floats)
+    bool contains(double v) const {
+        return (loOpen ? v > lo : v >= lo) && (hiOpen ? v < hi : v <= hi);
+    }
+};
+
+struct RenderOption {
+    const char* key;    // scene file: "render": {"<key>": value}
+    const char* flags;  // CLI11 names, "--max-steps" or "--cell-intersection,--cell" (first: main)
+    const char* group;  // the help section: Tracer, Shading, Shadows, Whitted, Path, Grids
+    OptionType type;
+    OptionRange range{0, 0};        // Int, Float
+    const char* what = "a number";  // Int, Float: "an over-relaxation factor" (error messages)
+    std::vector<const char*> choices = {};  // Choice: the accepted words, in value order
+    const char* doc;                        // one line (help and docs/cli.md)
+    // The member as a number: bools 0/1, choices their index, ints and floats themselves.
+    double (*get)(const RenderSettings&);
+    void (*set)(RenderSettings&, double);
+
+    std::string mainFlag() const;      // "--max-steps"
+    std::string accepted() const;      // "an integer in [1, 100000]", "true or false", ...
+    std::string choiceList() const;    // "hard, soft, distributed, pcf, evsm"
+    std::string show(double v) const;  // a value as the user writes it ("1.2", "true", "dda")
+    std::string defaultText() const { return show(get(RenderSettings{})); }
+    // Parses a CLI value (or a scene file's choice word) into `out`; returns an error message that
+    // says what is accepted, empty on success.
+    std::string parse(const std::string& text, double& out) const;
+    // Range check of a number (Int: also integral); an error message or empty.
+    std::string check(double v) const;
+};
+
+// Every option, in the order docs and help list them.
+std::span<const RenderOption> renderOptions();
+const RenderOption* findRenderOption(const std::string& key);
+
+// The options as a Markdown table (key, flag, default, accepted, meaning): what docs/cli.md
+// holds between its `<!-- render-options -->` markers (a test compares them).
+std::string renderOptionsMarkdown();
+
+}  // namespace sdft
