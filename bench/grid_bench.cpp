@@ -23,7 +23,7 @@
 #include <sstream>
 
 #include "sdftrace/io/vdb_io.h"
-#include "sdftrace/render/camera.h"
+#include "sdftrace/math/camera.h"
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/trace/grid_tracer.h"
 #include "sdftrace/trace/minmax_buffer.h"

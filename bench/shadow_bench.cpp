@@ -23,10 +23,11 @@
 #include <string>
 #include <vector>
 
-#include "sdftrace/render/camera.h"
+#include "sdftrace/math/camera.h"
 #include "sdftrace/render/light_sample.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/plan_render.h"
 
 using namespace sdft;
 
@@ -46,19 +47,20 @@ struct Run {
     double evaluationsPerPixel = 0;
 };
 
-Run renderWith(const Scene& base, const Tape& tape, const Method& m, int reps) {
+Run renderWith(const Scene& base, const Method& m, int reps) {
     Scene scene = base;
     scene.settings.shadowMethod = m.method;
     if (m.rays) scene.settings.shadowRays = m.rays;
     scene.settings.soft.centered = m.centered;
     scene.settings.soft.triangulate = m.triangulate;
     if (m.maxStep >= 0) scene.settings.soft.maxStep = m.maxStep;
+    const RenderPlan plan = planRender(scene);
     Run run;
     std::vector<double> times;
     for (int i = 0; i < reps; ++i) {
         Film film(scene.camera.width, scene.camera.height);
         auto t0 = std::chrono::steady_clock::now();
-        RenderStats st = render(scene, tape, film);
+        RenderStats st = render(plan, film);
         times.push_back(
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                 .count());
@@ -98,10 +100,9 @@ int main(int argc, char** argv) {
     scene.camera.width = width;
     scene.camera.height = height;
     scene.settings.threads = threads;
-    Tape tape = compileTape(scene.root);
 
     const Run truth =
-        renderWith(scene, tape, {"distributed (truth)", ShadowMethod::Distributed, truthRays}, 1);
+        renderWith(scene, {"distributed (truth)", ShadowMethod::Distributed, truthRays}, 1);
     const Method methods[] = {
         {"hard", ShadowMethod::Hard},
         {"soft, RTSDF k·h/t", ShadowMethod::Soft, 0, false, false},
@@ -133,7 +134,7 @@ int main(int argc, char** argv) {
         reps);
     std::printf("| --- | --- | --- | --- | --- | --- |\n");
     for (const Method& m : methods) {
-        const Run r = renderWith(scene, tape, m, reps);
+        const Run r = renderWith(scene, m, reps);
         double sq = 0, worst = 0;
         size_t n = 0;
         for (size_t i = 0; i < truth.shadow.size(); ++i) {

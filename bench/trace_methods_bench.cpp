@@ -17,7 +17,7 @@
 #include <string>
 
 #include "sdftrace/field/tape.h"
-#include "sdftrace/render/camera.h"
+#include "sdftrace/math/camera.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/trace/field_tracer.h"
 

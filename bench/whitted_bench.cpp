@@ -16,6 +16,7 @@
 
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/plan_render.h"
 
 using namespace sdft;
 
@@ -34,7 +35,6 @@ int main(int argc, char** argv) {
     }
     Scene scene = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/glass_shapes.json");
     scene.settings.threads = threads;
-    Tape tape = compileTape(scene.root);
     std::vector<float> images[2];
     std::printf("%dx%d, %d threads\n\n", scene.camera.width, scene.camera.height, threads);
     std::printf(
@@ -45,10 +45,11 @@ int main(int argc, char** argv) {
         scene.settings.convexBounds = v == 1;
         std::vector<double> ms;
         RenderStats st;
+        const RenderPlan plan = planRender(scene);
         for (int r = 0; r < reps; ++r) {
             Film film(scene.camera.width, scene.camera.height);
             const auto t0 = std::chrono::steady_clock::now();
-            st = render(scene, tape, film);
+            st = render(plan, film);
             ms.push_back(
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                     .count());

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "cli_runner.h"
-#include "sdftrace/render/camera.h"
+#include "sdftrace/math/camera.h"
 
 namespace sdft::e2e {
 namespace {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "cli_runner.h"
-#include "sdftrace/render/camera.h"
+#include "sdftrace/math/camera.h"
 
 namespace sdft::e2e {
 namespace {

@@ -13,10 +13,12 @@
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/image_io.h"
 #include "sdftrace/io/mesh_file.h"
+#include "sdftrace/io/mesh_io.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/render/temporal.h"
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/plan_render.h"
 #include "sdftrace/scene/render_options.h"
 
 namespace sdft::cli {
@@ -162,7 +164,8 @@ int runRender(const RenderArgs& a) {
         scene = parseSceneFile(a.scene);
     }
     applyOverrides(a, scene);
-    Tape tape = compileTape(scene.root, {.boundsCulling = scene.settings.boundsCulling});
+    const RenderPlan plan = planRender(scene);
+    const Tape& tape = plan.tape;
     Film film(scene.camera.width, scene.camera.height);
     RenderStats st;
     if (a.frames > 1 || a.orbit != 0) {
@@ -176,9 +179,9 @@ int runRender(const RenderArgs& a) {
                 writeAov(f, Aov::Color, framePath(a.framePattern, k));
             };
         }
-        st = renderFrames(scene, tape, film, t, onFrame, !a.quiet && stderrIsTerminal());
+        st = renderFrames(plan, film, t, onFrame, !a.quiet && stderrIsTerminal());
     } else {
-        st = render(scene, tape, film, !a.quiet && stderrIsTerminal());
+        st = render(plan, film, !a.quiet && stderrIsTerminal());
     }
 
     writeAov(film, Aov::Color, a.output);

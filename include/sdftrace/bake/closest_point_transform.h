@@ -18,8 +18,8 @@
 
 #include <cstddef>
 
+#include "sdftrace/bake/triangle_mesh.h"
 #include "sdftrace/field/grid.h"
-#include "sdftrace/io/mesh_io.h"
 
 namespace sdft {
 

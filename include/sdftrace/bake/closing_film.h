@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "sdftrace/bake/segment_crossing.h"
-#include "sdftrace/io/mesh_io.h"
+#include "sdftrace/bake/triangle_mesh.h"
 
 namespace sdft {
 

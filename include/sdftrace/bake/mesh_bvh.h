@@ -5,7 +5,7 @@
 #include <cmath>
 #include <memory>
 
-#include "sdftrace/io/mesh_io.h"
+#include "sdftrace/bake/triangle_mesh.h"
 
 namespace sdft {
 

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "sdftrace/bake/triangle_mesh.h"
 #include "sdftrace/field/grid.h"
-#include "sdftrace/io/mesh_io.h"
 
 namespace sdft {
 

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <vector>
 
-#include "sdftrace/io/mesh_io.h"
+#include "sdftrace/bake/triangle_mesh.h"
 
 namespace sdft {
 
@@ -37,7 +37,7 @@ inline float fastAtan2(float y, float x) {
             a +
         a;
     r = ay > ax ? 1.57079637f - r : r;
-    r = x < 0 ? 3.14159274f - r : r;
+    r = x < 0 ? kPi - r : r;
     return y < 0 ? -r : r;
 }
 

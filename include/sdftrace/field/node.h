@@ -120,6 +120,9 @@ Bounds3 nodeBounds(const Node& n);
 // bounds (exact-distance primitives, blobs, rigid or uniformly scaled transforms, unions and
 // repetitions of such). Bounds culling of smooth unions relies on it (decision 0002).
 bool dominatesBounds(const Node& n);
+// Whether the node's solid is convex: convex primitives, their intersections and transforms
+// (Keinert et al. 2014, §3.5 traces rays inside such objects back from their bounds).
+bool isConvex(const Node& node);
 // Recursive reference evaluation of the tree (slow; the tests' ground truth for the tape).
 float evalTree(const Node& n, Vec3 p);
 

@@ -3,8 +3,8 @@
 #pragma once
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
+#include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/grid.h"
 
 namespace sdft {
@@ -12,7 +12,7 @@ namespace sdft {
 template <class F>
 void forEachVertex(const GridShape& s, int threads, F&& f) {
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
-    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    ThreadArena arena(threads);
     arena.execute([&] {
         tbb::parallel_for(0, vz, [&](int k) {
             for (int j = 0; j < vy; ++j)

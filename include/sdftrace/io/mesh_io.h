@@ -9,16 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "sdftrace/bake/triangle_mesh.h"
 #include "sdftrace/math/ray.h"
 
 namespace sdft {
-
-struct TriangleMesh {
-    std::vector<Vec3> positions;
-    std::vector<std::array<uint32_t, 3>> triangles;
-
-    Bounds3 bounds() const;
-};
 
 struct MeshReport {
     size_t verticesRead = 0, trianglesRead = 0;  // as the importer delivers them (OBJ: per corner)
@@ -31,10 +25,6 @@ struct MeshReport {
 
     std::string summary() const;  // one line for stderr
 };
-
-// Every directed edge (a, b) is matched by as many (b, a): the mesh bounds closed regions, so its
-// winding number is an integer, constant between crossings of the surface.
-bool isWatertight(const TriangleMesh& mesh);
 
 TriangleMesh loadMesh(const std::string& path, MeshReport* report = nullptr);
 

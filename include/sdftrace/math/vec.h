@@ -7,6 +7,10 @@
 
 namespace sdft {
 
+// pi, the one definition every module uses.
+inline constexpr float kPi = 3.14159265358979f;
+SDFT_HOST_DEVICE constexpr float radians(float degrees) { return degrees * kPi / 180.0f; }
+
 // min/max that compile to one instruction (std::fmin/fmax are libm calls for their NaN rules).
 // Hot-path values are never NaN.
 SDFT_HOST_DEVICE constexpr float minf(float a, float b) { return a < b ? a : b; }
@@ -86,7 +90,7 @@ struct Mat3 {
 // Rotation by `degrees` about the (unit) `axis`, Rodrigues' formula.
 inline Mat3 rotationAxisAngle(Vec3 axis, float degrees) {
     Vec3 a = normalize(axis);
-    float rad = degrees * 3.14159265358979f / 180.0f;
+    float rad = radians(degrees);
     float c = std::cos(rad), s = std::sin(rad), t = 1 - c;
     Mat3 r;
     r.m[0][0] = t * a.x * a.x + c;

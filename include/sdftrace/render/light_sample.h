@@ -52,7 +52,7 @@ SDFT_HOST_DEVICE inline float lightTanRadius(const Light& light, Vec3 p) {
             Vec3 to = light.position - p;
             float d = length(to);
             float cosL = std::fabs(dot(n / std::fmax(area, 1e-30f), to / std::fmax(d, 1e-30f)));
-            return std::sqrt(area * cosL / 3.14159265f) / std::fmax(d, 1e-30f);
+            return std::sqrt(area * cosL / kPi) / std::fmax(d, 1e-30f);
         }
     }
     return 0.0f;

@@ -4,11 +4,11 @@
 #pragma once
 
 #include "sdftrace/field/tape.h"
-#include "sdftrace/scene/scene.h"
+#include "sdftrace/render/render_plan.h"
 
 namespace sdft {
 
 // n: the unit world normal at p (for tri-planar projections).
-Material materialAt(const Scene& scene, const Tape& tape, Vec3 p, Vec3 n);
+Material materialAt(const RenderPlan& plan, Vec3 p, Vec3 n);
 
 }  // namespace sdft

@@ -19,8 +19,10 @@
 
 namespace sdft {
 
-// Renders scene.settings.samplesPerPixel paths per pixel into `film` (colour; depth, normal and
-// steps of the first sample). Stats: primary rays are paths, secondary rays every further ray.
-RenderStats renderPaths(const Scene& scene, const Tape& tape, Film& film, bool progress = false);
+// Renders plan.settings.samplesPerPixel paths per pixel as seen by `view` into `film` (colour;
+// depth, normal and steps of the first sample). Stats: primary rays are paths, secondary rays
+// every further ray.
+RenderStats renderPaths(const RenderPlan& plan, const FrameView& view, Film& film,
+                        bool progress = false);
 
 }  // namespace sdft

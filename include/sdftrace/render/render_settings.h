@@ -49,8 +49,6 @@ struct RenderSettings {
     bool pathTracing = false;
     int samplesPerPixel = 16;       // path tracer
     int maxDepth = 5;               // path tracer: scattering events per path
-    uint32_t frame = 0;             // seeds the per-pixel jitter of soft shadows and light samples
-    float pixelJitter[2] = {0, 0};  // primary rays through (x + 0.5 + jx, y + 0.5 + jy)
     float maxDistance = 100.0f;     // t_max of primary rays (the scene bounds clip it further)
     float shadowOffsetMin = 1e-3f;  // eps_min of the shadow-ray origin offset
     bool boundsCulling = true;  // skip far union operands (docs/decisions/0002-bounds-culling.md)

@@ -25,8 +25,7 @@ CameraDesc orbitCamera(const CameraDesc& camera, float degrees);
 
 // Renders the frames into `film`: colour is the accumulated image, the other AOVs those of the last
 // frame. `onFrame(k, film)`, if set, sees each accumulated frame. Stats are summed over frames.
-RenderStats renderFrames(const Scene& scene, const Tape& tape, Film& film,
-                         const TemporalOptions& options,
+RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptions& options,
                          const std::function<void(int, const Film&)>& onFrame = nullptr,
                          bool progress = false);
 

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "sdftrace/field/tape.h"
-#include "sdftrace/scene/scene.h"
+#include "sdftrace/render/render_plan.h"
 
 namespace sdft {
 
@@ -31,7 +31,7 @@ class WhittedTracer {
   public:
     // How much of a light a point sees (the renderer's shadow method).
     using Visibility = std::function<float(Vec3 p, Vec3 n, const Light& light, int lightIndex)>;
-    WhittedTracer(const Scene& scene, const Tape& tape, Visibility visibility);
+    WhittedTracer(const RenderPlan& plan, Visibility visibility);
 
     // Radiance leaving a mirror or dielectric hit p (unit normal n, field value f) against the
     // unit ray direction d.
@@ -55,19 +55,11 @@ class WhittedTracer {
     float offset(float f) const;
     Vec3 normalAt(Vec3 p) const;
 
-    const Scene& m_scene;
+    const RenderPlan& m_plan;
     const Tape& m_tape;
     Visibility m_visibility;
     TraceOptions m_trace;
-    struct ConvexObject {
-        Tape tape;
-        Bounds3 bounds;
-    };
-    std::vector<ConvexObject> m_convex;  // Keinert §3.5, when the settings enable it
 };
-
-// Whether the solid of `node` is convex: convex primitives, their intersections and transforms.
-bool isConvex(const Node& node);
 
 // Fresnel reflectance of unpolarized light from a medium of index n1 into n2 at incidence cosine
 // cosI (1 under total internal reflection).

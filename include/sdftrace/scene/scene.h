@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "sdftrace/field/node.h"
-#include "sdftrace/render/camera.h"
+#include "sdftrace/math/camera.h"
 #include "sdftrace/render/lighting.h"
 #include "sdftrace/render/render_settings.h"
 #include "sdftrace/render/texture.h"

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "sdftrace/field/grid.h"
-#include "sdftrace/render/camera.h"
+#include "sdftrace/math/camera.h"
 
 namespace sdft {
 

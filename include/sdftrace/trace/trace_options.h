@@ -25,6 +25,18 @@ struct TraceOptions {
     float hybridStep = 0.01f;
     int falsiIters = 4;
 
+    // The options of a ray without a pixel footprint of its own (shadow, reflection, refraction,
+    // shadow-map and path rays): the primary rays' march and relaxation, a plain threshold, no
+    // screen-space selection, no refinement, no fixed step count.
+    TraceOptions secondary() const {
+        TraceOptions o = *this;
+        o.screenSpace = false;
+        o.forceHit = false;
+        o.discontinuityIters = 0;
+        o.fixedSteps = false;
+        return o;
+    }
+
     // The plain method of Hart 1996 (Keinert Listing 1): no enhancement at all.
     static TraceOptions classic() {
         TraceOptions o;

@@ -7,6 +7,7 @@
 
 #include "sdftrace/bake/mesh_bvh.h"
 #include "sdftrace/field/sample_grid.h"
+#include "sdftrace/io/mesh_io.h"
 #include "test_meshes.h"
 
 namespace sdft {

@@ -6,6 +6,7 @@
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/test_util.h"
+#include "sdftrace/io/mesh_io.h"
 
 namespace sdft {
 namespace {

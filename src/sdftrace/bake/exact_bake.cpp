@@ -1,7 +1,6 @@
 #include "sdftrace/bake/exact_bake.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <memory>
@@ -10,10 +9,10 @@
 #include "sdftrace/bake/closest_point_transform.h"
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/exec/progress.h"
+#include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
 
-using detail::arenaThreads;
 using detail::report;
 using detail::RowSampler;
 
@@ -43,7 +42,7 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, Sign
     ClosestPointTransformStats ts;
     std::vector<BakeStage> stages;
     StageClock phases(stages);
-    tbb::task_arena arena(arenaThreads(threads));
+    ThreadArena arena(threads);
     if (transform) {
         Progress bar("sdftrace bake: closest point transform", static_cast<uint64_t>(vy) + vz,
                      progress && stderrIsTerminal());

@@ -13,6 +13,7 @@
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/field/primitives.h"
 #include "sdftrace/field/test_util.h"
+#include "sdftrace/io/mesh_io.h"
 
 namespace sdft {
 namespace {

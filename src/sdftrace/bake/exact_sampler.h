@@ -2,8 +2,6 @@
 // tests, and the thread arena size.
 #pragma once
 
-#include <tbb/task_arena.h>
-
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -185,10 +183,6 @@ class RowSampler {
     std::unique_ptr<ClosingFilm> m_film;
     std::unique_ptr<WindingNumber> m_winding;
 };
-
-inline int arenaThreads(int threads) {
-    return threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
-}
 
 inline void report(ExactBakeStats* stats, const std::atomic<size_t>& queries,
                    const std::atomic<size_t>& signs, const std::atomic<size_t>& filmSums) {

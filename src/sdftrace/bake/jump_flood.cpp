@@ -1,11 +1,11 @@
 #include "sdftrace/bake/jump_flood.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <chrono>
 
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
 
@@ -25,7 +25,7 @@ std::vector<Vec3> jumpFlood(const GridShape& s, std::vector<Vec3> seed, JfaVaria
     // Ping-pong buffers, one parallel sweep per offset.
     std::vector<Vec3> next;
     assignHuge(next, seed.size(), Vec3(kNoSeed));
-    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    ThreadArena arena(threads);
     for (int off : offsets) {
         auto start = std::chrono::steady_clock::now();
         arena.execute([&] {

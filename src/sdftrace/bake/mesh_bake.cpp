@@ -1,7 +1,5 @@
 #include "sdftrace/bake/mesh_bake.h"
 
-#include <tbb/task_arena.h>
-
 #include <chrono>
 #include <cstdio>
 
@@ -10,6 +8,7 @@
 #include "sdftrace/bake/seed_signs.h"
 #include "sdftrace/bake/separable_edt.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
 
@@ -161,9 +160,7 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
 MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     validateMeshBakeOptions(o);
     // Every stage, grid finishing included, on exactly the requested threads.
-    int threads =
-        o.sampling.threads > 0 ? o.sampling.threads : tbb::this_task_arena::max_concurrency();
-    tbb::task_arena arena(threads);
+    ThreadArena arena(o.sampling.threads);
     MeshBakeResult r;
     arena.execute([&] { r = bakeInArena(mesh, o); });
     return r;

@@ -14,8 +14,10 @@
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/primitives.h"
+#include "sdftrace/io/mesh_io.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/grid_scene.h"
+#include "sdftrace/scene/plan_render.h"
 
 namespace sdft {
 namespace {
@@ -279,9 +281,8 @@ TEST(MeshBake, BakedBunnyRendersLikeRayCastTriangles) {
     const int W = 120, H = 90;
     scene.camera.width = W;
     scene.camera.height = H;
-    Tape tape = compileTape(scene.root);
     Film film(W, H);
-    render(scene, tape, film);
+    render(planRender(scene), film);
     MeshBvh bvh(mesh);
     Camera cam(scene.camera);
     std::vector<float> truth(W * H);

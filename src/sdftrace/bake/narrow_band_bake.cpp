@@ -3,7 +3,6 @@
 // between neighbours (open meshes closed by films).
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -17,10 +16,10 @@
 #include "sdftrace/bake/surface_seeds.h"
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/exec/progress.h"
+#include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
 
-using detail::arenaThreads;
 using detail::report;
 using detail::RowSampler;
 
@@ -53,7 +52,7 @@ Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float 
         return (static_cast<size_t>(ok) * no[1] + oj) * no[0] + oi;
     };
     std::atomic<size_t> queries{0}, signs{0}, filmSums{0};
-    tbb::task_arena arena(arenaThreads(threads));
+    ThreadArena arena(threads);
 
     phases.mark("setup");
     // 1. Scatter: a vertex closer than the band to the mesh is within the band of its closest

@@ -1,7 +1,6 @@
 #include "sdftrace/bake/rtsdf_bake.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <chrono>
@@ -10,6 +9,7 @@
 #include "sdftrace/bake/jump_flood.h"
 #include "sdftrace/bake/seed_signs.h"
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
 
@@ -64,7 +64,7 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
     std::vector<float> out;
     assignHuge(out, s.vertexCount(), 0.0f);
     std::atomic<size_t> refined{0}, missed{0};
-    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    ThreadArena arena(threads);
     arena.execute([&] {
         tbb::parallel_for(0, vz, [&](int k) {
             size_t localRefined = 0, localMissed = 0;

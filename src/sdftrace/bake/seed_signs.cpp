@@ -1,10 +1,10 @@
 #include "sdftrace/bake/seed_signs.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/core/macros.h"
+#include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/vertex_loop.h"
 
 namespace sdft {
@@ -153,7 +153,7 @@ void signDistancesSparse(std::vector<float>& d, const TriangleMesh& mesh, const 
     };
     // Per block: 1 = within the band (its vertices need their own sign), else 2 + inside.
     std::vector<uint8_t> state(numBlocks);
-    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    ThreadArena arena(threads);
     arena.execute([&] {
         tbb::parallel_for(size_t(0), numBlocks, [&](size_t b) {
             int bi = static_cast<int>(b % nb[0]), bj = static_cast<int>((b / nb[0]) % nb[1]),

@@ -1,12 +1,12 @@
 #include "sdftrace/bake/separable_edt.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <limits>
 
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
 
@@ -65,7 +65,7 @@ std::vector<Vec3> separableEdt(const GridShape& s, const std::vector<Vec3>& seed
         dist[i] = seed ? double(dot(off, off)) : kInf;
         feature[i] = seed ? static_cast<int32_t>(i) : -1;
     }
-    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    ThreadArena arena(threads);
     for (int axis = 0; axis < 3; ++axis) {
         const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3, len = n[axis];
         arena.execute([&] {

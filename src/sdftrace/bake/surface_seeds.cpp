@@ -1,12 +1,12 @@
 #include "sdftrace/bake/surface_seeds.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <cmath>
 
 #include "sdftrace/bake/closest_point.h"
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/vertex_loop.h"
 
 namespace sdft {
@@ -43,7 +43,7 @@ SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, i
         for (int slab = r.lo[2] / kSlab; slab <= r.hi[2] / kSlab; ++slab)
             bySlab[slab].push_back(static_cast<uint32_t>(t));
     }
-    tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+    ThreadArena arena(threads);
     arena.execute([&] {
         tbb::parallel_for(0, slabs, [&](int slab) {
             const int k0 = slab * kSlab, k1 = std::min(vz - 1, k0 + kSlab - 1);

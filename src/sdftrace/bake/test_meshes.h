@@ -6,7 +6,7 @@
 #include <cmath>
 #include <map>
 
-#include "sdftrace/io/mesh_io.h"
+#include "sdftrace/bake/triangle_mesh.h"
 
 namespace sdft::testing {
 
@@ -73,7 +73,7 @@ inline TriangleMesh torusMesh(float R, float r, int nu, int nv) {
 // The largest distance between the torus mesh and the smooth torus: the sagitta of the chords
 // around both circles (a bound on how far the polyhedron strays from the surface).
 inline float torusTessellationGap(float R, float r, int nu, int nv) {
-    float du = 3.14159265f / nu, dv = 3.14159265f / nv;
+    float du = kPi / nu, dv = kPi / nv;
     return (R + r) * (1 - std::cos(du)) + r * (1 - std::cos(dv));
 }
 

@@ -3,10 +3,11 @@
 #include <tbb/combinable.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
+
+#include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
 
@@ -220,8 +221,7 @@ TexcoordStats bakeTexcoords(Grid& grid, const std::function<float(Vec3)>& field,
         dst[0] = e.x, dst[1] = e.y, dst[2] = e.z;
     };
 
-    const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
-    tbb::task_arena arena(threads);
+    ThreadArena arena(o.threads);
     arena.execute([&] {
         if (grid.kind() == GridKind::Dense) {
             const int nx = shape.cells[0] + 1, ny = shape.cells[1] + 1;

@@ -12,8 +12,6 @@
 namespace sdft {
 namespace {
 
-constexpr float kPi = 3.14159265f;
-
 Grid sampled(const Tape& tape, GridKind kind, int resolution) {
     SampleOptions o;
     o.resolution = resolution;

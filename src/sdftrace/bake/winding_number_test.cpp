@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "sdftrace/field/test_util.h"
+#include "sdftrace/io/mesh_io.h"
 
 namespace sdft {
 namespace {

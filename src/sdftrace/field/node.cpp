@@ -443,4 +443,28 @@ float evalTree(const Node& n, Vec3 p) {
     return 0;
 }
 
+bool isConvex(const Node& n) {
+    switch (n.kind) {
+        case NodeKind::Sphere:
+        case NodeKind::Box:
+        case NodeKind::RoundBox:
+        case NodeKind::Capsule:
+        case NodeKind::Cylinder:
+        case NodeKind::Cone:
+        case NodeKind::Ellipsoid:
+        case NodeKind::Octahedron:
+        case NodeKind::Dodecahedron:
+            return true;
+        case NodeKind::Intersection:
+        case NodeKind::Translate:
+        case NodeKind::Rotate:
+        case NodeKind::Scale:
+            for (const NodePtr& c : n.children)
+                if (!isConvex(*c)) return false;
+            return !n.children.empty();
+        default:
+            return false;
+    }
+}
+
 }  // namespace sdft

@@ -3,12 +3,12 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "sdftrace/core/macros.h"
+#include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
 
@@ -38,8 +38,7 @@ std::vector<float> sampleVertices(const Tape& tape, const GridShape& s, int thre
         BatchScratch batch;
     };
     tbb::enumerable_thread_specific<Scratch> scratch;
-    int n = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
-    tbb::task_arena arena(n);
+    ThreadArena arena(threads);
     arena.execute([&] {
         tbb::parallel_for(
             tbb::blocked_range<int>(0, vy * vz), [&](const tbb::blocked_range<int>& rows) {

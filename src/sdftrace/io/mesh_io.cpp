@@ -16,12 +16,6 @@
 
 namespace sdft {
 
-Bounds3 TriangleMesh::bounds() const {
-    Bounds3 b;
-    for (const Vec3& p : positions) b.include(p);
-    return b;
-}
-
 std::string MeshReport::summary() const {
     char buf[400];
     std::snprintf(
@@ -116,18 +110,6 @@ TriangleMesh cleanMesh(const std::vector<Vec3>& positions,
     for (const auto& [e, count] : edges) r.boundaryEdges += count == 1;
     for (uint32_t v = 0; v < parent.size(); ++v) r.components += findRoot(parent, v) == v;
     return mesh;
-}
-
-bool isWatertight(const TriangleMesh& mesh) {
-    std::vector<std::pair<uint32_t, uint32_t>> forward, backward;
-    for (const auto& t : mesh.triangles)
-        for (int e = 0; e < 3; ++e) {
-            forward.emplace_back(t[e], t[(e + 1) % 3]);
-            backward.emplace_back(t[(e + 1) % 3], t[e]);
-        }
-    std::sort(forward.begin(), forward.end());
-    std::sort(backward.begin(), backward.end());
-    return forward == backward;
 }
 
 TriangleMesh loadMesh(const std::string& path, MeshReport* report) {

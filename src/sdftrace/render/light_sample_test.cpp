@@ -41,7 +41,7 @@ TEST(LightSample, SamplesLieOnTheLight) {
     const float d = length(sphere.position - p);
     EXPECT_NEAR(std::atan(lightTanRadius(sphere, p)), std::asin(sphere.radius / d), 1e-5f);
     Light sun;
-    sun.angle = 0.5f * 3.14159265f / 180.0f;
+    sun.angle = radians(0.5f);
     EXPECT_NEAR(lightTanRadius(sun, p), std::tan(sun.angle / 2), 1e-7f);
     const LightSample s = sampleLight(sun, p, 0.3f, 0.8f);
     EXPECT_LE(std::acos(std::min(1.0f, dot(s.dir, normalize(-sun.direction)))),

@@ -4,9 +4,10 @@
 
 namespace sdft {
 
-Material materialAt(const Scene& scene, const Tape& tape, Vec3 p, Vec3 n) {
+Material materialAt(const RenderPlan& plan, Vec3 p, Vec3 n) {
+    const Tape& tape = plan.tape;
     const MaterialBlend b = tape.evalMaterial(p);
-    const auto& table = scene.materials;
+    const auto& table = plan.materials;
     Material m;
     m.color = Vec3(0.0f);
     m.diffuse = m.specular = m.shininess = 0;
@@ -20,8 +21,8 @@ Material materialAt(const Scene& scene, const Tape& tape, Vec3 p, Vec3 n) {
         const Material& src = table[std::clamp(b.id[i], 0, static_cast<int>(table.size()) - 1)];
         const float w = b.weight[i];
         Vec3 color = src.color;
-        if (src.colorTexture >= 0 && src.colorTexture < static_cast<int>(scene.textures.size())) {
-            const Texture& t = scene.textures[static_cast<size_t>(src.colorTexture)];
+        if (src.colorTexture >= 0 && src.colorTexture < static_cast<int>(plan.textures.size())) {
+            const Texture& t = plan.textures[static_cast<size_t>(src.colorTexture)];
             TextureInputs in;
             in.point = b.local[i];
             in.hasUv = b.hasUv[i];
@@ -39,7 +40,7 @@ Material materialAt(const Scene& scene, const Tape& tape, Vec3 p, Vec3 n) {
                     if (offset.id[j] == b.id[i] && length(offset.local[j] - b.local[i]) > 0)
                         in.normal = normalize(offset.local[j] - b.local[i]);
             }
-            color = evalTexture(t, scene.images, in);
+            color = evalTexture(t, plan.images, in);
         }
         m.color += color * w;
         m.diffuse += src.diffuse * w;

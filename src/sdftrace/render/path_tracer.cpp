@@ -1,17 +1,16 @@
 #include "sdftrace/render/path_tracer.h"
 
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 
 #include "sdftrace/exec/progress.h"
+#include "sdftrace/exec/thread_arena.h"
+#include "sdftrace/math/camera.h"
 #include "sdftrace/math/sampling.h"
-#include "sdftrace/render/camera.h"
 #include "sdftrace/render/light_sample.h"
 #include "sdftrace/render/material_at.h"
 #include "sdftrace/render/whitted.h"
@@ -21,8 +20,6 @@
 namespace sdft {
 
 namespace {
-
-constexpr float kPi = 3.14159265f;
 
 float maxComponent3(Vec3 v) { return std::max(v.x, std::max(v.y, v.z)); }
 
@@ -85,15 +82,11 @@ Vec3 sampleGgx(Vec3 n, Vec3 wo, float alpha, float u1, float u2) {
 
 class PathTracer {
   public:
-    PathTracer(const Scene& scene, const Tape& tape)
-        : m_scene(scene), m_tape(tape), m_camera(scene.camera) {
-        m_primary = scene.settings.trace;
+    PathTracer(const RenderPlan& plan, const FrameView& view)
+        : m_plan(plan), m_view(view), m_tape(plan.tape), m_camera(view.camera) {
+        m_primary = plan.settings.trace;
         m_primary.pixelRadius = m_camera.pixelRadius();
-        m_secondary = scene.settings.trace;
-        m_secondary.screenSpace = false;
-        m_secondary.forceHit = false;
-        m_secondary.discontinuityIters = 0;
-        m_secondary.fixedSteps = false;
+        m_secondary = plan.settings.trace.secondary();
     }
 
     Vec3 radiance(int x, int y, int sample, RenderStats& st, float* depth, Vec3* normal,
@@ -108,10 +101,11 @@ class PathTracer {
     Vec3 nextEvent(Vec3 p, Vec3 n, float eps, Vec3 wo, const Plastic& m, Rng& rng,
                    RenderStats& st) const;
     float epsilon(float f) const {
-        return 2.0f * std::max(m_scene.settings.shadowOffsetMin, std::fabs(f) / m_tape.lipschitz());
+        return 2.0f * std::max(m_plan.settings.shadowOffsetMin, std::fabs(f) / m_tape.lipschitz());
     }
 
-    const Scene& m_scene;
+    const RenderPlan& m_plan;
+    const FrameView& m_view;
     const Tape& m_tape;
     Camera m_camera;
     TraceOptions m_primary, m_secondary;
@@ -133,7 +127,7 @@ bool PathTracer::march(const Ray& ray, float tMax, bool inside, const TraceOptio
 bool PathTracer::trace(const Ray& ray, bool inside, bool primary, float& t, float& value,
                        RenderStats& st) const {
     if (!primary) ++st.secondaryRays;
-    return march(ray, m_scene.settings.maxDistance, inside, primary ? m_primary : m_secondary, t,
+    return march(ray, m_plan.settings.maxDistance, inside, primary ? m_primary : m_secondary, t,
                  value, primary ? st.primaryEvaluations : st.secondaryEvaluations);
 }
 
@@ -141,17 +135,17 @@ bool PathTracer::trace(const Ray& ray, bool inside, bool primary, float& t, floa
 Vec3 PathTracer::nextEvent(Vec3 p, Vec3 n, float eps, Vec3 wo, const Plastic& m, Rng& rng,
                            RenderStats& st) const {
     Vec3 sum(0.0f);
-    const auto& lights = m_scene.lighting.lights;
+    const auto& lights = m_plan.lighting.lights;
     for (const Light& light : lights) {
         const LightDirection to = towardLight(light, p);
         const LightSample ls = sampleLight(light, p, rng.uniform(), rng.uniform());
         float pdf;
         const Vec3 fcos = evalPlastic(m, n, wo, ls.dir, pdf);
         if (maxComponent3(fcos) <= 0) continue;
-        if (m_scene.settings.shadows && light.castShadows && ls.dist > 0) {
+        if (m_plan.settings.shadows && light.castShadows && ls.dist > 0) {
             ++st.shadowRays;
             float t, value;
-            if (march({p + n * eps, ls.dir}, std::min(ls.dist, m_scene.settings.maxDistance), false,
+            if (march({p + n * eps, ls.dir}, std::min(ls.dist, m_plan.settings.maxDistance), false,
                       m_secondary, t, value, st.shadowEvaluations))
                 continue;
         }
@@ -164,9 +158,9 @@ Vec3 PathTracer::nextEvent(Vec3 p, Vec3 n, float eps, Vec3 wo, const Plastic& m,
 
 Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* depthOut,
                           Vec3* normalOut, int* stepsOut) const {
-    const RenderSettings& set = m_scene.settings;
-    Rng rng(static_cast<uint32_t>(y * m_scene.camera.width + x),
-            set.frame * static_cast<uint32_t>(set.samplesPerPixel) + sample, 0x9A7Bu);
+    const RenderSettings& set = m_plan.settings;
+    Rng rng(static_cast<uint32_t>(y * m_view.camera.width + x),
+            m_view.frame * static_cast<uint32_t>(set.samplesPerPixel) + sample, 0x9A7Bu);
     Ray ray = m_camera.rayThrough(x + rng.uniform(), y + rng.uniform());
     Vec3 L(0.0f), beta(1.0f);
     bool inside = false;
@@ -180,7 +174,7 @@ Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* dept
             if (stepsOut) *stepsOut = static_cast<int>(st.primaryEvaluations - before);
         }
         if (!hit) {
-            L += beta * (depth == 0 ? m_scene.lighting.background : m_scene.lighting.environment);
+            L += beta * (depth == 0 ? m_plan.lighting.background : m_plan.lighting.environment);
             break;
         }
         if (depth == 0) ++st.hits;
@@ -197,7 +191,7 @@ Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* dept
             if (depthOut) *depthOut = t;
             if (normalOut) *normalOut = n;
         }
-        const Material m = inside ? medium : materialAt(m_scene, m_tape, p, n);
+        const Material m = inside ? medium : materialAt(m_plan, p, n);
         const Vec3 wo = -ray.direction;
         const float eps = epsilon(value);
         if (m.kind == Material::Kind::Dielectric) {
@@ -246,14 +240,11 @@ Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* dept
 
 }  // namespace
 
-RenderStats renderPaths(const Scene& scene, const Tape& tape, Film& film, bool progress) {
+RenderStats renderPaths(const RenderPlan& plan, const FrameView& view, Film& film, bool progress) {
     const auto start = std::chrono::steady_clock::now();
-    const int threads = scene.settings.threads > 0 ? scene.settings.threads
-                                                   : tbb::this_task_arena::max_concurrency();
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    tbb::task_arena arena(threads);
-    PathTracer tracer(scene, tape);
-    const int spp = std::max(1, scene.settings.samplesPerPixel);
+    ThreadArena arena(plan.settings.threads);
+    PathTracer tracer(plan, view);
+    const int spp = std::max(1, plan.settings.samplesPerPixel);
     tbb::enumerable_thread_specific<RenderStats> stats;
     Progress bar("path tracing", static_cast<uint64_t>(film.height), progress);
     arena.execute([&] {
@@ -280,7 +271,7 @@ RenderStats renderPaths(const Scene& scene, const Tape& tape, Film& film, bool p
     });
     RenderStats total;
     for (const RenderStats& s : stats) total.add(s);
-    total.threads = threads;
+    total.threads = arena.threads();
     total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return total;
 }

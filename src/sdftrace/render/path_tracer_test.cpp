@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "sdftrace/render/temporal.h"
+#include "sdftrace/scene/plan_render.h"
 #include "shadow_test_scenes.h"
 
 namespace sdft {
@@ -20,9 +21,8 @@ std::string diffuseScene(const std::string& render) {
 }
 
 Film renderScene(Scene scene) {
-    Tape tape = compileTape(scene.root);
     Film film(scene.camera.width, scene.camera.height);
-    render(scene, tape, film);
+    render(planRender(scene), film);
     return film;
 }
 
@@ -138,7 +138,6 @@ TEST(PathTracer, FramesAccumulateProgressively) {
         diffuseScene(R"({"integrator": "path", "spp": 4, "max_depth": 3})"), "<test>");
     scene.camera.width = 40;
     scene.camera.height = 24;
-    Tape tape = compileTape(scene.root);
     Scene refScene = scene;
     refScene.settings.samplesPerPixel = 512;
     const Film ref = renderScene(refScene);
@@ -149,11 +148,11 @@ TEST(PathTracer, FramesAccumulateProgressively) {
         return std::sqrt(sq / f.color.size());
     };
     Film one(40, 24), sixteen(40, 24);
-    render(scene, tape, one);
+    render(planRender(scene), one);
     TemporalOptions o;
     o.frames = 16;
     o.jitterCamera = false;
-    renderFrames(scene, tape, sixteen, o, {}, false);
+    renderFrames(planRender(scene), sixteen, o, {}, false);
     // 16 times the paths: a quarter of the error in expectation; allow 0.4.
     EXPECT_LT(rmse(sixteen), 0.4 * rmse(one));
     EXPECT_GT(rmse(one), 0.0);
@@ -173,9 +172,8 @@ TEST(PathTracer, EveryMaterialAndLightGivesFinitePixels) {
         Scene s = scene;
         s.lighting.lights =
             parseSceneText(testing::shadowScene(light, "{}"), "<test>").lighting.lights;
-        Tape tape = compileTape(s.root);
         Film film(48, 30);
-        const RenderStats st = render(s, tape, film);
+        const RenderStats st = render(planRender(s), film);
         for (float c : film.color) ASSERT_TRUE(std::isfinite(c) && c >= 0);
         EXPECT_EQ(st.primaryRays, 48u * 30u * 4u);
         EXPECT_GT(st.secondaryRays, st.primaryRays / 2);

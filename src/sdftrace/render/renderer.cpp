@@ -1,9 +1,7 @@
 #include "sdftrace/render/renderer.h"
 
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -12,8 +10,9 @@
 #include <memory>
 
 #include "sdftrace/exec/progress.h"
+#include "sdftrace/exec/thread_arena.h"
+#include "sdftrace/math/camera.h"
 #include "sdftrace/math/sampling.h"
-#include "sdftrace/render/camera.h"
 #include "sdftrace/render/light_sample.h"
 #include "sdftrace/render/path_tracer.h"
 #include "sdftrace/render/whitted.h"
@@ -59,22 +58,19 @@ struct TileScratch {
 
 class TileRenderer {
   public:
-    TileRenderer(const Scene& scene, const Tape& tape, Film& film)
-        : m_scene(scene),
-          m_tape(tape),
+    TileRenderer(const RenderPlan& plan, const FrameView& view, Film& film)
+        : m_plan(plan),
+          m_view(view),
+          m_tape(plan.tape),
           m_film(film),
-          m_camera(scene.camera),
-          m_settings(scene.settings) {
+          m_camera(view.camera),
+          m_settings(plan.settings) {
         m_primary = m_settings.trace;
         m_primary.pixelRadius = m_camera.pixelRadius();
         // Shadow rays need only a yes/no answer: plain threshold, relaxation kept, no refinement.
-        m_shadow = m_settings.trace;
-        m_shadow.screenSpace = false;
-        m_shadow.forceHit = false;
-        m_shadow.discontinuityIters = 0;
-        m_shadow.fixedSteps = false;
-        if (scene.root->kind == NodeKind::Grid && m_settings.gridTracer == GridTracerKind::Dda) {
-            m_gridView = scene.root->grid->view();
+        m_shadow = m_settings.trace.secondary();
+        if (plan.ddaGrid) {
+            m_gridView = plan.ddaGrid->view();
             m_grid = &m_gridView;
             if (m_settings.minMaxResolution > 0) {
                 m_minMax = MinMaxBuffer::build(m_gridView, m_camera, m_settings.minMaxResolution);
@@ -82,17 +78,17 @@ class TileRenderer {
             }
         }
         m_whitted = std::make_unique<WhittedTracer>(
-            scene, tape, [this](Vec3 p, Vec3 n, const Light& light, int li) {
+            plan, [this](Vec3 p, Vec3 n, const Light& light, int li) {
                 return visibilityAt(p, n, light, li);
             });
         const ShadowMethod method = m_settings.shadowMethod;
         if (m_settings.shadows && (method == ShadowMethod::Pcf || method == ShadowMethod::Evsm)) {
             const Bounds3 region = shadowRegion();
-            for (const Light& light : scene.lighting.lights) {
+            for (const Light& light : plan.lighting.lights) {
                 m_maps.push_back(nullptr);
                 if (!light.castShadows || region.empty()) continue;
                 m_maps.back() = std::make_unique<ShadowMap>(
-                    tape, light, region, m_shadow,
+                    m_tape, light, region, m_shadow,
                     method == ShadowMethod::Pcf ? ShadowMapFilter::Pcf : ShadowMapFilter::Evsm,
                     m_settings.shadowMap);
                 m_mapEvaluations += m_maps.back()->evaluations();
@@ -131,7 +127,8 @@ class TileRenderer {
     void gridNormals(TileScratch& s);
     void stencilNormals(TileScratch& s);
 
-    const Scene& m_scene;
+    const RenderPlan& m_plan;
+    const FrameView& m_view;
     const Tape& m_tape;
     Film& m_film;
     Camera m_camera;
@@ -216,8 +213,8 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     s.segments.resize(count);
     s.results.resize(count);
     for (int i = 0; i < count; ++i) {
-        s.segments[i] = {m_camera.rayThrough(x0 + i % tw + 0.5f + m_settings.pixelJitter[0],
-                                             y0 + i / tw + 0.5f + m_settings.pixelJitter[1]),
+        s.segments[i] = {m_camera.rayThrough(x0 + i % tw + 0.5f + m_view.pixelJitter[0],
+                                             y0 + i / tw + 0.5f + m_view.pixelJitter[1]),
                          0.0f, m_settings.maxDistance};
     }
     if (m_grid) {
@@ -251,7 +248,7 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     std::vector<Material> mats(hits);
     for (int h = 0; h < hits; ++h) {
         mats[h] = m_whitted->materialAt(s.hitPoint[h], s.hitNormal[h]);
-        s.radiance[h] = m_scene.lighting.ambient * mats[h].color;
+        s.radiance[h] = m_plan.lighting.ambient * mats[h].color;
     }
     // Keinert-style SDF ambient occlusion scales the ambient term.
     s.ao.assign(hits, 1.0f);
@@ -267,8 +264,8 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     std::vector<float> visible;
     s.shadow.assign(hits, 1.0f);
     bool firstShadow = true;
-    for (size_t li = 0; li < m_scene.lighting.lights.size(); ++li) {
-        const Light& light = m_scene.lighting.lights[li];
+    for (size_t li = 0; li < m_plan.lighting.lights.size(); ++li) {
+        const Light& light = m_plan.lighting.lights[li];
         visible.assign(hits, 1.0f);
         if (m_settings.shadows && light.castShadows) {
             lightVisibility(s, visible, light, static_cast<int>(li));
@@ -306,7 +303,7 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     }
 
     // Write the film.
-    const Vec3 bg = m_scene.lighting.background;
+    const Vec3 bg = m_plan.lighting.background;
     for (int i = 0; i < count; ++i) {
         size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
         m_film.color[3 * p + 0] = bg.x;
@@ -502,7 +499,7 @@ void TileRenderer::softShadows(TileScratch& s, std::vector<float>& visible, cons
             visible[h] = 0;
             continue;
         }
-        Rng rng(pixelIndex(s, static_cast<int>(h)), m_settings.frame, 0x50F7u + lightIndex);
+        Rng rng(pixelIndex(s, static_cast<int>(h)), m_view.frame, 0x50F7u + lightIndex);
         s.softRays.push_back({s.hitPoint[h] + n * shadowOffset(s, static_cast<int>(h)), to.dir,
                               0.0f, std::fmin(to.dist, m_settings.maxDistance),
                               lightTanRadius(light, s.hitPoint[h]), rng.uniform()});
@@ -534,7 +531,7 @@ void TileRenderer::distributedShadows(TileScratch& s, std::vector<float>& visibl
         const float r1 = rng.uniform(), r2 = rng.uniform();
         for (int k = 0; k < n; ++k) {
             float u1, u2;
-            rotatedHalton(m_settings.frame * static_cast<uint32_t>(n) + k, r1, r2, u1, u2);
+            rotatedHalton(m_view.frame * static_cast<uint32_t>(n) + k, r1, r2, u1, u2);
             const LightSample ls = sampleLight(light, s.hitPoint[h], u1, u2);
             if (ls.dist <= 0) {  // inside the light
                 ++seen[h];
@@ -560,22 +557,18 @@ Vec3 estimateNormal(const Tape& tape, Vec3 p, float h, NormalEstimator estimator
     return normalize(g);
 }
 
-RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progress) {
-    if (scene.settings.pathTracing) return renderPaths(scene, tape, film, progress);
+RenderStats render(const RenderPlan& plan, const FrameView& view, Film& film, bool progress) {
+    if (plan.settings.pathTracing) return renderPaths(plan, view, film, progress);
     auto start = std::chrono::steady_clock::now();
-    int threads = scene.settings.threads > 0 ? scene.settings.threads
-                                             : tbb::this_task_arena::max_concurrency();
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    tbb::task_arena arena(threads);
-
-    const int ts = std::max(1, scene.settings.tileSize);
+    ThreadArena arena(plan.settings.threads);
+    const int ts = std::max(1, plan.settings.tileSize);
     const int tilesX = (film.width + ts - 1) / ts, tilesY = (film.height + ts - 1) / ts;
     std::unique_ptr<TileRenderer> tiles;
     tbb::enumerable_thread_specific<TileScratch> scratch;
     Progress bar("render", static_cast<uint64_t>(tilesX) * tilesY, progress);
     arena.execute([&] {
         // Shadow maps render here, on the same threads.
-        tiles = std::make_unique<TileRenderer>(scene, tape, film);
+        tiles = std::make_unique<TileRenderer>(plan, view, film);
         TileRenderer& renderer = *tiles;
         tbb::parallel_for(
             tbb::blocked_range<int>(0, tilesX * tilesY, 1),
@@ -594,9 +587,8 @@ RenderStats render(const Scene& scene, const Tape& tape, Film& film, bool progre
     RenderStats total;
     for (const TileScratch& s : scratch) total.add(s.stats);
     total.shadowEvaluations += tiles->mapEvaluations();
-    total.threads = threads;
-    total.gridTracer =
-        scene.root->kind == NodeKind::Grid && scene.settings.gridTracer == GridTracerKind::Dda;
+    total.threads = arena.threads();
+    total.gridTracer = plan.ddaGrid != nullptr;
     total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return total;
 }

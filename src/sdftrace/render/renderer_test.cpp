@@ -6,6 +6,7 @@
 
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/plan_render.h"
 #include "shadow_test_scenes.h"
 
 namespace sdft {
@@ -35,9 +36,8 @@ TEST(Renderer, DemoHasNoNonFinitePixelAndCountsEveryRay) {
     scene.camera.width = 96;
     scene.camera.height = 54;
     scene.settings.threads = 1;
-    Tape tape = compileTape(scene.root);
     Film film(96, 54);
-    RenderStats stats = render(scene, tape, film);
+    RenderStats stats = render(planRender(scene), film);
     EXPECT_EQ(stats.threads, 1);
     EXPECT_EQ(stats.primaryRays, 96u * 54u);
     EXPECT_GT(stats.hits, stats.primaryRays / 2);
@@ -59,12 +59,11 @@ TEST(Renderer, ThreadCountDoesNotChangeTheImage) {
     Scene scene = demoScene();
     scene.camera.width = 64;
     scene.camera.height = 40;
-    Tape tape = compileTape(scene.root);
     Film one(64, 40), two(64, 40);
     scene.settings.threads = 1;
-    render(scene, tape, one);
+    render(planRender(scene), one);
     scene.settings.threads = 2;
-    EXPECT_EQ(render(scene, tape, two).threads, 2);
+    EXPECT_EQ(render(planRender(scene), two).threads, 2);
     EXPECT_EQ(one.color, two.color);
     EXPECT_EQ(one.depth, two.depth);
 }
@@ -103,9 +102,8 @@ TEST(Renderer, WhittedScenesGiveFinitePixels) {
         scene.settings.shadowMethod = m;
         scene.settings.shadowRays = 4;
         scene.settings.shadowMap.resolution = 64;
-        Tape tape = compileTape(scene.root);
         Film film(64, 40);
-        const RenderStats st = render(scene, tape, film);
+        const RenderStats st = render(planRender(scene), film);
         for (float c : film.color) ASSERT_TRUE(std::isfinite(c));
         EXPECT_GT(st.secondaryRays, 100u);
     }

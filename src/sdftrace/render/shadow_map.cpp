@@ -101,11 +101,7 @@ ShadowMap::ShadowMap(const Tape& tape, const Light& light, const Bounds3& region
     }
     const size_t perFace = static_cast<size_t>(m_res) * m_res;
     // One sphere-traced ray per texel, in rows of texels.
-    TraceOptions opts = trace;
-    opts.screenSpace = false;
-    opts.forceHit = false;
-    opts.discontinuityIters = 0;
-    opts.fixedSteps = false;
+    const TraceOptions opts = trace.secondary();
     m_depth.assign(perFace * m_faces.size(), INFINITY);
     std::atomic<uint64_t> evaluations{0};
     tbb::enumerable_thread_specific<PacketScratch> scratch;

@@ -5,6 +5,7 @@
 
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/plan_render.h"
 
 namespace sdft::testing {
 
@@ -34,9 +35,8 @@ struct Rendered {
 
 inline Rendered renderText(const std::string& text) {
     Scene scene = parseSceneText(text, "<test>");
-    Tape tape = compileTape(scene.root);
     Rendered r{Film(scene.camera.width, scene.camera.height), {}};
-    r.stats = render(scene, tape, r.film);
+    r.stats = render(planRender(scene), r.film);
     return r;
 }
 

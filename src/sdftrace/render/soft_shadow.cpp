@@ -10,7 +10,7 @@ namespace {
 // The visible share of a disk whose edge-to-centre offset is s radii (s = -1: hidden, 1: clear).
 float diskShare(float s) {
     s = std::clamp(s, -1.0f, 1.0f);
-    return 0.5f + (s * std::sqrt(1.0f - s * s) + std::asin(s)) / 3.14159265f;
+    return 0.5f + (s * std::sqrt(1.0f - s * s) + std::asin(s)) / kPi;
 }
 
 }  // namespace

@@ -25,30 +25,11 @@ Vec3 bilinear(const std::vector<float>& img, int w, int h, float px, float py) {
     return c;
 }
 
-void add(RenderStats& total, const RenderStats& s) {
-    total.seconds += s.seconds;
-    total.threads = s.threads;
-    total.primaryRays += s.primaryRays;
-    total.primaryEvaluations += s.primaryEvaluations;
-    total.hits += s.hits;
-    total.fallbacks += s.fallbacks;
-    total.normalEvaluations += s.normalEvaluations;
-    total.shadowRays += s.shadowRays;
-    total.shadowEvaluations += s.shadowEvaluations;
-    total.aoEvaluations += s.aoEvaluations;
-    total.secondaryRays += s.secondaryRays;
-    total.secondaryEvaluations += s.secondaryEvaluations;
-    total.selfIntersections += s.selfIntersections;
-    total.traversalSteps += s.traversalSteps;
-    total.intersectionTests += s.intersectionTests;
-    total.gridTracer = s.gridTracer;
-}
-
 }  // namespace
 
 CameraDesc orbitCamera(const CameraDesc& c, float degrees) {
     CameraDesc out = c;
-    const float a = degrees * 3.14159265f / 180.0f;
+    const float a = radians(degrees);
     const Vec3 axis = normalize(c.up);
     const Vec3 v = c.eye - c.target;
     // Rodrigues' rotation of the eye about the up axis through the target.
@@ -58,24 +39,28 @@ CameraDesc orbitCamera(const CameraDesc& c, float degrees) {
     return out;
 }
 
-RenderStats renderFrames(const Scene& scene, const Tape& tape, Film& film, const TemporalOptions& o,
+RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptions& o,
                          const std::function<void(int, const Film&)>& onFrame, bool progress) {
     const int w = film.width, h = film.height;
     const bool moving = o.orbitDegrees != 0;
     const float alpha = o.alpha > 0 ? o.alpha : (moving ? 0.9f : 0.0f);
     RenderStats total;
     std::vector<float> history;
-    Camera previous(scene.camera);
+    Camera previous(plan.camera);
     for (int k = 0; k < std::max(1, o.frames); ++k) {
-        Scene s = scene;
-        s.camera = orbitCamera(scene.camera, o.orbitDegrees * static_cast<float>(k));
-        s.settings.frame = static_cast<uint32_t>(k);
+        FrameView s;
+        s.camera = orbitCamera(plan.camera, o.orbitDegrees * static_cast<float>(k));
+        s.frame = static_cast<uint32_t>(k);
         if (o.jitterCamera && o.frames > 1) {
-            s.settings.pixelJitter[0] = radicalInverse(static_cast<uint32_t>(k) + 1, 2) - 0.5f;
-            s.settings.pixelJitter[1] = radicalInverse(static_cast<uint32_t>(k) + 1, 3) - 0.5f;
+            s.pixelJitter[0] = radicalInverse(static_cast<uint32_t>(k) + 1, 2) - 0.5f;
+            s.pixelJitter[1] = radicalInverse(static_cast<uint32_t>(k) + 1, 3) - 0.5f;
         }
         Film current(w, h);
-        add(total, render(s, tape, current, progress && k == 0));
+        const RenderStats frameStats = render(plan, s, current, progress && k == 0);
+        total.add(frameStats);
+        total.seconds += frameStats.seconds;
+        total.threads = frameStats.threads;
+        total.gridTracer = frameStats.gridTracer;
         const Camera camera(s.camera);
         if (k == 0) {
             history = current.color;
@@ -93,8 +78,8 @@ RenderStats renderFrames(const Scene& scene, const Tape& tape, Film& film, const
                         float px = x + 0.5f, py = y + 0.5f;
                         if (std::isfinite(current.depth[i])) {
                             const Vec3 p = camera
-                                               .rayThrough(x + 0.5f + s.settings.pixelJitter[0],
-                                                           y + 0.5f + s.settings.pixelJitter[1])
+                                               .rayThrough(x + 0.5f + s.pixelJitter[0],
+                                                           y + 0.5f + s.pixelJitter[1])
                                                .at(current.depth[i]);
                             if (!previous.project(p, px, py) || px < 0 || py < 0 || px >= w ||
                                 py >= h)

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "sdftrace/scene/plan_render.h"
 #include "shadow_test_scenes.h"
 
 namespace sdft {
@@ -28,12 +29,11 @@ TEST(Temporal, AccumulatedFramesConvergeToTheGroundTruth) {
         return s;
     };
     auto colour = [](const Scene& s, int frames) {
-        Tape tape = compileTape(s.root);
         Film film(s.camera.width, s.camera.height);
         TemporalOptions o;
         o.frames = frames;
         o.jitterCamera = false;  // the same pixel footprints as the truth
-        renderFrames(s, tape, film, o);
+        renderFrames(planRender(s), film, o);
         return film.color;
     };
     const std::vector<float> truth = colour(scene(1024), 1);
@@ -53,7 +53,6 @@ TEST(Temporal, OrbitingCameraLeavesNoGhosts) {
     EXPECT_LT(length(full.eye - s.camera.eye), 1e-4f * length(s.camera.eye));
     EXPECT_NEAR(length(orbitCamera(s.camera, 37.0f).eye - s.camera.target),
                 length(s.camera.eye - s.camera.target), 1e-4f);
-    Tape tape = compileTape(s.root);
     const int frames = 10;
     const float step = 4.0f;
     Film film(s.camera.width, s.camera.height);
@@ -61,12 +60,12 @@ TEST(Temporal, OrbitingCameraLeavesNoGhosts) {
     o.frames = frames;
     o.orbitDegrees = step;
     int seen = 0;
-    renderFrames(s, tape, film, o, [&](int k, const Film&) { seen += k == seen; });
+    renderFrames(planRender(s), film, o, [&](int k, const Film&) { seen += k == seen; });
     EXPECT_EQ(seen, frames);
     Scene last = s;
     last.camera = orbitCamera(s.camera, step * (frames - 1));
     Film single(s.camera.width, s.camera.height);
-    render(last, tape, single);
+    render(planRender(last), single);
     double diff = 0, mean = 0;
     for (size_t i = 0; i < single.color.size(); ++i) {
         diff += std::fabs(double(film.color[i]) - single.color[i]);

@@ -28,75 +28,34 @@ bool refract(Vec3 d, Vec3 n, float eta, Vec3& out) {
     return true;
 }
 
-bool isConvex(const Node& n) {
-    switch (n.kind) {
-        case NodeKind::Sphere:
-        case NodeKind::Box:
-        case NodeKind::RoundBox:
-        case NodeKind::Capsule:
-        case NodeKind::Cylinder:
-        case NodeKind::Cone:
-        case NodeKind::Ellipsoid:
-        case NodeKind::Octahedron:
-        case NodeKind::Dodecahedron:
-            return true;
-        case NodeKind::Intersection:
-        case NodeKind::Translate:
-        case NodeKind::Rotate:
-        case NodeKind::Scale:
-            for (const NodePtr& c : n.children)
-                if (!isConvex(*c)) return false;
-            return !n.children.empty();
-        default:
-            return false;
-    }
+WhittedTracer::WhittedTracer(const RenderPlan& plan, Visibility visibility)
+    : m_plan(plan), m_tape(plan.tape), m_visibility(std::move(visibility)) {
+    m_trace = plan.settings.trace.secondary();  // a secondary ray has no pixel footprint
 }
 
-WhittedTracer::WhittedTracer(const Scene& scene, const Tape& tape, Visibility visibility)
-    : m_scene(scene), m_tape(tape), m_visibility(std::move(visibility)) {
-    m_trace = scene.settings.trace;
-    m_trace.screenSpace = false;  // a secondary ray has no pixel footprint of its own
-    m_trace.forceHit = false;
-    m_trace.discontinuityIters = 0;
-    m_trace.fixedSteps = false;
-    if (scene.settings.convexBounds && scene.root) {
-        std::vector<NodePtr> objects;
-        if (scene.root->kind == NodeKind::Union)
-            objects = scene.root->children;
-        else
-            objects.push_back(scene.root);
-        for (const NodePtr& o : objects) {
-            const Bounds3 b = nodeBounds(*o);
-            if (isConvex(*o) && b.finite() && !b.empty()) m_convex.push_back({compileTape(o), b});
-        }
-    }
-}
-
-Material WhittedTracer::materialAt(Vec3 p, Vec3 n) const {
-    return sdft::materialAt(m_scene, m_tape, p, n);
-}
+Material WhittedTracer::materialAt(Vec3 p, Vec3 n) const { return sdft::materialAt(m_plan, p, n); }
 
 // Keinert et al. 2014, §3.3.
 float WhittedTracer::offset(float f) const {
-    const RenderSettings& s = m_scene.settings;
+    const RenderSettings& s = m_plan.settings;
     return s.dynamicEpsilon ? 2.0f * std::max(s.shadowOffsetMin, std::fabs(f) / m_tape.lipschitz())
                             : s.globalEpsilon;
 }
 
 Vec3 WhittedTracer::normalAt(Vec3 p) const {
-    const Vec3 n = estimateNormal(m_tape, p, 1e-4f, m_scene.settings.normals);
+    const Vec3 n = estimateNormal(m_tape, p, 1e-4f, m_plan.settings.normals);
     return length(n) > 0 ? n : Vec3(0, 1, 0);
 }
 
 Vec3 WhittedTracer::shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m) const {
-    Vec3 c = m_scene.lighting.ambient * m.color;
-    const auto& lights = m_scene.lighting.lights;
+    Vec3 c = m_plan.lighting.ambient * m.color;
+    const auto& lights = m_plan.lighting.lights;
     for (size_t li = 0; li < lights.size(); ++li) {
         const LightDirection to = towardLight(lights[li], p);
         const float ndotl = dot(n, to.dir);
         if (ndotl <= 0) continue;
         float vis = 1;
-        if (m_scene.settings.shadows && lights[li].castShadows)
+        if (m_plan.settings.shadows && lights[li].castShadows)
             vis = m_visibility(p, n, lights[li], static_cast<int>(li));
         if (vis <= 0) continue;
         const Vec3 half = normalize(to.dir - d);
@@ -109,7 +68,7 @@ Vec3 WhittedTracer::shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m) const
 
 Vec3 WhittedTracer::shadeSpecular(Vec3 p, Vec3 n, float f, Vec3 d, const Material& m,
                                   WhittedStats& stats) const {
-    return shade(p, n, f, d, m, m_scene.settings.maxReflections, m_scene.settings.maxRefractions,
+    return shade(p, n, f, d, m, m_plan.settings.maxReflections, m_plan.settings.maxRefractions,
                  stats);
 }
 
@@ -145,10 +104,10 @@ Vec3 WhittedTracer::shade(Vec3 p, Vec3 n, float f, Vec3 d, const Material& m, in
 Vec3 WhittedTracer::traceOutside(Vec3 origin, Vec3 d, int reflections, int refractions, float eps,
                                  WhittedStats& stats) const {
     const TraceResult r =
-        traceRay(m_tape, {{origin, d}, 0.0f, m_scene.settings.maxDistance}, m_trace);
+        traceRay(m_tape, {{origin, d}, 0.0f, m_plan.settings.maxDistance}, m_trace);
     ++stats.rays;
     stats.evaluations += r.evaluations;
-    if (!r.hit) return m_scene.lighting.background;
+    if (!r.hit) return m_plan.lighting.background;
     if (r.t <= 2 * eps) ++stats.selfIntersections;
     const Vec3 p = origin + d * r.t;
     const Vec3 n = normalAt(p);
@@ -158,7 +117,7 @@ Vec3 WhittedTracer::traceOutside(Vec3 origin, Vec3 d, int reflections, int refra
 bool WhittedTracer::exitDistance(Vec3 origin, Vec3 d, float& dist, float& value,
                                  WhittedStats& stats) const {
     // Keinert §3.5: inside a convex object, from its bound's far side back along -d.
-    for (const ConvexObject& c : m_convex) {
+    for (const ConvexObject& c : m_plan.convexObjects) {
         if (!c.bounds.contains(origin)) continue;
         const float f = c.tape.eval(origin);
         ++stats.evaluations;
@@ -185,7 +144,7 @@ bool WhittedTracer::exitDistance(Vec3 origin, Vec3 d, float& dist, float& value,
     }
     SphereTraceState s;
     const float invL = 1.0f / m_tape.lipschitz();
-    sphereTraceBegin(s, {origin, d}, 0.0f, m_scene.settings.maxDistance, Bounds3::everything(),
+    sphereTraceBegin(s, {origin, d}, 0.0f, m_plan.settings.maxDistance, Bounds3::everything(),
                      m_trace);
     while (!s.done()) sphereTraceAdvance(s, -m_tape.eval(s.queryPoint()), invL, m_trace);
     stats.evaluations += s.result.evaluations;

@@ -15,8 +15,8 @@ TEST(Fresnel, NormalIncidenceGrazingAndTotalInternalReflection) {
     EXPECT_NEAR(fresnelDielectric(1.0f, 1.5f, 1.0f), 0.04f, 1e-6f);
     EXPECT_GT(fresnelDielectric(0.01f, 1.0f, 1.5f), 0.9f);
     // From glass, beyond the critical angle asin(1/1.5) ~ 41.8 degrees: all reflected.
-    EXPECT_EQ(fresnelDielectric(std::cos(45.0f * 3.14159265f / 180), 1.5f, 1.0f), 1.0f);
-    EXPECT_LT(fresnelDielectric(std::cos(40.0f * 3.14159265f / 180), 1.5f, 1.0f), 1.0f);
+    EXPECT_EQ(fresnelDielectric(std::cos(radians(45.0f)), 1.5f, 1.0f), 1.0f);
+    EXPECT_LT(fresnelDielectric(std::cos(radians(40.0f)), 1.5f, 1.0f), 1.0f);
 }
 
 std::string environmentScene(const std::string& material, const std::string& render) {

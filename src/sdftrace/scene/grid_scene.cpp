@@ -11,7 +11,7 @@ CameraDesc frameBounds(const Bounds3& b, float fovDeg, int width, int height) {
     c.height = height;
     Vec3 center = b.center();
     float radius = 0.5f * length(b.extent());
-    float halfFov = 0.5f * fovDeg * 3.14159265f / 180.0f;
+    float halfFov = radians(0.5f * fovDeg);
     // Fit the sphere in the narrower of the two fields of view.
     float aspect = static_cast<float>(width) / height;
     float halfNarrow = aspect < 1 ? std::atan(std::tan(halfFov) * aspect) : halfFov;

@@ -11,6 +11,7 @@
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_file.h"
+#include "sdftrace/io/mesh_io.h"
 
 namespace sdft {
 

@@ -91,10 +91,9 @@ Light parseLight(const Reader& r) {
         l.direction = r.vec3("direction");
         if (length(l.direction) <= 0) r.failKey("direction", "expected a non-zero direction");
         l.direction = normalize(l.direction);
-        l.angle = r.number(
-                      "angle", 0.0f, [](double v) { return v >= 0 && v < 90; },
-                      "an angular diameter in [0, 90) degrees") *
-                  3.14159265f / 180.0f;
+        l.angle = radians(r.number(
+            "angle", 0.0f, [](double v) { return v >= 0 && v < 90; },
+            "an angular diameter in [0, 90) degrees"));
     } else if (type == "point") {
         r.allowKeys({"type", "position", "color", "intensity", "shadows"});
         l.kind = Light::Kind::Point;

@@ -19,11 +19,8 @@ MinMaxBuffer MinMaxBuffer::build(const GridView& g, const Camera& cam, int resol
     b.m_min.assign(static_cast<size_t>(b.m_w) * b.m_h, kInfinity);
     b.m_max.assign(static_cast<size_t>(b.m_w) * b.m_h, -kInfinity);
 
-    Vec3 forward = normalize(d.target - d.eye);
-    Vec3 right = normalize(cross(forward, d.up));
-    Vec3 up = cross(right, forward);
-    float tanHalf = std::tan(0.5f * d.fovDeg * 3.14159265f / 180.0f);
-    float aspect = static_cast<float>(d.width) / d.height;
+    const Vec3 forward = cam.forward(), right = cam.right(), up = cam.up();
+    const float tanHalf = cam.tanHalfFov();
     const int B = g.kind == GridKind::Sparse
                       ? g.blockSize
                       : std::max({g.shape.cells[0], g.shape.cells[1], g.shape.cells[2]});
@@ -66,8 +63,8 @@ MinMaxBuffer MinMaxBuffer::build(const GridView& g, const Camera& cam, int resol
                         // point q = c + e (|e| <= r) projects to q_x / q_z; |q_x/q_z - c_x/c_z| =
                         // |e_x c_z - c_x e_z| / (q_z c_z) <= r (c_z + |c_x|) / ((c_z - r) c_z).
                         float cx = dot(rel, right), cy = dot(rel, up);
-                        float px = (cx / z / (tanHalf * aspect) * 0.5f + 0.5f) * d.width;
-                        float py = (0.5f - cy / z / tanHalf * 0.5f) * d.height;
+                        float px, py;
+                        cam.project(c, px, py);
                         float pixelsPerUnit =
                             0.5f * d.height / tanHalf;  // image-plane units to pixels
                         float halfX =

@@ -23,7 +23,7 @@ class Camera {
         m_forward = normalize(d.target - d.eye);
         m_right = normalize(cross(m_forward, d.up));
         m_up = cross(m_right, m_forward);
-        m_tanHalf = std::tan(0.5f * d.fovDeg * 3.14159265358979f / 180.0f);
+        m_tanHalf = std::tan(0.5f * radians(d.fovDeg));
         m_aspect = static_cast<float>(d.width) / static_cast<float>(d.height);
     }
 
@@ -49,6 +49,11 @@ class Camera {
     // Radius of half a pixel at distance 1 (Keinert et al. 2014, Listing 2's pixelRadius).
     float pixelRadius() const { return m_tanHalf / m_desc.height; }
     const CameraDesc& desc() const { return m_desc; }
+    // The orthonormal frame (forward towards the target) and tan(fov / 2).
+    Vec3 forward() const { return m_forward; }
+    Vec3 right() const { return m_right; }
+    Vec3 up() const { return m_up; }
+    float tanHalfFov() const { return m_tanHalf; }
 
   private:
     CameraDesc m_desc;

@@ -1,0 +1,52 @@
+// What the integrators consume (DESIGN.md "one plan, two devices"): the scene's field compiled to
+// a tape, the tapes of its convex top-level objects (Keinert et al. 2014, §3.5), the grid a
+// single-grid scene is traced through by Jamriška's DDA, materials, textures, lights, the camera
+// and the settings. Built once from a prepared scene (scene/plan_render.h) and read-only after;
+// the renderers never look at the node tree. What changes per frame is a FrameView.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "sdftrace/field/grid.h"
+#include "sdftrace/field/node.h"
+#include "sdftrace/field/tape.h"
+#include "sdftrace/math/camera.h"
+#include "sdftrace/render/lighting.h"
+#include "sdftrace/render/render_settings.h"
+#include "sdftrace/render/texture.h"
+
+namespace sdft {
+
+// A convex top-level object's own field and bounding box (Keinert §3.5).
+struct ConvexObject {
+    Tape tape;
+    Bounds3 bounds;
+};
+
+struct RenderPlan {
+    Tape tape;                                // the whole field
+    std::vector<ConvexObject> convexObjects;  // when settings.convexBounds
+    std::shared_ptr<const Grid> ddaGrid;      // a single-grid scene traced by DDA; else null
+    std::vector<Material> materials;
+    std::vector<Texture> textures;     // referenced by materials
+    std::vector<TextureImage> images;  // referenced by textures
+    Lighting lighting;
+    CameraDesc camera;
+    RenderSettings settings;
+};
+
+// What changes between frames of one plan (temporal.h): the camera, the frame number that seeds
+// per-pixel random sequences, and the subpixel offset of primary rays.
+struct FrameView {
+    CameraDesc camera;
+    uint32_t frame = 0;
+    float pixelJitter[2] = {0, 0};  // primary rays through (x + 0.5 + jx, y + 0.5 + jy)
+};
+
+// Compiles the field part of `plan` from the scene's root node by `plan.settings`: the tape (with
+// bounds culling when enabled), the convex objects and the DDA grid.
+void compileField(RenderPlan& plan, const NodePtr& root);
+
+}  // namespace sdft
