@@ -209,16 +209,21 @@ SDFT_HOST_DEVICE inline void GridView::locate(Vec3 p, int& i, int& j, int& k, fl
     u = fx - i, v = fy - j, w = fz - k;
 }
 
+// Trilinear interpolation of a cell's corners c[i + 2 j + 4 k] at local coordinates (u, v, w).
+SDFT_HOST_DEVICE inline float trilinear(const float c[8], float u, float v, float w) {
+    float c00 = c[0] + (c[1] - c[0]) * u, c10 = c[2] + (c[3] - c[2]) * u;
+    float c01 = c[4] + (c[5] - c[4]) * u, c11 = c[6] + (c[7] - c[6]) * u;
+    float c0 = c00 + (c10 - c00) * v, c1 = c01 + (c11 - c01) * v;
+    return c0 + (c1 - c0) * w;
+}
+
 SDFT_HOST_DEVICE inline float GridView::interpolate(Vec3 p) const {
     int i, j, k;
     float u, v, w;
     locate(p, i, j, k, u, v, w);
     float c[8];
     cellCorners(i, j, k, c);
-    float c00 = c[0] + (c[1] - c[0]) * u, c10 = c[2] + (c[3] - c[2]) * u;
-    float c01 = c[4] + (c[5] - c[4]) * u, c11 = c[6] + (c[7] - c[6]) * u;
-    float c0 = c00 + (c10 - c00) * v, c1 = c01 + (c11 - c01) * v;
-    return c0 + (c1 - c0) * w;
+    return trilinear(c, u, v, w);
 }
 
 SDFT_HOST_DEVICE inline bool GridView::cornerIndices(int i, int j, int k, size_t idx[8]) const {

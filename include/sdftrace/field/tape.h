@@ -99,6 +99,10 @@ struct BatchScratch {
 class Tape {
   public:
     static constexpr int kBatchWidth = 64;
+    // The scalar evaluator's register files live on the stack: the compiler keeps a tape within
+    // them (deeper trees are rejected with an InputError).
+    static constexpr int kMaxScalarRegs = 64;
+    static constexpr int kMaxPointRegs = 32;
 
     float eval(Vec3 p) const;
     // out[i] = f(x[i], y[i], z[i]) for i < n (any n; processed in chunks of kBatchWidth).

@@ -12,6 +12,7 @@
 
 #include "sdftrace/bake/closest_point.h"
 #include "sdftrace/exec/progress.h"
+#include "sdftrace/math/vec3d.h"
 
 namespace sdft {
 namespace {
@@ -20,21 +21,8 @@ namespace {
 // 1e-4 at 1024 voxels), so the true closest feature is always among those evaluated.
 constexpr double kGrow = 1e-3;
 
-struct D3 {
-    double x = 0, y = 0, z = 0;
-    double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
-};
-D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-D3 operator*(D3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-double dot(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-D3 cross(D3 a, D3 b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double norm(D3 a) { return std::sqrt(dot(a, a)); }
-
 struct Plane {
-    D3 n;
+    Vec3d n;
     double c;  // n . x <= c
 };
 
@@ -43,16 +31,16 @@ struct Plane {
 constexpr int kMaxLoop = 40, kMaxFaces = 36;
 struct Loop {
     int n = 0;
-    D3 v[kMaxLoop];
+    Vec3d v[kMaxLoop];
 };
 struct Polytope {
     int faces = 0;
     Loop f[kMaxFaces];
 };
 
-void makeBox(Polytope& p, D3 lo, D3 hi) {
+void makeBox(Polytope& p, Vec3d lo, Vec3d hi) {
     auto corner = [&](int i) {
-        return D3{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z};
+        return Vec3d{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z};
     };
     static constexpr int kQuads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
                                          {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
@@ -78,7 +66,7 @@ Cut clip(const Polytope& p, const Plane& h, Polytope& out) {
     }
     if (hi <= 0) return Cut::Unchanged;
     if (lo > 0) return Cut::Empty;
-    D3 cuts[2 * kMaxFaces];
+    Vec3d cuts[2 * kMaxFaces];
     int nc = 0;
     out.faces = 0;
     for (int f = 0; f < p.faces; ++f) {
@@ -86,8 +74,8 @@ Cut clip(const Polytope& p, const Plane& h, Polytope& out) {
         Loop& o = out.f[out.faces];
         o.n = 0;
         for (int i = 0; i < in.n; ++i) {
-            const D3& a = in.v[i];
-            const D3& b = in.v[(i + 1) % in.n];
+            const Vec3d& a = in.v[i];
+            const Vec3d& b = in.v[(i + 1) % in.n];
             const double da = dot(h.n, a) - h.c, db = dot(h.n, b) - h.c;
             if (da <= 0) {
                 if (o.n == kMaxLoop) return Cut::Unchanged;
@@ -95,7 +83,7 @@ Cut clip(const Polytope& p, const Plane& h, Polytope& out) {
             }
             if ((da <= 0) != (db <= 0)) {
                 if (o.n == kMaxLoop || nc == 2 * kMaxFaces) return Cut::Unchanged;
-                const D3 x = a + (b - a) * (da / (da - db));
+                const Vec3d x = a + (b - a) * (da / (da - db));
                 o.v[o.n++] = x;
                 cuts[nc++] = x;
             }
@@ -104,13 +92,13 @@ Cut clip(const Polytope& p, const Plane& h, Polytope& out) {
     }
     if (nc >= 3) {
         if (out.faces == kMaxFaces) return Cut::Unchanged;
-        D3 g;
+        Vec3d g;
         for (int i = 0; i < nc; ++i) g = g + cuts[i];
         g = g * (1.0 / nc);
-        const D3 n = h.n * (1.0 / norm(h.n));
-        D3 u = cross(n, std::fabs(n.x) < 0.6 ? D3{1, 0, 0} : D3{0, 1, 0});
+        const Vec3d n = h.n * (1.0 / norm(h.n));
+        Vec3d u = cross(n, std::fabs(n.x) < 0.6 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0});
         u = u * (1.0 / norm(u));
-        const D3 w = cross(n, u);
+        const Vec3d w = cross(n, u);
         std::array<std::pair<double, int>, 2 * kMaxFaces> order;
         for (int i = 0; i < nc; ++i)
             order[i] = {std::atan2(dot(cuts[i] - g, w), dot(cuts[i] - g, u)), i};
@@ -118,7 +106,7 @@ Cut clip(const Polytope& p, const Plane& h, Polytope& out) {
         Loop& cap = out.f[out.faces];
         cap.n = 0;
         for (int i = 0; i < nc && cap.n < kMaxLoop; ++i) {
-            const D3& x = cuts[order[i].second];
+            const Vec3d& x = cuts[order[i].second];
             if (cap.n > 0 && norm(x - cap.v[cap.n - 1]) < 1e-12) continue;
             cap.v[cap.n++] = x;
         }
@@ -238,22 +226,22 @@ class Transform {
     // Feature f: faces first, then edges, then vertices. False when its region misses the grid.
     bool build(size_t f, Scratch& s, Scan& out) const {
         std::vector<Plane> planes;
-        D3 lo, hi;
+        Vec3d lo, hi;
         const size_t nt = m_mesh.triangles.size(), ne = m_edges.size();
         if (f < nt) {
             out.kind = Kind::Face;
             out.id = static_cast<uint32_t>(f);
             const auto& t = m_mesh.triangles[f];
-            const D3 a = m_pd[t[0]], b = m_pd[t[1]], c = m_pd[t[2]];
-            D3 n = cross(b - a, c - a);
+            const Vec3d a = m_pd[t[0]], b = m_pd[t[1]], c = m_pd[t[2]];
+            Vec3d n = cross(b - a, c - a);
             const double longest =
                 std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
             // A sliver this thin is within 1e-10 of its edges, which stand for it.
             if (dot(n, n) <= 1e-20 * longest * longest) return false;
             n = n * (1.0 / norm(n));
-            const D3 v[3] = {a, b, c};
+            const Vec3d v[3] = {a, b, c};
             for (int k = 0; k < 3; ++k) {
-                D3 m = cross(v[(k + 1) % 3] - v[k], n);
+                Vec3d m = cross(v[(k + 1) % 3] - v[k], n);
                 m = m * (1.0 / norm(m));
                 planes.push_back({m, dot(m, v[k]) + kGrow});
             }
@@ -263,10 +251,10 @@ class Transform {
             out.kind = Kind::Edge;
             out.id = static_cast<uint32_t>(f - nt);
             const auto& e = m_edges[out.id];
-            const D3 a = m_pd[e[0]], b = m_pd[e[1]];
+            const Vec3d a = m_pd[e[0]], b = m_pd[e[1]];
             const double len = norm(b - a);
             if (len == 0) return false;
-            const D3 u = (b - a) * (1.0 / len);
+            const Vec3d u = (b - a) * (1.0 / len);
             planes.push_back({u * -1.0, -dot(u, a) + kGrow});
             planes.push_back({u, dot(u, b) + kGrow});
             for (uint32_t k = m_edgeFaces[out.id]; k < m_edgeFaces[out.id + 1]; ++k) {
@@ -274,7 +262,7 @@ class Transform {
                 const uint32_t w = t[0] != e[0] && t[0] != e[1]   ? t[0]
                                    : t[1] != e[0] && t[1] != e[1] ? t[1]
                                                                   : t[2];
-                D3 m = a - m_pd[w];
+                Vec3d m = a - m_pd[w];
                 m = m - u * dot(m, u);
                 const double ml = norm(m);
                 if (ml <= 1e-12 * len) continue;  // a sliver: no constraint (a larger region)
@@ -287,9 +275,9 @@ class Transform {
             out.kind = Kind::Vertex;
             out.id = static_cast<uint32_t>(f - nt - ne);
             if (m_vertexEdges[out.id] == m_vertexEdges[out.id + 1]) return false;  // unused
-            const D3 v = m_pd[out.id];
+            const Vec3d v = m_pd[out.id];
             for (uint32_t k = m_vertexEdges[out.id]; k < m_vertexEdges[out.id + 1]; ++k) {
-                D3 u = m_pd[m_neighbours[k]] - v;
+                Vec3d u = m_pd[m_neighbours[k]] - v;
                 const double ul = norm(u);
                 if (ul == 0) continue;
                 u = u * (1.0 / ul);
@@ -483,10 +471,10 @@ class Transform {
         for (int z : at[2]) {
             for (int y : at[1]) {
                 for (int x : at[0]) {
-                    const D3 p{double(x), double(y), double(z)};
+                    const Vec3d p{double(x), double(y), double(z)};
                     double best = INFINITY;
                     for (size_t v = 0; v < nv; v += stride) {
-                        const D3 d = m_pd[v] - p;
+                        const Vec3d d = m_pd[v] - p;
                         best = std::min(best, dot(d, d));
                     }
                     worst = std::max(worst, best);
@@ -498,7 +486,7 @@ class Transform {
 
     const TriangleMesh& m_mesh;
     const GridShape& m_shape;
-    std::vector<D3> m_pd;
+    std::vector<Vec3d> m_pd;
     std::vector<Vec3> m_pf;
     std::vector<std::array<uint32_t, 2>> m_edges;
     std::vector<uint32_t> m_edgeFaces, m_faceList;

@@ -4,30 +4,23 @@
 #include <cmath>
 #include <numeric>
 
+#include "sdftrace/math/vec3d.h"
+
 namespace sdft {
 
 namespace {
 constexpr double kFourPi = 12.566370614359172;
 constexpr int kLeafSize = 8;
 
-struct D3 {
-    double x, y, z;
-};
-D3 sub(Vec3 a, Vec3 b) { return {double(a.x) - b.x, double(a.y) - b.y, double(a.z) - b.z}; }
-double dot3(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-D3 cross3(D3 a, D3 b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double len3(D3 a) { return std::sqrt(dot3(a, a)); }
 }  // namespace
 
 // Van Oosterom & Strackee 1983: tan(Omega / 2) = a.(b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b| +
 // (b.c)|a|) with a, b, c the vertices relative to p.
 double triangleSolidAngle(Vec3 p, Vec3 va, Vec3 vb, Vec3 vc) {
-    D3 a = sub(va, p), b = sub(vb, p), c = sub(vc, p);
-    double la = len3(a), lb = len3(b), lc = len3(c);
-    double num = dot3(a, cross3(b, c));
-    double den = la * lb * lc + dot3(a, b) * lc + dot3(a, c) * lb + dot3(b, c) * la;
+    Vec3d a = difference(va, p), b = difference(vb, p), c = difference(vc, p);
+    double la = norm(a), lb = norm(b), lc = norm(c);
+    double num = dot(a, cross(b, c));
+    double den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
     return 2.0 * std::atan2(num, den);
 }
 
@@ -73,8 +66,8 @@ int WindingNumber::build(int first, int count) {
         for (Vec3 v : {p0, p1, p2}) b.include(v);
         Vec3 c = (p0 + p1 + p2) / 3.0f;
         centroids.include(c);
-        D3 cr = cross3(sub(p1, p0), sub(p2, p0));  // 2 * area * unit normal
-        double a = 0.5 * len3(cr);
+        Vec3d cr = cross(difference(p1, p0), difference(p2, p0));  // 2 * area * unit normal
+        double a = 0.5 * norm(cr);
         area += a;
         cx += a * c.x, cy += a * c.y, cz += a * c.z;
         nx += 0.5 * cr.x, ny += 0.5 * cr.y, nz += 0.5 * cr.z;

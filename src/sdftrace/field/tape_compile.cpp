@@ -10,9 +10,8 @@ namespace sdft {
 
 namespace {
 
-// Register files of the scalar evaluator live on the stack; keep these in sync with tape_eval.cpp.
-constexpr int kMaxScalarRegs = 64;
-constexpr int kMaxPointRegs = 32;
+constexpr int kMaxScalarRegs = Tape::kMaxScalarRegs;
+constexpr int kMaxPointRegs = Tape::kMaxPointRegs;
 
 class Compiler {
   public:

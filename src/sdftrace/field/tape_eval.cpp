@@ -11,8 +11,8 @@
 namespace sdft {
 
 namespace {
-constexpr int kMaxScalarRegs = 64;  // see tape_compile.cpp
-constexpr int kMaxPointRegs = 32;
+constexpr int kMaxScalarRegs = Tape::kMaxScalarRegs;
+constexpr int kMaxPointRegs = Tape::kMaxPointRegs;
 
 float evalPrimitive(Op op, Vec3 p, const float* k) {
     switch (op) {

@@ -62,10 +62,7 @@ float valueAt(const GridView& g, const GridRay& r, float t, int ci, int cj, int 
     Vec3 p = r.o + r.d * t;
     float u = clampf(p.x - ci, 0.f, 1.f), v = clampf(p.y - cj, 0.f, 1.f),
           w = clampf(p.z - ck, 0.f, 1.f);
-    float c00 = c[0] + (c[1] - c[0]) * u, c10 = c[2] + (c[3] - c[2]) * u;
-    float c01 = c[4] + (c[5] - c[4]) * u, c11 = c[6] + (c[7] - c[6]) * u;
-    float c0 = c00 + (c10 - c00) * v, c1 = c01 + (c11 - c01) * v;
-    return c0 + (c1 - c0) * w;
+    return trilinear(c, u, v, w);
 }
 
 // Jamriška §4.2 inside one surface cell on [tIn, tOut]: true and the hit parameter if the
