@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "sdftrace/field/primitive_table.h"
 #include "sdftrace/math/ray.h"
 #include "sdftrace/math/vec.h"
 
@@ -17,20 +18,11 @@ class Grid;
 namespace sdft {
 
 enum class NodeKind {
-    // primitives
-    Sphere,
-    Box,
-    RoundBox,
-    Torus,
-    Capsule,
-    Cylinder,
-    Cone,
-    Plane,
-    Ellipsoid,
-    Octahedron,
-    Dodecahedron,
-    Blobs,
-    Grid,  // a sampled field (dense or sparse block grid), trilinear
+// primitives (primitive_table.h), then grids
+#define SDFT_PRIMITIVE_KIND(Kind, ...) Kind,
+    SDFT_PRIMITIVES(SDFT_PRIMITIVE_KIND)
+#undef SDFT_PRIMITIVE_KIND
+        Grid,  // a sampled field (dense or sparse block grid), trilinear
     // operators
     Union,
     Intersection,

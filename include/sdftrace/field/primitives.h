@@ -1,10 +1,12 @@
-// Distance functions (or distance bounds) of the primitives, in the primitive's own frame.
-// Each takes the point and a pointer to its parameters as laid out by the tape compiler.
-// All are 1-Lipschitz: exact distances unless a comment says "bound".
+// Distance functions (or distance bounds) of the primitives, in the primitive's own frame, and the
+// axis-aligned box of each one's solid. Each takes the point and a pointer to its parameters as
+// laid out by its factory in node.h. All are 1-Lipschitz: exact distances unless a comment says
+// "bound". primitive_table.h lists them.
 #pragma once
 
 #include <cmath>
 
+#include "sdftrace/math/ray.h"
 #include "sdftrace/math/vec.h"
 
 namespace sdft::prim {
@@ -125,6 +127,60 @@ SDFT_HOST_DEVICE inline float blobs(Vec3 p, const float* k) {
         support = minf(support, r - b[3]);
     }
     return maxf((threshold - density) * invL, support);
+}
+
+// Bounds of each primitive's solid (nodeBounds), in its own frame, from the same parameters.
+inline Bounds3 sphereBounds(const float* k) { return {Vec3(-k[0]), Vec3(k[0])}; }
+inline Bounds3 boxBounds(const float* k) {
+    return {Vec3(-k[0], -k[1], -k[2]), Vec3(k[0], k[1], k[2])};
+}
+inline Bounds3 roundBoxBounds(const float* k) { return boxBounds(k); }
+inline Bounds3 torusBounds(const float* k) {
+    Vec3 e(k[0] + k[1], k[1], k[0] + k[1]);
+    return {-e, e};
+}
+inline Bounds3 capsuleBounds(const float* k) {
+    Bounds3 b;
+    b.include({k[0], k[1], k[2]});
+    b.include({k[3], k[4], k[5]});
+    return b.expanded(k[6]);
+}
+inline Bounds3 cylinderBounds(const float* k) {
+    return {Vec3(-k[0], -k[1], -k[0]), Vec3(k[0], k[1], k[0])};
+}
+inline Bounds3 coneBounds(const float* k) {
+    return {Vec3(-k[0], -0.5f * k[1], -k[0]), Vec3(k[0], 0.5f * k[1], k[0])};
+}
+// The solid half-space n.p + d <= 0 is bounded only along an axis-aligned normal.
+inline Bounds3 planeBounds(const float* k) {
+    Bounds3 b = Bounds3::everything();
+    for (int a = 0; a < 3; ++a) {
+        Vec3 axis(0.0f);
+        axis[a] = 1;
+        if (std::fabs(dot(Vec3(k[0], k[1], k[2]), axis)) < 0.999999f) continue;
+        if (k[a] > 0)
+            b.hi[a] = -k[3] / k[a];
+        else
+            b.lo[a] = -k[3] / k[a];
+    }
+    return b;
+}
+inline Bounds3 ellipsoidBounds(const float* k) { return boxBounds(k); }
+inline Bounds3 octahedronBounds(const float* k) { return sphereBounds(k); }
+inline Bounds3 dodecahedronBounds(const float* k) {
+    const float r = k[0] * kDodecahedronCircumPerInradius;
+    return {Vec3(-r), Vec3(r)};
+}
+// The union of the support spheres.
+inline Bounds3 blobsBounds(const float* k) {
+    Bounds3 b;
+    const int count = static_cast<int>(k[2]);
+    for (int i = 0; i < count; ++i) {
+        const float* c = &k[3 + 5 * i];
+        b = unite(
+            b, Bounds3{Vec3(c[0], c[1], c[2]) - Vec3(c[3]), Vec3(c[0], c[1], c[2]) + Vec3(c[3])});
+    }
+    return b;
 }
 
 }  // namespace sdft::prim

@@ -14,20 +14,11 @@
 namespace sdft {
 
 enum class Op : uint8_t {
-    // primitives: out(scalar) = f(point a), constants at k
-    Sphere,
-    Box,
-    RoundBox,
-    Torus,
-    Capsule,
-    Cylinder,
-    Cone,
-    Plane,
-    Ellipsoid,
-    Octahedron,
-    Dodecahedron,
-    Blobs,
-    Grid,  // k[0]: index into the tape's grid views
+// primitives (primitive_table.h): out(scalar) = f(point a), constants at k
+#define SDFT_PRIMITIVE_OP(Kind, ...) Kind,
+    SDFT_PRIMITIVES(SDFT_PRIMITIVE_OP)
+#undef SDFT_PRIMITIVE_OP
+        Grid,  // k[0]: index into the tape's grid views
     // scalar binary: out = op(a, b)
     Union,
     Intersection,

@@ -16,30 +16,11 @@ bool isPrimitive(NodeKind kind) { return kind <= NodeKind::Grid; }
 
 const char* nodeKindName(NodeKind kind) {
     switch (kind) {
-        case NodeKind::Sphere:
-            return "sphere";
-        case NodeKind::Box:
-            return "box";
-        case NodeKind::RoundBox:
-            return "round_box";
-        case NodeKind::Torus:
-            return "torus";
-        case NodeKind::Capsule:
-            return "capsule";
-        case NodeKind::Cylinder:
-            return "cylinder";
-        case NodeKind::Cone:
-            return "cone";
-        case NodeKind::Plane:
-            return "plane";
-        case NodeKind::Ellipsoid:
-            return "ellipsoid";
-        case NodeKind::Octahedron:
-            return "octahedron";
-        case NodeKind::Dodecahedron:
-            return "dodecahedron";
-        case NodeKind::Blobs:
-            return "blobs";
+#define SDFT_PRIMITIVE_NAME(Kind, name, ...) \
+    case NodeKind::Kind:                     \
+        return name;
+        SDFT_PRIMITIVES(SDFT_PRIMITIVE_NAME)
+#undef SDFT_PRIMITIVE_NAME
         case NodeKind::Grid:
             return "grid";
         case NodeKind::Union:
@@ -227,15 +208,11 @@ Bounds3 transformBounds(const Bounds3& b, const auto& map) {
 bool dominatesBounds(const Node& n) {
     auto child = [&](size_t i) { return dominatesBounds(*n.children[i]); };
     switch (n.kind) {
-        case NodeKind::Sphere:
-        case NodeKind::Box:
-        case NodeKind::RoundBox:
-        case NodeKind::Torus:
-        case NodeKind::Capsule:
-        case NodeKind::Cylinder:
-        case NodeKind::Cone:
-        case NodeKind::Blobs:  // max with the distance to the support spheres, inside the boxes
-            return true;
+#define SDFT_PRIMITIVE_DOMINATES(Kind, name, eval, bounds, convex, dominates) \
+    case NodeKind::Kind:                                                      \
+        return dominates;
+        SDFT_PRIMITIVES(SDFT_PRIMITIVE_DOMINATES)
+#undef SDFT_PRIMITIVE_DOMINATES
         case NodeKind::Union:
         case NodeKind::SmoothUnion: {  // the smooth union's bounds are grown by k >= the blend's
                                        // dip
@@ -267,58 +244,13 @@ Bounds3 nodeBounds(const Node& n) {
     const auto& k = n.params;
     auto child = [&](size_t i) { return nodeBounds(*n.children[i]); };
     switch (n.kind) {
-        case NodeKind::Sphere:
-            return {Vec3(-k[0]), Vec3(k[0])};
-        case NodeKind::Box:
-        case NodeKind::RoundBox:
-        case NodeKind::Ellipsoid:
-            return {Vec3(-k[0], -k[1], -k[2]), Vec3(k[0], k[1], k[2])};
-        case NodeKind::Torus: {
-            Vec3 e(k[0] + k[1], k[1], k[0] + k[1]);
-            return {-e, e};
-        }
-        case NodeKind::Capsule: {
-            Bounds3 b;
-            b.include({k[0], k[1], k[2]});
-            b.include({k[3], k[4], k[5]});
-            return b.expanded(k[6]);
-        }
-        case NodeKind::Cylinder:
-            return {Vec3(-k[0], -k[1], -k[0]), Vec3(k[0], k[1], k[0])};
-        case NodeKind::Cone:
-            return {Vec3(-k[0], -0.5f * k[1], -k[0]), Vec3(k[0], 0.5f * k[1], k[0])};
-        case NodeKind::Plane: {
-            // Solid half-space n.p + d <= 0: bounded only along an axis-aligned normal.
-            Bounds3 b = Bounds3::everything();
-            for (int a = 0; a < 3; ++a) {
-                Vec3 axis(0.0f);
-                axis[a] = 1;
-                if (std::fabs(dot(Vec3(k[0], k[1], k[2]), axis)) < 0.999999f) continue;
-                if (k[a] > 0)
-                    b.hi[a] = -k[3] / k[a];
-                else
-                    b.lo[a] = -k[3] / k[a];
-            }
-            return b;
-        }
-        case NodeKind::Octahedron:
-            return {Vec3(-k[0]), Vec3(k[0])};
-        case NodeKind::Dodecahedron: {
-            float r = k[0] * prim::kDodecahedronCircumPerInradius;
-            return {Vec3(-r), Vec3(r)};
-        }
+#define SDFT_PRIMITIVE_BOUNDS(Kind, name, eval, bounds, ...) \
+    case NodeKind::Kind:                                     \
+        return bounds(k.data());
+        SDFT_PRIMITIVES(SDFT_PRIMITIVE_BOUNDS)
+#undef SDFT_PRIMITIVE_BOUNDS
         case NodeKind::Grid:
             return n.grid->shape().bounds();
-        case NodeKind::Blobs: {
-            Bounds3 b;
-            int count = static_cast<int>(k[2]);
-            for (int i = 0; i < count; ++i) {
-                const float* c = &k[3 + 5 * i];
-                b = unite(b, Bounds3{Vec3(c[0], c[1], c[2]) - Vec3(c[3]),
-                                     Vec3(c[0], c[1], c[2]) + Vec3(c[3])});
-            }
-            return b;
-        }
         case NodeKind::Union:
         case NodeKind::Morph: {
             Bounds3 b;
@@ -375,30 +307,11 @@ float evalTree(const Node& n, Vec3 p) {
     auto child = [&](size_t i, Vec3 q) { return evalTree(*n.children[i], q); };
     float h;
     switch (n.kind) {
-        case NodeKind::Sphere:
-            return prim::sphere(p, k);
-        case NodeKind::Box:
-            return prim::box(p, k);
-        case NodeKind::RoundBox:
-            return prim::roundBox(p, k);
-        case NodeKind::Torus:
-            return prim::torus(p, k);
-        case NodeKind::Capsule:
-            return prim::capsule(p, k);
-        case NodeKind::Cylinder:
-            return prim::cylinder(p, k);
-        case NodeKind::Cone:
-            return prim::cone(p, k);
-        case NodeKind::Plane:
-            return prim::plane(p, k);
-        case NodeKind::Ellipsoid:
-            return prim::ellipsoid(p, k);
-        case NodeKind::Octahedron:
-            return prim::octahedron(p, k);
-        case NodeKind::Dodecahedron:
-            return prim::dodecahedron(p, k);
-        case NodeKind::Blobs:
-            return prim::blobs(p, k);
+#define SDFT_PRIMITIVE_TREE(Kind, name, eval, ...) \
+    case NodeKind::Kind:                           \
+        return eval(p, k);
+        SDFT_PRIMITIVES(SDFT_PRIMITIVE_TREE)
+#undef SDFT_PRIMITIVE_TREE
         case NodeKind::Grid:
             return n.grid->view().sample(p) / n.grid->lipschitz();
         case NodeKind::Union: {
@@ -445,16 +358,11 @@ float evalTree(const Node& n, Vec3 p) {
 
 bool isConvex(const Node& n) {
     switch (n.kind) {
-        case NodeKind::Sphere:
-        case NodeKind::Box:
-        case NodeKind::RoundBox:
-        case NodeKind::Capsule:
-        case NodeKind::Cylinder:
-        case NodeKind::Cone:
-        case NodeKind::Ellipsoid:
-        case NodeKind::Octahedron:
-        case NodeKind::Dodecahedron:
-            return true;
+#define SDFT_PRIMITIVE_CONVEX(Kind, name, eval, bounds, convex, ...) \
+    case NodeKind::Kind:                                             \
+        return convex;
+        SDFT_PRIMITIVES(SDFT_PRIMITIVE_CONVEX)
+#undef SDFT_PRIMITIVE_CONVEX
         case NodeKind::Intersection:
         case NodeKind::Translate:
         case NodeKind::Rotate:

@@ -207,5 +207,86 @@ TEST(Primitives, BoundsContainTheSurface) {
     }
 }
 
+// One example of each row of the primitive table; a new row without one fails here.
+NodePtr examplePrimitive(NodeKind kind) {
+    switch (kind) {
+        case NodeKind::Sphere:
+            return node::sphere(0.5f);
+        case NodeKind::Box:
+            return node::box({0.3f, 0.4f, 0.5f});
+        case NodeKind::RoundBox:
+            return node::roundBox({0.3f, 0.4f, 0.5f}, 0.1f);
+        case NodeKind::Torus:
+            return node::torus(0.6f, 0.2f);
+        case NodeKind::Capsule:
+            return node::capsule({0, 0, 0}, {0.5f, 0.5f, 0}, 0.2f);
+        case NodeKind::Cylinder:
+            return node::cylinder(0.4f, 0.6f);
+        case NodeKind::Cone:
+            return node::cone(0.4f, 1.0f);
+        case NodeKind::Plane:
+            return node::plane({0, 1, 0}, 0.2f);
+        case NodeKind::Ellipsoid:
+            return node::ellipsoid({0.7f, 0.2f, 0.3f});
+        case NodeKind::Octahedron:
+            return node::octahedron(0.6f);
+        case NodeKind::Dodecahedron:
+            return node::dodecahedron(0.5f);
+        case NodeKind::Blobs:
+            return node::blobs({{{-0.2f, 0, 0}, 0.5f, 1}, {{0.25f, 0.1f, 0}, 0.4f, 1}}, 0.5f);
+        default:
+            return nullptr;
+    }
+}
+
+float distanceToBox(const Bounds3& b, Vec3 p) {
+    const Vec3 d = max(max(b.lo - p, p - b.hi), 0.0f);
+    return length(d);
+}
+
+// The table's flags hold for every row: negative values lie in the bounds, a row that dominates
+// its bounds is at least the distance to them outside, and a convex row's inside is convex.
+TEST(PrimitiveTable, FlagsHoldForEveryRow) {
+    struct Row {
+        NodeKind kind;
+        const char* name;
+        bool convex, dominates;
+    };
+    const Row rows[] = {
+#define SDFT_PRIMITIVE_ROW(Kind, name, eval, bounds, convex, dominates) \
+    {NodeKind::Kind, name, convex, dominates},
+        SDFT_PRIMITIVES(SDFT_PRIMITIVE_ROW)
+#undef SDFT_PRIMITIVE_ROW
+    };
+    testing::Rng rng(23);
+    for (const Row& row : rows) {
+        const NodePtr n = examplePrimitive(row.kind);
+        ASSERT_NE(n, nullptr) << row.name << ": add an example";
+        EXPECT_STREQ(nodeKindName(row.kind), row.name);
+        EXPECT_EQ(isConvex(*n), row.convex) << row.name;
+        EXPECT_EQ(dominatesBounds(*n), row.dominates) << row.name;
+        EXPECT_EQ(lipschitzBound(*n), 1.0f) << row.name;
+        const Bounds3 b = nodeBounds(*n);
+        std::vector<Vec3> inside;
+        for (int i = 0; i < 20000; ++i) {
+            const Vec3 p = rng.inCube(1.5f);
+            const float f = evalTree(*n, p);
+            if (f < 0) {
+                ASSERT_TRUE(b.contains(p)) << row.name;
+                inside.push_back(p);
+            }
+            if (row.dominates && !b.contains(p)) {
+                ASSERT_GE(f, distanceToBox(b, p) - 1e-4f) << row.name;
+            }
+        }
+        ASSERT_GT(inside.size(), 50u) << row.name;
+        if (!row.convex) continue;
+        for (size_t i = 0; i + 1 < inside.size(); i += 2) {
+            const Vec3 mid = (inside[i] + inside[i + 1]) * 0.5f;
+            ASSERT_LE(evalTree(*n, mid), 1e-5f) << row.name << ": not convex";
+        }
+    }
+}
+
 }  // namespace
 }  // namespace sdft

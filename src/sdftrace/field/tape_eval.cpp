@@ -16,30 +16,11 @@ constexpr int kMaxPointRegs = Tape::kMaxPointRegs;
 
 float evalPrimitive(Op op, Vec3 p, const float* k) {
     switch (op) {
-        case Op::Sphere:
-            return prim::sphere(p, k);
-        case Op::Box:
-            return prim::box(p, k);
-        case Op::RoundBox:
-            return prim::roundBox(p, k);
-        case Op::Torus:
-            return prim::torus(p, k);
-        case Op::Capsule:
-            return prim::capsule(p, k);
-        case Op::Cylinder:
-            return prim::cylinder(p, k);
-        case Op::Cone:
-            return prim::cone(p, k);
-        case Op::Plane:
-            return prim::plane(p, k);
-        case Op::Ellipsoid:
-            return prim::ellipsoid(p, k);
-        case Op::Octahedron:
-            return prim::octahedron(p, k);
-        case Op::Dodecahedron:
-            return prim::dodecahedron(p, k);
-        case Op::Blobs:
-            return prim::blobs(p, k);
+#define SDFT_PRIMITIVE_EVAL(Kind, name, eval, ...) \
+    case Op::Kind:                                 \
+        return eval(p, k);
+        SDFT_PRIMITIVES(SDFT_PRIMITIVE_EVAL)
+#undef SDFT_PRIMITIVE_EVAL
         default:
             return 0;
     }
@@ -252,12 +233,12 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
     std::copy(z, z + n, pz(0));
     const float* consts = m_consts.data();
 
-#define SDFT_PRIM_CASE(OP, FN)                                                     \
-    case Op::OP: {                                                                 \
-        const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);                \
-        float* o = sr(in.out);                                                     \
-        for (int l = 0; l < n; ++l) o[l] = prim::FN(Vec3(ax[l], ay[l], az[l]), k); \
-        break;                                                                     \
+#define SDFT_PRIMITIVE_BATCH(Kind, name, eval, ...)                            \
+    case Op::Kind: {                                                           \
+        const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);            \
+        float* o = sr(in.out);                                                 \
+        for (int l = 0; l < n; ++l) o[l] = eval(Vec3(ax[l], ay[l], az[l]), k); \
+        break;                                                                 \
     }
 
     const size_t count = m_instrs.size();
@@ -283,18 +264,7 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 if (skipped == n) pc = in.jump - 1;
                 break;
             }
-                SDFT_PRIM_CASE(Sphere, sphere)
-                SDFT_PRIM_CASE(Box, box)
-                SDFT_PRIM_CASE(RoundBox, roundBox)
-                SDFT_PRIM_CASE(Torus, torus)
-                SDFT_PRIM_CASE(Capsule, capsule)
-                SDFT_PRIM_CASE(Cylinder, cylinder)
-                SDFT_PRIM_CASE(Cone, cone)
-                SDFT_PRIM_CASE(Plane, plane)
-                SDFT_PRIM_CASE(Ellipsoid, ellipsoid)
-                SDFT_PRIM_CASE(Octahedron, octahedron)
-                SDFT_PRIM_CASE(Dodecahedron, dodecahedron)
-                SDFT_PRIM_CASE(Blobs, blobs)
+                SDFT_PRIMITIVES(SDFT_PRIMITIVE_BATCH)
             case Op::Grid: {
                 const GridView& g = m_gridViews[static_cast<size_t>(k[0])];
                 const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);
@@ -370,7 +340,7 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
             }
         }
     }
-#undef SDFT_PRIM_CASE
+#undef SDFT_PRIMITIVE_BATCH
     std::copy(sr(m_result), sr(m_result) + n, out);
 }
 

@@ -21,13 +21,6 @@ using json_reader::Reader;
 
 namespace {
 
-const char* kPrimitiveTypes =
-    "sphere, box, round_box, torus, capsule, cylinder, cone, plane, ellipsoid, octahedron, "
-    "dodecahedron, blobs, grid";
-const char* kOperatorTypes =
-    "union, intersection, difference, complement, smooth_union, smooth_intersection, "
-    "smooth_difference, morph, translate, rotate, scale, repeat, displace";
-
 std::vector<NodePtr> parseChildren(const Reader& r, NodeContext& mats, size_t minCount,
                                    size_t maxCount) {
     if (!r.has("children")) r.fail("missing required key 'children' (an array of objects)");
@@ -92,31 +85,6 @@ NodePtr applyInlineTransforms(const Reader& r, NodePtr n) {
     if (r.has("rotate")) n = node::rotate(n, parseRotation(r, "rotate"));
     if (r.has("translate")) n = node::translate(n, r.vec3("translate"));
     return n;
-}
-
-NodePtr parseBlobs(const Reader& r) {
-    if (!r.has("blobs"))
-        r.fail("missing required key 'blobs' (an array of {center, radius, strength})");
-    Reader list = r.child("blobs");
-    list.requireArray("a list of blobs");
-    if (list.value().empty() || list.value().size() > 256) list.fail("expected 1 to 256 blobs");
-    std::vector<node::Blob> blobs;
-    float total = 0;
-    for (size_t i = 0; i < list.value().size(); ++i) {
-        Reader b = list.element(i);
-        b.requireObject("a blob");
-        b.allowKeys({"center", "radius", "strength"});
-        node::Blob blob{b.vec3("center"), b.number("radius", positive, "a positive support radius"),
-                        b.number("strength", 1.0f, positive, "a positive strength")};
-        total += blob.strength;
-        blobs.push_back(blob);
-    }
-    float threshold = r.number("threshold", 0.5f, positive, "a positive threshold");
-    if (threshold >= total) {
-        r.failKey("threshold", "must be below the sum of the blob strengths (" +
-                                   std::to_string(total) + "), or no surface exists");
-    }
-    return node::blobs(blobs, threshold);
 }
 
 // A path from the scene file, relative to its directory unless absolute.
@@ -234,171 +202,176 @@ NodePtr finishNode(const Reader& r, NodePtr n, const NodeContext& mats) {
     return applyInlineTransforms(r, n);
 }
 
+// Operators and transforms (Liktor 2008, §2.2; Keinert et al. 2014), one function each.
+NodePtr parseUnionOrIntersection(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"children"});
+    auto c = parseChildren(r, ctx, 1, 100000);
+    return type == "union" ? node::unite(c) : node::intersect(c);
+}
+
+// a minus the union of the others.
+NodePtr parseDifference(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"children"});
+    auto c = parseChildren(r, ctx, 2, 100000);
+    NodePtr cutters = c.size() == 2 ? c[1] : node::unite({c.begin() + 1, c.end()});
+    return node::subtract(c[0], cutters);
+}
+
+NodePtr parseComplement(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"child"});
+    return node::complement(parseSingleChild(r, ctx));
+}
+
+NodePtr parseSmooth(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"children", "k"});
+    const float k = r.number("k", nonNegative, "a non-negative blend radius");
+    auto c = parseChildren(r, ctx, 2, 100000);
+    if (type == "smooth_difference") {
+        NodePtr cutters = c.size() == 2 ? c[1] : node::unite({c.begin() + 1, c.end()});
+        return node::smoothDifference(c[0], cutters, k);
+    }
+    NodePtr n = c[0];
+    for (size_t i = 1; i < c.size(); ++i)
+        n = type == "smooth_union" ? node::smoothUnion(n, c[i], k)
+                                   : node::smoothIntersection(n, c[i], k);
+    return n;
+}
+
+NodePtr parseMorph(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"children", "weight"});
+    const float w = r.number(
+        "weight", [](double v) { return v >= 0 && v <= 1; }, "a weight in [0, 1]");
+    auto c = parseChildren(r, ctx, 2, 2);
+    return node::morph(c[0], c[1], w);
+}
+
+NodePtr parseTranslate(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"child", "offset"});
+    return node::translate(parseSingleChild(r, ctx), r.vec3("offset"));
+}
+
+NodePtr parseRotate(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"child", "axis", "angle"});
+    const Vec3 axis = r.vec3("axis");
+    if (length(axis) <= 0) r.failKey("axis", "expected a non-zero axis");
+    const float angle = r.number("angle", json_reader::anyFinite, "an angle in degrees");
+    return node::rotate(parseSingleChild(r, ctx), rotationAxisAngle(axis, angle));
+}
+
+NodePtr parseScaleNode(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"child", "factors"});
+    if (!r.has("factors")) r.fail("missing required key 'factors' (a number or 3 numbers)");
+    return node::scale(parseSingleChild(r, ctx), parseScale(r, "factors"));
+}
+
+// Copies must not overlap: the repetition's distance bound assumes each cell holds one copy.
+NodePtr parseRepeat(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"child", "cell", "count"});
+    const Vec3 cell = r.vec3("cell", positive, "positive cell sizes");
+    const Vec3 count = r.vec3(
+        "count", [](double v) { return v >= 0 && v <= 1000 && v == std::floor(v); },
+        "whole numbers of copies per side in [0, 1000]");
+    NodePtr child = parseSingleChild(r, ctx);
+    const Bounds3 b = nodeBounds(*child);
+    for (int i = 0; i < 3; ++i) {
+        if (count[i] <= 0) continue;
+        const float extent = std::fmax(std::fabs(b.lo[i]), std::fabs(b.hi[i]));
+        if (!(extent <= 0.5f * cell[i])) {
+            r.failKey("cell", "the child reaches " + std::to_string(extent) +
+                                  " from its origin along axis " + std::to_string(i) +
+                                  "; the cell must be at least twice that (" +
+                                  std::to_string(2 * extent) + ") so copies do not overlap");
+        }
+    }
+    return node::repeat(child, cell, count);
+}
+
+NodePtr parseDisplace(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"child", "amplitude", "frequency", "octaves", "gain"});
+    const float amplitude = r.number("amplitude", nonNegative, "a non-negative amplitude");
+    const float frequency = r.number("frequency", 1.0f, positive, "a positive frequency");
+    const int octaves = r.integer("octaves", 3, 1, 12);
+    const float gain = r.number(
+        "gain", 0.5f, [](double v) { return v > 0 && v < 1; }, "a gain in (0, 1)");
+    return node::displace(parseSingleChild(r, ctx), amplitude, frequency, octaves, gain);
+}
+
+NodePtr parseGridNode(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(r, type, {"file"});
+    return node::grid(loadGridObject(r, ctx));
+}
+
+NodePtr parseBake(const Reader& r, NodeContext& ctx, const std::string& type) {
+    allowObjectKeys(
+        r, type, {"child", "resolution", "band", "texcoords", "texcoord_axis", "texcoord_center"});
+    return node::grid(bakeSubtree(r, ctx));
+}
+
+struct OperatorParser {
+    const char* name;
+    NodePtr (*parse)(const Reader&, NodeContext&, const std::string&);
+};
+
+constexpr OperatorParser kOperators[] = {
+    {"union", parseUnionOrIntersection},
+    {"intersection", parseUnionOrIntersection},
+    {"difference", parseDifference},
+    {"complement", parseComplement},
+    {"smooth_union", parseSmooth},
+    {"smooth_intersection", parseSmooth},
+    {"smooth_difference", parseSmooth},
+    {"morph", parseMorph},
+    {"translate", parseTranslate},
+    {"rotate", parseRotate},
+    {"scale", parseScaleNode},
+    {"repeat", parseRepeat},
+    {"displace", parseDisplace},
+    {"grid", parseGridNode},
+    {"bake", parseBake},
+};
+
+std::string objectTypeNames() {
+    std::string names = primitiveTypeNames();
+    for (const OperatorParser& o : kOperators)
+        if (std::string(o.name) != "grid") names += std::string(", ") + o.name;
+    return names;
+}
+
 }  // namespace
 
-NodePtr parseNode(const Reader& r, NodeContext& mats) {
+void allowObjectKeys(const Reader& r, const std::string& type,
+                     std::initializer_list<const char*> extra) {
+    std::vector<const char*> keys = {"type", "material", "translate", "rotate", "scale"};
+    keys.insert(keys.end(), extra.begin(), extra.end());
+    for (auto it = r.value().begin(); it != r.value().end(); ++it) {
+        bool ok = false;
+        for (const char* k : keys) ok = ok || it.key() == k;
+        if (ok) continue;
+        std::string list;
+        for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
+        r.failKey(it.key(), "unknown key for a " + type + "; accepted: " + list);
+    }
+}
+
+NodePtr parseNode(const Reader& r, NodeContext& ctx) {
     r.requireObject("an object node");
     // Shorthand for a grid object: {"grid": "field.sdfg", ...} is {"type": "grid", "file": ...}.
     if (!r.has("type") && r.has("grid")) {
         r.allowKeys({"grid", "material", "translate", "rotate", "scale"});
-        return finishNode(r, node::grid(loadGridObject(r, mats, "grid")), mats);
+        return finishNode(r, node::grid(loadGridObject(r, ctx, "grid")), ctx);
     }
     // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact", "sign":
     // "winding", "band": 3}.
     if (!r.has("type") && r.has("mesh")) {
         r.allowKeys({"mesh", "resolution", "method", "sign", "band", "material", "translate",
                      "rotate", "scale"});
-        return finishNode(r, node::grid(bakeMeshObject(r, mats)), mats);
+        return finishNode(r, node::grid(bakeMeshObject(r, ctx)), ctx);
     }
-    std::string type = r.string("type");
-    const char* common[] = {"type", "material", "translate", "rotate", "scale"};
-    auto allow = [&](std::initializer_list<const char*> extra) {
-        std::vector<const char*> keys(std::begin(common), std::end(common));
-        keys.insert(keys.end(), extra.begin(), extra.end());
-        for (auto it = r.value().begin(); it != r.value().end(); ++it) {
-            bool ok = false;
-            for (const char* k : keys) ok = ok || it.key() == k;
-            if (!ok) {
-                std::string list;
-                for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
-                r.failKey(it.key(), "unknown key for a " + type + "; accepted: " + list);
-            }
-        }
-    };
-
-    NodePtr n;
-    if (type == "sphere") {
-        allow({"radius"});
-        n = node::sphere(r.number("radius", positive, "a positive radius"));
-    } else if (type == "box") {
-        allow({"size"});
-        n = node::box(r.vec3("size", positive, "positive edge lengths") * 0.5f);
-    } else if (type == "round_box") {
-        allow({"size", "radius"});
-        Vec3 half = r.vec3("size", positive, "positive edge lengths") * 0.5f;
-        float radius = r.number("radius", nonNegative, "a non-negative edge radius");
-        if (radius > minComponent(half))
-            r.failKey("radius", "must not exceed half the smallest edge");
-        n = node::roundBox(half, radius);
-    } else if (type == "torus") {
-        allow({"major_radius", "minor_radius"});
-        float R = r.number("major_radius", positive, "a positive ring radius");
-        float rr = r.number("minor_radius", positive, "a positive tube radius");
-        n = node::torus(R, rr);
-    } else if (type == "capsule") {
-        allow({"a", "b", "radius"});
-        n = node::capsule(r.vec3("a"), r.vec3("b"),
-                          r.number("radius", positive, "a positive radius"));
-    } else if (type == "cylinder") {
-        allow({"radius", "height"});
-        float radius = r.number("radius", positive, "a positive radius");
-        n = node::cylinder(radius, 0.5f * r.number("height", positive, "a positive height"));
-    } else if (type == "cone") {
-        allow({"radius", "height"});
-        float radius = r.number("radius", positive, "a positive base radius");
-        n = node::cone(radius, r.number("height", positive, "a positive height"));
-    } else if (type == "plane") {
-        allow({"normal", "distance"});
-        Vec3 normal = r.vec3("normal");
-        if (length(normal) <= 0) r.failKey("normal", "expected a non-zero normal");
-        // Solid on the side opposite the normal: n.p <= distance.
-        n = node::plane(normal, -r.number("distance", 0.0f, json_reader::anyFinite, "a number"));
-    } else if (type == "ellipsoid") {
-        allow({"radii"});
-        n = node::ellipsoid(r.vec3("radii", positive, "positive semi-axes"));
-    } else if (type == "octahedron") {
-        allow({"size"});
-        n = node::octahedron(r.number("size", positive, "a positive centre-to-vertex size"));
-    } else if (type == "dodecahedron") {
-        allow({"radius"});
-        n = node::dodecahedron(r.number("radius", positive, "a positive inradius"));
-    } else if (type == "blobs") {
-        allow({"blobs", "threshold"});
-        n = parseBlobs(r);
-    } else if (type == "grid") {
-        allow({"file"});
-        n = node::grid(loadGridObject(r, mats));
-    } else if (type == "union" || type == "intersection") {
-        allow({"children"});
-        auto c = parseChildren(r, mats, 1, 100000);
-        n = type == "union" ? node::unite(c) : node::intersect(c);
-    } else if (type == "difference") {
-        allow({"children"});
-        auto c = parseChildren(r, mats, 2, 100000);
-        NodePtr cutters = c.size() == 2 ? c[1] : node::unite({c.begin() + 1, c.end()});
-        n = node::subtract(c[0], cutters);
-    } else if (type == "complement") {
-        allow({"child"});
-        n = node::complement(parseSingleChild(r, mats));
-    } else if (type == "smooth_union" || type == "smooth_intersection" ||
-               type == "smooth_difference") {
-        allow({"children", "k"});
-        float k = r.number("k", nonNegative, "a non-negative blend radius");
-        auto c = parseChildren(r, mats, 2, 100000);
-        if (type == "smooth_difference") {
-            NodePtr cutters = c.size() == 2 ? c[1] : node::unite({c.begin() + 1, c.end()});
-            n = node::smoothDifference(c[0], cutters, k);
-        } else {
-            n = c[0];
-            for (size_t i = 1; i < c.size(); ++i)
-                n = type == "smooth_union" ? node::smoothUnion(n, c[i], k)
-                                           : node::smoothIntersection(n, c[i], k);
-        }
-    } else if (type == "morph") {
-        allow({"children", "weight"});
-        float w = r.number(
-            "weight", [](double v) { return v >= 0 && v <= 1; }, "a weight in [0, 1]");
-        auto c = parseChildren(r, mats, 2, 2);
-        n = node::morph(c[0], c[1], w);
-    } else if (type == "bake") {
-        allow({"child", "resolution", "band", "texcoords", "texcoord_axis", "texcoord_center"});
-        n = node::grid(bakeSubtree(r, mats));
-    } else if (type == "translate") {
-        allow({"child", "offset"});
-        n = node::translate(parseSingleChild(r, mats), r.vec3("offset"));
-    } else if (type == "rotate") {
-        allow({"child", "axis", "angle"});
-        Vec3 axis = r.vec3("axis");
-        if (length(axis) <= 0) r.failKey("axis", "expected a non-zero axis");
-        float angle = r.number("angle", json_reader::anyFinite, "an angle in degrees");
-        n = node::rotate(parseSingleChild(r, mats), rotationAxisAngle(axis, angle));
-    } else if (type == "scale") {
-        allow({"child", "factors"});
-        if (!r.has("factors")) r.fail("missing required key 'factors' (a number or 3 numbers)");
-        n = node::scale(parseSingleChild(r, mats), parseScale(r, "factors"));
-    } else if (type == "repeat") {
-        allow({"child", "cell", "count"});
-        Vec3 cell = r.vec3("cell", positive, "positive cell sizes");
-        Vec3 count = r.vec3(
-            "count", [](double v) { return v >= 0 && v <= 1000 && v == std::floor(v); },
-            "whole numbers of copies per side in [0, 1000]");
-        NodePtr child = parseSingleChild(r, mats);
-        Bounds3 b = nodeBounds(*child);
-        for (int i = 0; i < 3; ++i) {
-            if (count[i] <= 0) continue;
-            float extent = std::fmax(std::fabs(b.lo[i]), std::fabs(b.hi[i]));
-            if (!(extent <= 0.5f * cell[i])) {
-                r.failKey("cell", "the child reaches " + std::to_string(extent) +
-                                      " from its origin along axis " + std::to_string(i) +
-                                      "; the cell must be at least twice that (" +
-                                      std::to_string(2 * extent) + ") so copies do not overlap");
-            }
-        }
-        n = node::repeat(child, cell, count);
-    } else if (type == "displace") {
-        allow({"child", "amplitude", "frequency", "octaves", "gain"});
-        float amplitude = r.number("amplitude", nonNegative, "a non-negative amplitude");
-        float frequency = r.number("frequency", 1.0f, positive, "a positive frequency");
-        int octaves = r.integer("octaves", 3, 1, 12);
-        float gain = r.number(
-            "gain", 0.5f, [](double v) { return v > 0 && v < 1; }, "a gain in (0, 1)");
-        n = node::displace(parseSingleChild(r, mats), amplitude, frequency, octaves, gain);
-    } else {
-        r.failKey("type", "unknown object type '" + type + "'; accepted: " + kPrimitiveTypes +
-                              ", " + kOperatorTypes);
-    }
-
-    return finishNode(r, n, mats);
+    const std::string type = r.string("type");
+    if (NodePtr n = parsePrimitive(r, type)) return finishNode(r, n, ctx);
+    for (const OperatorParser& o : kOperators)
+        if (type == o.name) return finishNode(r, o.parse(r, ctx, type), ctx);
+    r.failKey("type", "unknown object type '" + type + "'; accepted: " + objectTypeNames());
 }
 
 }  // namespace sdft
