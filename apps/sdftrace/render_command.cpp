@@ -116,12 +116,8 @@ void validateFramePattern(const std::string& pattern) {
     checkWritablePath(framePath(pattern, 0), "--frame-pattern");
 }
 
-int runRender(const RenderArgs& a) {
-    if (a.listOptions) {
-        std::fputs(renderOptionsMarkdown().c_str(), stdout);
-        return 0;
-    }
-    // Validate every output before the (possibly long) render starts.
+// Every output is validated before the (possibly long) render starts; the AOVs to write.
+std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a) {
     imageFormatFromPath(a.output, "--output");
     checkWritablePath(a.output, "--output");
     if (!a.framePattern.empty()) validateFramePattern(a.framePattern);
@@ -141,54 +137,54 @@ int runRender(const RenderArgs& a) {
         checkWritablePath(path, "--aov " + spec.substr(0, eq));
         aovs.emplace_back(aov, path);
     }
+    return aovs;
+}
 
-    Scene scene;
-    if (a.scene.empty()) {
-        scene = demoScene();
-    } else if (isMeshFile(a.scene)) {
+// The scene of the input: the demo, a scene file, or a mesh or grid file framed automatically.
+Scene loadInput(const std::string& input) {
+    if (input.empty()) return demoScene();
+    if (isMeshFile(input)) {
         // A mesh rendered directly: baked exactly at the default resolution first.
         MeshReport report;
-        TriangleMesh mesh = loadMesh(a.scene, &report);
+        TriangleMesh mesh = loadMesh(input, &report);
         auto grid = std::make_shared<const Grid>(bakeMesh(mesh, MeshBakeOptions{}).grid);
-        std::fprintf(stderr, "sdftrace render: %s: %s; baked exactly at 128 cells\n",
-                     a.scene.c_str(), report.summary().c_str());
-        scene = sceneForObject(node::grid(grid), grid->surfaceBounds());
-    } else if (isGridFile(a.scene)) {
+        std::fprintf(stderr, "sdftrace render: %s: %s; baked exactly at 128 cells\n", input.c_str(),
+                     report.summary().c_str());
+        return sceneForObject(node::grid(grid), grid->surfaceBounds());
+    }
+    if (isGridFile(input)) {
         // A grid file rendered directly: framed by an automatic camera, lit by default lights.
-        auto grid = std::make_shared<const Grid>(loadGridFile(a.scene));
+        auto grid = std::make_shared<const Grid>(loadGridFile(input));
         Bounds3 frame = grid->surfaceBounds();
         if (frame.empty())
-            throw InputError(a.scene + ": the grid contains no surface (no sign change)");
-        scene = sceneForObject(node::grid(grid), frame);
-    } else {
-        scene = parseSceneFile(a.scene);
+            throw InputError(input + ": the grid contains no surface (no sign change)");
+        return sceneForObject(node::grid(grid), frame);
     }
-    applyOverrides(a, scene);
-    const RenderPlan plan = planRender(scene);
-    const Tape& tape = plan.tape;
-    Film film(scene.camera.width, scene.camera.height);
-    RenderStats st;
-    if (a.frames > 1 || a.orbit != 0) {
-        TemporalOptions t;
-        t.frames = a.frames;
-        t.orbitDegrees = a.orbit;
-        if (a.taaAlpha) t.alpha = *a.taaAlpha;
-        std::function<void(int, const Film&)> onFrame;
-        if (!a.framePattern.empty()) {
-            onFrame = [&](int k, const Film& f) {
-                writeAov(f, Aov::Color, framePath(a.framePattern, k));
-            };
-        }
-        st = renderFrames(plan, film, t, onFrame, !a.quiet && stderrIsTerminal());
-    } else {
-        st = render(plan, film, !a.quiet && stderrIsTerminal());
+    return parseSceneFile(input);
+}
+
+// One frame, or temporally accumulated frames (--frames, --orbit).
+RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film) {
+    const bool progress = !a.quiet && stderrIsTerminal();
+    if (a.frames <= 1 && a.orbit == 0) return render(plan, film, progress);
+    TemporalOptions t;
+    t.frames = a.frames;
+    t.orbitDegrees = a.orbit;
+    if (a.taaAlpha) t.alpha = *a.taaAlpha;
+    std::function<void(int, const Film&)> onFrame;
+    if (!a.framePattern.empty()) {
+        onFrame = [&](int k, const Film& f) {
+            writeAov(f, Aov::Color, framePath(a.framePattern, k));
+        };
     }
+    return renderFrames(plan, film, t, onFrame, progress);
+}
 
-    writeAov(film, Aov::Color, a.output);
-    for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
-
-    double rays = static_cast<double>(st.primaryRays);
-    if (scene.settings.pathTracing) {
+// The summary line on stderr (docs/cli.md "Outputs").
+void printSummary(const RenderStats& st, const Film& film, const RenderPlan& plan) {
+    const double rays = static_cast<double>(st.primaryRays);
+    const float lipschitz = plan.tape.lipschitz();
+    if (plan.settings.pathTracing) {
         const double rayCount =
             static_cast<double>(st.primaryRays + st.secondaryRays + st.shadowRays);
         std::fprintf(stderr,
@@ -197,23 +193,22 @@ int runRender(const RenderArgs& a) {
                      "evaluations per path, L = %.3g\n",
                      film.width, film.height, rays / static_cast<double>(film.pixels()), st.seconds,
                      st.threads, rays / st.seconds * 1e-6, rayCount / rays, st.shadowRays / rays,
-                     st.totalEvaluations() / rays, tape.lipschitz());
-        return 0;
+                     st.totalEvaluations() / rays, lipschitz);
+        return;
     }
-    std::string gridCounters;
+    std::string counters;
+    char buf[160];
     if (st.gridTracer) {
-        char buf[160];
         std::snprintf(buf, sizeof buf,
                       ", DDA: %.2f traversal steps and %.2f intersection tests per pixel",
                       st.traversalSteps / rays, st.intersectionTests / rays);
-        gridCounters = buf;
+        counters = buf;
     }
     if (st.secondaryRays) {
-        char buf[160];
         std::snprintf(
             buf, sizeof buf, ", Whitted: %.2f secondary rays per pixel, %llu self-intersections",
             st.secondaryRays / rays, static_cast<unsigned long long>(st.selfIntersections));
-        gridCounters += buf;
+        counters += buf;
     }
     std::fprintf(
         stderr,
@@ -222,7 +217,23 @@ int runRender(const RenderArgs& a) {
         "over-relaxation fallbacks, L = %.3g%s\n",
         film.width, film.height, st.seconds, st.threads, rays / st.seconds * 1e-6,
         st.primaryEvaluations / rays, st.totalEvaluations() / rays, 100.0 * st.hits / rays,
-        static_cast<unsigned long long>(st.fallbacks), tape.lipschitz(), gridCounters.c_str());
+        static_cast<unsigned long long>(st.fallbacks), lipschitz, counters.c_str());
+}
+
+int runRender(const RenderArgs& a) {
+    if (a.listOptions) {
+        std::fputs(renderOptionsMarkdown().c_str(), stdout);
+        return 0;
+    }
+    const auto aovs = validateOutputs(a);
+    Scene scene = loadInput(a.scene);
+    applyOverrides(a, scene);
+    const RenderPlan plan = planRender(scene);
+    Film film(plan.camera.width, plan.camera.height);
+    const RenderStats st = renderImage(a, plan, film);
+    writeAov(film, Aov::Color, a.output);
+    for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
+    printSummary(st, film, plan);
     return 0;
 }
 

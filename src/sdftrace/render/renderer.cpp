@@ -51,8 +51,10 @@ struct TileScratch {
     std::vector<SoftShadowResult> softResults;
     SoftShadowScratch soft;
     std::vector<Vec3> radiance;
-    std::vector<float> shadow, ao;  // per hit: the first shadowing light's visibility; AO
-    int x0 = 0, y0 = 0, tw = 0;     // the tile being rendered
+    std::vector<Material> materials;  // per hit
+    std::vector<float> visible;       // per hit: the current light's visibility
+    std::vector<float> shadow, ao;    // per hit: the first shadowing light's visibility; AO
+    int x0 = 0, y0 = 0, tw = 0;       // the tile being rendered
     RenderStats stats;
 };
 
@@ -98,6 +100,7 @@ class TileRenderer {
 
     uint64_t mapEvaluations() const { return m_mapEvaluations; }
 
+    // The tile's pixels [x0, x1) x [y0, y1): trace, normals, shade, write the film.
     void renderTile(int x0, int y0, int x1, int y1, TileScratch& s);
 
   private:
@@ -123,7 +126,11 @@ class TileRenderer {
         const int i = s.hitPixel[h];
         return static_cast<uint32_t>((s.y0 + i / s.tw) * m_film.width + (s.x0 + i % s.tw));
     }
+    void tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1);
     void tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw);
+    void shadeDirect(TileScratch& s);
+    void shadeSpecular(TileScratch& s);
+    void writeFilm(const TileScratch& s);
     void gridNormals(TileScratch& s);
     void stencilNormals(TileScratch& s);
 
@@ -205,8 +212,21 @@ Bounds3 TileRenderer::shadowRegion() const {
 }
 
 void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
-    int tw = x1 - x0;
-    int count = tw * (y1 - y0);
+    tracePrimary(s, x0, y0, x1, y1);
+    if (m_grid) {
+        gridNormals(s);
+    } else {
+        stencilNormals(s);
+    }
+    shadeDirect(s);
+    shadeSpecular(s);
+    writeFilm(s);
+}
+
+// The tile's primary rays, traced as one packet (or by the grid DDA); the hits gathered.
+void TileRenderer::tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1) {
+    const int tw = x1 - x0;
+    const int count = tw * (y1 - y0);
     s.x0 = x0;
     s.y0 = y0;
     s.tw = tw;
@@ -222,7 +242,6 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     } else {
         tracePacket(m_tape, s.segments, m_primary, s.results, s.packet);
     }
-
     s.hitPixel.clear();
     s.hitPoint.clear();
     for (int i = 0; i < count; ++i) {
@@ -235,22 +254,18 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     }
     s.stats.primaryRays += count;
     s.stats.hits += s.hitPixel.size();
-    int hits = static_cast<int>(s.hitPixel.size());
+}
 
-    if (m_grid) {
-        gridNormals(s);
-    } else {
-        stencilNormals(s);
-    }
-
-    // Shading: ambient + for each light, Lambert + Blinn-Phong if the light is visible.
+// Ambient (scaled by SDF ambient occlusion) + for each light, Lambert + Blinn-Phong where the
+// light is visible by the shadow method.
+void TileRenderer::shadeDirect(TileScratch& s) {
+    const int hits = static_cast<int>(s.hitPixel.size());
     s.radiance.assign(hits, Vec3(0.0f));
-    std::vector<Material> mats(hits);
+    s.materials.resize(hits);
     for (int h = 0; h < hits; ++h) {
-        mats[h] = m_whitted->materialAt(s.hitPoint[h], s.hitNormal[h]);
-        s.radiance[h] = m_plan.lighting.ambient * mats[h].color;
+        s.materials[h] = m_whitted->materialAt(s.hitPoint[h], s.hitNormal[h]);
+        s.radiance[h] = m_plan.lighting.ambient * s.materials[h].color;
     }
-    // Keinert-style SDF ambient occlusion scales the ambient term.
     s.ao.assign(hits, 1.0f);
     if (m_settings.ambientOcclusion) {
         for (int h = 0; h < hits; ++h) {
@@ -261,7 +276,7 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
             s.stats.aoEvaluations += ao.evaluations;
         }
     }
-    std::vector<float> visible;
+    std::vector<float>& visible = s.visible;
     s.shadow.assign(hits, 1.0f);
     bool firstShadow = true;
     for (size_t li = 0; li < m_plan.lighting.lights.size(); ++li) {
@@ -274,6 +289,7 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
         }
         for (int h = 0; h < hits; ++h) {
             if (visible[h] == 0) continue;
+            const Material& m = s.materials[h];
             const LightDirection to = towardLight(light, s.hitPoint[h]);
             const Vec3 l = to.dir;
             const float scale = to.scale * visible[h];
@@ -282,30 +298,35 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
             if (ndotl <= 0) continue;
             Vec3 v = -s.segments[s.hitPixel[h]].ray.direction;
             Vec3 half = normalize(l + v);
-            float spec = std::pow(std::fmax(dot(n, half), 0.0f), mats[h].shininess);
-            Vec3 c = mats[h].color * (mats[h].diffuse * ndotl) + Vec3(mats[h].specular * spec);
+            float spec = std::pow(std::fmax(dot(n, half), 0.0f), m.shininess);
+            Vec3 c = m.color * (m.diffuse * ndotl) + Vec3(m.specular * spec);
             s.radiance[h] += c * light.color * scale;
         }
     }
+}
 
-    // Mirrors and dielectrics: Whitted rays from the hit (Keinert §4).
+// Mirrors and dielectrics: Whitted rays from the hit (Keinert §4).
+void TileRenderer::shadeSpecular(TileScratch& s) {
+    const int hits = static_cast<int>(s.hitPixel.size());
     WhittedStats ws;
     for (int h = 0; h < hits; ++h) {
-        if (mats[h].kind == Material::Kind::Plastic) continue;
+        if (s.materials[h].kind == Material::Kind::Plastic) continue;
         const int i = s.hitPixel[h];
         s.radiance[h] = m_whitted->shadeSpecular(s.hitPoint[h], s.hitNormal[h], s.results[i].value,
-                                                 s.segments[i].ray.direction, mats[h], ws);
+                                                 s.segments[i].ray.direction, s.materials[h], ws);
     }
-    if (ws.rays) {
-        s.stats.secondaryRays += ws.rays;
-        s.stats.secondaryEvaluations += ws.evaluations;
-        s.stats.selfIntersections += ws.selfIntersections;
-    }
+    s.stats.secondaryRays += ws.rays;
+    s.stats.secondaryEvaluations += ws.evaluations;
+    s.stats.selfIntersections += ws.selfIntersections;
+}
 
-    // Write the film.
+// Colour and AOVs of the tile: the background where rays missed; no NaN or Inf pixel.
+void TileRenderer::writeFilm(const TileScratch& s) {
+    const int count = static_cast<int>(s.results.size()), tw = s.tw;
+    const int hits = static_cast<int>(s.hitPixel.size());
     const Vec3 bg = m_plan.lighting.background;
     for (int i = 0; i < count; ++i) {
-        size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
+        size_t p = static_cast<size_t>(s.y0 + i / tw) * m_film.width + (s.x0 + i % tw);
         m_film.color[3 * p + 0] = bg.x;
         m_film.color[3 * p + 1] = bg.y;
         m_film.color[3 * p + 2] = bg.z;
@@ -313,7 +334,7 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     }
     for (int h = 0; h < hits; ++h) {
         int i = s.hitPixel[h];
-        size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
+        size_t p = static_cast<size_t>(s.y0 + i / tw) * m_film.width + (s.x0 + i % tw);
         Vec3 c = s.radiance[h];
         if (!isFinite(c)) c = Vec3(0.0f);
         for (int a = 0; a < 3; ++a) {
