@@ -6,7 +6,7 @@
 //    outside or surface; only surface blocks store their (B+1)^3 vertex samples (Jamriška §3), with
 //    a bit mask of the cells that contain the surface (§4.1).
 // Buffers are flat (std::vector) and the view holds plain pointers, so a device upload is one copy
-// per buffer (DESIGN.md; NanoVDB's handle + flat layout).
+// per buffer (docs/design.md; NanoVDB's handle + flat layout).
 #pragma once
 
 #include <cmath>

@@ -1,7 +1,7 @@
 // The analytic field as a tree of nodes: primitives, CSG operators, transforms, displacement,
-// morph. Built by the scene parser (or by code); compiled to a flat Tape for evaluation (DESIGN.md:
-// tree -> tape -> batch evaluators). evalTree() is the plain recursive reference the tests compare
-// the tape against.
+// morph. Built by the scene parser (or by code); compiled to a flat Tape for evaluation
+// (docs/design.md: tree -> tape -> batch evaluators). evalTree() is the plain recursive reference
+// the tests compare the tape against.
 #pragma once
 
 #include <memory>

@@ -1,5 +1,6 @@
-// Pinhole camera (DESIGN.md conventions): eye, target, up, vertical fov in degrees. Pixel (x, y)
-// has its centre at (x + 0.5, y + 0.5); row 0 is the top of the image; primary directions are unit.
+// Pinhole camera (docs/design.md conventions): eye, target, up, vertical fov in degrees. Pixel (x,
+// y) has its centre at (x + 0.5, y + 0.5); row 0 is the top of the image; primary directions are
+// unit.
 #pragma once
 
 #include <cmath>

@@ -1,5 +1,5 @@
-// What the integrators consume (DESIGN.md "one plan, two devices"): the scene's field compiled to
-// a tape, the tapes of its convex top-level objects (Keinert et al. 2014, §3.5), the grid a
+// What the integrators consume (docs/design.md "one plan, two devices"): the scene's field compiled
+// to a tape, the tapes of its convex top-level objects (Keinert et al. 2014, §3.5), the grid a
 // single-grid scene is traced through by Jamriška's DDA, materials, textures, lights, the camera
 // and the settings. Built once from a prepared scene (scene/plan_render.h) and read-only after;
 // the renderers never look at the node tree. What changes per frame is a FrameView.

@@ -40,8 +40,8 @@ struct SoftShadowResult {
     int evaluations = 0;
 };
 
-// One march as a state machine (as the sphere tracer's, DESIGN.md): start(), then step() with each
-// distance at point() until it returns false; result() then holds the visibility. Scalar and
+// One march as a state machine (as the sphere tracer's, docs/design.md): start(), then step() with
+// each distance at point() until it returns false; result() then holds the visibility. Scalar and
 // packet drivers below share it.
 class SoftShadowMarch {
   public:

@@ -7,7 +7,7 @@
 namespace sdft {
 
 // Looks at the bounds' centre from above and to the front-right, far enough for the bounding sphere
-// to fit the vertical field of view (DESIGN.md camera conventions).
+// to fit the vertical field of view (docs/design.md camera conventions).
 CameraDesc frameBounds(const Bounds3& bounds, float fovDeg, int width, int height);
 
 Scene sceneForObject(NodePtr object, const Bounds3& bounds);
