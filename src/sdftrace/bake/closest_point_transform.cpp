@@ -228,78 +228,144 @@ class Transform {
         std::vector<Plane> planes;
         Vec3d lo, hi;
         const size_t nt = m_mesh.triangles.size(), ne = m_edges.size();
+        bool ok;
         if (f < nt) {
-            out.kind = Kind::Face;
-            out.id = static_cast<uint32_t>(f);
-            const auto& t = m_mesh.triangles[f];
-            const Vec3d a = m_pd[t[0]], b = m_pd[t[1]], c = m_pd[t[2]];
-            Vec3d n = cross(b - a, c - a);
-            const double longest =
-                std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
-            // A sliver this thin is within 1e-10 of its edges, which stand for it.
-            if (dot(n, n) <= 1e-20 * longest * longest) return false;
-            n = n * (1.0 / norm(n));
-            const Vec3d v[3] = {a, b, c};
-            for (int k = 0; k < 3; ++k) {
-                Vec3d m = cross(v[(k + 1) % 3] - v[k], n);
-                m = m * (1.0 / norm(m));
-                planes.push_back({m, dot(m, v[k]) + kGrow});
-            }
-            lo = {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
-            hi = {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
+            ok = facePrism(static_cast<uint32_t>(f), planes, lo, hi, out);
         } else if (f < nt + ne) {
-            out.kind = Kind::Edge;
-            out.id = static_cast<uint32_t>(f - nt);
-            const auto& e = m_edges[out.id];
-            const Vec3d a = m_pd[e[0]], b = m_pd[e[1]];
-            const double len = norm(b - a);
-            if (len == 0) return false;
-            const Vec3d u = (b - a) * (1.0 / len);
-            planes.push_back({u * -1.0, -dot(u, a) + kGrow});
-            planes.push_back({u, dot(u, b) + kGrow});
-            for (uint32_t k = m_edgeFaces[out.id]; k < m_edgeFaces[out.id + 1]; ++k) {
-                const auto& t = m_mesh.triangles[m_faceList[k]];
-                const uint32_t w = t[0] != e[0] && t[0] != e[1]   ? t[0]
-                                   : t[1] != e[0] && t[1] != e[1] ? t[1]
-                                                                  : t[2];
-                Vec3d m = a - m_pd[w];
-                m = m - u * dot(m, u);
-                const double ml = norm(m);
-                if (ml <= 1e-12 * len) continue;  // a sliver: no constraint (a larger region)
-                m = m * (1.0 / ml);
-                planes.push_back({m * -1.0, -dot(m, a) + kGrow});
-            }
-            lo = {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
-            hi = {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+            ok = edgeWedge(static_cast<uint32_t>(f - nt), planes, lo, hi, out);
         } else {
-            out.kind = Kind::Vertex;
-            out.id = static_cast<uint32_t>(f - nt - ne);
-            if (m_vertexEdges[out.id] == m_vertexEdges[out.id + 1]) return false;  // unused
-            const Vec3d v = m_pd[out.id];
-            for (uint32_t k = m_vertexEdges[out.id]; k < m_vertexEdges[out.id + 1]; ++k) {
-                Vec3d u = m_pd[m_neighbours[k]] - v;
-                const double ul = norm(u);
-                if (ul == 0) continue;
-                u = u * (1.0 / ul);
-                planes.push_back({u, dot(u, v) + kGrow});
-            }
-            lo = hi = v;
+            ok = vertexCone(static_cast<uint32_t>(f - nt - ne), planes, lo, hi, out);
         }
-        // Within the grid and within the largest distance of any vertex.
+        return ok && cutToGrid(planes, lo, hi, s, out);
+    }
+
+    // Scan-converts `s` within layers o0..o1 (inclusive) of its outer axis, keeping squared
+    // distances in `d2`.
+    void rasterize(const Scan& s, int o0, int o1, float* d2, size_t& rows,
+                   size_t& evaluations) const {
+        constexpr float g = static_cast<float>(kGrow);
+        if (s.kind == Kind::Face) {
+            // Inside the prism proper: the plane distance; otherwise (the grown rim) the
+            // triangle's.
+            const auto& t = m_mesh.triangles[s.id];
+            const Vec3 fa = m_pf[t[0]], fb = m_pf[t[1]], fc = m_pf[t[2]];
+            const Vec3 fn = normalize(cross(fb - fa, fc - fa));
+            const float foff = dot(fn, fa);
+            scan(s, o0, o1, d2, rows, evaluations, [&](Vec3 q) {
+                bool inside = true;
+                for (int k = 0; k < 3; ++k) {
+                    const auto& h = s.planes[k];
+                    inside &= h[0] * q.x + h[1] * q.y + h[2] * q.z <= h[3] - 2 * g;
+                }
+                if (inside) {
+                    const float d = dot(fn, q) - foff;
+                    return d * d;
+                }
+                const Vec3 r = q - closestPointOnTriangle(q, fa, fb, fc);
+                return dot(r, r);
+            });
+        } else if (s.kind == Kind::Edge) {
+            const Vec3 fa = m_pf[m_edges[s.id][0]], fb = m_pf[m_edges[s.id][1]];
+            const float flen = length(fb - fa);
+            const Vec3 fn = (fb - fa) / flen;
+            scan(s, o0, o1, d2, rows, evaluations, [&](Vec3 q) {
+                const float t = std::clamp(dot(q - fa, fn), 0.0f, flen);
+                const Vec3 r = q - (fa + fn * t);
+                return dot(r, r);
+            });
+        } else {
+            const Vec3 fa = m_pf[s.id];
+            scan(s, o0, o1, d2, rows, evaluations, [&](Vec3 q) {
+                const Vec3 r = q - fa;
+                return dot(r, r);
+            });
+        }
+    }
+
+  private:
+    // A face's prism: the planes through its edges perpendicular to it (grown by kGrow).
+    bool facePrism(uint32_t id, std::vector<Plane>& planes, Vec3d& lo, Vec3d& hi, Scan& out) const {
+        out.kind = Kind::Face;
+        out.id = id;
+        const auto& t = m_mesh.triangles[id];
+        const Vec3d a = m_pd[t[0]], b = m_pd[t[1]], c = m_pd[t[2]];
+        Vec3d n = cross(b - a, c - a);
+        const double longest = std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
+        // A sliver this thin is within 1e-10 of its edges, which stand for it.
+        if (dot(n, n) <= 1e-20 * longest * longest) return false;
+        n = n * (1.0 / norm(n));
+        const Vec3d v[3] = {a, b, c};
         for (int k = 0; k < 3; ++k) {
-            const double l = std::max((k == 0 ? lo.x : k == 1 ? lo.y : lo.z) - m_limit, 0.0);
-            const double h = std::min((k == 0   ? hi.x
-                                       : k == 1 ? hi.y
-                                                : hi.z) +
-                                          m_limit,
-                                      double(m_shape.cells[k]));
-            if (l > h) return false;
-            (k == 0 ? lo.x : k == 1 ? lo.y : lo.z) = l;
-            (k == 0 ? hi.x : k == 1 ? hi.y : hi.z) = h;
+            Vec3d m = cross(v[(k + 1) % 3] - v[k], n);
+            m = m * (1.0 / norm(m));
+            planes.push_back({m, dot(m, v[k]) + kGrow});
+        }
+        lo = {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
+        hi = {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
+        return true;
+    }
+
+    // An edge's wedge: between the planes through its ends perpendicular to it, and outside each
+    // adjacent face's plane through the edge.
+    bool edgeWedge(uint32_t id, std::vector<Plane>& planes, Vec3d& lo, Vec3d& hi, Scan& out) const {
+        out.kind = Kind::Edge;
+        out.id = id;
+        const auto& e = m_edges[id];
+        const Vec3d a = m_pd[e[0]], b = m_pd[e[1]];
+        const double len = norm(b - a);
+        if (len == 0) return false;
+        const Vec3d u = (b - a) * (1.0 / len);
+        planes.push_back({u * -1.0, -dot(u, a) + kGrow});
+        planes.push_back({u, dot(u, b) + kGrow});
+        for (uint32_t k = m_edgeFaces[id]; k < m_edgeFaces[id + 1]; ++k) {
+            const auto& t = m_mesh.triangles[m_faceList[k]];
+            const uint32_t w = t[0] != e[0] && t[0] != e[1]   ? t[0]
+                               : t[1] != e[0] && t[1] != e[1] ? t[1]
+                                                              : t[2];
+            Vec3d m = a - m_pd[w];
+            m = m - u * dot(m, u);
+            const double ml = norm(m);
+            if (ml <= 1e-12 * len) continue;  // a sliver: no constraint (a larger region)
+            m = m * (1.0 / ml);
+            planes.push_back({m * -1.0, -dot(m, a) + kGrow});
+        }
+        lo = {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+        hi = {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+        return true;
+    }
+
+    // A vertex's cone: behind the plane perpendicular to each edge leaving it.
+    bool vertexCone(uint32_t id, std::vector<Plane>& planes, Vec3d& lo, Vec3d& hi,
+                    Scan& out) const {
+        out.kind = Kind::Vertex;
+        out.id = id;
+        if (m_vertexEdges[id] == m_vertexEdges[id + 1]) return false;  // unused
+        const Vec3d v = m_pd[id];
+        for (uint32_t k = m_vertexEdges[id]; k < m_vertexEdges[id + 1]; ++k) {
+            Vec3d u = m_pd[m_neighbours[k]] - v;
+            const double ul = norm(u);
+            if (ul == 0) continue;
+            u = u * (1.0 / ul);
+            planes.push_back({u, dot(u, v) + kGrow});
+        }
+        lo = hi = v;
+        return true;
+    }
+
+    // The region `planes` cut from the feature's box grown by the distance limit and clipped to
+    // the grid: its vertex range, the scan axis with the smallest projected hull, and the planes.
+    bool cutToGrid(const std::vector<Plane>& planes, Vec3d lo, Vec3d hi, Scratch& s,
+                   Scan& out) const {
+        // Within the grid and within the largest distance of any vertex.
+        double l3[3] = {lo.x, lo.y, lo.z}, h3[3] = {hi.x, hi.y, hi.z};
+        for (int k = 0; k < 3; ++k) {
+            l3[k] = std::max(l3[k] - m_limit, 0.0);
+            h3[k] = std::min(h3[k] + m_limit, double(m_shape.cells[k]));
+            if (l3[k] > h3[k]) return false;
         }
         Polytope* cur = s.a.get();
         Polytope* next = s.b.get();
-        makeBox(*cur, lo, hi);
+        makeBox(*cur, {l3[0], l3[1], l3[2]}, {h3[0], h3[1], h3[2]});
         for (const Plane& h : planes) {
             const Cut c = clip(*cur, h, *next);
             if (c == Cut::Empty) return false;
@@ -340,10 +406,53 @@ class Transform {
         return true;
     }
 
-    // Scan-converts `s` within layers o0..o1 (inclusive) of its outer axis, keeping squared
-    // distances in `d2`.
-    void rasterize(const Scan& s, int o0, int o1, float* d2, size_t& rows,
-                   size_t& evaluations) const {
+    // The hull's extent along the inner axis within outer layer ic +- kGrow; false if none.
+    static bool hullExtent(const Scan& s, int ic, float& bmin, float& bmax) {
+        constexpr float g = static_cast<float>(kGrow);
+        const size_t nh = s.hull.size();
+        bmin = INFINITY;
+        bmax = -INFINITY;
+        for (size_t i = 0; i < nh; ++i) {
+            const P2& p = s.hull[i];
+            const P2& q = s.hull[(i + 1) % nh];
+            if (std::max(p.c, q.c) < ic - g || std::min(p.c, q.c) > ic + g) continue;
+            float t0 = 0, t1 = 1;
+            const float dc = q.c - p.c;
+            if (std::fabs(dc) > 1e-9f) {
+                float ta = (ic - g - p.c) / dc, tb = (ic + g - p.c) / dc;
+                if (ta > tb) std::swap(ta, tb);
+                t0 = std::max(0.0f, ta);
+                t1 = std::min(1.0f, tb);
+                if (t0 > t1) continue;
+            }
+            const float b0 = p.b + (q.b - p.b) * t0, b1 = p.b + (q.b - p.b) * t1;
+            bmin = std::min(bmin, std::min(b0, b1));
+            bmax = std::max(bmax, std::max(b0, b1));
+        }
+        return bmin <= bmax;
+    }
+
+    // The scan axis's range [alo, ahi] of row (ib, ic) inside the region's planes.
+    static bool rowRange(const Scan& s, int ib, int ic, float& alo, float& ahi) {
+        const int a = s.axis, b = innerAxis(a), c = outerAxis(a);
+        for (const auto& h : s.planes) {
+            const float rhs = h[3] - h[b] * ib - h[c] * ic;
+            if (h[a] > 1e-7f) {
+                ahi = std::min(ahi, rhs / h[a]);
+            } else if (h[a] < -1e-7f) {
+                alo = std::max(alo, rhs / h[a]);
+            } else if (rhs < -1e-4f) {
+                return false;
+            }
+        }
+        return alo <= ahi;
+    }
+
+    // Every vertex of the region within layers o0..o1: d2 = min(d2, distance2(vertex)).
+    template <class Distance2>
+    void scan(const Scan& s, int o0, int o1, float* d2, size_t& rows, size_t& evaluations,
+              Distance2&& distance2) const {
+        constexpr float g = static_cast<float>(kGrow);
         const int a = s.axis, b = innerAxis(a), c = outerAxis(a);
         int lo[3] = {s.lo[0], s.lo[1], s.lo[2]};
         int hi[3] = {s.hi[0], s.hi[1], s.hi[2]};
@@ -352,63 +461,14 @@ class Transform {
         if (lo[c] > hi[c]) return;
         const size_t stride[3] = {1, size_t(m_shape.vertices(0)),
                                   size_t(m_shape.vertices(0)) * m_shape.vertices(1)};
-        // The feature, in voxel units.
-        Vec3 fa, fb, fc, fn;
-        float foff = 0, flen = 0;
-        if (s.kind == Kind::Face) {
-            const auto& t = m_mesh.triangles[s.id];
-            fa = m_pf[t[0]];
-            fb = m_pf[t[1]];
-            fc = m_pf[t[2]];
-            fn = normalize(cross(fb - fa, fc - fa));
-            foff = dot(fn, fa);
-        } else if (s.kind == Kind::Edge) {
-            fa = m_pf[m_edges[s.id][0]];
-            fb = m_pf[m_edges[s.id][1]];
-            flen = length(fb - fa);
-            fn = (fb - fa) / flen;
-        } else {
-            fa = m_pf[s.id];
-        }
-        constexpr float g = static_cast<float>(kGrow);
-        const size_t nh = s.hull.size();
         for (int ic = lo[c]; ic <= hi[c]; ++ic) {
-            // The hull's extent along b within c +- g.
-            float bmin = INFINITY, bmax = -INFINITY;
-            for (size_t i = 0; i < nh; ++i) {
-                const P2& p = s.hull[i];
-                const P2& q = s.hull[(i + 1) % nh];
-                if (std::max(p.c, q.c) < ic - g || std::min(p.c, q.c) > ic + g) continue;
-                float t0 = 0, t1 = 1;
-                const float dc = q.c - p.c;
-                if (std::fabs(dc) > 1e-9f) {
-                    float ta = (ic - g - p.c) / dc, tb = (ic + g - p.c) / dc;
-                    if (ta > tb) std::swap(ta, tb);
-                    t0 = std::max(0.0f, ta);
-                    t1 = std::min(1.0f, tb);
-                    if (t0 > t1) continue;
-                }
-                const float b0 = p.b + (q.b - p.b) * t0, b1 = p.b + (q.b - p.b) * t1;
-                bmin = std::min(bmin, std::min(b0, b1));
-                bmax = std::max(bmax, std::max(b0, b1));
-            }
-            if (!(bmin <= bmax)) continue;
+            float bmin, bmax;
+            if (!hullExtent(s, ic, bmin, bmax)) continue;
             const int ib0 = std::max(lo[b], static_cast<int>(std::ceil(bmin - g)));
             const int ib1 = std::min(hi[b], static_cast<int>(std::floor(bmax + g)));
             for (int ib = ib0; ib <= ib1; ++ib) {
                 float alo = static_cast<float>(lo[a]), ahi = static_cast<float>(hi[a]);
-                for (const auto& h : s.planes) {
-                    const float rhs = h[3] - h[b] * ib - h[c] * ic;
-                    if (h[a] > 1e-7f) {
-                        ahi = std::min(ahi, rhs / h[a]);
-                    } else if (h[a] < -1e-7f) {
-                        alo = std::max(alo, rhs / h[a]);
-                    } else if (rhs < -1e-4f) {
-                        ahi = -1;
-                        break;
-                    }
-                }
-                if (!(alo <= ahi)) continue;
+                if (!rowRange(s, ib, ic, alo, ahi)) continue;
                 const int ia0 = static_cast<int>(std::ceil(alo)),
                           ia1 = static_cast<int>(std::floor(ahi));
                 if (ia0 > ia1) continue;
@@ -421,39 +481,13 @@ class Transform {
                 const size_t sa = stride[a];
                 for (int ia = ia0; ia <= ia1; ++ia) {
                     p[a] = static_cast<float>(ia);
-                    const Vec3 q(p[0], p[1], p[2]);
-                    float d;
-                    if (s.kind == Kind::Face) {
-                        // Inside the prism proper: the plane distance; otherwise (the grown rim)
-                        // the triangle's.
-                        bool inside = true;
-                        for (int k = 0; k < 3; ++k) {
-                            const auto& h = s.planes[k];
-                            inside &= h[0] * q.x + h[1] * q.y + h[2] * q.z <= h[3] - 2 * g;
-                        }
-                        if (inside) {
-                            const float t = dot(fn, q) - foff;
-                            d = t * t;
-                        } else {
-                            const Vec3 r = q - closestPointOnTriangle(q, fa, fb, fc);
-                            d = dot(r, r);
-                        }
-                    } else if (s.kind == Kind::Edge) {
-                        const float t = std::clamp(dot(q - fa, fn), 0.0f, flen);
-                        const Vec3 r = q - (fa + fn * t);
-                        d = dot(r, r);
-                    } else {
-                        const Vec3 r = q - fa;
-                        d = dot(r, r);
-                    }
                     float& o = row[sa * ia];
-                    o = std::min(o, d);
+                    o = std::min(o, distance2(Vec3(p[0], p[1], p[2])));
                 }
             }
         }
     }
 
-  private:
     // The largest distance (voxels) any grid vertex can have: from a lattice of every s-th
     // vertex, the distance to the nearest of (up to 1024) mesh vertices bounds the distance to
     // the mesh; a vertex is within s*sqrt(3)/2 of a lattice point.
