@@ -19,6 +19,7 @@
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
+#include "sdftrace/scene/prepare_scene.h"
 #include "sdftrace/scene/render_options.h"
 
 namespace sdft::cli {
@@ -140,8 +141,9 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a) {
     return aovs;
 }
 
-// The scene of the input: the demo, a scene file, or a mesh or grid file framed automatically.
-Scene loadInput(const std::string& input) {
+// The scene of the input: the demo, a scene file (described, then its assets loaded and baked),
+// or a mesh or grid file framed automatically.
+Scene loadInput(const std::string& input, bool progress) {
     if (input.empty()) return demoScene();
     if (isMeshFile(input)) {
         // A mesh rendered directly: baked exactly at the default resolution first.
@@ -160,7 +162,9 @@ Scene loadInput(const std::string& input) {
             throw InputError(input + ": the grid contains no surface (no sign change)");
         return sceneForObject(node::grid(grid), frame);
     }
-    return parseSceneFile(input);
+    Scene scene = describeSceneFile(input);
+    prepareScene(scene, PrepareOptions{.progress = progress});
+    return scene;
 }
 
 // One frame, or temporally accumulated frames (--frames, --orbit).
@@ -226,7 +230,7 @@ int runRender(const RenderArgs& a) {
         return 0;
     }
     const auto aovs = validateOutputs(a);
-    Scene scene = loadInput(a.scene);
+    Scene scene = loadInput(a.scene, !a.quiet && stderrIsTerminal());
     applyOverrides(a, scene);
     const RenderPlan plan = planRender(scene);
     Film film(plan.camera.width, plan.camera.height);

@@ -53,6 +53,9 @@ struct Node {
     int material = -1;
     // NodeKind::Grid: the samples (shared, immutable).
     std::shared_ptr<const Grid> grid;
+    // NodeKind::Grid in a scene that is described but not yet prepared (scene/prepare_scene.h):
+    // the index of the asset request that will supply `grid`, which is null until then.
+    int asset = -1;
 };
 
 bool isPrimitive(NodeKind kind);
@@ -79,6 +82,8 @@ struct Blob {
 NodePtr blobs(const std::vector<Blob>& blobs, float threshold);
 // A sampled field; its value is the trilinear reconstruction divided by the grid's Lipschitz bound.
 NodePtr grid(std::shared_ptr<const Grid> grid);
+// A grid still to be loaded or baked: asset request `index` of its scene.
+NodePtr gridAsset(int index);
 
 NodePtr unite(std::vector<NodePtr> children);
 NodePtr intersect(std::vector<NodePtr> children);
@@ -115,6 +120,8 @@ bool dominatesBounds(const Node& n);
 // Whether the node's solid is convex: convex primitives, their intersections and transforms
 // (Keinert et al. 2014, §3.5 traces rays inside such objects back from their bounds).
 bool isConvex(const Node& node);
+// Whether the tree holds grids not loaded yet (node::gridAsset).
+bool hasPendingAssets(const Node& n);
 // Recursive reference evaluation of the tree (slow; the tests' ground truth for the tape).
 float evalTree(const Node& n, Vec3 p);
 

@@ -8,9 +8,14 @@
 
 namespace sdft {
 
+// The scene as described: validated, with its grid files, meshes and "bake" subtrees as asset
+// requests that prepareScene (prepare_scene.h) loads. `source` names the text in messages (a file
+// name, or "<demo>"); relative file paths in the scene start from `baseDir`.
+Scene describeSceneFile(const std::string& path);
+Scene describeSceneText(const std::string& text, const std::string& source,
+                        const std::string& baseDir = "");
+// Described, then prepared (assets loaded and baked, no progress shown).
 Scene parseSceneFile(const std::string& path);
-// `source` names the text in messages (a file name, or "<demo>"); relative file paths in the scene
-// (grid files) start from `baseDir`.
 Scene parseSceneText(const std::string& text, const std::string& source,
                      const std::string& baseDir = "");
 // The built-in demo scene (the text of examples/demo.json, embedded at build time).

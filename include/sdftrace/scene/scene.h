@@ -1,10 +1,17 @@
-// A parsed, validated scene: the field tree, materials, lights, camera and render settings.
+// A scene: the field tree, materials, lights, camera and render settings. Parsing gives a
+// description whose grid files, meshes and baked subtrees are asset requests (pending grid nodes);
+// prepareScene (prepare_scene.h) loads and bakes them; planRender (plan_render.h) compiles the
+// prepared scene for the integrators.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "sdftrace/bake/mesh_bake.h"
+#include "sdftrace/bake/texture_coords.h"
 #include "sdftrace/field/node.h"
+#include "sdftrace/field/sample_grid.h"
 #include "sdftrace/math/camera.h"
 #include "sdftrace/render/lighting.h"
 #include "sdftrace/render/render_settings.h"
@@ -12,8 +19,32 @@
 
 namespace sdft {
 
+// A grid the scene needs: a grid file, a mesh baked to a grid, or a subtree sampled into one.
+struct AssetRequest {
+    enum class Kind { GridFile, Mesh, Subtree };
+    Kind kind = Kind::GridFile;
+    std::string where;       // "<scene file>: <JSON path>", the start of its error messages
+    std::string path;        // GridFile, Mesh: the file (relative paths resolved)
+    MeshBakeOptions bake;    // Mesh
+    NodePtr subtree;         // Subtree: the field to sample (may hold assets)
+    SampleOptions sampling;  // Subtree
+    std::optional<TexcoordOptions> texcoords;  // Subtree: projected (u, v) (Liktor §5.5.2)
+    std::string key;  // identical requests (same file and options) share one grid; empty: none
+};
+
+// A check that needs the bounds of pending grids, run once they are loaded: copies of a
+// repetition's child must not overlap.
+struct RepeatCheck {
+    NodePtr child;
+    Vec3 cell, count;
+    std::string where;  // "<scene file>: <JSON path of the repeat>"
+};
+
 struct Scene {
     NodePtr root;
+    std::vector<AssetRequest> assets;  // requests of pending grid nodes (node::gridAsset)
+    std::vector<RepeatCheck> repeatChecks;
+    bool prepared() const { return !root || !hasPendingAssets(*root); }
     std::vector<Material> materials;
     std::vector<Texture> textures;     // referenced by materials
     std::vector<TextureImage> images;  // decoded image files, referenced by textures

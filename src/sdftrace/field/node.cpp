@@ -100,6 +100,14 @@ NodePtr grid(std::shared_ptr<const Grid> g) {
     return n;
 }
 
+NodePtr gridAsset(int index) {
+    SDFT_CHECK(index >= 0);
+    auto n = std::make_shared<Node>();
+    n->kind = NodeKind::Grid;
+    n->asset = index;
+    return n;
+}
+
 NodePtr unite(std::vector<NodePtr> c) {
     SDFT_CHECK(!c.empty());
     return make(NodeKind::Union, {}, std::move(c));
@@ -249,8 +257,8 @@ Bounds3 nodeBounds(const Node& n) {
         return bounds(k.data());
         SDFT_PRIMITIVES(SDFT_PRIMITIVE_BOUNDS)
 #undef SDFT_PRIMITIVE_BOUNDS
-        case NodeKind::Grid:
-            return n.grid->shape().bounds();
+        case NodeKind::Grid:  // unknown until a pending grid is loaded
+            return n.grid ? n.grid->shape().bounds() : Bounds3::everything();
         case NodeKind::Union:
         case NodeKind::Morph: {
             Bounds3 b;
@@ -313,6 +321,7 @@ float evalTree(const Node& n, Vec3 p) {
         SDFT_PRIMITIVES(SDFT_PRIMITIVE_TREE)
 #undef SDFT_PRIMITIVE_TREE
         case NodeKind::Grid:
+            SDFT_CHECK(n.grid != nullptr);
             return n.grid->view().sample(p) / n.grid->lipschitz();
         case NodeKind::Union: {
             float v = child(0, p);
@@ -354,6 +363,13 @@ float evalTree(const Node& n, Vec3 p) {
                    displaceScale(n);
     }
     return 0;
+}
+
+bool hasPendingAssets(const Node& n) {
+    if (n.kind == NodeKind::Grid) return !n.grid;
+    for (const NodePtr& c : n.children)
+        if (hasPendingAssets(*c)) return true;
+    return false;
 }
 
 bool isConvex(const Node& n) {

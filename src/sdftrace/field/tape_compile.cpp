@@ -101,6 +101,7 @@ uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
         return r;
     }
     if (n.kind == NodeKind::Grid) {
+        SDFT_CHECK(n.grid != nullptr);  // a pending grid: the scene was not prepared
         uint16_t out = allocScalar();
         m_grids.push_back(n.grid);
         push(Op::Grid, out, point, 0, addConsts({static_cast<float>(m_grids.size() - 1)}),

@@ -14,8 +14,10 @@ namespace {
 TEST(MaterialAt, TexturesMoveWithTheirObject) {
     auto scene = [](const std::string& texture, Vec3 o, float turn) {
         auto v = [&](Vec3 p) {
-            return "[" + std::to_string(p.x + o.x) + ", " + std::to_string(p.y + o.y) + ", " +
-                   std::to_string(p.z + o.z) + "]";
+            std::string out = "[";
+            out += std::to_string(p.x + o.x) + ", " + std::to_string(p.y + o.y) + ", ";
+            out += std::to_string(p.z + o.z) + "]";
+            return out;
         };
         return R"({"camera": {"eye": )" + v({0, 0.5f, 4}) + R"(, "target": )" + v({0, 0, 0}) +
                R"(, "fov": 35, "width": 48, "height": 48},

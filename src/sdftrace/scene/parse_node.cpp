@@ -11,7 +11,6 @@
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_file.h"
-#include "sdftrace/io/mesh_io.h"
 
 namespace sdft {
 
@@ -95,41 +94,52 @@ std::filesystem::path resolvePath(const NodeContext& ctx, const std::string& fil
     return path;
 }
 
-// A grid file, relative to the scene file's directory; its errors carry the JSON path too.
-std::shared_ptr<const Grid> loadGridObject(const Reader& r, NodeContext& ctx,
-                                           const char* jsonKey = "file") {
-    std::string file = r.string(jsonKey);
-    std::filesystem::path path = resolvePath(ctx, file);
-    std::string key = path.lexically_normal().string();
-    auto it = ctx.grids.find(key);
-    if (it != ctx.grids.end()) return it->second;
-    if (!isGridFile(key))
-        r.failKey(jsonKey, "unsupported grid file '" + file + "'; accepted: .sdfg, .vdb");
-    try {
-        auto grid = std::make_shared<const Grid>(loadGridFile(key));
-        ctx.grids[key] = grid;
-        return grid;
-    } catch (const InputError& e) {
-        r.failKey(jsonKey, e.what());
+// The index of `request` among the scene's asset requests; an identical earlier one is reused.
+int addRequest(NodeContext& ctx, AssetRequest request) {
+    if (!request.key.empty()) {
+        auto it = ctx.requestIndex.find(request.key);
+        if (it != ctx.requestIndex.end()) return it->second;
     }
+    const int index = static_cast<int>(ctx.scene->assets.size());
+    if (!request.key.empty()) ctx.requestIndex[request.key] = index;
+    ctx.scene->assets.push_back(std::move(request));
+    return index;
 }
 
-// A mesh file (relative to the scene file) baked to a sparse grid on load; the same file with the
-// same options is baked once.
-std::shared_ptr<const Grid> bakeMeshObject(const Reader& r, NodeContext& ctx) {
-    std::string file = r.string("mesh");
-    std::filesystem::path path = resolvePath(ctx, file);
-    if (!isMeshFile(path.string())) {
+std::string where(const Reader& r, const std::string& key) {
+    return r.source() + ": " + r.path() + "/" + key;
+}
+
+// A grid file, relative to the scene file's directory: loaded by prepareScene.
+NodePtr requestGridFile(const Reader& r, NodeContext& ctx, const char* jsonKey = "file") {
+    const std::string file = r.string(jsonKey);
+    const std::string path = resolvePath(ctx, file).lexically_normal().string();
+    if (!isGridFile(path))
+        r.failKey(jsonKey, "unsupported grid file '" + file + "'; accepted: .sdfg, .vdb");
+    AssetRequest q;
+    q.kind = AssetRequest::Kind::GridFile;
+    q.where = where(r, jsonKey);
+    q.path = path;
+    q.key = "grid|" + path;
+    return node::gridAsset(addRequest(ctx, std::move(q)));
+}
+
+// A mesh file (relative to the scene file) baked to a sparse grid by prepareScene; the same file
+// with the same options is baked once.
+NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
+    const std::string file = r.string("mesh");
+    const std::string path = resolvePath(ctx, file).lexically_normal().string();
+    if (!isMeshFile(path)) {
         r.failKey("mesh", "unsupported mesh file '" + file +
                               "'; accepted: .obj, .ply, .stl, .off, .gltf, .glb");
     }
     SampleOptions o;
     o.resolution = r.integer("resolution", 128, 8, 1024);
-    std::string method = r.string("method", "exact");
+    const std::string method = r.string("method", "exact");
     MeshBakeOptions bake;
     if (!parseMeshBakeMethod(method, bake.method))
         r.failKey("method", "unknown method '" + method + "'; accepted: " + kMeshBakeMethods);
-    std::string sign = r.string("sign", "winding");
+    const std::string sign = r.string("sign", "winding");
     if (!parseSignMethod(sign, bake.sign))
         r.failKey("sign", "unknown sign '" + sign + "'; accepted: " + kSignMethods);
     o.bandVoxels = r.number(
@@ -140,32 +150,28 @@ std::shared_ptr<const Grid> bakeMeshObject(const Reader& r, NodeContext& ctx) {
     } catch (const InputError& e) {
         r.failKey("sign", e.what());
     }
-    std::string key = path.lexically_normal().string() + "|" + method + "|" + sign + "|" +
-                      std::to_string(o.resolution) + "|" + std::to_string(o.bandVoxels);
-    auto it = ctx.grids.find(key);
-    if (it != ctx.grids.end()) return it->second;
-    try {
-        TriangleMesh mesh = loadMesh(path.string());
-        auto grid = std::make_shared<const Grid>(bakeMesh(mesh, bake).grid);
-        ctx.grids[key] = grid;
-        return grid;
-    } catch (const InputError& e) {
-        r.failKey("mesh", e.what());
-    }
+    AssetRequest q;
+    q.kind = AssetRequest::Kind::Mesh;
+    q.where = where(r, "mesh");
+    q.path = path;
+    q.bake = bake;
+    q.key = "mesh|" + path + "|" + method + "|" + sign + "|" + std::to_string(o.resolution) + "|" +
+            std::to_string(o.bandVoxels);
+    return node::gridAsset(addRequest(ctx, std::move(q)));
 }
 
-// {"type": "bake", "child": {...}}: the child's field sampled into a sparse grid on load,
+// {"type": "bake", "child": {...}}: the child's field sampled into a sparse grid by prepareScene,
 // optionally with projected texture coordinates (Liktor 2008, §5.5.2).
-std::shared_ptr<const Grid> bakeSubtree(const Reader& r, NodeContext& ctx) {
-    const NodePtr child = parseSingleChild(r, ctx);
-    const Tape tape = compileTape(child, {.boundsCulling = false});
-    if (!tape.bounds().finite() || tape.bounds().empty())
-        r.failKey("child", "unbounded (a plane or a complement?); a bake needs a bounded field");
-    SampleOptions o;
-    o.resolution = r.integer("resolution", 96, 8, 1024);
-    o.bandVoxels = r.number(
+NodePtr requestSubtree(const Reader& r, NodeContext& ctx) {
+    AssetRequest q;
+    q.kind = AssetRequest::Kind::Subtree;
+    q.where = where(r, "child");
+    q.subtree = parseSingleChild(r, ctx);
+    // Checked here when the child is analytic, else once its grids are loaded.
+    if (!hasPendingAssets(*q.subtree) && !boundedField(q.subtree)) r.failKey("child", kUnbounded);
+    q.sampling.resolution = r.integer("resolution", 96, 8, 1024);
+    q.sampling.bandVoxels = r.number(
         "band", 3.0f, [](double v) { return v >= 2 && v <= 64; }, "a band in [2, 64] voxels");
-    Grid grid = sampleGrid(tape, tape.bounds(), o);
     if (r.has("texcoords")) {
         TexcoordOptions t;
         const std::string helper = r.string("texcoords");
@@ -177,12 +183,11 @@ std::shared_ptr<const Grid> bakeSubtree(const Reader& r, NodeContext& ctx) {
             t.center = r.vec3("texcoord_center");
             t.autoCenter = false;
         }
-        bakeTexcoords(
-            grid, [&tape](Vec3 p) { return tape.eval(p); }, t);
+        q.texcoords = t;
     } else if (r.has("texcoord_axis") || r.has("texcoord_center")) {
         r.fail("texcoord_axis and texcoord_center need \"texcoords\": \"sphere\" or \"cylinder\"");
     }
-    return std::make_shared<const Grid>(std::move(grid));
+    return node::gridAsset(addRequest(ctx, std::move(q)));
 }
 
 // The keys every object may carry: inline transforms, then the material.
@@ -272,16 +277,10 @@ NodePtr parseRepeat(const Reader& r, NodeContext& ctx, const std::string& type) 
         "count", [](double v) { return v >= 0 && v <= 1000 && v == std::floor(v); },
         "whole numbers of copies per side in [0, 1000]");
     NodePtr child = parseSingleChild(r, ctx);
-    const Bounds3 b = nodeBounds(*child);
-    for (int i = 0; i < 3; ++i) {
-        if (count[i] <= 0) continue;
-        const float extent = std::fmax(std::fabs(b.lo[i]), std::fabs(b.hi[i]));
-        if (!(extent <= 0.5f * cell[i])) {
-            r.failKey("cell", "the child reaches " + std::to_string(extent) +
-                                  " from its origin along axis " + std::to_string(i) +
-                                  "; the cell must be at least twice that (" +
-                                  std::to_string(2 * extent) + ") so copies do not overlap");
-        }
+    if (hasPendingAssets(*child)) {  // checked once its grids are loaded (prepareScene)
+        ctx.scene->repeatChecks.push_back({child, cell, count, r.source() + ": " + r.path()});
+    } else if (std::string error = repeatOverlap(nodeBounds(*child), cell, count); !error.empty()) {
+        r.failKey("cell", error);
     }
     return node::repeat(child, cell, count);
 }
@@ -298,13 +297,13 @@ NodePtr parseDisplace(const Reader& r, NodeContext& ctx, const std::string& type
 
 NodePtr parseGridNode(const Reader& r, NodeContext& ctx, const std::string& type) {
     allowObjectKeys(r, type, {"file"});
-    return node::grid(loadGridObject(r, ctx));
+    return requestGridFile(r, ctx);
 }
 
 NodePtr parseBake(const Reader& r, NodeContext& ctx, const std::string& type) {
     allowObjectKeys(
         r, type, {"child", "resolution", "band", "texcoords", "texcoord_axis", "texcoord_center"});
-    return node::grid(bakeSubtree(r, ctx));
+    return requestSubtree(r, ctx);
 }
 
 struct OperatorParser {
@@ -339,6 +338,24 @@ std::string objectTypeNames() {
 
 }  // namespace
 
+bool boundedField(const NodePtr& n) {
+    const Bounds3 b = compileTape(n, {.boundsCulling = false}).bounds();
+    return b.finite() && !b.empty();
+}
+
+std::string repeatOverlap(const Bounds3& b, Vec3 cell, Vec3 count) {
+    for (int i = 0; i < 3; ++i) {
+        if (count[i] <= 0) continue;
+        const float extent = std::fmax(std::fabs(b.lo[i]), std::fabs(b.hi[i]));
+        if (!(extent <= 0.5f * cell[i])) {
+            return "the child reaches " + std::to_string(extent) + " from its origin along axis " +
+                   std::to_string(i) + "; the cell must be at least twice that (" +
+                   std::to_string(2 * extent) + ") so copies do not overlap";
+        }
+    }
+    return "";
+}
+
 void allowObjectKeys(const Reader& r, const std::string& type,
                      std::initializer_list<const char*> extra) {
     std::vector<const char*> keys = {"type", "material", "translate", "rotate", "scale"};
@@ -358,14 +375,14 @@ NodePtr parseNode(const Reader& r, NodeContext& ctx) {
     // Shorthand for a grid object: {"grid": "field.sdfg", ...} is {"type": "grid", "file": ...}.
     if (!r.has("type") && r.has("grid")) {
         r.allowKeys({"grid", "material", "translate", "rotate", "scale"});
-        return finishNode(r, node::grid(loadGridObject(r, ctx, "grid")), ctx);
+        return finishNode(r, requestGridFile(r, ctx, "grid"), ctx);
     }
     // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact", "sign":
     // "winding", "band": 3}.
     if (!r.has("type") && r.has("mesh")) {
         r.allowKeys({"mesh", "resolution", "method", "sign", "band", "material", "translate",
                      "rotate", "scale"});
-        return finishNode(r, node::grid(bakeMeshObject(r, ctx)), ctx);
+        return finishNode(r, requestMesh(r, ctx), ctx);
     }
     const std::string type = r.string("type");
     if (NodePtr n = parsePrimitive(r, type)) return finishNode(r, n, ctx);

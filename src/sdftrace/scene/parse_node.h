@@ -7,16 +7,25 @@
 #include "json_reader.h"
 #include "sdftrace/field/grid.h"
 #include "sdftrace/field/node.h"
+#include "sdftrace/scene/scene.h"
 
 namespace sdft {
 
 // What object parsing needs beyond the JSON: material names, the directory that relative file
-// paths start from, and the grids loaded so far (a file used twice is loaded once).
+// paths start from, and the scene whose asset requests and deferred checks it adds to.
 struct NodeContext {
     std::map<std::string, int> materials;  // name -> index in the scene's material table
     std::string baseDir;
-    std::map<std::string, std::shared_ptr<const Grid>> grids;
+    Scene* scene = nullptr;
+    std::map<std::string, int> requestIndex;  // request key -> index in scene->assets
 };
+
+// What a bake of a subtree needs: finite, non-empty bounds.
+inline const char* kUnbounded =
+    "unbounded (a plane or a complement?); a bake needs a bounded field";
+bool boundedField(const NodePtr& n);
+// Why copies of a child with these bounds overlap in a repetition (empty: they do not).
+std::string repeatOverlap(const Bounds3& childBounds, Vec3 cell, Vec3 count);
 
 NodePtr parseNode(const json_reader::Reader& r, NodeContext& context);
 

@@ -12,6 +12,7 @@
 #include "parse_node.h"
 #include "parse_texture.h"
 #include "sdftrace/render/film.h"
+#include "sdftrace/scene/prepare_scene.h"
 #include "sdftrace/scene/render_options.h"
 
 namespace sdft {
@@ -158,6 +159,7 @@ Scene parseRoot(const Json& root, const std::string& source, const std::string& 
     scene.materials.push_back(Material{"default"});
     NodeContext context;
     context.baseDir = baseDir;
+    context.scene = &scene;
     std::map<std::string, int>& materialIndex = context.materials;
     materialIndex["default"] = 0;
     TextureContext textures;
@@ -230,8 +232,8 @@ void validateImageSize(int width, int height, const std::string& what) {
     }
 }
 
-Scene parseSceneText(const std::string& text, const std::string& source,
-                     const std::string& baseDir) {
+Scene describeSceneText(const std::string& text, const std::string& source,
+                        const std::string& baseDir) {
     Json root;
     try {
         root = Json::parse(text);
@@ -247,14 +249,27 @@ Scene parseSceneText(const std::string& text, const std::string& source,
     return parseRoot(root, source, baseDir);
 }
 
-Scene parseSceneFile(const std::string& path) {
+Scene describeSceneFile(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in)
         throw InputError(path + ": cannot open scene file (does it exist and is it readable?)");
     std::ostringstream text;
     text << in.rdbuf();
     if (in.bad()) throw InputError(path + ": cannot read scene file");
-    return parseSceneText(text.str(), path, std::filesystem::path(path).parent_path().string());
+    return describeSceneText(text.str(), path, std::filesystem::path(path).parent_path().string());
+}
+
+Scene parseSceneText(const std::string& text, const std::string& source,
+                     const std::string& baseDir) {
+    Scene scene = describeSceneText(text, source, baseDir);
+    prepareScene(scene);
+    return scene;
+}
+
+Scene parseSceneFile(const std::string& path) {
+    Scene scene = describeSceneFile(path);
+    prepareScene(scene);
+    return scene;
 }
 
 const char* demoSceneText() { return kDemoSceneJson; }

@@ -1,8 +1,11 @@
 #include "sdftrace/scene/plan_render.h"
 
+#include "sdftrace/core/macros.h"
+
 namespace sdft {
 
 RenderPlan planRender(const Scene& scene) {
+    SDFT_CHECK(scene.prepared());  // prepareScene first: grids are still pending
     RenderPlan plan;
     plan.materials = scene.materials;
     plan.textures = scene.textures;
