@@ -143,127 +143,145 @@ bool parseTexcoordKind(const std::string& s, TexcoordKind& out) {
     return false;
 }
 
+namespace {
+
+// Counters of one thread's particles.
+struct ParticleCounts {
+    size_t particles = 0, projected = 0, unfinished = 0, ridges = 0, atLevel = 0;
+    double steps = 0, evaluations = 0;
+    void add(const ParticleCounts& o) {
+        particles += o.particles, projected += o.projected, unfinished += o.unfinished;
+        ridges += o.ridges, atLevel += o.atLevel, steps += o.steps, evaluations += o.evaluations;
+    }
+};
+
+// Liktor §5.5.2: one particle per sample, carried along the field's gradient to the helper
+// surface, where its position gives the texture coordinates.
+struct ParticleTracer {
+    const Helper& helper;
+    const std::function<float(Vec3)>& field;
+    const TexcoordOptions& o;
+    float voxel;
+
+    // The unit gradient at p by central differences (the helper's outward direction where it
+    // vanishes).
+    Vec3 direction(Vec3 p, ParticleCounts& c) const {
+        const float h = voxel;
+        const Vec3 g(field(p + Vec3(h, 0, 0)) - field(p - Vec3(h, 0, 0)),
+                     field(p + Vec3(0, h, 0)) - field(p - Vec3(0, h, 0)),
+                     field(p + Vec3(0, 0, h)) - field(p - Vec3(0, 0, h)));
+        c.evaluations += 6;
+        const float len = length(g);
+        return len > 1e-12f ? g / len : helper.outward(p);
+    }
+
+    // Where the particle from x stops: on the helper, at the stop level, or on a ridge.
+    Vec3 trace(Vec3 x, ParticleCounts& c) const {
+        ++c.particles;
+        int step = 0;
+        float f = field(x);  // the traced field (a scene's may differ from the sample by L)
+        c.evaluations += 1;
+        for (; step < o.maxSteps; ++step) {
+            // Larger steps far from the surface, where the field lines straighten.
+            const float s = std::clamp(0.5f * std::fabs(f), 0.5f * voxel, helper.radius / 8);
+            const Vec3 d1 = direction(x, c);
+            const Vec3 d2 = direction(x + d1 * (0.5f * s), c);  // midpoint (RK2)
+            const Vec3 next = x + d2 * s;
+            const float g0 = helper.g(x), g1 = helper.g(next);
+            if (g1 >= 0) {
+                // Where the segment leaves the helper.
+                const float t = g0 < g1 ? std::clamp(g0 / (g0 - g1), 0.0f, 1.0f) : 1.0f;
+                x = x + (next - x) * t;
+                break;
+            }
+            const float fNext = field(next);
+            c.evaluations += 1;
+            if (fNext >= o.stopLevel) {
+                // Where the segment reaches the level (continuous in the start point, unlike
+                // stopping at a whole step).
+                const float t =
+                    fNext > f ? std::clamp((o.stopLevel - f) / (fNext - f), 0.0f, 1.0f) : 0.0f;
+                x = x + (next - x) * t;
+                ++c.atLevel;
+                break;
+            }
+            x = next;
+            // No ascent: the particle sits on a ridge or plateau of the field (a medial surface,
+            // or the constant region a narrow band leaves), where the gradient stops leading
+            // outward. From here it goes straight out (radial projection).
+            if (!(fNext > f)) {
+                ++c.ridges;
+                break;
+            }
+            f = fNext;
+        }
+        c.steps += step + 1;
+        if (step == o.maxSteps) ++c.unfinished;
+        return x;
+    }
+};
+
+// f(position, sample value, index of the stored sample) for every stored sample, in parallel.
+template <class F>
+void forEachStoredSample(const Grid& grid, F&& f) {
+    const GridShape& shape = grid.shape();
+    const float voxel = shape.voxelSize;
+    if (grid.kind() == GridKind::Dense) {
+        const int nx = shape.cells[0] + 1, ny = shape.cells[1] + 1;
+        tbb::parallel_for(0, shape.cells[2] + 1, [&](int k) {
+            for (int j = 0; j < ny; ++j)
+                for (int i = 0; i < nx; ++i) {
+                    const size_t idx = (static_cast<size_t>(k) * ny + j) * nx + i;
+                    f(shape.origin + Vec3(i, j, k) * voxel, grid.samples()[idx], idx);
+                }
+        });
+        return;
+    }
+    const GridView view = grid.view();
+    const int B = grid.blockSize(), V = B + 1;
+    const int bx = view.blocks[0], by = view.blocks[1], bz = view.blocks[2];
+    tbb::parallel_for(0, bx * by * bz, [&](int block) {
+        const int32_t data = view.blockData[block];
+        if (data < 0) return;
+        const int bi = block % bx, bj = (block / bx) % by, bk = block / (bx * by);
+        const size_t base = static_cast<size_t>(data) * V * V * V;
+        for (int lk = 0; lk < V; ++lk)
+            for (int lj = 0; lj < V; ++lj)
+                for (int li = 0; li < V; ++li) {
+                    const size_t idx = base + (static_cast<size_t>(lk) * V + lj) * V + li;
+                    const Vec3 x =
+                        shape.origin + Vec3(bi * B + li, bj * B + lj, bk * B + lk) * voxel;
+                    f(x, grid.blockSamples()[idx], idx);
+                }
+    });
+}
+
+}  // namespace
+
 TexcoordStats bakeTexcoords(Grid& grid, const std::function<float(Vec3)>& field,
                             const TexcoordOptions& o) {
     const Helper helper = makeHelper(grid, o);
-    const GridShape& shape = grid.shape();
-    const GridView view = grid.view();
-    const float voxel = shape.voxelSize, band = o.bandVoxels * voxel;
-    const size_t count = grid.storedSamples();
-    std::vector<float> out(3 * count);
-
-    struct Local {
-        size_t particles = 0, projected = 0, unfinished = 0, ridges = 0, atLevel = 0;
-        double steps = 0, evaluations = 0;
-    };
-    tbb::combinable<Local> locals;
-
-    // Liktor §5.5.2: one particle per sample, along the gradient to the helper surface.
-    auto trace = [&](Vec3 x, float f0, float* dst) {
-        Local& L = locals.local();
-        Vec3 q;
-        if (std::fabs(f0) > band) {
-            ++L.projected;
-            q = x;
-        } else {
-            ++L.particles;
-            const float hGrad = voxel;
-            auto direction = [&](Vec3 p) {
-                const Vec3 g(field(p + Vec3(hGrad, 0, 0)) - field(p - Vec3(hGrad, 0, 0)),
-                             field(p + Vec3(0, hGrad, 0)) - field(p - Vec3(0, hGrad, 0)),
-                             field(p + Vec3(0, 0, hGrad)) - field(p - Vec3(0, 0, hGrad)));
-                L.evaluations += 6;
-                const float len = length(g);
-                return len > 1e-12f ? g / len : helper.outward(p);
-            };
-            int step = 0;
-            float f = field(x);  // the traced field (a scene's may differ from the sample by L)
-            L.evaluations += 1;
-            for (; step < o.maxSteps; ++step) {
-                // Larger steps far from the surface, where the field lines straighten.
-                const float s = std::clamp(0.5f * std::fabs(f), 0.5f * voxel, helper.radius / 8);
-                const Vec3 d1 = direction(x);
-                const Vec3 d2 = direction(x + d1 * (0.5f * s));  // midpoint (RK2)
-                const Vec3 next = x + d2 * s;
-                const float g0 = helper.g(x), g1 = helper.g(next);
-                if (g1 >= 0) {
-                    // Where the segment leaves the helper.
-                    const float t = g0 < g1 ? std::clamp(g0 / (g0 - g1), 0.0f, 1.0f) : 1.0f;
-                    x = x + (next - x) * t;
-                    break;
-                }
-                const float fNext = field(next);
-                L.evaluations += 1;
-                if (fNext >= o.stopLevel) {
-                    // Where the segment reaches the level (continuous in the start point, unlike
-                    // stopping at a whole step).
-                    const float t =
-                        fNext > f ? std::clamp((o.stopLevel - f) / (fNext - f), 0.0f, 1.0f) : 0.0f;
-                    x = x + (next - x) * t;
-                    ++L.atLevel;
-                    break;
-                }
-                x = next;
-                // No ascent: the particle sits on a ridge or plateau of the field (a medial
-                // surface, or the constant region a narrow band leaves), where the gradient stops
-                // leading outward. From here it goes straight out (radial projection).
-                if (!(fNext > f)) {
-                    ++L.ridges;
-                    break;
-                }
-                f = fNext;
-            }
-            L.steps += step + 1;
-            if (step == o.maxSteps) ++L.unfinished;
-            q = x;
-        }
-        const Vec3 e = helper.encode(q);
-        dst[0] = e.x, dst[1] = e.y, dst[2] = e.z;
-    };
-
+    const float voxel = grid.shape().voxelSize, band = o.bandVoxels * voxel;
+    std::vector<float> out(3 * grid.storedSamples());
+    const ParticleTracer tracer{helper, field, o, voxel};
+    tbb::combinable<ParticleCounts> counts;
     ThreadArena arena(o.threads);
     arena.execute([&] {
-        if (grid.kind() == GridKind::Dense) {
-            const int nx = shape.cells[0] + 1, ny = shape.cells[1] + 1;
-            tbb::parallel_for(0, shape.cells[2] + 1, [&](int k) {
-                for (int j = 0; j < ny; ++j)
-                    for (int i = 0; i < nx; ++i) {
-                        const size_t idx = (static_cast<size_t>(k) * ny + j) * nx + i;
-                        trace(shape.origin + Vec3(i, j, k) * voxel, grid.samples()[idx],
-                              &out[3 * idx]);
-                    }
-            });
-        } else {
-            const int B = grid.blockSize(), V = B + 1;
-            const int bx = view.blocks[0], by = view.blocks[1], bz = view.blocks[2];
-            tbb::parallel_for(0, bx * by * bz, [&](int block) {
-                const int32_t data = view.blockData[block];
-                if (data < 0) return;
-                const int bi = block % bx, bj = (block / bx) % by, bk = block / (bx * by);
-                const size_t base = static_cast<size_t>(data) * V * V * V;
-                for (int lk = 0; lk < V; ++lk)
-                    for (int lj = 0; lj < V; ++lj)
-                        for (int li = 0; li < V; ++li) {
-                            const size_t idx = base + (static_cast<size_t>(lk) * V + lj) * V + li;
-                            const Vec3 x =
-                                shape.origin + Vec3(bi * B + li, bj * B + lj, bk * B + lk) * voxel;
-                            trace(x, grid.blockSamples()[idx], &out[3 * idx]);
-                        }
-            });
-        }
+        forEachStoredSample(grid, [&](Vec3 x, float f0, size_t idx) {
+            ParticleCounts& c = counts.local();
+            Vec3 q = x;
+            if (std::fabs(f0) > band) {
+                ++c.projected;  // beyond the band: radial projection from the sample
+            } else {
+                q = tracer.trace(x, c);
+            }
+            const Vec3 e = helper.encode(q);
+            out[3 * idx] = e.x, out[3 * idx + 1] = e.y, out[3 * idx + 2] = e.z;
+        });
     });
-
+    ParticleCounts total;
+    counts.combine_each([&](const ParticleCounts& c) { total.add(c); });
     TexcoordStats st;
-    Local total;
-    locals.combine_each([&](const Local& l) {
-        total.particles += l.particles;
-        total.projected += l.projected;
-        total.unfinished += l.unfinished;
-        total.ridges += l.ridges;
-        total.atLevel += l.atLevel;
-        total.steps += l.steps;
-        total.evaluations += l.evaluations;
-    });
     st.particles = total.particles;
     st.projected = total.projected;
     st.unfinished = total.unfinished;
