@@ -106,15 +106,20 @@ void saveSdfg(const Grid& grid, const std::string& path) {
     out.commit();
 }
 
-Grid loadSdfg(const std::string& path) {
-    File file{std::fopen(path.c_str(), "rb")};
-    if (!file.f)
-        throw InputError(path + ": cannot open grid file (does it exist and is it readable?)");
-    std::error_code ec;
-    uint64_t fileBytes = std::filesystem::file_size(path, ec);
-    if (ec) throw InputError(path + ": cannot read the file size");
+namespace {
+
+// What the header says the payload holds, checked against the file's size.
+struct PayloadLayout {
+    GridKind kind = GridKind::Dense;
+    bool texcoords = false;  // version 2: u32 kind, u32 reserved, 3 floats per sample
+    uint64_t bytes = 0;      // the payload after the header
+    uint64_t numBlocks = 0;  // sparse: one flag byte each
+    uint64_t texHeaderBytes = 0, floatsPerSample = 1;
+};
+
+Header readHeader(std::FILE* f, const std::string& path, uint64_t fileBytes) {
     Header h{};
-    if (fileBytes < sizeof h || std::fread(&h, sizeof h, 1, file.f) != 1) {
+    if (fileBytes < sizeof h || std::fread(&h, sizeof h, 1, f) != 1) {
         throw InputError(path + ": truncated: shorter than the 64-byte .sdfg header");
     }
     if (std::memcmp(h.magic, kMagic, 4) != 0)
@@ -124,12 +129,13 @@ Grid loadSdfg(const std::string& path) {
                          " is not supported (this build reads versions 1 to " +
                          std::to_string(kSdfgVersion) + ")");
     }
-    // Version 2: after the distances, u32 kind, u32 reserved, 3 floats per stored sample.
-    const bool tex = h.version == 2;
-    const uint64_t texHeaderBytes = tex ? 8 : 0, floatsPerSample = tex ? 4 : 1;
     if (h.kind > 1)
         throw InputError(path + ": unknown grid kind " + std::to_string(h.kind) +
                          " (accepted: 0 dense, 1 sparse)");
+    return h;
+}
+
+GridShape shapeOf(const Header& h, const std::string& path) {
     GridShape s;
     for (int a = 0; a < 3; ++a) {
         if (h.cells[a] < 1 || h.cells[a] > kMaxCells) {
@@ -145,14 +151,20 @@ Grid loadSdfg(const std::string& path) {
     if (!(h.voxelSize > 0) || !std::isfinite(h.voxelSize))
         throw InputError(path + ": voxel size must be positive and finite");
     s.voxelSize = h.voxelSize;
-    GridKind kind = static_cast<GridKind>(h.kind);
+    return s;
+}
 
-    // Expected payload from the header alone, checked against the file before allocating.
-    uint64_t expected = 0;
-    uint64_t numBlocks = 0, perBlockBytes = 0;
-    if (kind == GridKind::Dense) {
-        expected = static_cast<uint64_t>(s.vertexCount()) * sizeof(float) * floatsPerSample +
-                   texHeaderBytes;
+// The payload expected from the header alone, checked against the file before allocating.
+PayloadLayout layoutOf(const Header& h, const GridShape& s, const std::string& path,
+                       uint64_t fileBytes) {
+    PayloadLayout l;
+    l.kind = static_cast<GridKind>(h.kind);
+    l.texcoords = h.version == 2;
+    l.texHeaderBytes = l.texcoords ? 8 : 0;
+    l.floatsPerSample = l.texcoords ? 4 : 1;
+    if (l.kind == GridKind::Dense) {
+        l.bytes = static_cast<uint64_t>(s.vertexCount()) * sizeof(float) * l.floatsPerSample +
+                  l.texHeaderBytes;
     } else {
         if (h.blockSize != 4 && h.blockSize != 8)
             throw InputError(path + ": block size " + std::to_string(h.blockSize) +
@@ -160,28 +172,43 @@ Grid loadSdfg(const std::string& path) {
         if (!(h.background > 0) || !std::isfinite(h.background))
             throw InputError(path + ": background must be positive and finite");
         for (int a = 0; a < 3; ++a)
-            numBlocks = (a == 0 ? 1 : numBlocks) * ((s.cells[a] + h.blockSize - 1) / h.blockSize);
-        perBlockBytes = static_cast<uint64_t>(h.blockSize + 1) * (h.blockSize + 1) *
-                        (h.blockSize + 1) * sizeof(float);
-        perBlockBytes *= floatsPerSample;
-        if (h.payloadBytes < numBlocks + texHeaderBytes ||
-            (h.payloadBytes - numBlocks - texHeaderBytes) % perBlockBytes != 0 ||
-            (h.payloadBytes - numBlocks - texHeaderBytes) / perBlockBytes > numBlocks) {
+            l.numBlocks =
+                (a == 0 ? 1 : l.numBlocks) * ((s.cells[a] + h.blockSize - 1) / h.blockSize);
+        const uint64_t perBlockBytes = static_cast<uint64_t>(h.blockSize + 1) * (h.blockSize + 1) *
+                                       (h.blockSize + 1) * sizeof(float) * l.floatsPerSample;
+        const uint64_t fixed = l.numBlocks + l.texHeaderBytes;
+        if (h.payloadBytes < fixed || (h.payloadBytes - fixed) % perBlockBytes != 0 ||
+            (h.payloadBytes - fixed) / perBlockBytes > l.numBlocks) {
             throw InputError(path + ": corrupt header: payload size does not fit the block layout");
         }
-        expected = h.payloadBytes;
+        l.bytes = h.payloadBytes;
     }
-    if (h.payloadBytes != expected)
+    if (h.payloadBytes != l.bytes)
         throw InputError(path + ": corrupt header: payload size does not match the grid size");
-    if (fileBytes - sizeof h < expected) {
-        throw InputError(path + ": truncated: the header promises " + std::to_string(expected) +
+    if (fileBytes - sizeof h < l.bytes) {
+        throw InputError(path + ": truncated: the header promises " + std::to_string(l.bytes) +
                          " payload bytes, the file has " + std::to_string(fileBytes - sizeof h));
     }
-    if (fileBytes - sizeof h > expected)
+    if (fileBytes - sizeof h > l.bytes)
         throw InputError(path + ": corrupt: trailing bytes after the payload");
     double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-    if (static_cast<double>(expected) > 0.5 * have)
+    if (static_cast<double>(l.bytes) > 0.5 * have)
         throw InputError(path + ": the grid needs more than half of this machine's memory");
+    return l;
+}
+
+}  // namespace
+
+Grid loadSdfg(const std::string& path) {
+    File file{std::fopen(path.c_str(), "rb")};
+    if (!file.f)
+        throw InputError(path + ": cannot open grid file (does it exist and is it readable?)");
+    std::error_code ec;
+    uint64_t fileBytes = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path + ": cannot read the file size");
+    const Header h = readHeader(file.f, path, fileBytes);
+    const GridShape s = shapeOf(h, path);
+    const PayloadLayout l = layoutOf(h, s, path, fileBytes);
 
     auto readExact = [&](void* dst, size_t bytes) {
         if (bytes && std::fread(dst, 1, bytes, file.f) != bytes)
@@ -190,19 +217,20 @@ Grid loadSdfg(const std::string& path) {
     uint64_t sum = 0xcbf29ce484222325ull;
     std::vector<float> samples;
     std::vector<uint8_t> flags;
-    if (kind == GridKind::Dense) {
+    if (l.kind == GridKind::Dense) {
         samples.resize(s.vertexCount());
     } else {
-        flags.resize(numBlocks);
-        readExact(flags.data(), numBlocks);
+        flags.resize(l.numBlocks);
+        readExact(flags.data(), l.numBlocks);
         sum = fnv1a64(flags.data(), flags.size(), sum);
-        samples.resize((expected - numBlocks - texHeaderBytes) / floatsPerSample / sizeof(float));
+        samples.resize((l.bytes - l.numBlocks - l.texHeaderBytes) / l.floatsPerSample /
+                       sizeof(float));
     }
     readExact(samples.data(), samples.size() * sizeof(float));
     sum = fnv1a64(samples.data(), samples.size() * sizeof(float), sum);
     uint32_t texHeader[2] = {0, 0};
     std::vector<float> texcoords;
-    if (tex) {
+    if (l.texcoords) {
         readExact(texHeader, sizeof texHeader);
         texcoords.resize(3 * samples.size());
         readExact(texcoords.data(), texcoords.size() * sizeof(float));
@@ -212,16 +240,17 @@ Grid loadSdfg(const std::string& path) {
     if (sum != h.checksum) throw InputError(path + ": corrupt: payload checksum mismatch");
     for (float v : samples)
         if (!std::isfinite(v)) throw InputError(path + ": corrupt: non-finite sample");
-    if (tex && texHeader[0] != static_cast<uint32_t>(TexcoordKind::Sphere) &&
+    if (l.texcoords && texHeader[0] != static_cast<uint32_t>(TexcoordKind::Sphere) &&
         texHeader[0] != static_cast<uint32_t>(TexcoordKind::Cylinder)) {
         throw InputError(path + ": unknown texture-coordinate kind " +
                          std::to_string(texHeader[0]) + " (accepted: 1 sphere, 2 cylinder)");
     }
-    Grid grid = kind == GridKind::Dense
+    Grid grid = l.kind == GridKind::Dense
                     ? Grid::dense(s, std::move(samples))
                     : Grid::sparseFromBuffers(s, static_cast<int>(h.blockSize), h.background,
                                               std::move(flags), std::move(samples), path);
-    if (tex) grid.setTexcoords(static_cast<TexcoordKind>(texHeader[0]), std::move(texcoords), path);
+    if (l.texcoords)
+        grid.setTexcoords(static_cast<TexcoordKind>(texHeader[0]), std::move(texcoords), path);
     return grid;
 }
 
