@@ -52,6 +52,13 @@ class ShadowMap {
     bool project(Vec3 p, int& face, float& x, float& y, float& depth, float& texel) const;
     float pcf(int face, float x, float y, float depth, float bias) const;
     float evsm(int face, float x, float y, float depth) const;
+    // The map's faces and depth range; each returns the rays' t_max.
+    float orthographicFaces(const Tape& tape, const Light& light, Vec3 centre, float radius);
+    float cubeFaces(const Light& light, Vec3 centre, float radius);
+    // One sphere-traced ray per texel, in rows of texels.
+    void traceDepths(const Tape& tape, const TraceOptions& trace, float tMax);
+    // EVSM: the warped moments of the depths, box filtered within each face.
+    void buildMoments();
 
     ShadowMapFilter m_filter;
     ShadowMapOptions m_o;

@@ -56,51 +56,60 @@ ShadowMap::ShadowMap(const Tape& tape, const Light& light, const Bounds3& region
     const Vec3 centre = region.center();
     const float radius = std::max(0.5f * length(region.extent()), 1e-6f);
     m_ortho = light.kind == Light::Kind::Directional;
-    float tMax;
-    if (m_ortho) {
-        m_res = o.resolution;
-        Face f;
-        f.forward = normalize(light.direction);
-        orthonormalBasis(f.forward, f.right, f.up);
-        m_faces.push_back(f);
-        // A square map over the region's bounding sphere; rays start beyond the scene's bounds
-        // (or the sphere) on the light's side, so occluders outside the region still cast.
-        m_extent = 2 * radius;
-        float start = -radius;
-        const Bounds3 all = tape.bounds();
-        if (all.finite()) {
-            for (int c = 0; c < 8; ++c) {
-                Vec3 q((c & 1) ? all.hi.x : all.lo.x, (c & 2) ? all.hi.y : all.lo.y,
-                       (c & 4) ? all.hi.z : all.lo.z);
-                start = std::min(start, dot(q - centre, f.forward));
-            }
+    const float tMax =
+        m_ortho ? orthographicFaces(tape, light, centre, radius) : cubeFaces(light, centre, radius);
+    traceDepths(tape, trace, tMax);
+    if (m_filter == ShadowMapFilter::Evsm) buildMoments();
+}
+
+// A square map over the region's bounding sphere; rays start beyond the scene's bounds (or the
+// sphere) on the light's side, so occluders outside the region still cast.
+float ShadowMap::orthographicFaces(const Tape& tape, const Light& light, Vec3 centre,
+                                   float radius) {
+    m_res = m_o.resolution;
+    Face f;
+    f.forward = normalize(light.direction);
+    orthonormalBasis(f.forward, f.right, f.up);
+    m_faces.push_back(f);
+    m_extent = 2 * radius;
+    float start = -radius;
+    const Bounds3 all = tape.bounds();
+    if (all.finite()) {
+        for (int c = 0; c < 8; ++c) {
+            Vec3 q((c & 1) ? all.hi.x : all.lo.x, (c & 2) ? all.hi.y : all.lo.y,
+                   (c & 4) ? all.hi.z : all.lo.z);
+            start = std::min(start, dot(q - centre, f.forward));
         }
-        start -= 1e-3f * radius;
-        m_origin = centre + f.forward * start - f.right * radius - f.up * radius;
-        m_near = dot(centre, f.forward) - radius;
-        m_far = dot(centre, f.forward) + radius;
-        tMax = radius - start;
-    } else {
-        // Six axis-aligned 90-degree faces: face k looks along +-axis k/2.
-        m_res = std::max(1, o.resolution / 2);
-        m_origin = light.position;
-        for (int k = 0; k < 6; ++k) {
-            const int axis = k / 2;
-            Face f;
-            f.forward = Vec3(0.0f);
-            f.forward[axis] = (k & 1) ? -1.0f : 1.0f;
-            f.right = Vec3(0.0f);
-            f.right[axis == 0 ? 1 : 0] = 1.0f;
-            f.up = Vec3(0.0f);
-            f.up[axis == 2 ? 1 : 2] = 1.0f;
-            m_faces.push_back(f);
-        }
-        m_near = 0;
-        m_far = length(centre - light.position) + radius;
-        tMax = m_far;
     }
+    start -= 1e-3f * radius;
+    m_origin = centre + f.forward * start - f.right * radius - f.up * radius;
+    m_near = dot(centre, f.forward) - radius;
+    m_far = dot(centre, f.forward) + radius;
+    return radius - start;
+}
+
+// Six axis-aligned 90-degree faces: face k looks along +-axis k/2.
+float ShadowMap::cubeFaces(const Light& light, Vec3 centre, float radius) {
+    m_res = std::max(1, m_o.resolution / 2);
+    m_origin = light.position;
+    for (int k = 0; k < 6; ++k) {
+        const int axis = k / 2;
+        Face f;
+        f.forward = Vec3(0.0f);
+        f.forward[axis] = (k & 1) ? -1.0f : 1.0f;
+        f.right = Vec3(0.0f);
+        f.right[axis == 0 ? 1 : 0] = 1.0f;
+        f.up = Vec3(0.0f);
+        f.up[axis == 2 ? 1 : 2] = 1.0f;
+        m_faces.push_back(f);
+    }
+    m_near = 0;
+    m_far = length(centre - light.position) + radius;
+    return m_far;
+}
+
+void ShadowMap::traceDepths(const Tape& tape, const TraceOptions& trace, float tMax) {
     const size_t perFace = static_cast<size_t>(m_res) * m_res;
-    // One sphere-traced ray per texel, in rows of texels.
     const TraceOptions opts = trace.secondary();
     m_depth.assign(perFace * m_faces.size(), INFINITY);
     std::atomic<uint64_t> evaluations{0};
@@ -136,23 +145,24 @@ ShadowMap::ShadowMap(const Tape& tape, const Light& light, const Bounds3& region
         evaluations += e;
     });
     m_evaluations = evaluations.load();
-    if (m_filter == ShadowMapFilter::Evsm) {
-        m_moments.resize(4 * m_depth.size());
-        for (size_t t = 0; t < m_depth.size(); ++t) {
-            const float z = std::isfinite(m_depth[t])
-                                ? std::clamp((m_depth[t] - m_near) / (m_far - m_near), 0.0f, 1.0f)
-                                : 1.0f;
-            const float w = 2 * z - 1;
-            const float pos = std::exp(m_o.evsmPositive * w),
-                        neg = -std::exp(-m_o.evsmNegative * w);
-            m_moments[4 * t + 0] = pos;
-            m_moments[4 * t + 1] = pos * pos;
-            m_moments[4 * t + 2] = neg;
-            m_moments[4 * t + 3] = neg * neg;
-        }
-        for (size_t face = 0; face < m_faces.size(); ++face)
-            boxFilter(m_moments.data() + 4 * face * perFace, m_res, m_o.evsmRadius);
+}
+
+void ShadowMap::buildMoments() {
+    const size_t perFace = static_cast<size_t>(m_res) * m_res;
+    m_moments.resize(4 * m_depth.size());
+    for (size_t t = 0; t < m_depth.size(); ++t) {
+        const float z = std::isfinite(m_depth[t])
+                            ? std::clamp((m_depth[t] - m_near) / (m_far - m_near), 0.0f, 1.0f)
+                            : 1.0f;
+        const float w = 2 * z - 1;
+        const float pos = std::exp(m_o.evsmPositive * w), neg = -std::exp(-m_o.evsmNegative * w);
+        m_moments[4 * t + 0] = pos;
+        m_moments[4 * t + 1] = pos * pos;
+        m_moments[4 * t + 2] = neg;
+        m_moments[4 * t + 3] = neg * neg;
     }
+    for (size_t face = 0; face < m_faces.size(); ++face)
+        boxFilter(m_moments.data() + 4 * face * perFace, m_res, m_o.evsmRadius);
 }
 
 bool ShadowMap::project(Vec3 p, int& face, float& x, float& y, float& depth, float& texel) const {
