@@ -56,6 +56,11 @@ class Compiler {
         m_instrs.push_back(in);
     }
     uint16_t emitUnion(const Node& n, uint16_t point, int material);
+    uint16_t emitPrimitive(const Node& n, uint16_t point, int material);
+    uint16_t emitFold(Op op, const Node& n, const std::vector<float>& k, uint16_t point,
+                      int material);
+    uint16_t emitTransform(const Node& n, uint16_t point, int material);
+    uint16_t emitRepeat(const Node& n, uint16_t point, int material);
     uint16_t emitSmoothUnion(const Node& n, uint16_t point, int material);
     // Emits `operand` combined into `acc` by `op`, behind a CullIfFar when culling applies.
     void emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t point, int material,
@@ -100,84 +105,33 @@ uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
         m_materialPoint = outer;
         return r;
     }
-    if (n.kind == NodeKind::Grid) {
-        SDFT_CHECK(n.grid != nullptr);  // a pending grid: the scene was not prepared
-        uint16_t out = allocScalar();
-        m_grids.push_back(n.grid);
-        push(Op::Grid, out, point, 0, addConsts({static_cast<float>(m_grids.size() - 1)}),
-             material);
-        return out;
-    }
-    if (isPrimitive(n.kind)) {
-        uint16_t out = allocScalar();
-        push(primitiveOp(n.kind), out, point, 0, addConsts(n.params), material);
-        return out;
-    }
-    auto binary = [&](Op op, const std::vector<float>& k) {
-        uint16_t acc = emit(*n.children[0], point, material);
-        uint32_t offset = addConsts(k);
-        for (size_t i = 1; i < n.children.size(); ++i) {
-            uint16_t rhs = emit(*n.children[i], point, material);
-            push(op, acc, acc, rhs, offset);
-            m_freeScalar.push_back(rhs);
-        }
-        return acc;
-    };
+    if (isPrimitive(n.kind)) return emitPrimitive(n, point, material);
     switch (n.kind) {
         case NodeKind::Union:
             return emitUnion(n, point, material);
         case NodeKind::Intersection:
-            return binary(Op::Intersection, {});
+            return emitFold(Op::Intersection, n, {}, point, material);
         case NodeKind::Difference:
-            return binary(Op::Difference, {});
+            return emitFold(Op::Difference, n, {}, point, material);
         case NodeKind::SmoothUnion:
             return emitSmoothUnion(n, point, material);
         case NodeKind::SmoothIntersection:
-            return binary(Op::SmoothIntersection, n.params);
+            return emitFold(Op::SmoothIntersection, n, n.params, point, material);
         case NodeKind::SmoothDifference:
-            return binary(Op::SmoothDifference, n.params);
+            return emitFold(Op::SmoothDifference, n, n.params, point, material);
         case NodeKind::Morph:
-            return binary(Op::Morph, n.params);
+            return emitFold(Op::Morph, n, n.params, point, material);
         case NodeKind::Complement: {
             uint16_t r = emit(*n.children[0], point, material);
             push(Op::Complement, r, r, 0, 0);
             return r;
         }
-        case NodeKind::Translate: {
-            uint16_t q = emitPointOp(Op::Translate, point, n.params);
-            uint16_t r = emit(*n.children[0], q, material);
-            m_freePoint.push_back(q);
-            return r;
-        }
-        case NodeKind::Rotate: {
-            // Store the inverse (transpose): the child sees R^T p.
-            std::vector<float> inv(9);
-            for (int i = 0; i < 3; ++i)
-                for (int j = 0; j < 3; ++j) inv[i * 3 + j] = n.params[j * 3 + i];
-            uint16_t q = emitPointOp(Op::Rotate, point, inv);
-            uint16_t r = emit(*n.children[0], q, material);
-            m_freePoint.push_back(q);
-            return r;
-        }
-        case NodeKind::Scale: {
-            // Liktor 2008, §2.2: f(T^-1 p) has Lipschitz constant L_f / min(s); multiplying by
-            // min(s) restores L_f, so the value stays a distance bound in world units.
-            uint16_t q = emitPointOp(Op::ScalePoint, point, n.params);
-            uint16_t r = emit(*n.children[0], q, material);
-            m_freePoint.push_back(q);
-            float minScale = std::min({n.params[0], n.params[1], n.params[2]});
-            push(Op::ScaleValue, r, r, 0, addConsts({minScale}));
-            return r;
-        }
-        case NodeKind::Repeat: {
-            uint32_t k = addConsts(n.params);
-            uint16_t q = allocPoint();
-            push(Op::RepeatPoint, q, point, 0, k);
-            uint16_t r = emit(*n.children[0], q, material);
-            m_freePoint.push_back(q);
-            push(Op::RepeatBound, r, r, point, k);
-            return r;
-        }
+        case NodeKind::Translate:
+        case NodeKind::Rotate:
+        case NodeKind::Scale:
+            return emitTransform(n, point, material);
+        case NodeKind::Repeat:
+            return emitRepeat(n, point, material);
         case NodeKind::Displace: {
             uint16_t r = emit(*n.children[0], point, material);
             push(Op::Displace, r, r, point, addConsts(n.params));
@@ -189,6 +143,68 @@ uint16_t Compiler::emit(const Node& n, uint16_t point, int material) {
     }
     SDFT_CHECK(false && "unhandled node kind");
     return 0;
+}
+
+// An analytic primitive (primitive_table.h) or a grid, on the current point register.
+uint16_t Compiler::emitPrimitive(const Node& n, uint16_t point, int material) {
+    const uint16_t out = allocScalar();
+    if (n.kind == NodeKind::Grid) {
+        SDFT_CHECK(n.grid != nullptr);  // a pending grid: the scene was not prepared
+        m_grids.push_back(n.grid);
+        push(Op::Grid, out, point, 0, addConsts({static_cast<float>(m_grids.size() - 1)}),
+             material);
+    } else {
+        push(primitiveOp(n.kind), out, point, 0, addConsts(n.params), material);
+    }
+    return out;
+}
+
+// The children combined left to right by a binary op with constants k.
+uint16_t Compiler::emitFold(Op op, const Node& n, const std::vector<float>& k, uint16_t point,
+                            int material) {
+    const uint16_t acc = emit(*n.children[0], point, material);
+    const uint32_t offset = addConsts(k);
+    for (size_t i = 1; i < n.children.size(); ++i) {
+        const uint16_t rhs = emit(*n.children[i], point, material);
+        push(op, acc, acc, rhs, offset);
+        m_freeScalar.push_back(rhs);
+    }
+    return acc;
+}
+
+// Translate, rotate, scale: the child sees the inverse-transformed point.
+uint16_t Compiler::emitTransform(const Node& n, uint16_t point, int material) {
+    uint16_t q;
+    if (n.kind == NodeKind::Rotate) {
+        // Store the inverse (transpose): the child sees R^T p.
+        std::vector<float> inv(9);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) inv[i * 3 + j] = n.params[j * 3 + i];
+        q = emitPointOp(Op::Rotate, point, inv);
+    } else {
+        q = emitPointOp(n.kind == NodeKind::Translate ? Op::Translate : Op::ScalePoint, point,
+                        n.params);
+    }
+    const uint16_t r = emit(*n.children[0], q, material);
+    m_freePoint.push_back(q);
+    if (n.kind == NodeKind::Scale) {
+        // Liktor 2008, §2.2: f(T^-1 p) has Lipschitz constant L_f / min(s); multiplying by
+        // min(s) restores L_f, so the value stays a distance bound in world units.
+        const float minScale = std::min({n.params[0], n.params[1], n.params[2]});
+        push(Op::ScaleValue, r, r, 0, addConsts({minScale}));
+    }
+    return r;
+}
+
+// The child on the lattice-folded point, bounded by the neighbouring copies' distance.
+uint16_t Compiler::emitRepeat(const Node& n, uint16_t point, int material) {
+    const uint32_t k = addConsts(n.params);
+    const uint16_t q = allocPoint();
+    push(Op::RepeatPoint, q, point, 0, k);
+    const uint16_t r = emit(*n.children[0], q, material);
+    m_freePoint.push_back(q);
+    push(Op::RepeatBound, r, r, point, k);
+    return r;
 }
 
 // A union of operands, each but the first guarded by a CullIfFar when bounds culling is on and the
