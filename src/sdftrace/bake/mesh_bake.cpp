@@ -55,97 +55,123 @@ void validateMeshBakeOptions(const MeshBakeOptions& o) {
 
 namespace {
 
-MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
+// The summary of an exact bake: how the distances were found, and the sign work.
+std::string exactDetails(const ExactBakeStats& st, const MeshBakeOptions& o,
+                         const GridShape& shape) {
     const SampleOptions& so = o.sampling;
-    const int threads = so.threads;
-    GridShape shape = gridShapeFor(mesh.bounds(), so);
-    MeshBakeResult r;
-    StageClock clock(r.stages);
-    char line[400] = "";
-    std::vector<float> samples;
-
-    if (o.method == MeshBakeMethod::Exact) {
-        ExactBakeStats st;
-        if (so.kind == GridKind::Sparse) {
-            r.grid = bakeExactSparse(mesh, shape, so.blockSize, so.bandVoxels, o.sign, threads, &st,
-                                     o.progress);
-            r.stages.insert(r.stages.end(), st.phases.begin(), st.phases.end());
-            clock.restart();
-        } else {
-            MeshBvh bvh(mesh);
-            clock.mark("bvh");
-            std::vector<float> exact =
-                bakeExactSamples(bvh, shape, o.sign, threads, &st, o.progress, o.closest);
-            r.stages.insert(r.stages.end(), st.phases.begin(), st.phases.end());
-            clock.restart();
-            r.grid = Grid::dense(shape, std::move(exact));
-            clock.mark("grid");
-        }
-        char distances[160];
-        if (so.kind == GridKind::Dense && o.closest == ClosestPoints::Transform) {
-            std::snprintf(distances, sizeof distances,
-                          "closest point transform: %zu rows, %zu distance evaluations (%.1f per "
-                          "vertex)",
-                          st.transformRows, st.transformEvaluations,
-                          double(st.transformEvaluations) / double(shape.vertexCount()));
-        } else {
-            std::snprintf(
-                distances, sizeof distances, "%zu %s", st.distanceQueries,
-                so.kind == GridKind::Sparse ? "vertices within the band" : "distance queries");
-        }
-        std::snprintf(line, sizeof line, "%s, %zu sign evaluations (%s), %zu closing-film sums",
-                      distances, st.signEvaluations, signMethodName(o.sign), st.filmSums);
-        r.details = line;
-        return r;
+    char distances[160], line[400];
+    if (so.kind == GridKind::Dense && o.closest == ClosestPoints::Transform) {
+        std::snprintf(distances, sizeof distances,
+                      "closest point transform: %zu rows, %zu distance evaluations (%.1f per "
+                      "vertex)",
+                      st.transformRows, st.transformEvaluations,
+                      double(st.transformEvaluations) / double(shape.vertexCount()));
+    } else {
+        std::snprintf(
+            distances, sizeof distances, "%zu %s", st.distanceQueries,
+            so.kind == GridKind::Sparse ? "vertices within the band" : "distance queries");
     }
-    if (o.method == MeshBakeMethod::Rtsdf) {
+    std::snprintf(line, sizeof line, "%s, %zu sign evaluations (%s), %zu closing-film sums",
+                  distances, st.signEvaluations, signMethodName(o.sign), st.filmSums);
+    return line;
+}
+
+// Exact distances: the narrow band (sparse) or the closest point transform / BVH (dense).
+void bakeExact(const TriangleMesh& mesh, const MeshBakeOptions& o, const GridShape& shape,
+               MeshBakeResult& r, StageClock& clock) {
+    const SampleOptions& so = o.sampling;
+    ExactBakeStats st;
+    if (so.kind == GridKind::Sparse) {
+        r.grid = bakeExactSparse(mesh, shape, so.blockSize, so.bandVoxels, o.sign, so.threads, &st,
+                                 o.progress);
+        r.stages.insert(r.stages.end(), st.phases.begin(), st.phases.end());
+        clock.restart();
+    } else {
         MeshBvh bvh(mesh);
         clock.mark("bvh");
-        RtsdfOptions ro = o.rtsdf;
-        ro.coarseSign = o.sign;
-        RtsdfStats st;
-        samples = bakeRtsdfSamples(mesh, bvh, shape, ro, threads, &st);
-        r.stages.push_back({"coarse jfa", st.coarseSeconds});
-        r.stages.push_back({"rays", st.raySeconds});
+        std::vector<float> exact =
+            bakeExactSamples(bvh, shape, o.sign, so.threads, &st, o.progress, o.closest);
+        r.stages.insert(r.stages.end(), st.phases.begin(), st.phases.end());
         clock.restart();
-        std::snprintf(line, sizeof line,
-                      "%zu vertices refined by %d rays each (%zu rays), %zu with no hit",
-                      st.refined, ro.rays, st.rays, st.missed);
-        r.details = line;
-    } else {
-        SurfaceSeeds seeds = seedSurfaceVertices(mesh, shape, threads);
-        clock.mark("seeds");
-        std::vector<Vec3> points;
-        if (o.method == MeshBakeMethod::JumpFlood) {
-            JfaStats st;
-            points = jumpFlood(shape, seeds.point, o.jfaVariant, threads, &st);
-            std::string passes;
-            for (size_t i = 0; i < st.offsets.size(); ++i) {
-                char one[48];
-                std::snprintf(one, sizeof one, "%s%d: %.0f ms", i ? ", " : "", st.offsets[i],
-                              st.passSeconds[i] * 1e3);
-                passes += one;
-            }
-            r.details = std::to_string(st.offsets.size()) + " passes (offset: time) " + passes;
-            clock.mark("jump flooding");
-        } else if (o.method == MeshBakeMethod::Danielsson) {
-            points = danielssonTransform(shape, seeds.point);
-            clock.mark("danielsson sweeps");
-        } else {
-            points = separableEdt(shape, seeds.point, threads);
-            clock.mark("separable edt");
-        }
-        samples = distancesToPoints(shape, points, threads);
-        std::unique_ptr<MeshBvh> bvh;
-        if (o.sign == SignMethod::RayParity) bvh = std::make_unique<MeshBvh>(mesh);
-        if (so.kind == GridKind::Sparse) {
-            signDistancesSparse(samples, mesh, bvh.get(), shape, seeds, o.sign, o.betaVoxels,
-                                so.blockSize, so.bandVoxels, threads);
-        } else {
-            signDistances(samples, mesh, bvh.get(), shape, seeds, o.sign, o.betaVoxels, threads);
-        }
-        clock.mark(std::string("signs (") + signMethodName(o.sign) + ")");
+        r.grid = Grid::dense(shape, std::move(exact));
+        clock.mark("grid");
     }
+    r.details = exactDetails(st, o, shape);
+}
+
+// RTSDF §2.1-2.3: a jump-flooded coarse field, refined by rays where it is near the surface.
+std::vector<float> bakeRtsdf(const TriangleMesh& mesh, const MeshBakeOptions& o,
+                             const GridShape& shape, MeshBakeResult& r, StageClock& clock) {
+    MeshBvh bvh(mesh);
+    clock.mark("bvh");
+    RtsdfOptions ro = o.rtsdf;
+    ro.coarseSign = o.sign;
+    RtsdfStats st;
+    std::vector<float> samples = bakeRtsdfSamples(mesh, bvh, shape, ro, o.sampling.threads, &st);
+    r.stages.push_back({"coarse jfa", st.coarseSeconds});
+    r.stages.push_back({"rays", st.raySeconds});
+    clock.restart();
+    char line[400];
+    std::snprintf(line, sizeof line,
+                  "%zu vertices refined by %d rays each (%zu rays), %zu with no hit", st.refined,
+                  ro.rays, st.rays, st.missed);
+    r.details = line;
+    return samples;
+}
+
+// Seeds on the surface spread by jump flooding (RTSDF §2.2), Danielsson's sweeps (Liktor §3.2)
+// or the separable EDT, then signed.
+std::vector<float> bakeFromSeeds(const TriangleMesh& mesh, const MeshBakeOptions& o,
+                                 const GridShape& shape, MeshBakeResult& r, StageClock& clock) {
+    const SampleOptions& so = o.sampling;
+    const int threads = so.threads;
+    SurfaceSeeds seeds = seedSurfaceVertices(mesh, shape, threads);
+    clock.mark("seeds");
+    std::vector<Vec3> points;
+    if (o.method == MeshBakeMethod::JumpFlood) {
+        JfaStats st;
+        points = jumpFlood(shape, seeds.point, o.jfaVariant, threads, &st);
+        std::string passes;
+        for (size_t i = 0; i < st.offsets.size(); ++i) {
+            char one[48];
+            std::snprintf(one, sizeof one, "%s%d: %.0f ms", i ? ", " : "", st.offsets[i],
+                          st.passSeconds[i] * 1e3);
+            passes += one;
+        }
+        r.details = std::to_string(st.offsets.size()) + " passes (offset: time) " + passes;
+        clock.mark("jump flooding");
+    } else if (o.method == MeshBakeMethod::Danielsson) {
+        points = danielssonTransform(shape, seeds.point);
+        clock.mark("danielsson sweeps");
+    } else {
+        points = separableEdt(shape, seeds.point, threads);
+        clock.mark("separable edt");
+    }
+    std::vector<float> samples = distancesToPoints(shape, points, threads);
+    std::unique_ptr<MeshBvh> bvh;
+    if (o.sign == SignMethod::RayParity) bvh = std::make_unique<MeshBvh>(mesh);
+    if (so.kind == GridKind::Sparse) {
+        signDistancesSparse(samples, mesh, bvh.get(), shape, seeds, o.sign, o.betaVoxels,
+                            so.blockSize, so.bandVoxels, threads);
+    } else {
+        signDistances(samples, mesh, bvh.get(), shape, seeds, o.sign, o.betaVoxels, threads);
+    }
+    clock.mark(std::string("signs (") + signMethodName(o.sign) + ")");
+    return samples;
+}
+
+MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
+    const SampleOptions& so = o.sampling;
+    const GridShape shape = gridShapeFor(mesh.bounds(), so);
+    MeshBakeResult r;
+    StageClock clock(r.stages);
+    if (o.method == MeshBakeMethod::Exact) {
+        bakeExact(mesh, o, shape, r, clock);
+        return r;
+    }
+    std::vector<float> samples = o.method == MeshBakeMethod::Rtsdf
+                                     ? bakeRtsdf(mesh, o, shape, r, clock)
+                                     : bakeFromSeeds(mesh, o, shape, r, clock);
     if (so.kind == GridKind::Dense) {
         r.grid = Grid::dense(shape, std::move(samples));
     } else {
