@@ -103,6 +103,26 @@ INSTANTIATE_TEST_SUITE_P(
                 "",
                 {"/camera/width", "[1, 65536]"}},
         BadCase{"no_objects", R"({"objects": []})", "", {"/objects", "at least one object"}},
+        BadCase{"nesting_too_deep",
+                [] {
+                    std::string s = R"({"objects": [)";
+                    for (int i = 0; i < 300; ++i) s += R"({"type": "union", "children": [)";
+                    s += R"({"type": "sphere", "radius": 1})";
+                    for (int i = 0; i < 300; ++i) s += "]}";
+                    return s + "]}";
+                }(),
+                "",
+                {"bad.json", "/objects/0/children/0/", "nest deeper than 256 levels"}},
+        BadCase{"number_beyond_float_range",
+                sceneWithObject(R"({"type": "sphere", "radius": 1e20})"),
+                "",
+                {"/objects/0/radius", "got 1e+20", "within +-1e9"}},
+        BadCase{"objects_too_small",
+                sceneWithObject(R"({"type": "sphere", "radius": 1e-8})"),
+                "",
+                {"/objects", "span only 2e-08", "at least 1e-6"}},
+        BadCase{"eye_beyond_float_range", "", "--eye 1e20,0,0", {"--eye", "within +-1e9"}},
+        BadCase{"flag_beyond_float_range", "", "--max-distance 1e12", {"--max-distance", "1e9"}},
         BadCase{
             "repeat_overlap",
             sceneWithObject(

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "cli_runner.h"
 
@@ -136,6 +137,22 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
     TempDir dir;
     std::string garbage = dir.write("garbage.stl", "not a mesh");
     std::string flat = dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    // A closed tetrahedron scaled and moved beyond what float distance computations keep.
+    auto tetrahedron = [&](const std::string& name, double scale, double offset) {
+        std::string text;
+        const double v[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+        for (const auto& p : v) {
+            char line[96];
+            std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", offset + scale * p[0],
+                          scale * p[1], scale * p[2]);
+            text += line;
+        }
+        return dir.write(name, text + "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    };
+    std::string huge = tetrahedron("huge.obj", 1e37, 1e38);
+    std::string far = tetrahedron("far.obj", 1, 1e6);
+    std::string tiny = tetrahedron("tiny.obj", 1e-12, 0);
+    std::string scene = dir.write("s.json", R"({"objects": [{"type": "sphere", "radius": 1}]})");
     struct Case {
         std::string args, fragment;
     } cases[] = {
@@ -155,6 +172,26 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
         {"bake " + mesh("bunny_npm.obj") + " --dense --closest octree -o " + dir.file("x.sdfg"),
          "--closest"},
         {"render -q " + garbage + " -o " + dir.file("x.png"), "cannot read mesh"},
+        // Coordinates float geometry cannot resolve are refused with the range that works.
+        {"bake " + huge + " -o " + dir.file("x.sdfg"), "coordinates reach 1.1e+38"},
+        {"render -q " + huge + " -o " + dir.file("x.png"), "|x| <= 1e+09"},
+        {"bake " + far + " -o " + dir.file("x.sdfg"), "lies 1e+06 from the origin"},
+        {"bake " + tiny + " -o " + dir.file("x.sdfg"), "spans only 1e-12"},
+        // Flags that do nothing for the input are errors.
+        {"bake " + scene + " --res 16 --verify -o " + dir.file("x.sdfg"),
+         "--verify: applies to meshes only"},
+        {"bake " + scene + " --res 16 --method jfa -o " + dir.file("x.sdfg"),
+         "--method: applies to meshes only"},
+        {"bake " + mesh("bunny_npm.obj") + " --bounds 0,0,0,1,1,1 -o " + dir.file("x.sdfg"),
+         "--bounds: applies to scene files only"},
+        {"bake " + mesh("bunny_npm.obj") + " --rays 8 -o " + dir.file("x.sdfg"),
+         "--rays: applies to --method rtsdf only"},
+        {"bake " + mesh("bunny_npm.obj") + " --beta 1 -o " + dir.file("x.sdfg"),
+         "--beta: applies to --sign beta only"},
+        {"bake " + mesh("bunny_npm.obj") + " --dense --band 4 -o " + dir.file("x.sdfg"),
+         "--band: applies to sparse grids only"},
+        {"bake " + mesh("bunny_npm.obj") + " --texcoord-axis 0,0,1 -o " + dir.file("x.sdfg"),
+         "--texcoord-axis: needs --texcoords"},
     };
     for (const Case& c : cases) {
         RunResult r = runCli(c.args, dir);

@@ -47,7 +47,42 @@ struct BakeArgs {
     int threads = 0;
     std::string texcoords;  // "", sphere, cylinder
     std::string texcoordCenter, texcoordAxis;
+    const CLI::App* command = nullptr;  // to ask which flags were given
 };
+
+bool given(const BakeArgs& a, const char* flag) {
+    const CLI::Option* o = a.command ? a.command->get_option_no_throw(flag) : nullptr;
+    return o && o->count() > 0;
+}
+
+// A flag that does nothing for this input is an error, not silently ignored.
+void rejectGiven(const BakeArgs& a, std::initializer_list<const char*> flags,
+                 const std::string& why) {
+    for (const char* flag : flags)
+        if (given(a, flag)) throw InputError(std::string(flag) + ": " + why);
+}
+
+void rejectFlagsThatDoNotApply(const BakeArgs& a, bool mesh) {
+    if (mesh) {
+        rejectGiven(a, {"--bounds"},
+                    "applies to scene files only (a mesh's grid covers the mesh's bounds)");
+        if (a.method != "rtsdf")
+            rejectGiven(a, {"--rays", "--mask"}, "applies to --method rtsdf only");
+        if (a.method != "jfa") rejectGiven(a, {"--jfa-variant"}, "applies to --method jfa only");
+        if (a.sign != "beta") rejectGiven(a, {"--beta"}, "applies to --sign beta only");
+        if (a.method != "exact" || !a.dense)
+            rejectGiven(a, {"--closest"}, "applies to --method exact with --dense only");
+    } else {
+        rejectGiven(
+            a,
+            {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays", "--mask",
+             "--verify"},
+            "applies to meshes only; " + a.scene + " is a scene file, sampled from its own field");
+    }
+    if (a.dense) rejectGiven(a, {"--block", "--band"}, "applies to sparse grids only (--dense)");
+    if (a.texcoords.empty())
+        rejectGiven(a, {"--texcoord-center", "--texcoord-axis"}, "needs --texcoords");
+}
 
 Bounds3 parseBoundsArg(const std::string& text) {
     std::vector<float> v;
@@ -248,6 +283,7 @@ int runBake(const BakeArgs& a) {
         throw InputError("--texcoords: texture coordinates are stored in .sdfg files only, not " +
                          a.output);
     }
+    rejectFlagsThatDoNotApply(a, isMeshFile(a.scene));
     if (isMeshFile(a.scene)) return bakeMesh(a);
     Scene scene = parseSceneFile(a.scene);
     // The field's definition (no culling): sampled values should be the field, not a looser bound.
@@ -365,6 +401,7 @@ void addBakeCommand(CLI::App& app, Action& action) {
     cmd->add_option("--texcoord-axis", args->texcoordAxis,
                     "The helper's axis x,y,z: the sphere's poles, the cylinder's axis (default "
                     "0,1,0)");
+    args->command = cmd;
     cmd->callback([&action, args] { action = [args] { return runBake(*args); }; });
 }
 

@@ -12,8 +12,8 @@ Vec3Arg parseVec3Arg(const std::string& flag, const std::string& text) {
     std::string part;
     while (std::getline(in, part, ',')) parts.push_back(part);
     auto bad = [&] {
-        return CLI::ValidationError(flag,
-                                    "expected three finite numbers x,y,z, got '" + text + "'");
+        return CLI::ValidationError(
+            flag, "expected three finite numbers x,y,z (each within +-1e9), got '" + text + "'");
     };
     if (parts.size() != 3) throw bad();
     float v[3];
@@ -21,7 +21,7 @@ Vec3Arg parseVec3Arg(const std::string& flag, const std::string& text) {
         try {
             size_t used = 0;
             v[i] = std::stof(parts[i], &used);
-            if (used != parts[i].size() || !std::isfinite(v[i])) throw bad();
+            if (used != parts[i].size() || !(std::fabs(v[i]) <= 1e9f)) throw bad();
         } catch (const std::exception&) {
             throw bad();
         }

@@ -185,6 +185,8 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
 
 MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     validateMeshBakeOptions(o);
+    if (std::string problem = meshRangeProblem(mesh); !problem.empty())
+        throw InputError("mesh: " + problem);
     // Every stage, grid finishing included, on exactly the requested threads.
     ThreadArena arena(o.sampling.threads);
     MeshBakeResult r;

@@ -145,6 +145,9 @@ TriangleMesh loadMesh(const std::string& path, MeshReport* report) {
     }
     MeshReport local;
     MeshReport& r = report ? *report : local;
+    // Before cleaning: its area tests would call a mesh out of range degenerate.
+    if (std::string problem = meshRangeProblem({positions, triangles}); !problem.empty())
+        throw InputError(path + ": " + problem);
     TriangleMesh mesh = cleanMesh(positions, triangles, r);
     if (mesh.triangles.empty())
         throw InputError(path + ": the mesh has no (non-degenerate) triangles");

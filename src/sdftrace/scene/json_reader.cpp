@@ -15,6 +15,11 @@ std::string typeName(const Json& v) {
     if (v.is_null()) return "null";
     return "something else";
 }
+// Scene geometry is computed in float, which keeps about 7 digits: larger numbers lose the
+// surface (squared distances overflow, rays step past it).
+constexpr double kMaxNumber = 1e9;
+const char* const tooLarge = "; numbers in scene files must lie within +-1e9";
+
 std::string show(double v) {
     std::ostringstream s;
     s << v;
@@ -53,8 +58,8 @@ float Reader::number(const std::string& key, const std::function<bool(double)>& 
     const Json& v = m_value.at(key);
     if (!v.is_number()) failKey(key, "expected " + accepted + ", got " + typeName(v));
     double d = v.get<double>();
-    if (!std::isfinite(d) || std::fabs(d) > 1e30)
-        failKey(key, "expected " + accepted + ", got a non-finite or huge number");
+    if (!std::isfinite(d) || std::fabs(d) > kMaxNumber)
+        failKey(key, "expected " + accepted + ", got " + show(d) + tooLarge);
     if (!ok(d)) failKey(key, "expected " + accepted + ", got " + show(d));
     return static_cast<float>(d);
 }
@@ -107,8 +112,8 @@ Vec3 Reader::vec3(const std::string& key, const std::function<bool(double)>& ok,
         if (!v[i].is_number())
             failKey(key + "/" + std::to_string(i), "expected a number, got " + typeName(v[i]));
         double d = v[i].get<double>();
-        if (!std::isfinite(d) || std::fabs(d) > 1e30)
-            failKey(key + "/" + std::to_string(i), "expected a finite number");
+        if (!std::isfinite(d) || std::fabs(d) > kMaxNumber)
+            failKey(key + "/" + std::to_string(i), "got " + show(d) + tooLarge);
         if (ok && !ok(d))
             failKey(key + "/" + std::to_string(i), "expected " + accepted + ", got " + show(d));
         out[i] = static_cast<float>(d);

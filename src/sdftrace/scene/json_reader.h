@@ -32,10 +32,18 @@ class Reader {
     bool has(const std::string& key) const { return m_value.is_object() && m_value.contains(key); }
 
     [[noreturn]] void fail(const std::string& message) const {
-        throw InputError(m_source + ": " + (m_path.empty() ? "/" : m_path) + ": " + message);
+        throw InputError(m_source + ": " + shortPath(m_path.empty() ? "/" : m_path) + ": " +
+                         message);
     }
     [[noreturn]] void failKey(const std::string& key, const std::string& message) const {
-        throw InputError(m_source + ": " + m_path + "/" + key + ": " + message);
+        throw InputError(m_source + ": " + shortPath(m_path + "/" + key) + ": " + message);
+    }
+    // A JSON path as messages show it: whole, or its start and end around "/…/" when very long.
+    static std::string shortPath(const std::string& path) {
+        if (path.size() <= 160) return path;
+        const size_t head = path.find('/', 60), tail = path.rfind('/', path.size() - 60);
+        if (head == std::string::npos || tail == std::string::npos || head >= tail) return path;
+        return path.substr(0, head) + "/\u2026" + path.substr(tail);
     }
 
     void requireObject(const char* what) const;

@@ -372,6 +372,15 @@ void allowObjectKeys(const Reader& r, const std::string& type,
 
 NodePtr parseNode(const Reader& r, NodeContext& ctx) {
     r.requireObject("an object node");
+    if (ctx.depth >= kMaxObjectDepth) {
+        r.fail("objects nest deeper than " + std::to_string(kMaxObjectDepth) +
+               " levels; flatten the tree (a union or intersection takes any number of children)");
+    }
+    struct Level {
+        int& depth;
+        explicit Level(int& d) : depth(++d) {}
+        ~Level() { --depth; }
+    } level(ctx.depth);
     // Shorthand for a grid object: {"grid": "field.sdfg", ...} is {"type": "grid", "file": ...}.
     if (!r.has("type") && r.has("grid")) {
         r.allowKeys({"grid", "material", "translate", "rotate", "scale"});

@@ -18,7 +18,12 @@ struct NodeContext {
     std::string baseDir;
     Scene* scene = nullptr;
     std::map<std::string, int> requestIndex;  // request key -> index in scene->assets
+    int depth = 0;                            // objects being parsed, outermost first
 };
+
+// Objects nest at most this deep (parsing, compiling and bounding recurse over the tree; a union
+// takes any number of children, so real scenes stay shallow).
+constexpr int kMaxObjectDepth = 256;
 
 // What a bake of a subtree needs: finite, non-empty bounds.
 inline const char* kUnbounded =

@@ -206,6 +206,16 @@ Scene parseRoot(const Json& root, const std::string& source, const std::string& 
     for (size_t i = 0; i < objs.value().size(); ++i)
         nodes.push_back(parseNode(objs.element(i), context));
     scene.root = nodes.size() == 1 ? nodes[0] : node::unite(nodes);
+    // Objects smaller than float geometry resolves (their grids are checked when prepared).
+    const Bounds3 b = nodeBounds(*scene.root);
+    if (b.finite() && !b.empty() && maxComponent(b.extent()) < 1e-6f) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      "the objects span only %.3g; scenes need at least 1e-6 across (scale them "
+                      "up)",
+                      maxComponent(b.extent()));
+        objs.fail(buf);
+    }
     validateImageSize(scene.camera.width, scene.camera.height, source + ": /camera");
     return scene;
 }

@@ -453,6 +453,8 @@ std::string RenderOption::check(double v) const {
     const bool integral = type != OptionType::Int || v == std::floor(v);
     if (!std::isfinite(v) || !integral || !range.contains(v))
         return "expected " + accepted() + ", got " + number(v);
+    if (std::fabs(v) > 1e9)  // float geometry keeps about 7 digits, as in scene files
+        return "expected " + accepted() + ", got " + number(v) + "; numbers must lie within +-1e9";
     return "";
 }
 
