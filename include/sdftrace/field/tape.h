@@ -28,10 +28,11 @@ enum class Op : uint8_t {
     SmoothDifference,
     Morph,
     // scalar unary
-    Complement,   // out = -a
-    ScaleValue,   // out = a * k[0]
-    RepeatBound,  // out = min(a, neighbour bound of point b)
-    Displace,     // out = a + amplitude * fbm(point b * frequency)
+    Complement,     // out = -a
+    ScaleValue,     // out = a * k[0]
+    RepeatBound,    // out = min(a, neighbour bound of point b)
+    FloorByBounds,  // out = max(a, signed distance of point b to the box k[0..5])
+    Displace,       // out = a + amplitude * fbm(point b * frequency)
     // point: out(point) = T(point a)
     Translate,
     Rotate,

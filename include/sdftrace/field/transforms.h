@@ -42,6 +42,22 @@ SDFT_HOST_DEVICE inline float repeatNeighbourBound(Vec3 p, const float* k) {
     return maxf(d + k[6], boxDistance(p, k + 7));
 }
 
+// Signed distance from p to the box k[0..2] (lo) - k[3..5] (hi): negative inside.
+SDFT_HOST_DEVICE inline float signedBoxDistance(Vec3 p, const float* k) {
+    const Vec3 lo(k[0], k[1], k[2]), hi(k[3], k[4], k[5]);
+    const Vec3 q = max(lo - p, p - hi);
+    return length(max(q, 0.0f)) + minf(maxComponent(q), 0.0f);
+}
+
+// A repeated child whose value is not at least the distance to its bounds (a distance bound such
+// as the ellipsoid's, a displacement, an intersection) is raised to the signed distance to its
+// bounds box: still a lower bound of the distance to its surface with the same sign (the surface
+// lies in the box), still Lipschitz (the max of two), and now at least the gap at the cell walls,
+// so the repetition's min with the neighbour bound stays continuous there.
+SDFT_HOST_DEVICE inline float floorByBounds(float value, Vec3 p, const float* k) {
+    return maxf(value, signedBoxDistance(p, k));
+}
+
 // Distance from p to the box k[0..2] (lo) - k[3..5] (hi); 0 inside.
 SDFT_HOST_DEVICE inline float boxDistance(Vec3 p, const float* k) {
     float dx = maxf(maxf(k[0] - p.x, p.x - k[3]), 0.0f);

@@ -190,8 +190,9 @@ float lipschitzBound(const Node& n) {
         case NodeKind::Translate:
         case NodeKind::Rotate:
         case NodeKind::Scale:
-        case NodeKind::Repeat:
             return childL(0);
+        case NodeKind::Repeat:  // the neighbour and box bounds are 1-Lipschitz
+            return std::max(childL(0), 1.0f);
         case NodeKind::Displace:
             return childL(0);  // renormalized, see displaceScale()
         default:
@@ -356,8 +357,16 @@ float evalTree(const Node& n, Vec3 p) {
             Vec3 s(k[0], k[1], k[2]);
             return child(0, p / s) * minComponent(s);
         }
-        case NodeKind::Repeat:
-            return minf(child(0, xform::repeatPoint(p, k)), xform::repeatNeighbourBound(p, k));
+        case NodeKind::Repeat: {
+            const Vec3 q = xform::repeatPoint(p, k);
+            float v = child(0, q);
+            if (!dominatesBounds(*n.children[0])) {  // as the tape does (transforms.h)
+                const Bounds3 b = nodeBounds(*n.children[0]);
+                const float box[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+                v = xform::floorByBounds(v, q, box);
+            }
+            return minf(v, xform::repeatNeighbourBound(p, k));
+        }
         case NodeKind::Displace:
             return (child(0, p) + k[0] * noise::fbm(p * k[1], static_cast<int>(k[2]), k[3])) *
                    displaceScale(n);

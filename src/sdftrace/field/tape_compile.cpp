@@ -202,6 +202,11 @@ uint16_t Compiler::emitRepeat(const Node& n, uint16_t point, int material) {
     const uint16_t q = allocPoint();
     push(Op::RepeatPoint, q, point, 0, k);
     const uint16_t r = emit(*n.children[0], q, material);
+    if (!dominatesBounds(*n.children[0])) {
+        const Bounds3 b = nodeBounds(*n.children[0]);
+        push(Op::FloorByBounds, r, r, q,
+             addConsts({b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z}));
+    }
     m_freePoint.push_back(q);
     push(Op::RepeatBound, r, r, point, k);
     return r;

@@ -187,6 +187,8 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
             s[in.out] = s[in.a] * k[0];
         } else if (op == Op::RepeatBound) {
             s[in.out] = minf(s[in.a], xform::repeatNeighbourBound(pts[in.b], k));
+        } else if (op == Op::FloorByBounds) {
+            s[in.out] = xform::floorByBounds(s[in.a], pts[in.b], k);
         } else if (op == Op::Displace) {
             s[in.out] = s[in.a] + displacement(pts[in.b], k);
         } else {
@@ -314,6 +316,13 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
             case Op::ScaleValue: {
                 float *o = sr(in.out), *a = sr(in.a);
                 for (int l = 0; l < n; ++l) o[l] = a[l] * k[0];
+                break;
+            }
+            case Op::FloorByBounds: {
+                float *o = sr(in.out), *a = sr(in.a);
+                const float *bx = px(in.b), *by = py(in.b), *bz = pz(in.b);
+                for (int l = 0; l < n; ++l)
+                    o[l] = xform::floorByBounds(a[l], Vec3(bx[l], by[l], bz[l]), k);
                 break;
             }
             case Op::RepeatBound:
