@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "sdftrace/math/vec.h"
 
 namespace sdft::cli {
 
@@ -21,7 +22,7 @@ Vec3Arg parseVec3Arg(const std::string& flag, const std::string& text) {
         try {
             size_t used = 0;
             v[i] = std::stof(parts[i], &used);
-            if (used != parts[i].size() || !(std::fabs(v[i]) <= 1e9f)) throw bad();
+            if (used != parts[i].size() || !(std::fabs(v[i]) <= kMaxCoordinate)) throw bad();
         } catch (const std::exception&) {
             throw bad();
         }

@@ -26,7 +26,7 @@ bool isWatertight(const TriangleMesh& mesh);
 // multiplied distances stay finite), a bounding box at least kMinMeshExtent across, and no
 // farther from the origin than kMaxMeshOffset times its size (float keeps about 7 digits, so a
 // small mesh far away loses its shape to rounding at a voxel's scale).
-inline constexpr float kMaxMeshCoordinate = 1e9f;
+inline constexpr float kMaxMeshCoordinate = kMaxCoordinate;
 inline constexpr float kMinMeshExtent = 1e-9f;
 inline constexpr float kMaxMeshOffset = 1e4f;
 // Why the mesh (the vertices its triangles use) is outside that range, in one sentence that says

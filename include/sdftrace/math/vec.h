@@ -7,6 +7,10 @@
 
 namespace sdft {
 
+// The largest magnitude of a number user input may give geometry (scene files, flags, mesh
+// coordinates): float keeps about 7 digits, and squared and multiplied distances must stay finite.
+inline constexpr float kMaxCoordinate = 1e9f;
+
 // pi, the one definition every module uses.
 inline constexpr float kPi = 3.14159265358979f;
 SDFT_HOST_DEVICE constexpr float radians(float degrees) { return degrees * kPi / 180.0f; }

@@ -30,11 +30,17 @@ void put(std::string& out, T v) {
     out.append(reinterpret_cast<const char*>(&v), sizeof v);
 }
 
-std::string plyAscii(const TriangleMesh& m) {
-    std::string s = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(m.positions.size()) +
-                    "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
-                    std::to_string(m.triangles.size()) +
-                    "\nproperty list uchar int vertex_indices\nend_header\n";
+std::string plyHeader(const TriangleMesh& m, const char* format) {
+    return std::string("ply\nformat ") + format + " 1.0\nelement vertex " +
+           std::to_string(m.positions.size()) +
+           "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+           std::to_string(m.triangles.size()) +
+           "\nproperty list uchar int vertex_indices\nend_header\n";
+}
+
+// "x y z" lines, then "3 a b c" lines: the body of ascii PLY and of OFF.
+std::string asciiVerticesAndFaces(const TriangleMesh& m) {
+    std::string s;
     char line[128];
     for (const Vec3& p : m.positions) {
         std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
@@ -47,12 +53,12 @@ std::string plyAscii(const TriangleMesh& m) {
     return s;
 }
 
+std::string plyAscii(const TriangleMesh& m) {
+    return plyHeader(m, "ascii") + asciiVerticesAndFaces(m);
+}
+
 std::string plyBinary(const TriangleMesh& m) {
-    std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex " +
-                    std::to_string(m.positions.size()) +
-                    "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
-                    std::to_string(m.triangles.size()) +
-                    "\nproperty list uchar int vertex_indices\nend_header\n";
+    std::string s = plyHeader(m, "binary_little_endian");
     for (const Vec3& p : m.positions) put(s, p.x), put(s, p.y), put(s, p.z);
     for (const auto& t : m.triangles) {
         put(s, uint8_t{3});
@@ -98,18 +104,8 @@ std::string stlBinary(const TriangleMesh& m) {
 }
 
 std::string off(const TriangleMesh& m) {
-    std::string s = "OFF\n" + std::to_string(m.positions.size()) + " " +
-                    std::to_string(m.triangles.size()) + " 0\n";
-    char line[128];
-    for (const Vec3& p : m.positions) {
-        std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
-        s += line;
-    }
-    for (const auto& t : m.triangles) {
-        std::snprintf(line, sizeof line, "3 %u %u %u\n", t[0], t[1], t[2]);
-        s += line;
-    }
-    return s;
+    return "OFF\n" + std::to_string(m.positions.size()) + " " + std::to_string(m.triangles.size()) +
+           " 0\n" + asciiVerticesAndFaces(m);
 }
 
 std::string base64(const std::string& in) {

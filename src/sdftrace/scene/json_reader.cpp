@@ -17,7 +17,7 @@ std::string typeName(const Json& v) {
 }
 // Scene geometry is computed in float, which keeps about 7 digits: larger numbers lose the
 // surface (squared distances overflow, rays step past it).
-constexpr double kMaxNumber = 1e9;
+constexpr double kMaxNumber = kMaxCoordinate;
 const char* const tooLarge = "; numbers in scene files must lie within +-1e9";
 
 std::string show(double v) {

@@ -36,7 +36,11 @@ class Reader {
                          message);
     }
     [[noreturn]] void failKey(const std::string& key, const std::string& message) const {
-        throw InputError(m_source + ": " + shortPath(m_path + "/" + key) + ": " + message);
+        throw InputError(location(key) + ": " + message);
+    }
+    // "<file>: <JSON path>/<key>", the start of an error about that key.
+    std::string location(const std::string& key) const {
+        return m_source + ": " + shortPath(m_path + "/" + key);
     }
     // A JSON path as messages show it: whole, or its start and end around "/…/" when very long.
     static std::string shortPath(const std::string& path) {

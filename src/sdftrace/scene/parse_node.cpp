@@ -106,10 +106,6 @@ int addRequest(NodeContext& ctx, AssetRequest request) {
     return index;
 }
 
-std::string where(const Reader& r, const std::string& key) {
-    return r.source() + ": " + r.path() + "/" + key;
-}
-
 // A grid file, relative to the scene file's directory: loaded by prepareScene.
 NodePtr requestGridFile(const Reader& r, NodeContext& ctx, const char* jsonKey = "file") {
     const std::string file = r.string(jsonKey);
@@ -118,7 +114,7 @@ NodePtr requestGridFile(const Reader& r, NodeContext& ctx, const char* jsonKey =
         r.failKey(jsonKey, "unsupported grid file '" + file + "'; accepted: .sdfg, .vdb");
     AssetRequest q;
     q.kind = AssetRequest::Kind::GridFile;
-    q.where = where(r, jsonKey);
+    q.where = r.location(jsonKey);
     q.path = path;
     q.key = "grid|" + path;
     return node::gridAsset(addRequest(ctx, std::move(q)));
@@ -152,7 +148,7 @@ NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
     }
     AssetRequest q;
     q.kind = AssetRequest::Kind::Mesh;
-    q.where = where(r, "mesh");
+    q.where = r.location("mesh");
     q.path = path;
     q.bake = bake;
     q.key = "mesh|" + path + "|" + method + "|" + sign + "|" + std::to_string(o.resolution) + "|" +
@@ -165,7 +161,7 @@ NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
 NodePtr requestSubtree(const Reader& r, NodeContext& ctx) {
     AssetRequest q;
     q.kind = AssetRequest::Kind::Subtree;
-    q.where = where(r, "child");
+    q.where = r.location("child");
     q.subtree = parseSingleChild(r, ctx);
     // Checked here when the child is analytic, else once its grids are loaded.
     if (!hasPendingAssets(*q.subtree) && !boundedField(q.subtree)) r.failKey("child", kUnbounded);

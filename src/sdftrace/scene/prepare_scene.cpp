@@ -17,24 +17,36 @@ namespace sdft {
 namespace {
 
 // The tree with its pending grid nodes replaced by the loaded grids (the material a pending node
-// carries stays on it); subtrees without pending grids are shared, not copied. `done` maps each
-// rewritten node to its copy, so a node shared within the tree (or between a subtree request and
-// the tree) is rewritten once.
+// carries stays on it); a node none of whose descendants was pending is returned as it is, not
+// copied. `done` remembers every node visited, so a node shared within the tree (or between a
+// subtree request and the tree) is visited once.
 NodePtr substitute(const NodePtr& n, const std::vector<std::shared_ptr<const Grid>>& grids,
                    std::unordered_map<const Node*, NodePtr>& done) {
-    if (!hasPendingAssets(*n)) return n;
     auto it = done.find(n.get());
     if (it != done.end()) return it->second;
-    auto copy = std::make_shared<Node>(*n);
-    if (n->kind == NodeKind::Grid) {
+    NodePtr out = n;
+    if (n->kind == NodeKind::Grid && !n->grid) {
         SDFT_CHECK(n->asset >= 0 && static_cast<size_t>(n->asset) < grids.size());
+        SDFT_CHECK(grids[static_cast<size_t>(n->asset)]);  // requests precede their users
+        auto copy = std::make_shared<Node>(*n);
         copy->grid = grids[static_cast<size_t>(n->asset)];
-        SDFT_CHECK(copy->grid != nullptr);  // requests come before the nodes that use them
         copy->asset = -1;
+        out = copy;
+    } else {
+        std::vector<NodePtr> children;
+        bool changed = false;
+        for (const NodePtr& c : n->children) {
+            children.push_back(substitute(c, grids, done));
+            changed |= children.back() != c;
+        }
+        if (changed) {
+            auto copy = std::make_shared<Node>(*n);
+            copy->children = std::move(children);
+            out = copy;
+        }
     }
-    for (NodePtr& c : copy->children) c = substitute(c, grids, done);
-    done.emplace(n.get(), copy);
-    return copy;
+    done.emplace(n.get(), out);
+    return out;
 }
 
 std::string describe(const AssetRequest& q) {

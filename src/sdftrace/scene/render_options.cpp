@@ -453,7 +453,7 @@ std::string RenderOption::check(double v) const {
     const bool integral = type != OptionType::Int || v == std::floor(v);
     if (!std::isfinite(v) || !integral || !range.contains(v))
         return "expected " + accepted() + ", got " + number(v);
-    if (std::fabs(v) > 1e9)  // float geometry keeps about 7 digits, as in scene files
+    if (std::fabs(v) > kMaxCoordinate)  // float geometry keeps about 7 digits, as in scene files
         return "expected " + accepted() + ", got " + number(v) + "; numbers must lie within +-1e9";
     return "";
 }
