@@ -58,6 +58,7 @@ enum Method { kClassic, kRelaxed, kRelaxedScreenSpace, kEnhanced, kEnhancedNoCul
 TraceOptions options(Method m, const Prepared& p) {
     TraceOptions o = TraceOptions::classic();
     o.pixelRadius = Camera(p.scene.camera).pixelRadius();
+    o.rootIters = 0;  // the papers' methods; the root refinement is measured in exact_hits_test
     if (m >= kRelaxed) o.omega = 1.2f;
     if (m >= kRelaxedScreenSpace) o.screenSpace = true;
     if (m >= kEnhanced) o.discontinuityIters = 3;

@@ -329,7 +329,8 @@ void addRenderCommand(CLI::App& app, Action& action) {
         "--aov", args->aovs,
         "Extra output NAME=PATH, repeatable. NAME: color (linear radiance), depth (t along the "
         "unit primary ray, inf on a miss), normal, steps (field evaluations of the primary "
-        "ray), error (f at the hit point), trav_steps and isect_tests (grid DDA), shadow (the "
+        "ray), error (f where the march placed the hit, before the root refinement), trav_steps "
+        "and isect_tests (grid DDA), shadow (the "
         "first shadowing light's visibility), ao (ambient occlusion). PATH: .exr, .pfm, or .png "
         "(heat map with legend)");
     addCameraFlags(cmd, *args);

@@ -22,7 +22,7 @@ struct Film {
     std::vector<float> depth;      // t along the unit primary ray, +inf on a miss
     std::vector<float> normal;     // 3 per pixel, zero on a miss
     std::vector<float> steps;      // field evaluations of the primary ray
-    std::vector<float> error;      // f(p) at the chosen hit point, 0 on a miss
+    std::vector<float> error;      // f where the march placed the hit (before root refinement)
     std::vector<float> travSteps;  // grid tracer: blocks + cells visited by primary and shadow rays
     std::vector<float>
         isectTests;  // grid tracer: surface-cell intersection tests (Jamriška fig. 7)

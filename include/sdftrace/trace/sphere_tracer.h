@@ -18,21 +18,30 @@ namespace sdft {
 struct TraceResult {
     bool hit = false;
     float t = kInfinity;  // distance along the unit ray direction; +inf on a miss
-    float value = 0;      // f(p) at the chosen hit point (Keinert fig. 9)
+    // f where the march placed the hit (Keinert fig. 9), before the root refinement moved t onto
+    // f = 0: the error scale by which secondary rays leave the surface (Keinert §3.3's dynamic ε).
+    float value = 0;
     int evaluations = 0;  // field evaluations spent on this ray
     int fallbacks = 0;    // over-relaxation fallbacks taken (Keinert Listing 2)
 };
 
 struct SphereTraceState {
-    enum Phase : uint8_t { kMarch, kLinear, kFalsi, kRefine, kDone };
+    enum Phase : uint8_t { kMarch, kLinear, kFalsi, kRefine, kRoot, kDone };
 
     Ray ray;
     float tMax = 0;
     float t = 0;  // where the next evaluation happens
     float candidateT = 0, candidateError = kInfinity, candidateValue = 0;
     float previousRadius = 0, stepLength = 0, omega = 1, sign = 0;
-    float tA = 0, fA = 0, tB = 0, fB = 0;  // hybrid: the bracket
+    float tA = 0, fA = 0, tB = 0, fB = 0;  // hybrid and root refinement: the bracket
+    // The march's latest samples on each side of the surface (values sign * f): the root
+    // refinement's bracket or secant starts from them.
+    float posT = 0, posV = 0, prevPosT = 0, prevPosV = 0, negT = 0, negV = 0;
+    float hitT = 0, hitF = 0;  // the placement the march chose (kept when no root is near)
     int steps = 0, refineLeft = 0;
+    uint8_t samples = 0;  // bit 0: pos valid, bit 1: prevPos valid, bit 2: neg valid
+    bool bracketed = false;
+    int8_t sameSide = 0;  // Illinois: +1 / -1 after a falsi step that kept the other end
     Phase phase = kMarch;
     TraceResult result;
 
@@ -82,8 +91,149 @@ SDFT_HOST_DEVICE inline void finish(SphereTraceState& s, bool hit, float t, floa
     s.phase = SphereTraceState::kDone;
 }
 
+// Remembers a sample of the march (v = sign * f) on its side of the surface.
+SDFT_HOST_DEVICE inline void recordSample(SphereTraceState& s, float t, float v) {
+    if (v > 0) {
+        if (s.samples & 1u) {
+            s.prevPosT = s.posT;
+            s.prevPosV = s.posV;
+            s.samples |= 2u;
+        }
+        s.posT = t;
+        s.posV = v;
+        s.samples |= 1u;
+    } else {
+        s.negT = t;
+        s.negV = v;
+        s.samples |= 4u;
+    }
+}
+
+SDFT_HOST_DEVICE inline float falsiPoint(const SphereTraceState& s) {
+    const float t = s.tA - s.fA * (s.tB - s.tA) / (s.fB - s.fA);
+    return minf(maxf(t, minf(s.tA, s.tB)), maxf(s.tA, s.tB));
+}
+
+// The next probe of the root refinement: regula falsi inside a bracket; otherwise a secant step
+// from the last two samples approaching the surface, at least the safe sphere step fA / L and at
+// most kReach of them (a probe never jumps far along a grazing ray), a little long so that it
+// brackets the root of a surface that curves away.
+SDFT_HOST_DEVICE inline float rootProbe(const SphereTraceState& s, float prevT, float prevV,
+                                        bool havePrev, float invL) {
+    if (s.bracketed) return falsiPoint(s);
+    constexpr float kReach = 16.0f, kLong = 1.0f + 1.0f / 32.0f;
+    const float safe = s.fA * invL;
+    float step = safe;
+    // The other sample may lie on either side of tA (the discontinuity reduction steps back);
+    // only a slope that approaches the surface says where the root is.
+    const float slope = havePrev && prevT != s.tA ? (prevV - s.fA) / (s.tA - prevT) : 0.0f;
+    if (slope > 0) step = kLong * s.fA / slope;
+    return s.tA + minf(maxf(step, safe), kReach * safe);
+}
+
+// Starts the root refinement at the hit the march chose, (t, f); finishes there when refinement
+// is off, the point is on the surface, or no sample brackets it from the inside.
+SDFT_HOST_DEVICE inline void beginRoot(SphereTraceState& s, float t, float f, float invL,
+                                       const TraceOptions& o) {
+    const float v = s.sign * f;
+    if (o.rootIters <= 0 || v == 0 || !(t < kInfinity)) {
+        finish(s, true, t, f);
+        return;
+    }
+    s.hitT = t;
+    s.hitF = f;
+    s.sameSide = 0;
+    if (v < 0) {
+        // The march crossed the surface (an over-relaxed step, or the discontinuity reduction):
+        // the latest sample before it in front of the surface closes the bracket.
+        if (!(s.samples & 1u) || s.posT >= t) {
+            finish(s, true, t, f);
+            return;
+        }
+        s.tA = s.posT;
+        s.fA = s.posV;
+        s.tB = t;
+        s.fB = v;
+        s.bracketed = true;
+    } else {
+        s.tA = t;
+        s.fA = v;
+        s.bracketed = (s.samples & 4u) && s.negT > t && s.negT - t <= 16.0f * v * invL;
+        if (s.bracketed) {
+            s.tB = s.negT;
+            s.fB = s.negV;
+        }
+    }
+    s.phase = SphereTraceState::kRoot;
+    s.refineLeft = o.rootIters;
+    // The secant's other sample: the latest one in front of the surface other than the hit
+    // itself (usually the latest sample).
+    bool prev = false;
+    if ((s.samples & 1u) && s.posT != t) {
+        s.prevPosT = s.posT;
+        s.prevPosV = s.posV;
+        prev = true;
+    } else {
+        prev = (s.samples & 2u) && s.prevPosT != t;
+    }
+    s.samples = prev ? 2u : 0u;
+    s.t = rootProbe(s, s.prevPosT, s.prevPosV, prev, invL);
+}
+
+// One evaluation of the root refinement; after the last one a bracketed root is placed by regula
+// falsi without evaluating it. A hit whose probes found no sign change keeps the march's placement
+// (a near miss at a silhouette is not pulled along the ray) unless a probe all but touched f = 0.
+SDFT_HOST_DEVICE inline void rootStep(SphereTraceState& s, float f, float invL) {
+    constexpr float kOnSurface = 1e-5f;
+    const float v = s.sign * f;
+    const float t = s.t;
+    if (v == 0) {
+        finish(s, true, t, s.hitF);
+        return;
+    }
+    if (s.bracketed) {
+        // Illinois: halve the value of an end kept twice, so both ends converge.
+        if (v > 0) {
+            s.tA = t;
+            s.fA = v;
+            if (s.sameSide == 1) s.fB *= 0.5f;
+            s.sameSide = 1;
+        } else {
+            s.tB = t;
+            s.fB = v;
+            if (s.sameSide == -1) s.fA *= 0.5f;
+            s.sameSide = -1;
+        }
+    } else if (v < 0) {
+        s.tB = t;
+        s.fB = v;
+        s.bracketed = true;
+    } else if (v < s.fA) {
+        s.prevPosT = s.tA;
+        s.prevPosV = s.fA;
+        s.samples = 2u;
+        s.tA = t;
+        s.fA = v;
+    } else {
+        // Moving away from the surface: no root near the chosen point.
+        s.refineLeft = 0;
+    }
+    if (--s.refineLeft <= 0) {
+        if (s.bracketed) {
+            finish(s, true, falsiPoint(s), s.hitF);
+        } else {
+            // No sign change: a probe that came within 1e-5 t of the surface (far below what
+            // a pixel resolves) is a hit at grazing incidence; otherwise the march's placement.
+            const bool onSurface = s.fA * invL <= kOnSurface * s.tA;
+            finish(s, true, onSurface ? s.tA : s.hitT, s.hitF);
+        }
+        return;
+    }
+    s.t = rootProbe(s, s.prevPosT, s.prevPosV, s.samples & 2u, invL);
+}
+
 // End of the march: decide hit or miss (Keinert Listing 2, last lines), then refine.
-SDFT_HOST_DEVICE inline void endMarch(SphereTraceState& s, const TraceOptions& o) {
+SDFT_HOST_DEVICE inline void endMarch(SphereTraceState& s, float invL, const TraceOptions& o) {
     bool hit = s.candidateError <= hitThreshold(o) && s.candidateT <= s.tMax;
     if (!hit && !o.forceHit) {
         finish(s, false, 0, 0);
@@ -95,7 +245,7 @@ SDFT_HOST_DEVICE inline void endMarch(SphereTraceState& s, const TraceOptions& o
         s.t = s.candidateT;
         return;
     }
-    finish(s, true, s.candidateT, s.candidateValue);
+    beginRoot(s, s.candidateT, s.candidateValue, invL, o);
 }
 
 // Keinert et al. 2014, Listing 2: over-relaxed step with the safe fallback and screen-space
@@ -138,7 +288,7 @@ SDFT_HOST_DEVICE inline void marchStep(SphereTraceState& s, float f, float invL,
         if (o.hybrid) {
             finish(s, false, 0, 0);
         } else {
-            endMarch(s, o);
+            endMarch(s, invL, o);
         }
         return;
     }
@@ -197,7 +347,7 @@ SDFT_HOST_DEVICE inline void refineStep(SphereTraceState& s, float f, float invL
                                         const TraceOptions& o) {
     float next = s.t + s.sign * f * invL - permittedError(s.t, o);
     if (--s.refineLeft <= 0) {
-        finish(s, true, s.t, f);
+        beginRoot(s, s.t, f, invL, o);
         return;
     }
     s.t = next;
@@ -209,6 +359,11 @@ SDFT_HOST_DEVICE inline void refineStep(SphereTraceState& s, float f, float invL
 SDFT_HOST_DEVICE inline void sphereTraceAdvance(SphereTraceState& s, float f, float invL,
                                                 const TraceOptions& o) {
     s.result.evaluations++;
+    if (s.phase != SphereTraceState::kRoot) {
+        // The sign is set by the first march step; until then every value counts as in front.
+        const float v = s.sign == 0 ? std::fabs(f) : s.sign * f;
+        detail::recordSample(s, s.t, v);
+    }
     switch (s.phase) {
         case SphereTraceState::kMarch:
             detail::marchStep(s, f, invL, o);
@@ -221,6 +376,9 @@ SDFT_HOST_DEVICE inline void sphereTraceAdvance(SphereTraceState& s, float f, fl
             break;
         case SphereTraceState::kRefine:
             detail::refineStep(s, f, invL, o);
+            break;
+        case SphereTraceState::kRoot:
+            detail::rootStep(s, f, invL);
             break;
         case SphereTraceState::kDone:
             break;

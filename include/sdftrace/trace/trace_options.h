@@ -24,6 +24,11 @@ struct TraceOptions {
     float hybridEpsilon = 0.02f;
     float hybridStep = 0.01f;
     int falsiIters = 4;
+    // Evaluations spent moving the chosen hit onto the root of f (a secant step that brackets it,
+    // then Illinois regula falsi; the last placement is interpolated, not evaluated). The march
+    // still decides hit or miss and where to stop; a hit with no root near keeps its placement.
+    // 0 = off (hits stay on Keinert's error level set, or at f/L < tau).
+    int rootIters = 2;
 
     // The options of a ray without a pixel footprint of its own (shadow, reflection, refraction,
     // shadow-map and path rays): the primary rays' march and relaxation, a plain threshold, no
@@ -34,6 +39,14 @@ struct TraceOptions {
         o.forceHit = false;
         o.discontinuityIters = 0;
         o.fixedSteps = false;
+        return o;
+    }
+
+    // The options of a ray asked only whether something is in the way (shadow rays): no root
+    // refinement either.
+    TraceOptions occlusion() const {
+        TraceOptions o = secondary();
+        o.rootIters = 0;
         return o;
     }
 

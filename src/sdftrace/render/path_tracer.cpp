@@ -87,6 +87,7 @@ class PathTracer {
         m_primary = plan.settings.trace;
         m_primary.pixelRadius = m_camera.pixelRadius();
         m_secondary = plan.settings.trace.secondary();
+        m_occlusion = plan.settings.trace.occlusion();
     }
 
     Vec3 radiance(int x, int y, int sample, RenderStats& st, float* depth, Vec3* normal,
@@ -108,7 +109,7 @@ class PathTracer {
     const FrameView& m_view;
     const Tape& m_tape;
     Camera m_camera;
-    TraceOptions m_primary, m_secondary;
+    TraceOptions m_primary, m_secondary, m_occlusion;
 };
 
 bool PathTracer::march(const Ray& ray, float tMax, bool inside, const TraceOptions& o, float& t,
@@ -146,7 +147,7 @@ Vec3 PathTracer::nextEvent(Vec3 p, Vec3 n, float eps, Vec3 wo, const Plastic& m,
             ++st.shadowRays;
             float t, value;
             if (march({p + n * eps, ls.dir}, std::min(ls.dist, m_plan.settings.maxDistance), false,
-                      m_secondary, t, value, st.shadowEvaluations))
+                      m_occlusion, t, value, st.shadowEvaluations))
                 continue;
         }
         // The direct integrator's light model: pi * scale makes a white Lambertian surface's

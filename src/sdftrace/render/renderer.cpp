@@ -70,7 +70,7 @@ class TileRenderer {
         m_primary = m_settings.trace;
         m_primary.pixelRadius = m_camera.pixelRadius();
         // Shadow rays need only a yes/no answer: plain threshold, relaxation kept, no refinement.
-        m_shadow = m_settings.trace.secondary();
+        m_shadow = m_settings.trace.occlusion();  // hit or miss only: no root refinement
         if (plan.ddaGrid) {
             m_gridView = plan.ddaGrid->view();
             m_grid = &m_gridView;
@@ -90,7 +90,7 @@ class TileRenderer {
                 m_maps.push_back(nullptr);
                 if (!light.castShadows || region.empty()) continue;
                 m_maps.back() = std::make_unique<ShadowMap>(
-                    m_tape, light, region, m_shadow,
+                    m_tape, light, region, m_settings.trace.secondary(),
                     method == ShadowMethod::Pcf ? ShadowMapFilter::Pcf : ShadowMapFilter::Evsm,
                     m_settings.shadowMap);
                 m_mapEvaluations += m_maps.back()->evaluations();

@@ -191,10 +191,24 @@ TEST(SphereTracer, EnhancedMethodsFindTheSameHitsOnACityOfRepeatedBoxes) {
     compareMethods(city, 6, 3, 3);
 }
 
+// Without the root refinement a hit lies in front of the surface within tau; with it, on the
+// surface (float rounding aside).
+void expectHitsWithinTau(const TraceOptions& o);
+
 TEST(SphereTracer, HitsAnalyticSphereBoxAndPlaneWithinTau) {
     TraceOptions o = TraceOptions::classic();
     o.tau = 1e-4f;
     o.maxSteps = 2000;
+    o.rootIters = 0;
+    expectHitsWithinTau(o);
+    o.rootIters = 2;
+    expectHitsWithinTau(o);
+}
+
+void expectHitsWithinTau(const TraceOptions& o) {
+    // A refined hit may sit a float rounding behind the exact root.
+    const float behind = o.rootIters > 0 ? 1e-5f : 0.0f;
+    const float slack = o.rootIters > 0 ? 1e-5f : o.tau + 1e-5f;
     testing::Rng rng(4);
     Tape sphereTape = compileTape(node::sphere(1.0f));
     Tape boxTape = compileTape(node::box({0.5f, 0.7f, 0.9f}));
@@ -211,8 +225,11 @@ TEST(SphereTracer, HitsAnalyticSphereBoxAndPlaneWithinTau) {
         if (closest < 0.99f) {
             float tExact = -b - std::sqrt(disc);
             ASSERT_TRUE(rs.hit);
-            EXPECT_LE(rs.t, tExact + 1e-5f);
-            EXPECT_LT(std::fabs(length(ray.at(rs.t)) - 1.0f), o.tau + 1e-5f);
+            if (o.rootIters > 0) {
+                EXPECT_NEAR(rs.t, tExact, 1e-5f * std::max(1.0f, tExact));
+            }
+            EXPECT_LE(rs.t, tExact + 1e-5f + behind);
+            EXPECT_LT(std::fabs(length(ray.at(rs.t)) - 1.0f), slack);
             ++hits[0];
         } else if (closest > 1.01f) {
             EXPECT_FALSE(rs.hit);
@@ -223,10 +240,13 @@ TEST(SphereTracer, HitsAnalyticSphereBoxAndPlaneWithinTau) {
         TraceResult rb = traceRay(boxTape, {ray, 0, 100}, o);
         if (intersectBounds(box, ray, 0, 100, t0, t1) && t1 - t0 > 0.01f) {
             ASSERT_TRUE(rb.hit);
-            EXPECT_LE(rb.t, t0 + 1e-5f);
+            EXPECT_LE(rb.t, t0 + 1e-5f + behind);
             Vec3 p = ray.at(rb.t);
             Vec3 q = abs(p) - Vec3(0.5f, 0.7f, 0.9f);
-            EXPECT_LT(length(max(q, 0.0f)), o.tau + 1e-5f);
+            EXPECT_LT(length(max(q, 0.0f)), slack);
+            if (o.rootIters > 0) {
+                EXPECT_NEAR(rb.t, t0, 1e-5f * std::max(1.0f, t0));
+            }
             ++hits[1];
         }
         // plane y = 0 from above
@@ -235,8 +255,8 @@ TEST(SphereTracer, HitsAnalyticSphereBoxAndPlaneWithinTau) {
         TraceResult rp = traceRay(planeTape, {down, 0, 1000}, o);
         float tPlane = -down.origin.y / down.direction.y;
         ASSERT_TRUE(rp.hit);
-        EXPECT_LE(rp.t, tPlane + 1e-5f);
-        EXPECT_LT(down.at(rp.t).y, o.tau + 1e-5f);
+        EXPECT_LE(rp.t, tPlane + 1e-5f + behind);
+        EXPECT_LT(std::fabs(down.at(rp.t).y), slack);
         ++hits[2];
     }
     EXPECT_GT(hits[0], 500);
@@ -281,6 +301,7 @@ TEST(SphereTracer, FixedStepModeSpendsTheSameStepsOnEveryRay) {
     TraceOptions o = TraceOptions::classic();
     o.fixedSteps = true;
     o.maxSteps = 48;
+    o.rootIters = 0;  // the root refinement adds up to rootIters to a hit ray (tested below)
     testing::Rng rng(13);
     int hits = 0;
     for (int i = 0; i < 500; ++i) {
@@ -301,6 +322,35 @@ TEST(SphereTracer, FixedStepModeSpendsTheSameStepsOnEveryRay) {
         }
     }
     EXPECT_GT(hits, 200);
+}
+
+// The root refinement spends at most rootIters evaluations on a hit and none on a miss, and puts
+// a hit of a marched-to-convergence ray on the root.
+TEST(SphereTracer, RootRefinementCostsAtMostItsIterationsAndLandsOnTheRoot) {
+    Tape tape = compileTape(testing::everyKindTree());
+    std::vector<RaySegment> rays = makeRays(tape, 21, 3, 1500, 15);
+    for (TraceOptions base : {TraceOptions::classic(), TraceOptions{}}) {
+        base.pixelRadius = 1e-3f;
+        TraceOptions off = base, on = base;
+        off.rootIters = 0;
+        on.rootIters = 2;
+        int hits = 0, closer = 0;
+        for (const RaySegment& seg : rays) {
+            TraceResult a = traceRay(tape, seg, off), b = traceRay(tape, seg, on);
+            ASSERT_EQ(a.hit, b.hit) << "the march alone decides hit or miss";
+            if (!a.hit) {
+                EXPECT_EQ(b.evaluations, a.evaluations);
+                continue;
+            }
+            ++hits;
+            EXPECT_GE(b.evaluations, a.evaluations);
+            EXPECT_LE(b.evaluations, a.evaluations + on.rootIters);
+            EXPECT_EQ(b.value, a.value) << "the march's error scale is kept for offsets";
+            closer += std::fabs(valueAt(tape, seg.ray, b.t)) <= std::fabs(a.value);
+        }
+        ASSERT_GT(hits, 300);
+        EXPECT_GE(closer, hits * 99 / 100) << "refined hits are at least as close to f = 0";
+    }
 }
 
 TEST(SphereTracer, HybridRegulaFalsiConvergesOntoTheSurface) {
@@ -345,6 +395,7 @@ TEST(SphereTracer, DiscontinuityReductionPullsHitsOntoTheErrorLevelSet) {
     TraceOptions off;
     off.pixelRadius = 2e-3f;
     off.discontinuityIters = 0;
+    off.rootIters = 0;  // Keinert's placement itself
     TraceOptions on = off;
     on.discontinuityIters = 3;
     double scatterOff = 0, scatterOn = 0;
