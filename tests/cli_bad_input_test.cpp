@@ -53,6 +53,20 @@ TEST_P(BadInput, FailsWithOneClearLineAndNoOutput) {
 INSTANTIATE_TEST_SUITE_P(
     Cli, BadInput,
     ::testing::Values(
+        BadCase{"film_over_memory_budget",
+                "",
+                "--width 4000 --height 3000 --max-memory 64M",
+                {"--width/--height: needs", "(the film of a 4000x3000 image with its AOVs)",
+                 "more than the memory budget of 64 MiB (--max-memory)"}},
+        BadCase{"shadow_map_over_memory_budget",
+                R"({"camera": {"width": 16, "height": 12},
+                    "lights": [{"type": "point", "position": [0, 4, 0]}],
+                    "objects": [{"type": "sphere", "radius": 1}],
+                    "render": {"shadow_method": "evsm", "shadow_map_resolution": 8192}})",
+                "--max-memory 256M",
+                {"shadow_map_resolution 8192: needs", "more than the memory budget of 256 MiB"}},
+        BadCase{
+            "max_memory_not_a_size", "", "--max-memory 2X", {"--max-memory: 2X: expected a size"}},
         BadCase{"malformed_json",
                 "{\"objects\": [ {\"type\": \"sphere\", }",
                 "",

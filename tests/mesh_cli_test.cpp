@@ -151,6 +151,7 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
     };
     std::string huge = tetrahedron("huge.obj", 1e37, 1e38);
     std::string far = tetrahedron("far.obj", 1, 1e6);
+    std::string unit = tetrahedron("unit.obj", 1, 0);
     std::string tiny = tetrahedron("tiny.obj", 1e-12, 0);
     std::string scene = dir.write("s.json", R"({"objects": [{"type": "sphere", "radius": 1}]})");
     struct Case {
@@ -166,7 +167,7 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
         {"bake " + mesh("bunny_npm.obj") + " --method rtsdf --rays 0 -o " + dir.file("x.sdfg"),
          "--rays"},
         {"bake " + mesh("bunny_npm.obj") + " --method jfa --res 4096 -o " + dir.file("x.sdfg"),
-         "--res 4096: this bake needs about"},
+         "--res 4096: needs"},
         {"bake " + mesh("bunny_npm.obj") + " --jfa-variant 3+jfa -o " + dir.file("x.sdfg"),
          "--jfa-variant"},
         {"bake " + mesh("bunny_npm.obj") + " --dense --closest octree -o " + dir.file("x.sdfg"),
@@ -192,6 +193,18 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
          "--band: applies to sparse grids only"},
         {"bake " + mesh("bunny_npm.obj") + " --texcoord-axis 0,0,1 -o " + dir.file("x.sdfg"),
          "--texcoord-axis: needs --texcoords"},
+        // Memory budgets: checked before anything is allocated, with the bytes needed.
+        {"bake " + unit + " --dense --res 4096 -o " + dir.file("x.sdfg"),
+         "--res 4096: needs 256.2 GiB (the bake's arrays), more than the memory budget"},
+        {"bake " + mesh("bunny_npm.obj") + " --dense --res 256 --max-memory 16M -o " +
+             dir.file("x.sdfg"),
+         "more than the memory budget of 16 MiB (--max-memory)"},
+        {"bake " + scene + " --dense --res 512 --max-memory 64M -o " + dir.file("x.sdfg"),
+         "--res 512: needs 515 MiB"},
+        {"bake " + scene + " --res 16 --max-memory lots -o " + dir.file("x.sdfg"),
+         "--max-memory: lots: expected a size such as 8G"},
+        {"render -q " + mesh("bunny_npm.obj") + " --max-memory 1M -o " + dir.file("x.png"),
+         "needs more memory than the budget of 1 MiB (raise --max-memory"},
     };
     for (const Case& c : cases) {
         RunResult r = runCli(c.args, dir);

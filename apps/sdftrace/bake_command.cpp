@@ -17,6 +17,7 @@
 #include "sdftrace/bake/texture_coords.h"
 #include "sdftrace/bake/verify_bake.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
@@ -121,17 +122,10 @@ SampleOptions sampleOptions(const BakeArgs& a) {
     return o;
 }
 
-// Refuses work whose dense arrays would take more than 40% of the machine's memory.
+// Refuses a bake whose arrays would not fit the memory budget, naming the flag.
 void checkMemory(double bytes, int resolution) {
-    double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-    if (bytes > 0.4 * have) {
-        char line[200];
-        std::snprintf(line, sizeof line,
-                      "--res %d: this bake needs about %.1f GiB, more than 40%% of this machine's "
-                      "%.1f GiB; use a lower resolution or a sparse exact bake",
-                      resolution, bytes / (1 << 30), have / (1 << 30));
-        throw InputError(line);
-    }
+    checkMemoryBudget(bytes, "--res " + std::to_string(resolution), "the bake's arrays",
+                      "use a lower resolution or a sparse exact bake");
 }
 
 double seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
@@ -211,18 +205,8 @@ int bakeMesh(const BakeArgs& a) {
     auto t0 = std::chrono::steady_clock::now();
     MeshReport report;
     TriangleMesh mesh = loadMesh(a.scene, &report);
-    {
-        // Bytes per vertex of the working arrays: samples (sparse exact: per-block tables only);
-        // rtsdf adds a coarse grid;
-        // the propagation methods hold seed points, triangles and ping-pong or feature arrays.
-        double perVertex = o.method == MeshBakeMethod::Exact
-                               ? (o.sampling.kind == GridKind::Dense ? 4 : 0.2)  // block tables
-                           : o.method == MeshBakeMethod::Rtsdf ? 8
-                                                               : 40;
-        if (a.verify) perVertex += 8;
-        GridShape shape = gridShapeFor(mesh.bounds(), o.sampling);
-        checkMemory(perVertex * static_cast<double>(shape.vertexCount()), a.resolution);
-    }
+    checkMemory(meshBakeBytes(mesh, gridShapeFor(mesh.bounds(), o.sampling), o, a.verify),
+                a.resolution);
     std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.scene.c_str(), report.summary().c_str());
     auto t1 = std::chrono::steady_clock::now();
     MeshBakeResult r = bakeMesh(mesh, o);

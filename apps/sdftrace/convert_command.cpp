@@ -1,4 +1,4 @@
-// sdftrace convert in.{sdfg,vdb} out.{sdfg,vdb}
+// sdftrace convert in.{sdfg,vdb,sdf,raw} out.{sdfg,vdb,sdf,raw}
 #include <cstdio>
 #include <filesystem>
 
@@ -16,16 +16,17 @@ struct ConvertArgs {
 
 int runConvert(const ConvertArgs& a) {
     if (!isGridFile(a.output))
-        throw InputError("output " + a.output + ": accepted extensions: .sdfg, .vdb");
+        throw InputError("output " + a.output +
+                         ": accepted extensions: .sdfg, .vdb, .sdf (SDFGen), .raw (float32 with a "
+                         ".raw.json sidecar)");
     checkWritablePath(a.output, "output");
     Grid g = loadGridFile(a.input);
     if (g.texcoordKind() != TexcoordKind::None &&
-        std::filesystem::path(a.output).extension() == ".vdb")
-        std::fprintf(
-            stderr,
-            "sdftrace convert: warning: %s has texture coordinates; a .vdb level set holds "
-            "distances only, so they are not written (keep the .sdfg to texture it)\n",
-            a.input.c_str());
+        std::filesystem::path(a.output).extension() != ".sdfg")
+        std::fprintf(stderr,
+                     "sdftrace convert: warning: %s has texture coordinates; %s holds distances "
+                     "only, so they are not written (keep the .sdfg to texture it)\n",
+                     a.input.c_str(), a.output.c_str());
     saveGridFile(g, a.output);
     const GridShape& s = g.shape();
     std::fprintf(stderr, "sdftrace convert: %s -> %s, %dx%dx%d cells, voxel %.4g\n",
@@ -38,9 +39,11 @@ int runConvert(const ConvertArgs& a) {
 void addConvertCommand(CLI::App& app, Action& action) {
     auto args = std::make_shared<ConvertArgs>();
     CLI::App* cmd = app.add_subcommand(
-        "convert", "Convert grids between .sdfg and OpenVDB float level sets (.vdb), either way");
-    cmd->add_option("input", args->input, "Input grid (.sdfg or .vdb)")->required();
-    cmd->add_option("output", args->output, "Output grid (.sdfg or .vdb)")->required();
+        "convert",
+        "Convert grids between .sdfg, OpenVDB float level sets (.vdb), SDFGen's text format (.sdf) "
+        "and raw float32 samples with a JSON sidecar (.raw + .raw.json), any way");
+    cmd->add_option("input", args->input, "Input grid (.sdfg, .vdb, .sdf or .raw)")->required();
+    cmd->add_option("output", args->output, "Output grid (.sdfg, .vdb, .sdf or .raw)")->required();
     cmd->callback([&action, args] { action = [args] { return runConvert(*args); }; });
 }
 

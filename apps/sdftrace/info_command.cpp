@@ -43,8 +43,9 @@ int runInfo(const std::string& path) {
 
 void addInfoCommand(CLI::App& app, Action& action) {
     auto path = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand(
-        "info", "Describe a grid file (.sdfg or .vdb): size, voxel size, bounds, layout, memory");
+    CLI::App* cmd = app.add_subcommand("info",
+                                       "Describe a grid file (.sdfg, .vdb, .sdf or .raw): size, "
+                                       "voxel size, bounds, layout, memory");
     cmd->add_option("file", *path, "Grid file (.sdfg)")->required();
     cmd->callback([&action, path] { action = [path] { return runInfo(*path); }; });
 }

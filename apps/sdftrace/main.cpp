@@ -4,12 +4,28 @@
 
 #include "commands.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 
 int main(int argc, char** argv) {
     CLI::App app{"sdftrace: build and ray trace signed distance fields"};
     app.name("sdftrace");
     app.require_subcommand(1);
     app.set_version_flag("--version", "sdftrace 0.1.0");
+    app.fallthrough();  // --max-memory may follow the subcommand
+    app.add_option_function<std::string>(
+           "--max-memory",
+           [](const std::string& v) {
+               double bytes = 0;
+               if (!sdft::parseByteSize(v, bytes))
+                   throw CLI::ValidationError("--max-memory",
+                                              v + ": expected a size such as 8G, 512M or a number "
+                                                  "of bytes");
+               sdft::setMemoryBudgetBytes(bytes);
+           },
+           "Memory budget for everything whose size the input sets (films, grids, bake arrays, "
+           "BVHs, shadow maps), checked before it is allocated: 8G, 512M, 1.5GiB or bytes "
+           "(default: half of the physical memory)")
+        ->type_name("SIZE");
     sdft::cli::Action action;
     sdft::cli::addRenderCommand(app, action);
     sdft::cli::addBakeCommand(app, action);
@@ -37,7 +53,10 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "sdftrace: error: %s\n", e.what());
         return 1;
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "sdftrace: error: out of memory\n");
+        std::fprintf(stderr,
+                     "sdftrace: error: out of memory (an allocation over the memory budget of %s, "
+                     "or the machine's memory is exhausted; see --max-memory)\n",
+                     sdft::formatBytes(sdft::memoryBudgetBytes()).c_str());
         return 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "sdftrace: error: %s\n", e.what());

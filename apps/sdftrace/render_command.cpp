@@ -143,15 +143,16 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a) {
 
 // The scene of the input: the demo, a scene file (described, then its assets loaded and baked),
 // or a mesh or grid file framed automatically.
-Scene loadInput(const std::string& input, bool progress) {
+Scene loadInput(const std::string& input, bool progress, bool quiet) {
     if (input.empty()) return demoScene();
     if (isMeshFile(input)) {
         // A mesh rendered directly: baked exactly at the default resolution first.
         MeshReport report;
         TriangleMesh mesh = loadMesh(input, &report);
         auto grid = std::make_shared<const Grid>(bakeMesh(mesh, MeshBakeOptions{}).grid);
-        std::fprintf(stderr, "sdftrace render: %s: %s; baked exactly at 128 cells\n", input.c_str(),
-                     report.summary().c_str());
+        if (!quiet)
+            std::fprintf(stderr, "sdftrace render: %s: %s; baked exactly at 128 cells\n",
+                         input.c_str(), report.summary().c_str());
         return sceneForObject(node::grid(grid), grid->surfaceBounds());
     }
     if (isGridFile(input)) {
@@ -230,7 +231,7 @@ int runRender(const RenderArgs& a) {
         return 0;
     }
     const auto aovs = validateOutputs(a);
-    Scene scene = loadInput(a.scene, !a.quiet && stderrIsTerminal());
+    Scene scene = loadInput(a.scene, !a.quiet && stderrIsTerminal(), a.quiet);
     applyOverrides(a, scene);
     const RenderPlan plan = planRender(scene);
     Film film(plan.camera.width, plan.camera.height);

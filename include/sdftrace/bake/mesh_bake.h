@@ -44,6 +44,12 @@ struct MeshBakeResult {
 // winding or parity; the propagation methods also flood and beta). bakeMesh checks it first.
 void validateMeshBakeOptions(const MeshBakeOptions& options);
 
+// Bytes a bake of `mesh` at `shape` needs at its peak (the grid, the method's working arrays,
+// the BVH; `verify` adds the exact bake it is measured against), an estimate made before anything
+// is allocated. bakeMesh checks it against the memory budget (core/memory_budget.h).
+double meshBakeBytes(const TriangleMesh& mesh, const GridShape& shape,
+                     const MeshBakeOptions& options, bool verify = false);
+
 MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& options);
 
 const char* meshBakeMethodName(MeshBakeMethod m);

@@ -93,6 +93,9 @@ class Grid {
   public:
     // A dense grid from samples (vertexCount() of them, x fastest).
     static Grid dense(const GridShape& shape, std::vector<float> samples);
+    // Every vertex's value, x fastest (a sparse grid's dropped blocks give +-background): what
+    // dense file formats store.
+    std::vector<float> vertexSamples() const;
     // A sparse block grid from dense samples: blocks whose samples are all farther than `band`
     // voxels from the surface (and have no sign change) are flagged inside/outside and dropped.
     // Stored samples are clamped to +-band voxels (as in a narrow-band level set): still a

@@ -8,6 +8,7 @@
 #include "sdftrace/bake/seed_signs.h"
 #include "sdftrace/bake/separable_edt.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
@@ -183,10 +184,33 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
 
 }  // namespace
 
+double meshBakeBytes(const TriangleMesh& mesh, const GridShape& shape, const MeshBakeOptions& o,
+                     bool verify) {
+    // Bytes per grid vertex of the working arrays: samples (sparse exact: per-block tables only);
+    // rtsdf adds a coarse grid; the propagation methods hold seed points, triangles and ping-pong
+    // or feature arrays. Embree's BVH and the mesh: about 160 bytes a triangle.
+    double perVertex = o.method == MeshBakeMethod::Exact
+                           ? (o.sampling.kind == GridKind::Dense ? 4 : 0.2)
+                       : o.method == MeshBakeMethod::Rtsdf ? 8
+                                                           : 40;
+    if (verify) perVertex += 8;
+    return perVertex * static_cast<double>(shape.vertexCount()) +
+           160.0 * static_cast<double>(mesh.triangles.size());
+}
+
 MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     validateMeshBakeOptions(o);
+    if (mesh.triangles.empty()) throw InputError("mesh: no (non-degenerate) triangles to bake");
     if (std::string problem = meshRangeProblem(mesh); !problem.empty())
         throw InputError("mesh: " + problem);
+    {
+        const GridShape shape = gridShapeFor(mesh.bounds(), o.sampling);
+        checkMemoryBudget(
+            meshBakeBytes(mesh, shape, o), "resolution " + std::to_string(o.sampling.resolution),
+            "the bake's grid, working arrays and BVH at " + std::to_string(shape.cells[0]) + "x" +
+                std::to_string(shape.cells[1]) + "x" + std::to_string(shape.cells[2]) + " cells",
+            "use a lower resolution or a sparse exact bake");
+    }
     // Every stage, grid finishing included, on exactly the requested threads.
     ThreadArena arena(o.sampling.threads);
     MeshBakeResult r;

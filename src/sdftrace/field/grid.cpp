@@ -22,6 +22,17 @@ Grid Grid::dense(const GridShape& shape, std::vector<float> samples) {
     return g;
 }
 
+std::vector<float> Grid::vertexSamples() const {
+    if (m_kind == GridKind::Dense) return m_samples;
+    const GridView v = view();
+    std::vector<float> out(m_shape.vertexCount());
+    size_t n = 0;
+    for (int k = 0; k <= m_shape.cells[2]; ++k)
+        for (int j = 0; j <= m_shape.cells[1]; ++j)
+            for (int i = 0; i <= m_shape.cells[0]; ++i) out[n++] = v.vertex(i, j, k);
+    return out;
+}
+
 Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& samples, int B,
                            float bandVoxels) {
     SDFT_CHECK(samples.size() == shape.vertexCount());

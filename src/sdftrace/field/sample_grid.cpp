@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "sdftrace/core/macros.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
@@ -64,6 +66,14 @@ std::vector<float> sampleVertices(const Tape& tape, const GridShape& s, int thre
 
 Grid sampleGrid(const Tape& tape, const Bounds3& region, const SampleOptions& o) {
     GridShape shape = gridShapeFor(region, o);
+    // Every vertex is sampled first (sparse grids keep only their surface blocks afterwards).
+    checkMemoryBudget(static_cast<double>(shape.vertexCount()) * sizeof(float) *
+                          (o.kind == GridKind::Dense ? 1 : 2),
+                      "resolution " + std::to_string(o.resolution),
+                      "the grid's samples at " + std::to_string(shape.cells[0]) + "x" +
+                          std::to_string(shape.cells[1]) + "x" + std::to_string(shape.cells[2]) +
+                          " cells",
+                      "use a lower resolution");
     std::vector<float> samples = sampleVertices(tape, shape, o.threads);
     if (o.kind == GridKind::Dense) return Grid::dense(shape, std::move(samples));
     return Grid::sparseFromDense(shape, samples, o.blockSize, o.bandVoxels);

@@ -13,6 +13,7 @@
 #include <unordered_map>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 
 namespace sdft {
 
@@ -55,6 +56,13 @@ TriangleMesh cleanMesh(const std::vector<Vec3>& positions,
                        const std::vector<std::array<uint32_t, 3>>& triangles, MeshReport& r) {
     r.verticesRead = positions.size();
     r.trianglesRead = triangles.size();
+    for (size_t i = 0; i < triangles.size(); ++i)
+        for (uint32_t v : triangles[i])
+            if (v >= positions.size())
+                throw InputError("mesh: triangle " + std::to_string(i) + " uses vertex " +
+                                 std::to_string(v) + ", but there are " +
+                                 std::to_string(positions.size()) +
+                                 " vertices (accepted: indices below the vertex count)");
     // Weld exact duplicates (bitwise-equal positions; -0 and +0 compare equal too).
     std::unordered_map<Vec3, uint32_t, Vec3Hash, Vec3Eq> index;
     std::vector<uint32_t> remap(positions.size());
@@ -120,6 +128,13 @@ TriangleMesh loadMesh(const std::string& path, MeshReport* report) {
     // importer may split vertices per face corner; welding by exact position is ours (cleanMesh).
     const aiScene* scene =
         importer.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices);
+    if (!scene && std::string(importer.GetErrorString()).find("bad_alloc") != std::string::npos) {
+        // assimp turns std::bad_alloc into an error string; the allocation guard of the CLI
+        // throws it for any single allocation over the memory budget.
+        throw InputError(path + ": cannot read mesh: it needs more memory than the budget of " +
+                         formatBytes(memoryBudgetBytes()) +
+                         " (raise --max-memory, or simplify the mesh)");
+    }
     if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
         throw InputError(path + ": cannot read mesh (" + std::string(importer.GetErrorString()) +
                          "); accepted: OBJ, PLY, STL, OFF, glTF");

@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/io/atomic_file.h"
 
 namespace sdft {
@@ -191,9 +192,9 @@ PayloadLayout layoutOf(const Header& h, const GridShape& s, const std::string& p
     }
     if (fileBytes - sizeof h > l.bytes)
         throw InputError(path + ": corrupt: trailing bytes after the payload");
-    double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-    if (static_cast<double>(l.bytes) > 0.5 * have)
-        throw InputError(path + ": the grid needs more than half of this machine's memory");
+    checkMemoryBudget(2.0 * static_cast<double>(l.bytes), path,
+                      "the grid's samples and the structures built from them",
+                      "convert or bake it at a lower resolution");
     return l;
 }
 

@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/io/atomic_file.h"
 
 namespace sdft {
@@ -27,6 +28,12 @@ Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
         file.open();
         grids = file.getGrids();
         file.close();
+    } catch (const std::bad_alloc&) {
+        // OpenVDB allocates the sizes a file states; a corrupt one can ask for exabytes (refused
+        // by the allocation guard of the CLI once over the memory budget).
+        throw InputError(path + ": cannot read OpenVDB file: a size in it asks for more memory " +
+                         "than the budget of " + formatBytes(memoryBudgetBytes()) +
+                         " (a corrupt file, or raise --max-memory)");
     } catch (const std::exception& e) {
         throw InputError(path + ": cannot read OpenVDB file (" + e.what() + ")");
     }
@@ -64,9 +71,11 @@ Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
         shape.origin[a] = static_cast<float>(origin[a]);
     }
     shape.voxelSize = h;
-    double bytes = static_cast<double>(shape.vertexCount()) * sizeof(float);
-    if (bytes > 8.0 * (1ull << 30))
-        throw InputError(path + ": the active region is too large to import");
+    checkMemoryBudget(2.0 * static_cast<double>(shape.vertexCount()) * sizeof(float), path,
+                      "the active region of " + std::to_string(dim[0]) + "x" +
+                          std::to_string(dim[1]) + "x" + std::to_string(dim[2]) +
+                          " voxels, imported through a dense array",
+                      "resample the level set coarser");
     std::vector<float> samples(shape.vertexCount());
     auto acc = grid->getConstAccessor();
     size_t n = 0;

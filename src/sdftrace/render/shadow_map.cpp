@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/math/sampling.h"
 #include "sdftrace/trace/field_tracer.h"
 
@@ -111,6 +112,13 @@ float ShadowMap::cubeFaces(const Light& light, Vec3 centre, float radius) {
 void ShadowMap::traceDepths(const Tape& tape, const TraceOptions& trace, float tMax) {
     const size_t perFace = static_cast<size_t>(m_res) * m_res;
     const TraceOptions opts = trace.secondary();
+    // Depths, and for EVSM four moments and their filtered copy per texel.
+    checkMemoryBudget(static_cast<double>(perFace * m_faces.size()) * sizeof(float) *
+                          (m_filter == ShadowMapFilter::Evsm ? 9 : 1),
+                      "shadow_map_resolution " + std::to_string(m_o.resolution),
+                      "a shadow map of " + std::to_string(m_faces.size()) + " face(s) of " +
+                          std::to_string(m_res) + "x" + std::to_string(m_res) + " texels",
+                      "use a lower shadow-map resolution");
     m_depth.assign(perFace * m_faces.size(), INFINITY);
     std::atomic<uint64_t> evaluations{0};
     tbb::enumerable_thread_specific<PacketScratch> scratch;

@@ -11,6 +11,7 @@
 #include "json_reader.h"
 #include "parse_node.h"
 #include "parse_texture.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/render/film.h"
 #include "sdftrace/scene/prepare_scene.h"
 #include "sdftrace/scene/render_options.h"
@@ -229,17 +230,10 @@ void validateImageSize(int width, int height, const std::string& what) {
                          " is out of range; width and height must be in [1, " +
                          std::to_string(kMaxImageSide) + "]");
     }
-    double need = Film::bytesNeeded(width, height);
-    double have = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-    if (need > 0.5 * have) {
-        char buf[256];
-        std::snprintf(
-            buf, sizeof buf,
-            "image %dx%d needs %.1f GiB of film, more than half of this machine's %.1f GiB; "
-            "render a smaller image",
-            width, height, need / (1 << 30), have / (1 << 30));
-        throw InputError(what + ": " + buf);
-    }
+    checkMemoryBudget(Film::bytesNeeded(width, height), what,
+                      "the film of a " + std::to_string(width) + "x" + std::to_string(height) +
+                          " image with its AOVs",
+                      "render a smaller image");
 }
 
 Scene describeSceneText(const std::string& text, const std::string& source,

@@ -1,0 +1,48 @@
+// Helpers shared by the fuzz targets (fuzz/*_fuzz.cpp): reading fields off the fuzzer's bytes, and
+// handing bytes to readers that take a path.
+#pragma once
+
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+namespace sdft::fuzz {
+
+// Consumes the input from the front; past the end every read returns zeros.
+class Input {
+  public:
+    Input(const uint8_t* data, size_t size) : m_data(data), m_size(size) {}
+    template <class T>
+    T take() {
+        T v{};
+        const size_t n = m_pos + sizeof(T) <= m_size ? sizeof(T) : m_size - m_pos;
+        std::memcpy(&v, m_data + m_pos, n);
+        m_pos += n;
+        return v;
+    }
+    size_t left() const { return m_size - m_pos; }
+
+  private:
+    const uint8_t* m_data;
+    size_t m_size, m_pos = 0;
+};
+
+// A file of this process's own (in TMPDIR, or /tmp) that each input overwrites.
+inline std::string writeScratchFile(const uint8_t* data, size_t size, const char* extension) {
+    static const std::string path = [extension] {
+        const char* dir = std::getenv("TMPDIR");
+        return std::string(dir && *dir ? dir : "/tmp") + "/sdftrace-fuzz-" +
+               std::to_string(getpid()) + extension;
+    }();
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f) std::abort();
+    if (size && std::fwrite(data, 1, size, f) != size) std::abort();
+    std::fclose(f);
+    return path;
+}
+
+}  // namespace sdft::fuzz

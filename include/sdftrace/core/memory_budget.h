@@ -1,0 +1,29 @@
+// The memory budget: every allocation whose size a user controls (films, grids, bake arrays,
+// seeds, BVHs, shadow maps, histories) is checked against it before it is made, so that a request
+// too large fails with one line instead of an out-of-memory kill halfway through. The CLI's
+// --max-memory sets it; the default is half of this machine's physical memory.
+#pragma once
+
+#include <string>
+
+namespace sdft {
+
+double physicalMemoryBytes();
+double memoryBudgetBytes();
+// bytes <= 0 restores the default.
+void setMemoryBudgetBytes(double bytes);
+// True when the budget was set (--max-memory), not the default.
+bool memoryBudgetIsSet();
+
+// Throws InputError "<what>: needs <bytes> (<for>), more than the memory budget of <budget>
+// (<where it comes from>); <advice>" when `bytes` exceeds the budget. `what` names the flag, file
+// or JSON path that asked for it.
+void checkMemoryBudget(double bytes, const std::string& what, const std::string& forWhat,
+                       const std::string& advice);
+
+// "1.5 GiB", "820 MiB", "12 KiB", "100 bytes".
+std::string formatBytes(double bytes);
+// "8G", "8GiB", "512M", "1.5g", "123456" (bytes); false on anything else or on a size <= 0.
+bool parseByteSize(const std::string& text, double& bytes);
+
+}  // namespace sdft

@@ -1,0 +1,82 @@
+#include "sdftrace/core/memory_budget.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "sdftrace/core/error.h"
+
+namespace sdft {
+
+namespace {
+std::atomic<double> g_budget{0.0};  // 0: the default
+}
+
+double physicalMemoryBytes() {
+    return static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
+           static_cast<double>(sysconf(_SC_PAGE_SIZE));
+}
+
+double memoryBudgetBytes() {
+    const double set = g_budget.load();
+    return set > 0 ? set : 0.5 * physicalMemoryBytes();
+}
+
+void setMemoryBudgetBytes(double bytes) { g_budget.store(bytes > 0 ? bytes : 0.0); }
+
+bool memoryBudgetIsSet() { return g_budget.load() > 0; }
+
+std::string formatBytes(double bytes) {
+    char buf[64];
+    if (bytes >= 1024.0 * 1024 * 1024)
+        std::snprintf(buf, sizeof buf, "%.1f GiB", bytes / (1024.0 * 1024 * 1024));
+    else if (bytes >= 1024.0 * 1024)
+        std::snprintf(buf, sizeof buf, "%.0f MiB", bytes / (1024.0 * 1024));
+    else if (bytes >= 1024.0)
+        std::snprintf(buf, sizeof buf, "%.0f KiB", bytes / 1024.0);
+    else
+        std::snprintf(buf, sizeof buf, "%.0f bytes", bytes);
+    return buf;
+}
+
+void checkMemoryBudget(double bytes, const std::string& what, const std::string& forWhat,
+                       const std::string& advice) {
+    const double budget = memoryBudgetBytes();
+    if (!(bytes > budget)) return;
+    const std::string source = memoryBudgetIsSet() ? "--max-memory"
+                                                   : "half of this machine's " +
+                                                         formatBytes(physicalMemoryBytes()) +
+                                                         "; raise it with --max-memory";
+    throw InputError(what + ": needs " + formatBytes(bytes) + " (" + forWhat +
+                     "), more than the memory budget of " + formatBytes(budget) + " (" + source +
+                     "); " + advice);
+}
+
+bool parseByteSize(const std::string& text, double& bytes) {
+    const char* s = text.c_str();
+    char* end = nullptr;
+    const double v = std::strtod(s, &end);
+    if (end == s || !std::isfinite(v) || v <= 0) return false;
+    std::string unit(end);
+    for (char& c : unit) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    double scale = 0;
+    if (unit.empty() || unit == "b")
+        scale = 1;
+    else if (unit == "k" || unit == "kb" || unit == "kib")
+        scale = 1024.0;
+    else if (unit == "m" || unit == "mb" || unit == "mib")
+        scale = 1024.0 * 1024;
+    else if (unit == "g" || unit == "gb" || unit == "gib")
+        scale = 1024.0 * 1024 * 1024;
+    else if (unit == "t" || unit == "tb" || unit == "tib")
+        scale = 1024.0 * 1024 * 1024 * 1024;
+    if (scale == 0) return false;
+    bytes = v * scale;
+    return bytes >= 1;
+}
+
+}  // namespace sdft
