@@ -208,7 +208,7 @@ TEST(GridCli, ConvertsToAndFromOpenVdbAndRendersVdbFiles) {
     }
     RunResult bad = runCli("convert " + dir.file("f.sdfg") + " " + dir.file("f.png"), dir);
     EXPECT_NE(bad.status, 0);
-    EXPECT_NE(bad.err.find(".sdfg, .vdb"), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find(".sdfg, .vdb, .sdf (SDFGen), .raw"), std::string::npos) << bad.err;
     EXPECT_FALSE(std::filesystem::exists(dir.file("f.png")));
 }
 
@@ -271,6 +271,50 @@ TEST(GridCli, BakedTextureCoordinatesReachTheRenderer) {
     EXPECT_NE(convert.err.find("warning"), std::string::npos) << convert.err;
 }
 
+// SDFGen's .sdf and raw float32 + sidecar through convert, info and render: the same depths as
+// the .sdfg they came from (written dense, so equal samples give equal images).
+TEST(GridCli, ConvertsToAndFromSdfgenAndRawGrids) {
+    TempDir dir;
+    std::string scene = dir.write("object.json", kObject);
+    ASSERT_EQ(runCli("bake " + scene + " --res 48 --dense -o " + dir.file("f.sdfg"), dir).status, 0);
+    for (const char* ext : {".sdf", ".raw"}) {
+        const std::string out = dir.file(std::string("f") + ext);
+        RunResult to = runCli("convert " + dir.file("f.sdfg") + " " + out, dir);
+        ASSERT_EQ(to.status, 0) << to.err;
+        RunResult info = runCli("info " + out, dir);
+        ASSERT_EQ(info.status, 0) << info.err;
+        EXPECT_NE(info.out.find("48 x"), std::string::npos) << info.out;
+        RunResult back = runCli("convert " + out + " " + dir.file("back.sdfg"), dir);
+        ASSERT_EQ(back.status, 0) << back.err;
+        std::string common = std::string("render -q ") + kCamera + " ";
+        ASSERT_EQ(runCli(common + dir.file("f.sdfg") + " -o " + dir.file("a.png") +
+                             " --aov depth=" + dir.file("a.pfm"),
+                         dir)
+                      .status,
+                  0);
+        ASSERT_EQ(runCli(common + out + " -o " + dir.file("b.png") + " --aov depth=" +
+                             dir.file("b.pfm"),
+                         dir)
+                      .status,
+                  0);
+        int w, h, ch;
+        EXPECT_EQ(readPfm(dir.file("a.pfm"), w, h, ch), readPfm(dir.file("b.pfm"), w, h, ch))
+            << ext;
+    }
+}
+
+// bake scene.json --verify measures the grid against the scene's own field.
+TEST(GridCli, SceneBakeVerifiesAgainstItsField) {
+    TempDir dir;
+    std::string scene = dir.write("object.json", kObject);
+    RunResult r = runCli("bake " + scene + " --res 48 --verify -o " + dir.file("f.sdfg"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("verify field, vertices, narrow band"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("mean 0.0000, p99 0.0000, max 0.0000 voxels"), std::string::npos)
+        << "vertices hold the field itself: " << r.err;
+    EXPECT_NE(r.err.find("verify field, cell centres in the band"), std::string::npos) << r.err;
+}
+
 TEST(GridCli, BadGridInputFailsClearly) {
     TempDir dir;
     std::string scene = dir.write("object.json", kObject);
@@ -279,6 +323,8 @@ TEST(GridCli, BadGridInputFailsClearly) {
         std::vector<std::string> expected;
     };
     std::string truncated = dir.write("trunc.sdfg", "SDFG\x01\x00\x00\x00");
+    std::string shortSdf = dir.write("short.sdf", "2 2 2\n0 0 0\n0.5\n1 2 3");
+    std::string rawNoSidecar = dir.write("lonely.raw", std::string(32, '\0'));
     std::vector<Case> cases = {
         {"bake " + scene + " --res 2 -o " + dir.file("x.sdfg"), {"--res"}},
         {"bake " + scene + " --block 5 -o " + dir.file("x.sdfg"), {"--block"}},
@@ -291,6 +337,10 @@ TEST(GridCli, BadGridInputFailsClearly) {
         {"info " + truncated, {truncated, "truncated"}},
         {"render -q " + truncated + " -o " + dir.file("x.png"), {truncated, "truncated"}},
         {"info " + dir.file("missing.sdfg"), {"missing.sdfg", "cannot open"}},
+        {"info " + shortSdf, {shortSdf, "line 4: the file ends before a distance value"}},
+        {"render -q " + shortSdf + " -o " + dir.file("x.png"), {shortSdf, "line 4"}},
+        {"info " + rawNoSidecar, {rawNoSidecar + ".json", "cannot open the sidecar"}},
+        {"convert " + shortSdf + " " + dir.file("x.sdfg"), {shortSdf, "line 4"}},
     };
     for (const Case& c : cases) {
         RunResult r = runCli(c.args, dir);

@@ -179,8 +179,8 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
         {"bake " + far + " -o " + dir.file("x.sdfg"), "lies 1e+06 from the origin"},
         {"bake " + tiny + " -o " + dir.file("x.sdfg"), "spans only 1e-12"},
         // Flags that do nothing for the input are errors.
-        {"bake " + scene + " --res 16 --verify -o " + dir.file("x.sdfg"),
-         "--verify: applies to meshes only"},
+        {"bake " + scene + " --res 16 --sign parity -o " + dir.file("x.sdfg"),
+         "--sign: applies to meshes only"},
         {"bake " + scene + " --res 16 --method jfa -o " + dir.file("x.sdfg"),
          "--method: applies to meshes only"},
         {"bake " + mesh("bunny_npm.obj") + " --bounds 0,0,0,1,1,1 -o " + dir.file("x.sdfg"),

@@ -76,8 +76,7 @@ void rejectFlagsThatDoNotApply(const BakeArgs& a, bool mesh) {
     } else {
         rejectGiven(
             a,
-            {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays", "--mask",
-             "--verify"},
+            {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays", "--mask"},
             "applies to meshes only; " + a.scene + " is a scene file, sampled from its own field");
     }
     if (a.dense) rejectGiven(a, {"--block", "--band"}, "applies to sparse grids only (--dense)");
@@ -185,6 +184,20 @@ void printVerify(const char* method, const BakeVerification& v) {
                  method, 100.0 * v.wrongSignShare(), v.vertices);
 }
 
+// A scene's grid against the scene's own field f/L: at the vertices, and at cell centres where
+// the trilinear reconstruction stands in for the field.
+void printFieldVerify(const FieldVerification& v) {
+    printVerify("field, vertices", v.vertices);
+    if (v.centres.count)
+        std::fprintf(stderr,
+                     "sdftrace bake: verify field, cell centres in the band (%zu, trilinear "
+                     "reconstruction): mean %.4f, p99 %.4f, max %.4f voxels; %.4f%% of %zu centres "
+                     "with the wrong sign\n",
+                     v.centres.count, v.centres.mean, v.centres.p99, v.centres.max,
+                     v.signedCentres ? 100.0 * v.wrongSignCentres / v.signedCentres : 0.0,
+                     v.signedCentres);
+}
+
 // A mesh file, by any method of mesh_bake.h; --verify compares with the exact bake.
 int bakeMesh(const BakeArgs& a) {
     MeshBakeOptions o;
@@ -286,6 +299,7 @@ int runBake(const BakeArgs& a) {
     Grid grid = sampleGrid(tape, region, o);
     addTexcoords(a, grid, [&tape](Vec3 p) { return tape.eval(p); });
     auto t1 = std::chrono::steady_clock::now();
+    if (a.verify) printFieldVerify(verifyAgainstField(grid, tape, a.band, a.threads));
     saveGridFile(grid, a.output);
     auto t2 = std::chrono::steady_clock::now();
     size_t in = 0, out = 0, surf = 0;
@@ -343,8 +357,10 @@ void addBakeCommand(CLI::App& app, Action& action) {
         ->capture_default_str();
     cmd->add_flag(
         "--verify", args->verify,
-        "Meshes: also bake exactly and report mean / p99 / max error in voxels (all samples "
-        "and the narrow band) and the share of wrong signs");
+        "Also report mean / p99 / max error in voxels and the share of wrong signs: meshes "
+        "against an exact bake (all samples and the narrow band); scene files against the "
+        "scene's own field f/L (at the vertices, and at cell centres through the trilinear "
+        "reconstruction)");
     cmd->add_option("--sign", args->sign,
                     "Meshes: winding (generalized winding number, robust on open meshes), parity "
                     "(ray-crossing parity, closed meshes); for jfa, danielsson and edt also flood "

@@ -1,12 +1,24 @@
 // sdftrace: build and ray trace signed distance fields.
+#include <csignal>
 #include <cstdio>
 #include <exception>
 
 #include "commands.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
+#include "sdftrace/io/atomic_file.h"
+
+namespace {
+// Ctrl-C, kill, a closed terminal: no temporary output file is left behind (atomic_file.h).
+void onTerminatingSignal(int sig) {
+    sdft::removeTemporaryOutputs();
+    std::signal(sig, SIG_DFL);
+    std::raise(sig);
+}
+}  // namespace
 
 int main(int argc, char** argv) {
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, onTerminatingSignal);
     CLI::App app{"sdftrace: build and ray trace signed distance fields"};
     app.name("sdftrace");
     app.require_subcommand(1);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "sdftrace/field/grid.h"
+#include "sdftrace/field/tape.h"
 
 namespace sdft {
 
@@ -25,5 +26,17 @@ struct BakeVerification {
 
 // `exact`: the exact bake's samples on the grid's vertices (bakeExactSamples).
 BakeVerification verifyBake(const Grid& grid, const std::vector<float>& exact, float bandVoxels);
+
+// A grid sampled from a field (`sdftrace bake scene.json --verify`) against the field itself,
+// f/L: at the vertices (the sampling: zero up to the sparse grid's clamp to the band) and at cell
+// centres, where the trilinear reconstruction the tracers use stands in for the field between
+// samples (`band` there: centres with |f/L| < band; at most about 4M centres, evenly strided).
+struct FieldVerification {
+    BakeVerification vertices;
+    BakeError centres;
+    size_t wrongSignCentres = 0, signedCentres = 0;  // centres more than 1% of a voxel from f = 0
+};
+FieldVerification verifyAgainstField(const Grid& grid, const Tape& tape, float bandVoxels,
+                                     int threads = 0);
 
 }  // namespace sdft

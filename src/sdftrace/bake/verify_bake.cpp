@@ -1,10 +1,14 @@
 #include "sdftrace/bake/verify_bake.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 
 #include "sdftrace/core/macros.h"
+#include "sdftrace/exec/thread_arena.h"
+#include "sdftrace/field/sample_grid.h"
 
 namespace sdft {
 
@@ -59,6 +63,44 @@ BakeVerification verifyBake(const Grid& grid, const std::vector<float>& exact, f
             }
     r.all = summarize(all);
     r.band = summarize(near);
+    return r;
+}
+
+FieldVerification verifyAgainstField(const Grid& grid, const Tape& tape, float bandVoxels,
+                                     int threads) {
+    const GridShape& s = grid.shape();
+    FieldVerification r;
+    r.vertices = verifyBake(grid, sampleVertices(tape, s, threads), bandVoxels);
+    const float h = s.voxelSize, band = bandVoxels * h, invL = 1.0f / tape.lipschitz();
+    // Every cell up to ~4M, else every stride-th along each axis.
+    const double cells = static_cast<double>(s.cells[0]) * s.cells[1] * s.cells[2];
+    const int stride = std::max(1, static_cast<int>(std::ceil(std::cbrt(cells / 4.0e6))));
+    const GridView v = grid.view();
+    std::vector<std::vector<double>> errors(static_cast<size_t>(s.cells[2]));
+    std::vector<size_t> wrong(errors.size(), 0), signedCount(errors.size(), 0);
+    ThreadArena arena(threads);
+    arena.execute([&] {
+        tbb::parallel_for(0, s.cells[2], [&](int k) {
+            if (k % stride) return;
+            for (int j = 0; j < s.cells[1]; j += stride)
+                for (int i = 0; i < s.cells[0]; i += stride) {
+                    const Vec3 p = s.origin + Vec3(i + 0.5f, j + 0.5f, k + 0.5f) * h;
+                    const float exact = tape.eval(p) * invL, baked = v.interpolate(p);
+                    if (std::fabs(exact) > 0.01f * h) {
+                        wrong[k] += (baked < 0) != (exact < 0);
+                        ++signedCount[k];
+                    }
+                    if (std::fabs(exact) < band) errors[k].push_back(std::fabs(baked - exact) / h);
+                }
+        });
+    });
+    std::vector<double> all;
+    for (size_t k = 0; k < errors.size(); ++k) {
+        all.insert(all.end(), errors[k].begin(), errors[k].end());
+        r.wrongSignCentres += wrong[k];
+        r.signedCentres += signedCount[k];
+    }
+    r.centres = summarize(all);
     return r;
 }
 

@@ -3,6 +3,7 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfOutputFile.h>
 
 #include <algorithm>
@@ -22,6 +23,26 @@
 
 namespace sdft {
 
+namespace {
+// An OpenEXR output stream into memory.
+class MemoryStream : public Imf::OStream {
+  public:
+    MemoryStream() : Imf::OStream("<memory>") {}
+    void write(const char c[], int n) override {
+        if (m_pos + n > m_bytes.size()) m_bytes.resize(m_pos + n);
+        std::memcpy(m_bytes.data() + m_pos, c, n);
+        m_pos += n;
+    }
+    uint64_t tellp() override { return m_pos; }
+    void seekp(uint64_t pos) override { m_pos = pos; }
+    const std::vector<char>& bytes() const { return m_bytes; }
+
+  private:
+    std::vector<char> m_bytes;
+    uint64_t m_pos = 0;
+};
+}  // namespace
+
 ImageFormat imageFormatFromPath(const std::string& path, const std::string& what) {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
@@ -34,7 +55,7 @@ ImageFormat imageFormatFromPath(const std::string& path, const std::string& what
 
 void writeExr(const std::string& path, int w, int h, int channels, const std::vector<float>& data,
               const std::vector<std::string>& names) {
-    AtomicOutput out(path);
+    MemoryStream stream;
     try {
         Imf::Header header(w, h);
         Imf::FrameBuffer fb;
@@ -46,39 +67,41 @@ void writeExr(const std::string& path, int w, int h, int channels, const std::ve
                                  const_cast<char*>(reinterpret_cast<const char*>(data.data() + c)),
                                  xStride, yStride));
         }
-        Imf::OutputFile file(out.tempPath().c_str(), header);
+        Imf::OutputFile file(stream, header);
         file.setFrameBuffer(fb);
         file.writePixels(h);
     } catch (const std::exception& e) {
         throw InputError(path + ": cannot write EXR (" + e.what() + ")");
     }
-    out.commit();
+    // Encoded in memory, then written with every write checked (OpenEXR's file stream does not
+    // report a failed flush when it closes).
+    writeFileAtomically(path, stream.bytes().data(), stream.bytes().size());
 }
 
 void writePfm(const std::string& path, int w, int h, int channels, const std::vector<float>& data) {
     AtomicOutput out(path);
-    FILE* f = std::fopen(out.tempPath().c_str(), "wb");
-    if (!f) throw InputError(path + ": cannot open for writing (" + std::strerror(errno) + ")");
     // Header; a negative scale means little-endian. Rows run bottom to top.
-    std::fprintf(f, "%s\n%d %d\n-1.0\n", channels == 3 ? "PF" : "Pf", w, h);
-    bool ok = true;
-    for (int y = h - 1; y >= 0 && ok; --y) {
-        const float* row = data.data() + static_cast<size_t>(y) * w * channels;
-        ok = std::fwrite(row, sizeof(float), static_cast<size_t>(w) * channels, f) ==
-             static_cast<size_t>(w) * channels;
-    }
-    ok = (std::fclose(f) == 0) && ok;
-    if (!ok) throw InputError(path + ": write failed");
+    const std::string header = std::string(channels == 3 ? "PF" : "Pf") + "\n" + std::to_string(w) +
+                               " " + std::to_string(h) + "\n-1.0\n";
+    out.write(header.data(), header.size());
+    for (int y = h - 1; y >= 0; --y)
+        out.write(data.data() + static_cast<size_t>(y) * w * channels,
+                  static_cast<size_t>(w) * channels * sizeof(float));
     out.commit();
 }
 
 void writePng(const std::string& path, int w, int h, int channels,
               const std::vector<unsigned char>& data) {
-    AtomicOutput out(path);
-    if (!stbi_write_png(out.tempPath().c_str(), w, h, channels, data.data(), w * channels)) {
-        throw InputError(path + ": cannot write PNG");
-    }
-    out.commit();
+    // Encoded in memory (stb does not check its own fwrite), then written with every write checked.
+    std::vector<unsigned char> png;
+    auto append = [](void* context, void* bytes, int size) {
+        auto* v = static_cast<std::vector<unsigned char>*>(context);
+        v->insert(v->end(), static_cast<unsigned char*>(bytes),
+                  static_cast<unsigned char*>(bytes) + size);
+    };
+    if (!stbi_write_png_to_func(append, &png, w, h, channels, data.data(), w * channels))
+        throw InputError(path + ": cannot encode PNG");
+    writeFileAtomically(path, png.data(), png.size());
 }
 
 namespace {

@@ -101,22 +101,9 @@ void saveRawGrid(const Grid& grid, const std::string& path) {
                         {"dims", {s.vertices(0), s.vertices(1), s.vertices(2)}},
                         {"origin", {s.origin.x, s.origin.y, s.origin.z}},
                         {"voxel_size", s.voxelSize}};
-    auto write = [](const std::string& target, const void* data, size_t size) {
-        AtomicOutput out(target);
-        std::FILE* f = std::fopen(out.tempPath().c_str(), "wb");
-        if (!f)
-            throw InputError(target + ": cannot open for writing (" + std::strerror(errno) + ")");
-        bool ok = std::fwrite(data, 1, size, f) == size;
-        const int writeError = ok ? 0 : errno;
-        const int closeError = std::fclose(f) == 0 ? 0 : errno;
-        if (!ok || closeError)
-            throw InputError(target + ": write failed (" +
-                             std::strerror(writeError ? writeError : closeError) + ")");
-        out.commit();
-    };
-    write(path, samples.data(), samples.size() * sizeof(float));
+    writeFileAtomically(path, samples.data(), samples.size() * sizeof(float));
     const std::string text = j.dump(2) + "\n";
-    write(rawSidecarPath(path), text.data(), text.size());
+    writeFileAtomically(rawSidecarPath(path), text.data(), text.size());
 }
 
 }  // namespace sdft

@@ -83,27 +83,17 @@ void saveSdfg(const Grid& grid, const std::string& path) {
     h.checksum = sum;
 
     AtomicOutput out(path);
-    File file{std::fopen(out.tempPath().c_str(), "wb")};
-    if (!file.f)
-        throw InputError(path + ": cannot open for writing (" + std::strerror(errno) + ")");
-    bool ok = std::fwrite(&h, sizeof h, 1, file.f) == 1;
+    out.write(&h, sizeof h);
     if (grid.kind() == GridKind::Dense) {
-        ok = ok && std::fwrite(grid.samples().data(), sizeof(float), grid.samples().size(),
-                               file.f) == grid.samples().size();
+        out.write(grid.samples().data(), grid.samples().size() * sizeof(float));
     } else {
-        ok = ok && std::fwrite(grid.flags().data(), 1, grid.flags().size(), file.f) ==
-                       grid.flags().size();
-        ok = ok && std::fwrite(grid.blockSamples().data(), sizeof(float),
-                               grid.blockSamples().size(), file.f) == grid.blockSamples().size();
+        out.write(grid.flags().data(), grid.flags().size());
+        out.write(grid.blockSamples().data(), grid.blockSamples().size() * sizeof(float));
     }
     if (tex) {
-        ok = ok && std::fwrite(texHeader, sizeof texHeader, 1, file.f) == 1;
-        ok = ok && std::fwrite(grid.texcoords().data(), sizeof(float), grid.texcoords().size(),
-                               file.f) == grid.texcoords().size();
+        out.write(texHeader, sizeof texHeader);
+        out.write(grid.texcoords().data(), grid.texcoords().size() * sizeof(float));
     }
-    ok = std::fclose(file.f) == 0 && ok;
-    file.f = nullptr;
-    if (!ok) throw InputError(path + ": write failed (disk full?)");
     out.commit();
 }
 

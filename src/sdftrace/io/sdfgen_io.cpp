@@ -99,26 +99,23 @@ void saveSdfgen(const Grid& grid, const std::string& path) {
     const GridShape& s = grid.shape();
     const std::vector<float> samples = grid.vertexSamples();
     AtomicOutput out(path);
-    std::FILE* f = std::fopen(out.tempPath().c_str(), "wb");
-    if (!f) throw InputError(path + ": cannot open for writing (" + std::strerror(errno) + ")");
-    bool ok = std::fprintf(f, "%d %d %d\n%.9g %.9g %.9g\n%.9g\n", s.vertices(0), s.vertices(1),
-                           s.vertices(2), s.origin.x, s.origin.y, s.origin.z, s.voxelSize) > 0;
+    char header[256];
+    const int n = std::snprintf(header, sizeof header, "%d %d %d\n%.9g %.9g %.9g\n%.9g\n",
+                                s.vertices(0), s.vertices(1), s.vertices(2), s.origin.x, s.origin.y,
+                                s.origin.z, s.voxelSize);
+    out.write(header, static_cast<size_t>(n));
     std::vector<char> buffer;
     buffer.reserve(1 << 20);
     char number[32];
-    for (size_t i = 0; ok && i < samples.size(); ++i) {
+    for (size_t i = 0; i < samples.size(); ++i) {
         auto [end, ec] = std::to_chars(number, number + sizeof number, samples[i]);
         buffer.insert(buffer.end(), number, end);
         buffer.push_back('\n');
         if (buffer.size() >= (1 << 20) - 64 || i + 1 == samples.size()) {
-            ok = std::fwrite(buffer.data(), 1, buffer.size(), f) == buffer.size();
+            out.write(buffer.data(), buffer.size());
             buffer.clear();
         }
     }
-    const int closeError = std::fclose(f) == 0 ? 0 : errno;
-    if (!ok || closeError)
-        throw InputError(path + ": write failed (" +
-                         std::strerror(closeError ? closeError : errno) + ")");
     out.commit();
 }
 

@@ -1,11 +1,13 @@
 #include "sdftrace/io/vdb_io.h"
 
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/SignedFloodFill.h>
 
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <sstream>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
@@ -133,16 +135,16 @@ void saveVdb(const Grid& grid, const std::string& path) {
                 }
     }
     openvdb::tools::signedFloodFill(out->tree());
-    AtomicOutput file(path);
+    // Encoded in memory, then written with every write checked.
+    std::ostringstream bytes(std::ios::binary);
     try {
-        openvdb::io::File f(file.tempPath());
         openvdb::GridPtrVec grids{out};
-        f.write(grids);
-        f.close();
+        openvdb::io::Stream(bytes).write(grids);
     } catch (const std::exception& e) {
         throw InputError(path + ": cannot write OpenVDB file (" + e.what() + ")");
     }
-    file.commit();
+    const std::string data = bytes.str();
+    writeFileAtomically(path, data.data(), data.size());
 }
 
 }  // namespace sdft

@@ -1,0 +1,60 @@
+#include "sdftrace/io/atomic_file.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "sdftrace/core/error.h"
+
+namespace sdft {
+namespace {
+
+std::string tempPath(const std::string& name) {
+    return (std::filesystem::temp_directory_path() /
+            ("sdftrace-atomic-" + std::to_string(::getpid()) + "-" + name))
+        .string();
+}
+
+TEST(AtomicOutput, AppearsWholeOnCommitAndNotAtAllOtherwise) {
+    const std::string path = tempPath("a.bin");
+    {
+        AtomicOutput out(path);
+        out.write("abc", 3);
+        EXPECT_FALSE(std::filesystem::exists(path));
+        EXPECT_TRUE(std::filesystem::exists(out.tempPath()));
+    }
+    EXPECT_FALSE(std::filesystem::exists(path)) << "no commit, no file";
+    writeFileAtomically(path, "abcd", 4);
+    EXPECT_EQ(std::filesystem::file_size(path), 4u);
+    std::filesystem::remove(path);
+}
+
+// What the CLI's SIGINT / SIGTERM handler calls: every live temporary file goes.
+TEST(AtomicOutput, TemporaryFilesAreRemovedForASignal) {
+    AtomicOutput a(tempPath("x.bin")), b(tempPath("y.bin"));
+    a.write("1", 1);
+    b.write("2", 1);
+    removeTemporaryOutputs();
+    EXPECT_FALSE(std::filesystem::exists(a.tempPath()));
+    EXPECT_FALSE(std::filesystem::exists(b.tempPath()));
+}
+
+TEST(AtomicOutput, AVanishedDirectoryIsNamed) {
+    const std::string dir = tempPath("gone");
+    std::filesystem::create_directory(dir);
+    AtomicOutput out(dir + "/f.bin");
+    std::filesystem::remove_all(dir);
+    try {
+        out.write("abc", 3);
+        out.commit();
+        FAIL() << "wrote into a directory that does not exist";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("the directory " + dir + " no longer exists"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace sdft
