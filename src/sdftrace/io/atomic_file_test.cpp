@@ -6,15 +6,12 @@
 #include <filesystem>
 
 #include "sdftrace/core/error.h"
+#include "test_files.h"
 
 namespace sdft {
 namespace {
 
-std::string tempPath(const std::string& name) {
-    return (std::filesystem::temp_directory_path() /
-            ("sdftrace-atomic-" + std::to_string(::getpid()) + "-" + name))
-        .string();
-}
+using testing::tempPath;
 
 TEST(AtomicOutput, AppearsWholeOnCommitAndNotAtAllOtherwise) {
     const std::string path = tempPath("a.bin");

@@ -9,15 +9,12 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/sample_grid.h"
+#include "test_files.h"
 
 namespace sdft {
 namespace {
 
-std::string tempPath(const std::string& name) {
-    return (std::filesystem::temp_directory_path() /
-            ("sdftrace-raw-" + std::to_string(::getpid()) + "-" + name))
-        .string();
-}
+using testing::tempPath;
 
 TEST(RawGridIo, RoundTripsAndIsWhatNumpyReads) {
     const NodePtr box = node::box({0.4f, 0.3f, 0.2f});

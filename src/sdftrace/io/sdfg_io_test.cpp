@@ -10,15 +10,12 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/sample_grid.h"
+#include "test_files.h"
 
 namespace sdft {
 namespace {
 
-std::string tempPath(const std::string& name) {
-    return (std::filesystem::temp_directory_path() /
-            ("sdftrace-sdfg-" + std::to_string(::getpid()) + "-" + name))
-        .string();
-}
+using testing::tempPath;
 
 Grid makeGrid(GridKind kind) {
     Tape tape = compileTape(node::torus(0.7f, 0.2f), {.boundsCulling = false});

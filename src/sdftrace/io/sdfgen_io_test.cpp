@@ -9,15 +9,12 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/field/sample_grid.h"
+#include "test_files.h"
 
 namespace sdft {
 namespace {
 
-std::string tempPath(const std::string& name) {
-    return (std::filesystem::temp_directory_path() /
-            ("sdftrace-sdfgen-" + std::to_string(::getpid()) + "-" + name))
-        .string();
-}
+using testing::tempPath;
 
 Grid torusGrid(GridKind kind) {
     const NodePtr torus = node::torus(0.7f, 0.2f);

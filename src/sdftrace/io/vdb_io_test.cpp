@@ -12,15 +12,12 @@
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/io/grid_file.h"
+#include "test_files.h"
 
 namespace sdft {
 namespace {
 
-std::string tempPath(const std::string& name) {
-    return (std::filesystem::temp_directory_path() /
-            ("sdftrace-vdb-" + std::to_string(::getpid()) + "-" + name))
-        .string();
-}
+using testing::tempPath;
 
 Grid torusGrid(GridKind kind) {
     NodePtr n = node::unite(
