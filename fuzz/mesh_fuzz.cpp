@@ -33,7 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         MeshBakeMethod::SeparableEdt, MeshBakeMethod::Rtsdf};
     o.method = kMethods[(flags >> 1) % 5];
     o.sign = (flags & 0x10u) ? SignMethod::RayParity : SignMethod::WindingNumber;
-    o.sampling.resolution = 8 + (flags >> 5) * 2;
+    o.sampling.resolution = 8 + ((flags >> 5) & 1u) * 4;
     o.sampling.kind = (flags >> 4) & 1u ? GridKind::Dense : GridKind::Sparse;
     o.sampling.threads = 1;
     try {

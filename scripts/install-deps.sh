@@ -9,7 +9,8 @@ packages=(
     nlohmann-json3-dev    # scene files
     libcli11-dev          # command line
     libopenvdb-dev        # .vdb level sets (interop) and the OpenVDB baseline in bench/
-    libboost-iostreams-dev libblosc-dev  # needed by OpenVDB's CMake module, not pulled in by it
+    libboost-iostreams-dev libblosc-dev  # OpenVDB's CMake module needs them; sdftrace's .vdb reader too
+    zlib1g-dev            # sdftrace's .vdb reader (zip-compressed level sets)
     libassimp-dev         # mesh loading (OBJ, PLY, STL, OFF, glTF)
     libembree-dev         # BVH closest-point queries and ray casts for mesh baking
     libgtest-dev          # tests

@@ -65,9 +65,16 @@ bool closestCallback(RTCPointQueryFunctionArguments* args) {
 }
 }  // namespace
 
+// One Embree device for the process: starting one costs milliseconds (it sets up its task
+// scheduler), more than building a BVH of a small mesh; devices are thread-safe.
+static RTCDevice sharedDevice() {
+    static RTCDevice device = rtcNewDevice(nullptr);
+    if (!device) throw InputError("cannot start Embree (rtcNewDevice failed)");
+    return device;
+}
+
 MeshBvh::MeshBvh(const TriangleMesh& mesh) : m_impl(std::make_unique<Impl>()), m_mesh(mesh) {
-    m_impl->device = rtcNewDevice(nullptr);
-    if (!m_impl->device) throw InputError("cannot start Embree (rtcNewDevice failed)");
+    m_impl->device = sharedDevice();
     m_impl->scene = rtcNewScene(m_impl->device);
     rtcSetSceneBuildQuality(m_impl->scene, RTC_BUILD_QUALITY_HIGH);
     RTCGeometry geom = rtcNewGeometry(m_impl->device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -95,7 +102,6 @@ MeshBvh::MeshBvh(const TriangleMesh& mesh) : m_impl(std::make_unique<Impl>()), m
 
 MeshBvh::~MeshBvh() {
     if (m_impl->scene) rtcReleaseScene(m_impl->scene);
-    if (m_impl->device) rtcReleaseDevice(m_impl->device);
 }
 
 MeshBvh::Closest MeshBvh::closest(Vec3 p, float radius) const {

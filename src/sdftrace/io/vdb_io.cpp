@@ -3,15 +3,18 @@
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/SignedFloodFill.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <mutex>
 #include <sstream>
+#include <unordered_set>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/io/atomic_file.h"
+#include "vdb_reader.h"
 
 namespace sdft {
 
@@ -22,76 +25,150 @@ void initOpenVdb() {
 }
 }  // namespace
 
+namespace {
+
+// The active voxels' index bounds (leaves' value masks, active tiles); false if none.
+bool activeBounds(const vdb::Tree& t, std::array<int32_t, 3>& lo, std::array<int32_t, 3>& hi) {
+    bool any = false;
+    auto include = [&](int32_t x, int32_t y, int32_t z, int32_t extent) {
+        const int32_t p[3] = {x, y, z};
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = any ? std::min(lo[a], p[a]) : p[a];
+            hi[a] = any ? std::max(hi[a], p[a] + extent - 1) : p[a] + extent - 1;
+        }
+        any = true;
+    };
+    for (const vdb::Leaf& leaf : t.leaves)
+        for (int i = 0; i < 512; ++i)
+            if ((leaf.active[i >> 6] >> (i & 63)) & 1u)
+                include(leaf.origin[0] + (i >> 6), leaf.origin[1] + ((i >> 3) & 7),
+                        leaf.origin[2] + (i & 7), 1);
+    for (const vdb::RootTile& tile : t.tiles)
+        if (tile.active) include(tile.origin[0], tile.origin[1], tile.origin[2], 4096);
+    auto tiles = [&](const std::vector<vdb::Internal>& nodes, int log2, int shift) {
+        for (const vdb::Internal& n : nodes)
+            for (int i = 0; i < (1 << (3 * log2)); ++i)
+                if (((n.valueMask[i >> 6] >> (i & 63)) & 1u) && n.children[i] < 0)
+                    include(n.origin[0] + ((i >> (2 * log2)) << shift),
+                            n.origin[1] + (((i >> log2) & ((1 << log2) - 1)) << shift),
+                            n.origin[2] + ((i & ((1 << log2) - 1)) << shift), 1 << shift);
+    };
+    tiles(t.upper, 5, 7);
+    tiles(t.lower, 4, 3);
+    return any;
+}
+
+}  // namespace
+
+// The tree straight into a sparse block grid: blocks that touch a leaf (or whose corners are near
+// or of both signs) get their samples from the tree; every other block lies in one tile region
+// and takes its flag from the sign there. Same grid as sampling the dense active region and
+// sparsifying it (Grid::sparseFromDense), without the dense array.
 Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
-    initOpenVdb();
-    openvdb::GridPtrVecPtr grids;
-    try {
-        openvdb::io::File file(path);
-        file.open();
-        grids = file.getGrids();
-        file.close();
-    } catch (const std::bad_alloc&) {
-        // OpenVDB allocates the sizes a file states; a corrupt one can ask for exabytes (refused
-        // by the allocation guard of the CLI once over the memory budget).
-        throw InputError(path + ": cannot read OpenVDB file: a size in it asks for more memory " +
-                         "than the budget of " + formatBytes(memoryBudgetBytes()) +
-                         " (a corrupt file, or raise --max-memory)");
-    } catch (const std::exception& e) {
-        throw InputError(path + ": cannot read OpenVDB file (" + e.what() + ")");
-    }
-    openvdb::FloatGrid::Ptr grid;
-    for (const auto& g : *grids) {
-        auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
-        if (!f) continue;
-        if (!grid || (f->getGridClass() == openvdb::GRID_LEVEL_SET &&
-                      grid->getGridClass() != openvdb::GRID_LEVEL_SET))
-            grid = f;
-    }
-    if (!grid)
-        throw InputError(path + ": no float grid in the file (accepted: a FloatGrid level set)");
-    const openvdb::math::Transform& xf = grid->transform();
-    openvdb::Vec3d vs = xf.voxelSize();
-    if (!xf.isLinear() || std::fabs(vs[0] - vs[1]) > 1e-6 * vs[0] ||
-        std::fabs(vs[0] - vs[2]) > 1e-6 * vs[0]) {
-        throw InputError(path + ": grid '" + grid->getName() +
-                         "' has a non-uniform or non-linear transform (accepted: uniform voxels)");
-    }
-    openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
-    if (box.empty())
-        throw InputError(path + ": grid '" + grid->getName() + "' has no active voxels");
-    openvdb::Coord dim = box.dim();
-    for (int a = 0; a < 3; ++a) {
-        if (dim[a] < 2 || dim[a] > 32768)
-            throw InputError(path + ": active region of " + std::to_string(dim[a]) +
-                             " voxels along an axis (accepted: 2 to 32768)");
-    }
+    const vdb::FloatGrid g = vdb::readVdbFile(path);
+    const vdb::Tree& t = g.tree;
+    std::array<int32_t, 3> lo{}, hi{};
+    if (!activeBounds(t, lo, hi))
+        throw InputError(path + ": grid '" + g.name + "' has no active voxels");
     GridShape shape;
-    const float h = static_cast<float>(vs[0]);
-    openvdb::Vec3d origin = xf.indexToWorld(box.min());
+    const float h = static_cast<float>(g.voxelSize);
     for (int a = 0; a < 3; ++a) {
-        shape.cells[a] = dim[a] - 1;
-        shape.origin[a] = static_cast<float>(origin[a]);
+        const int64_t dim = static_cast<int64_t>(hi[a]) - lo[a] + 1;
+        if (dim < 2 || dim > 32768)
+            throw InputError(path + ": active region of " + std::to_string(dim) +
+                             " voxels along an axis (accepted: 2 to 32768)");
+        shape.cells[a] = static_cast<int>(dim - 1);
+        shape.origin[a] = static_cast<float>(g.translation[a] + lo[a] * g.voxelSize);
+        if (!(std::fabs(shape.origin[a]) <= kMaxCoordinate))
+            throw InputError(path + ": the grid lies beyond +-1e9");
     }
     shape.voxelSize = h;
-    checkMemoryBudget(2.0 * static_cast<double>(shape.vertexCount()) * sizeof(float), path,
-                      "the active region of " + std::to_string(dim[0]) + "x" +
-                          std::to_string(dim[1]) + "x" + std::to_string(dim[2]) +
-                          " voxels, imported through a dense array",
+    for (const vdb::Leaf& leaf : t.leaves)
+        for (float v : leaf.values)
+            if (!std::isfinite(v))
+                throw InputError(path + ": non-finite values in grid '" + g.name + "'");
+    const int B = options.blockSize, V = B + 1;
+    const float bandVoxels = std::max(options.minBandVoxels, std::fabs(t.background) / h * 0.999f);
+    const float band = bandVoxels * h;
+    int blocks[3];
+    for (int a = 0; a < 3; ++a) blocks[a] = (shape.cells[a] + B - 1) / B;
+    const size_t numBlocks = static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2];
+    checkMemoryBudget(static_cast<double>(numBlocks) * 5 +
+                          static_cast<double>(t.leaves.size()) * 8 * V * V * V * sizeof(float),
+                      path, "the sparse grid's block tables and surface blocks",
                       "resample the level set coarser");
-    std::vector<float> samples(shape.vertexCount());
-    auto acc = grid->getConstAccessor();
-    size_t n = 0;
-    for (int k = 0; k < dim[2]; ++k)
-        for (int j = 0; j < dim[1]; ++j)
-            for (int i = 0; i < dim[0]; ++i)
-                samples[n++] = acc.getValue(box.min().offsetBy(i, j, k));
-    for (float v : samples)
-        if (!std::isfinite(v))
-            throw InputError(path + ": non-finite values in grid '" + grid->getName() + "'");
-    // Samples equal to the background are outside the band by definition; keep rounding in
-    // band * h from making them look near.
-    float band = std::max(options.minBandVoxels, std::fabs(grid->background()) / h * 0.999f);
-    return Grid::sparseFromDense(shape, samples, options.blockSize, band);
+    std::unordered_set<uint64_t> leafKeys;
+    auto key = [](int32_t x, int32_t y, int32_t z) {
+        return (static_cast<uint64_t>(static_cast<uint32_t>(x) >> 3) & 0x1fffff) << 42 |
+               (static_cast<uint64_t>(static_cast<uint32_t>(y) >> 3) & 0x1fffff) << 21 |
+               (static_cast<uint64_t>(static_cast<uint32_t>(z) >> 3) & 0x1fffff);
+    };
+    for (const vdb::Leaf& leaf : t.leaves)
+        leafKeys.insert(key(leaf.origin[0], leaf.origin[1], leaf.origin[2]));
+    // Vertex (i, j, k), clamped to the grid as GridView::vertex clamps, is voxel lo + (i, j, k).
+    auto value = [&](int i, int j, int k) {
+        return t.value(lo[0] + std::min(i, shape.cells[0]), lo[1] + std::min(j, shape.cells[1]),
+                       lo[2] + std::min(k, shape.cells[2]));
+    };
+    std::vector<uint8_t> flags(numBlocks);
+    std::vector<std::vector<float>> slabSamples(blocks[2]);
+    tbb::parallel_for(0, blocks[2], [&](int bk) {
+        std::vector<float> local(static_cast<size_t>(V) * V * V);
+        for (int bj = 0; bj < blocks[1]; ++bj)
+            for (int bi = 0; bi < blocks[0]; ++bi) {
+                const int b[3] = {bi, bj, bk};
+                bool touches = false;
+                for (int corner = 0; corner < 8 && !touches; ++corner) {
+                    int32_t c[3];
+                    for (int a = 0; a < 3; ++a)
+                        c[a] = lo[a] + std::min(b[a] * B + ((corner >> a) & 1) * B, shape.cells[a]);
+                    touches = leafKeys.count(key(c[0], c[1], c[2])) > 0;
+                }
+                bool anyNeg = false, anyPos = false, near = false;
+                if (!touches) {
+                    // One tile region: its corners say everything.
+                    for (int corner = 0; corner < 8; ++corner) {
+                        const float v =
+                            value(bi * B + (corner & 1) * B, bj * B + ((corner >> 1) & 1) * B,
+                                  bk * B + ((corner >> 2) & 1) * B);
+                        anyNeg |= v < 0;
+                        anyPos |= v >= 0;
+                        near |= std::fabs(v) < band;
+                    }
+                }
+                if (touches || near || (anyNeg && anyPos)) {
+                    anyNeg = anyPos = near = false;
+                    for (int k = 0; k < V; ++k)
+                        for (int j = 0; j < V; ++j)
+                            for (int i = 0; i < V; ++i) {
+                                float v = value(bi * B + i, bj * B + j, bk * B + k);
+                                v = v < 0 ? -std::fmin(-v, band) : std::fmin(v, band);
+                                local[(static_cast<size_t>(k) * V + j) * V + i] = v;
+                                anyNeg |= v < 0;
+                                anyPos |= v >= 0;
+                                near |= std::fabs(v) < band;
+                            }
+                }
+                const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
+                if (near || (anyNeg && anyPos)) {
+                    flags[block] = static_cast<uint8_t>(BlockFlag::Surface);
+                    slabSamples[bk].insert(slabSamples[bk].end(), local.begin(), local.end());
+                } else {
+                    flags[block] =
+                        static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
+                }
+            }
+    });
+    std::vector<float> samples;
+    size_t total = 0;
+    for (const auto& s : slabSamples) total += s.size();
+    samples.reserve(total);
+    for (auto& s : slabSamples) {
+        samples.insert(samples.end(), s.begin(), s.end());
+        std::vector<float>().swap(s);
+    }
+    return Grid::sparseFromBuffers(shape, B, (bandVoxels - 1) * h, std::move(flags),
+                                   std::move(samples), path);
 }
 
 void saveVdb(const Grid& grid, const std::string& path) {
