@@ -67,6 +67,11 @@ INSTANTIATE_TEST_SUITE_P(
                 {"shadow_map_resolution 8192: needs", "more than the memory budget of 256 MiB"}},
         BadCase{
             "max_memory_not_a_size", "", "--max-memory 2X", {"--max-memory: 2X: expected a size"}},
+        BadCase{"temporal_history_over_memory_budget",
+                "",
+                "--frames 4 --max-memory 20M",
+                {"--frames: needs 26 MiB (temporal accumulation of 800x450 frames",
+                 "more than the memory budget of 20 MiB (--max-memory)"}},
         BadCase{"malformed_json",
                 "{\"objects\": [ {\"type\": \"sphere\", }",
                 "",

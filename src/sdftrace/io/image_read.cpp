@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 
 #define STB_IMAGE_STATIC
 #define STB_IMAGE_IMPLEMENTATION
@@ -37,6 +38,10 @@ void checkSize(int w, int h, const std::string& where) {
                          " pixels; accepted: 1 to " + std::to_string(kMaxSide) +
                          " per side, at most 2^28 pixels");
     }
+    // The decoded image (up to 4 floats a pixel while decoding) and its RGB floats.
+    checkMemoryBudget(28.0 * w * h, where,
+                      "a " + std::to_string(w) + " x " + std::to_string(h) + " texture image",
+                      "use a smaller image");
 }
 
 TextureImage readExr(const std::string& path, const std::string& where) {

@@ -113,10 +113,15 @@ struct Reader {
     bool half = false;
     float background = 0;
 
+    // memcpy, also for zero bytes into an empty buffer (no null pointer handed to memcpy).
+    static void copy(char* out, const char* in, uint64_t bytes) {
+        if (bytes) std::memcpy(out, in, bytes);
+    }
+
     // io::readData: `bytes` bytes of values, zipped, blosc-compressed or plain.
     void readData(char* out, uint64_t bytes) {
         if (!(compression & (kZip | kBlosc))) {
-            std::memcpy(out, c.take(bytes, "values"), bytes);
+            copy(out, c.take(bytes, "values"), bytes);
             return;
         }
         const int64_t stored = c.get<int64_t>("compressed size");
@@ -124,7 +129,7 @@ struct Reader {
             if (static_cast<uint64_t>(-stored) != bytes)
                 c.fail("uncompressed block of " + std::to_string(-stored) + " bytes, expected " +
                        std::to_string(bytes));
-            std::memcpy(out, c.take(bytes, "values"), bytes);
+            copy(out, c.take(bytes, "values"), bytes);
             return;
         }
         const char* src = c.take(static_cast<uint64_t>(stored), "compressed values");
@@ -136,10 +141,11 @@ struct Reader {
             if (nbytes < bytes || nbytes > bytes + 256)
                 c.fail("blosc block of " + std::to_string(nbytes) + " bytes, expected " +
                        std::to_string(bytes));
+            if (nbytes == 0) return;
             std::vector<char> tmp(nbytes);
             if (blosc_decompress_ctx(src, tmp.data(), nbytes, 1) != static_cast<int>(nbytes))
                 c.fail("corrupt blosc block");
-            std::memcpy(out, tmp.data(), bytes);
+            copy(out, tmp.data(), bytes);
         } else {
             uLongf outLen = static_cast<uLongf>(bytes);
             if (uncompress(reinterpret_cast<Bytef*>(out), &outLen,
@@ -182,7 +188,8 @@ struct Reader {
             readData(reinterpret_cast<char*>(values.data()), stored * 4ull);
         }
         if (stored == count) {
-            std::memcpy(dest, values.data(), count * sizeof(float));
+            copy(reinterpret_cast<char*>(dest), reinterpret_cast<const char*>(values.data()),
+                 count * sizeof(float));
             return;
         }
         for (int i = 0, t = 0; i < count; ++i) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/math/sampling.h"
 
 namespace sdft {
@@ -45,6 +46,11 @@ RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptio
     const bool moving = o.orbitDegrees != 0;
     const float alpha = o.alpha > 0 ? o.alpha : (moving ? 0.9f : 0.0f);
     RenderStats total;
+    // A frame's film besides the output film, and the colour history and its reprojection.
+    checkMemoryBudget(Film::bytesNeeded(w, h) + 2.0 * 3 * sizeof(float) * w * h, "--frames",
+                      "temporal accumulation of " + std::to_string(w) + "x" + std::to_string(h) +
+                          " frames (a second film and the colour history)",
+                      "render a smaller image");
     std::vector<float> history;
     Camera previous(plan.camera);
     for (int k = 0; k < std::max(1, o.frames); ++k) {
