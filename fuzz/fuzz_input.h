@@ -10,6 +10,8 @@
 #include <cstring>
 #include <string>
 
+#include "sdftrace/core/memory_budget.h"
+
 namespace sdft::fuzz {
 
 // Consumes the input from the front; past the end every read returns zeros.
@@ -30,6 +32,14 @@ class Input {
     const uint8_t* m_data;
     size_t m_size, m_pos = 0;
 };
+
+// Fuzz inputs are at most a few kilobytes; a budget of 64 MiB makes a structure that asks for
+// more (a grid of 10^9 blocks from a 4 KB file) a quick InputError rather than a long allocation or
+// loop. What the budget refuses is tested by the budget tests; the targets look for crashes.
+inline void limitMemoryForFuzzing() {
+    static const bool once = (setMemoryBudgetBytes(64.0 * 1024 * 1024), true);
+    (void)once;
+}
 
 // A file of this process's own (in TMPDIR, or /tmp) that each input overwrites.
 inline std::string writeScratchFile(const uint8_t* data, size_t size, const char* extension) {

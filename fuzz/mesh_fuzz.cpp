@@ -17,6 +17,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     using namespace sdft;
+    fuzz::limitMemoryForFuzzing();
     fuzz::Input in(data, size);
     const auto flags = in.take<uint8_t>();
     const int nv = in.take<uint8_t>() % 48, nt = in.take<uint8_t>() % 64;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 
+#include "fuzz_input.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
@@ -12,6 +13,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     using namespace sdft;
+    fuzz::limitMemoryForFuzzing();
     const std::string text(reinterpret_cast<const char*>(data), size);
     try {
         // A base directory that does not exist: asset paths stay requests and fail cleanly.

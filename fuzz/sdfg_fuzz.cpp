@@ -12,6 +12,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     using namespace sdft;
+    fuzz::limitMemoryForFuzzing();
     constexpr size_t kHeader = 64, kChecksumAt = 56;
     std::vector<uint8_t> bytes(data, data + size);
     if (size >= kHeader) {

@@ -8,6 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     using namespace sdft;
+    fuzz::limitMemoryForFuzzing();
     const std::string path = fuzz::writeScratchFile(data, size, ".vdb");
     try {
         const Grid g = loadVdb(path);

@@ -16,6 +16,12 @@ targets=("$@")
 build=build/fuzz
 jobs=${FUZZ_JOBS:-$(nproc)}
 
+# clang and libFuzzer come from Debian (not part of make deps: only fuzzing needs them).
+if ! command -v clang++ >/dev/null || ! ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1; then
+    echo "fuzz.sh: needs clang and libFuzzer: sudo apt-get install clang libclang-rt-14-dev" >&2
+    exit 2
+fi
+
 CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSDFT_FUZZ=ON \
     -DSDFT_BUILD_TESTS=OFF -DSDFT_BUILD_BENCH=OFF >/dev/null
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]/#/fuzz_}"
