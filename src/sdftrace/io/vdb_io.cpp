@@ -9,7 +9,6 @@
 #include <cmath>
 #include <mutex>
 #include <sstream>
-#include <unordered_set>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
@@ -97,18 +96,49 @@ Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
                           static_cast<double>(t.leaves.size()) * 8 * V * V * V * sizeof(float),
                       path, "the sparse grid's block tables and surface blocks",
                       "resample the level set coarser");
-    std::unordered_set<uint64_t> leafKeys;
-    auto key = [](int32_t x, int32_t y, int32_t z) {
-        return (static_cast<uint64_t>(static_cast<uint32_t>(x) >> 3) & 0x1fffff) << 42 |
-               (static_cast<uint64_t>(static_cast<uint32_t>(y) >> 3) & 0x1fffff) << 21 |
-               (static_cast<uint64_t>(static_cast<uint32_t>(z) >> 3) & 0x1fffff);
+    // The active region in 8^3-voxel regions on the VDB leaf grid: per region its leaf (or -1)
+    // and otherwise its tile value, so that a sample is two array reads, not a tree descent.
+    int32_t r0[3], rn[3];
+    for (int a = 0; a < 3; ++a) {
+        r0[a] = lo[a] >> 3;
+        rn[a] = (hi[a] >> 3) - r0[a] + 1;
+    }
+    const size_t numRegions = static_cast<size_t>(rn[0]) * rn[1] * rn[2];
+    checkMemoryBudget(
+        static_cast<double>(numRegions) * 8, path,
+        "an index of the active region's " + std::to_string(numRegions) + " leaf-sized regions",
+        "resample the level set coarser");
+    std::vector<int32_t> regionLeaf(numRegions, -1);
+    std::vector<float> regionValue(numRegions);
+    auto regionOf = [&](int32_t x, int32_t y, int32_t z) {
+        return (static_cast<size_t>((z >> 3) - r0[2]) * rn[1] + ((y >> 3) - r0[1])) * rn[0] +
+               ((x >> 3) - r0[0]);
     };
-    for (const vdb::Leaf& leaf : t.leaves)
-        leafKeys.insert(key(leaf.origin[0], leaf.origin[1], leaf.origin[2]));
+    tbb::parallel_for(0, rn[2], [&](int rz) {
+        for (int ry = 0; ry < rn[1]; ++ry)
+            for (int rx = 0; rx < rn[0]; ++rx) {
+                const int32_t x = (r0[0] + rx) * 8, y = (r0[1] + ry) * 8, z = (r0[2] + rz) * 8;
+                regionValue[regionOf(x, y, z)] = t.value(x, y, z);
+            }
+    });
+    for (size_t i = 0; i < t.leaves.size(); ++i) {
+        const auto& o = t.leaves[i].origin;
+        bool inside = true;
+        for (int a = 0; a < 3; ++a)
+            inside = inside && o[a] >= r0[a] * 8 && o[a] < (r0[a] + rn[a]) * 8;
+        if (inside) regionLeaf[regionOf(o[0], o[1], o[2])] = static_cast<int32_t>(i);
+    }
     // Vertex (i, j, k), clamped to the grid as GridView::vertex clamps, is voxel lo + (i, j, k).
+    auto voxel = [&](int i, int j, int k, int a) {
+        const int v[3] = {i, j, k};
+        return lo[a] + std::min(v[a], shape.cells[a]);
+    };
     auto value = [&](int i, int j, int k) {
-        return t.value(lo[0] + std::min(i, shape.cells[0]), lo[1] + std::min(j, shape.cells[1]),
-                       lo[2] + std::min(k, shape.cells[2]));
+        const int32_t x = voxel(i, j, k, 0), y = voxel(i, j, k, 1), z = voxel(i, j, k, 2);
+        const size_t r = regionOf(x, y, z);
+        const int32_t leaf = regionLeaf[r];
+        return leaf < 0 ? regionValue[r]
+                        : t.leaves[leaf].values[((x & 7) << 6) | ((y & 7) << 3) | (z & 7)];
     };
     std::vector<uint8_t> flags(numBlocks);
     std::vector<std::vector<float>> slabSamples(blocks[2]);
@@ -122,7 +152,7 @@ Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
                     int32_t c[3];
                     for (int a = 0; a < 3; ++a)
                         c[a] = lo[a] + std::min(b[a] * B + ((corner >> a) & 1) * B, shape.cells[a]);
-                    touches = leafKeys.count(key(c[0], c[1], c[2])) > 0;
+                    touches = regionLeaf[regionOf(c[0], c[1], c[2])] >= 0;
                 }
                 bool anyNeg = false, anyPos = false, near = false;
                 if (!touches) {
