@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <mutex>
 #include <sstream>
@@ -141,45 +142,64 @@ Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
                         : t.leaves[leaf].values[((x & 7) << 6) | ((y & 7) << 3) | (z & 7)];
     };
     std::vector<uint8_t> flags(numBlocks);
+    // Pass 1, cheap: which blocks need their samples (they touch a leaf, or their tile corners
+    // are near the surface or of both signs), the others flagged by their tile's sign. Tiles near
+    // zero or a band wider than the level set's can make far more candidates than the leaves
+    // suggest: their samples are checked against the budget before any is computed.
+    constexpr uint8_t kCandidate = 3;
+    std::atomic<size_t> candidates{0};
+    tbb::parallel_for(0, blocks[2], [&](int bk) {
+        size_t count = 0;
+        for (int bj = 0; bj < blocks[1]; ++bj)
+            for (int bi = 0; bi < blocks[0]; ++bi) {
+                const int b[3] = {bi, bj, bk};
+                bool touches = false, anyNeg = false, anyPos = false, near = false;
+                for (int corner = 0; corner < 8; ++corner) {
+                    int vtx[3];
+                    for (int a = 0; a < 3; ++a) vtx[a] = b[a] * B + ((corner >> a) & 1) * B;
+                    int32_t c[3];
+                    for (int a = 0; a < 3; ++a) c[a] = lo[a] + std::min(vtx[a], shape.cells[a]);
+                    touches |= regionLeaf[regionOf(c[0], c[1], c[2])] >= 0;
+                    const float v = value(vtx[0], vtx[1], vtx[2]);
+                    anyNeg |= v < 0;
+                    anyPos |= v >= 0;
+                    near |= std::fabs(v) < band;
+                }
+                const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
+                if (touches || near || (anyNeg && anyPos)) {
+                    flags[block] = kCandidate;
+                    ++count;
+                } else {
+                    flags[block] =
+                        static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
+                }
+            }
+        candidates += count;
+    });
+    checkMemoryBudget(
+        numBlocks * 5.0 + 2.0 * V * V * V * sizeof(float) * candidates.load(), path,
+        "the samples of " + std::to_string(candidates.load()) + " blocks near its surface",
+        "resample the level set coarser");
+    // Pass 2: the candidates' samples; a candidate whose samples are all far is not a surface
+    // block after all.
     std::vector<std::vector<float>> slabSamples(blocks[2]);
     tbb::parallel_for(0, blocks[2], [&](int bk) {
         std::vector<float> local(static_cast<size_t>(V) * V * V);
         for (int bj = 0; bj < blocks[1]; ++bj)
             for (int bi = 0; bi < blocks[0]; ++bi) {
-                const int b[3] = {bi, bj, bk};
-                bool touches = false;
-                for (int corner = 0; corner < 8 && !touches; ++corner) {
-                    int32_t c[3];
-                    for (int a = 0; a < 3; ++a)
-                        c[a] = lo[a] + std::min(b[a] * B + ((corner >> a) & 1) * B, shape.cells[a]);
-                    touches = regionLeaf[regionOf(c[0], c[1], c[2])] >= 0;
-                }
-                bool anyNeg = false, anyPos = false, near = false;
-                if (!touches) {
-                    // One tile region: its corners say everything.
-                    for (int corner = 0; corner < 8; ++corner) {
-                        const float v =
-                            value(bi * B + (corner & 1) * B, bj * B + ((corner >> 1) & 1) * B,
-                                  bk * B + ((corner >> 2) & 1) * B);
-                        anyNeg |= v < 0;
-                        anyPos |= v >= 0;
-                        near |= std::fabs(v) < band;
-                    }
-                }
-                if (touches || near || (anyNeg && anyPos)) {
-                    anyNeg = anyPos = near = false;
-                    for (int k = 0; k < V; ++k)
-                        for (int j = 0; j < V; ++j)
-                            for (int i = 0; i < V; ++i) {
-                                float v = value(bi * B + i, bj * B + j, bk * B + k);
-                                v = v < 0 ? -std::fmin(-v, band) : std::fmin(v, band);
-                                local[(static_cast<size_t>(k) * V + j) * V + i] = v;
-                                anyNeg |= v < 0;
-                                anyPos |= v >= 0;
-                                near |= std::fabs(v) < band;
-                            }
-                }
                 const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
+                if (flags[block] != kCandidate) continue;
+                bool anyNeg = false, anyPos = false, near = false;
+                for (int k = 0; k < V; ++k)
+                    for (int j = 0; j < V; ++j)
+                        for (int i = 0; i < V; ++i) {
+                            float v = value(bi * B + i, bj * B + j, bk * B + k);
+                            v = v < 0 ? -std::fmin(-v, band) : std::fmin(v, band);
+                            local[(static_cast<size_t>(k) * V + j) * V + i] = v;
+                            anyNeg |= v < 0;
+                            anyPos |= v >= 0;
+                            near |= std::fabs(v) < band;
+                        }
                 if (near || (anyNeg && anyPos)) {
                     flags[block] = static_cast<uint8_t>(BlockFlag::Surface);
                     slabSamples[bk].insert(slabSamples[bk].end(), local.begin(), local.end());
