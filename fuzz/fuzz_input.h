@@ -33,11 +33,11 @@ class Input {
     size_t m_size, m_pos = 0;
 };
 
-// Fuzz inputs are at most a few kilobytes; a budget of 64 MiB makes a structure that asks for
+// Fuzz inputs are at most a few kilobytes; a budget of 8 MiB makes a structure that asks for
 // more (a grid of 10^9 blocks from a 4 KB file) a quick InputError rather than a long allocation or
 // loop. What the budget refuses is tested by the budget tests; the targets look for crashes.
 inline void limitMemoryForFuzzing() {
-    static const bool once = (setMemoryBudgetBytes(64.0 * 1024 * 1024), true);
+    static const bool once = (setMemoryBudgetBytes(8.0 * 1024 * 1024), true);
     (void)once;
 }
 
