@@ -75,8 +75,7 @@ void rejectFlagsThatDoNotApply(const BakeArgs& a, bool mesh) {
             rejectGiven(a, {"--closest"}, "applies to --method exact with --dense only");
     } else {
         rejectGiven(
-            a,
-            {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays", "--mask"},
+            a, {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays", "--mask"},
             "applies to meshes only; " + a.scene + " is a scene file, sampled from its own field");
     }
     if (a.dense) rejectGiven(a, {"--block", "--band"}, "applies to sparse grids only (--dense)");

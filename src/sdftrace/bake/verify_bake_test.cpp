@@ -28,7 +28,8 @@ TEST(VerifyBake, AgainstTheFieldItWasSampledFrom) {
     // The same samples shifted by a third of a voxel: found at every vertex near the surface.
     std::vector<float> shifted = g.vertexSamples();
     for (float& s : shifted) s += h / 3;
-    const FieldVerification off = verifyAgainstField(Grid::dense(g.shape(), shifted), tape, 3.0f, 1);
+    const FieldVerification off =
+        verifyAgainstField(Grid::dense(g.shape(), shifted), tape, 3.0f, 1);
     EXPECT_NEAR(off.vertices.band.max, 1.0 / 3, 1e-3);
     EXPECT_GT(off.vertices.wrongSigns, 0u);
 }

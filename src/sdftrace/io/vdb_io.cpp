@@ -58,167 +58,214 @@ bool activeBounds(const vdb::Tree& t, std::array<int32_t, 3>& lo, std::array<int
     return any;
 }
 
-}  // namespace
-
 // The tree straight into a sparse block grid: blocks that touch a leaf (or whose corners are near
 // or of both signs) get their samples from the tree; every other block lies in one tile region
 // and takes its flag from the sign there. Same grid as sampling the dense active region and
 // sparsifying it (Grid::sparseFromDense), without the dense array.
-Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
-    const vdb::FloatGrid g = vdb::readVdbFile(path);
-    const vdb::Tree& t = g.tree;
-    std::array<int32_t, 3> lo{}, hi{};
-    if (!activeBounds(t, lo, hi))
-        throw InputError(path + ": grid '" + g.name + "' has no active voxels");
-    GridShape shape;
-    const float h = static_cast<float>(g.voxelSize);
-    for (int a = 0; a < 3; ++a) {
-        const int64_t dim = static_cast<int64_t>(hi[a]) - lo[a] + 1;
-        if (dim < 2 || dim > 32768)
-            throw InputError(path + ": active region of " + std::to_string(dim) +
-                             " voxels along an axis (accepted: 2 to 32768)");
-        shape.cells[a] = static_cast<int>(dim - 1);
-        shape.origin[a] = static_cast<float>(g.translation[a] + lo[a] * g.voxelSize);
-        if (!(std::fabs(shape.origin[a]) <= kMaxCoordinate))
-            throw InputError(path + ": the grid lies beyond +-1e9");
+class TreeToGrid {
+  public:
+    TreeToGrid(const vdb::FloatGrid& g, const std::string& path, const VdbImportOptions& o)
+        : m_t(g.tree), m_path(path), m_B(o.blockSize), m_V(o.blockSize + 1) {
+        if (!activeBounds(m_t, m_lo, m_hi))
+            throw InputError(path + ": grid '" + g.name + "' has no active voxels");
+        makeShape(g);
+        const float h = m_shape.voxelSize;
+        m_bandVoxels = std::max(o.minBandVoxels, std::fabs(m_t.background) / h * 0.999f);
+        m_band = m_bandVoxels * h;
+        for (int a = 0; a < 3; ++a) m_blocks[a] = (m_shape.cells[a] + m_B - 1) / m_B;
+        m_numBlocks = static_cast<size_t>(m_blocks[0]) * m_blocks[1] * m_blocks[2];
+        checkMemoryBudget(
+            static_cast<double>(m_numBlocks) * 5 +
+                static_cast<double>(m_t.leaves.size()) * 8 * m_V * m_V * m_V * sizeof(float),
+            path, "the sparse grid's block tables and surface blocks",
+            "resample the level set coarser");
+        indexRegions();
     }
-    shape.voxelSize = h;
-    for (const vdb::Leaf& leaf : t.leaves)
-        for (float v : leaf.values)
-            if (!std::isfinite(v))
-                throw InputError(path + ": non-finite values in grid '" + g.name + "'");
-    const int B = options.blockSize, V = B + 1;
-    const float bandVoxels = std::max(options.minBandVoxels, std::fabs(t.background) / h * 0.999f);
-    const float band = bandVoxels * h;
-    int blocks[3];
-    for (int a = 0; a < 3; ++a) blocks[a] = (shape.cells[a] + B - 1) / B;
-    const size_t numBlocks = static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2];
-    checkMemoryBudget(static_cast<double>(numBlocks) * 5 +
-                          static_cast<double>(t.leaves.size()) * 8 * V * V * V * sizeof(float),
-                      path, "the sparse grid's block tables and surface blocks",
-                      "resample the level set coarser");
+
+    Grid build() {
+        std::vector<uint8_t> flags(m_numBlocks);
+        const size_t candidates = flagBlocks(flags);
+        checkMemoryBudget(
+            m_numBlocks * 5.0 + 2.0 * m_V * m_V * m_V * sizeof(float) * candidates, m_path,
+            "the samples of " + std::to_string(candidates) + " blocks near its surface",
+            "resample the level set coarser");
+        std::vector<float> samples = sampleCandidates(flags);
+        return Grid::sparseFromBuffers(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
+                                       std::move(flags), std::move(samples), m_path);
+    }
+
+  private:
+    static constexpr uint8_t kCandidate = 3;
+
+    void makeShape(const vdb::FloatGrid& g) {
+        for (int a = 0; a < 3; ++a) {
+            const int64_t dim = static_cast<int64_t>(m_hi[a]) - m_lo[a] + 1;
+            if (dim < 2 || dim > 32768)
+                throw InputError(m_path + ": active region of " + std::to_string(dim) +
+                                 " voxels along an axis (accepted: 2 to 32768)");
+            m_shape.cells[a] = static_cast<int>(dim - 1);
+            m_shape.origin[a] = static_cast<float>(g.translation[a] + m_lo[a] * g.voxelSize);
+            if (!(std::fabs(m_shape.origin[a]) <= kMaxCoordinate))
+                throw InputError(m_path + ": the grid lies beyond +-1e9");
+        }
+        m_shape.voxelSize = static_cast<float>(g.voxelSize);
+        for (const vdb::Leaf& leaf : m_t.leaves)
+            for (float v : leaf.values)
+                if (!std::isfinite(v))
+                    throw InputError(m_path + ": non-finite values in grid '" + g.name + "'");
+    }
+
     // The active region in 8^3-voxel regions on the VDB leaf grid: per region its leaf (or -1)
     // and otherwise its tile value, so that a sample is two array reads, not a tree descent.
-    int32_t r0[3], rn[3];
-    for (int a = 0; a < 3; ++a) {
-        r0[a] = lo[a] >> 3;
-        rn[a] = (hi[a] >> 3) - r0[a] + 1;
+    void indexRegions() {
+        for (int a = 0; a < 3; ++a) {
+            m_r0[a] = m_lo[a] >> 3;
+            m_rn[a] = (m_hi[a] >> 3) - m_r0[a] + 1;
+        }
+        const size_t numRegions = static_cast<size_t>(m_rn[0]) * m_rn[1] * m_rn[2];
+        checkMemoryBudget(
+            static_cast<double>(numRegions) * 8, m_path,
+            "an index of the active region's " + std::to_string(numRegions) + " leaf-sized regions",
+            "resample the level set coarser");
+        m_regionLeaf.assign(numRegions, -1);
+        m_regionValue.resize(numRegions);
+        tbb::parallel_for(0, m_rn[2], [&](int rz) {
+            for (int ry = 0; ry < m_rn[1]; ++ry)
+                for (int rx = 0; rx < m_rn[0]; ++rx) {
+                    const int32_t x = (m_r0[0] + rx) * 8, y = (m_r0[1] + ry) * 8,
+                                  z = (m_r0[2] + rz) * 8;
+                    m_regionValue[regionOf(x, y, z)] = m_t.value(x, y, z);
+                }
+        });
+        for (size_t i = 0; i < m_t.leaves.size(); ++i) {
+            const auto& o = m_t.leaves[i].origin;
+            bool inside = true;
+            for (int a = 0; a < 3; ++a)
+                inside = inside && o[a] >= m_r0[a] * 8 && o[a] < (m_r0[a] + m_rn[a]) * 8;
+            if (inside) m_regionLeaf[regionOf(o[0], o[1], o[2])] = static_cast<int32_t>(i);
+        }
     }
-    const size_t numRegions = static_cast<size_t>(rn[0]) * rn[1] * rn[2];
-    checkMemoryBudget(
-        static_cast<double>(numRegions) * 8, path,
-        "an index of the active region's " + std::to_string(numRegions) + " leaf-sized regions",
-        "resample the level set coarser");
-    std::vector<int32_t> regionLeaf(numRegions, -1);
-    std::vector<float> regionValue(numRegions);
-    auto regionOf = [&](int32_t x, int32_t y, int32_t z) {
-        return (static_cast<size_t>((z >> 3) - r0[2]) * rn[1] + ((y >> 3) - r0[1])) * rn[0] +
-               ((x >> 3) - r0[0]);
-    };
-    tbb::parallel_for(0, rn[2], [&](int rz) {
-        for (int ry = 0; ry < rn[1]; ++ry)
-            for (int rx = 0; rx < rn[0]; ++rx) {
-                const int32_t x = (r0[0] + rx) * 8, y = (r0[1] + ry) * 8, z = (r0[2] + rz) * 8;
-                regionValue[regionOf(x, y, z)] = t.value(x, y, z);
-            }
-    });
-    for (size_t i = 0; i < t.leaves.size(); ++i) {
-        const auto& o = t.leaves[i].origin;
-        bool inside = true;
-        for (int a = 0; a < 3; ++a)
-            inside = inside && o[a] >= r0[a] * 8 && o[a] < (r0[a] + rn[a]) * 8;
-        if (inside) regionLeaf[regionOf(o[0], o[1], o[2])] = static_cast<int32_t>(i);
+
+    size_t regionOf(int32_t x, int32_t y, int32_t z) const {
+        return (static_cast<size_t>((z >> 3) - m_r0[2]) * m_rn[1] + ((y >> 3) - m_r0[1])) *
+                   m_rn[0] +
+               ((x >> 3) - m_r0[0]);
     }
+
     // Vertex (i, j, k), clamped to the grid as GridView::vertex clamps, is voxel lo + (i, j, k).
-    auto voxel = [&](int i, int j, int k, int a) {
-        const int v[3] = {i, j, k};
-        return lo[a] + std::min(v[a], shape.cells[a]);
-    };
-    auto value = [&](int i, int j, int k) {
-        const int32_t x = voxel(i, j, k, 0), y = voxel(i, j, k, 1), z = voxel(i, j, k, 2);
+    std::array<int32_t, 3> voxel(int i, int j, int k) const {
+        return {m_lo[0] + std::min(i, m_shape.cells[0]), m_lo[1] + std::min(j, m_shape.cells[1]),
+                m_lo[2] + std::min(k, m_shape.cells[2])};
+    }
+
+    float value(int i, int j, int k) const {
+        const auto [x, y, z] = voxel(i, j, k);
         const size_t r = regionOf(x, y, z);
-        const int32_t leaf = regionLeaf[r];
-        return leaf < 0 ? regionValue[r]
-                        : t.leaves[leaf].values[((x & 7) << 6) | ((y & 7) << 3) | (z & 7)];
-    };
-    std::vector<uint8_t> flags(numBlocks);
+        const int32_t leaf = m_regionLeaf[r];
+        return leaf < 0 ? m_regionValue[r]
+                        : m_t.leaves[leaf].values[((x & 7) << 6) | ((y & 7) << 3) | (z & 7)];
+    }
+
+    size_t blockIndex(int bi, int bj, int bk) const {
+        return (static_cast<size_t>(bk) * m_blocks[1] + bj) * m_blocks[0] + bi;
+    }
+
     // Pass 1, cheap: which blocks need their samples (they touch a leaf, or their tile corners
     // are near the surface or of both signs), the others flagged by their tile's sign. Tiles near
     // zero or a band wider than the level set's can make far more candidates than the leaves
-    // suggest: their samples are checked against the budget before any is computed.
-    constexpr uint8_t kCandidate = 3;
-    std::atomic<size_t> candidates{0};
-    tbb::parallel_for(0, blocks[2], [&](int bk) {
-        size_t count = 0;
-        for (int bj = 0; bj < blocks[1]; ++bj)
-            for (int bi = 0; bi < blocks[0]; ++bi) {
-                const int b[3] = {bi, bj, bk};
-                bool touches = false, anyNeg = false, anyPos = false, near = false;
-                for (int corner = 0; corner < 8; ++corner) {
-                    int vtx[3];
-                    for (int a = 0; a < 3; ++a) vtx[a] = b[a] * B + ((corner >> a) & 1) * B;
-                    int32_t c[3];
-                    for (int a = 0; a < 3; ++a) c[a] = lo[a] + std::min(vtx[a], shape.cells[a]);
-                    touches |= regionLeaf[regionOf(c[0], c[1], c[2])] >= 0;
-                    const float v = value(vtx[0], vtx[1], vtx[2]);
-                    anyNeg |= v < 0;
-                    anyPos |= v >= 0;
-                    near |= std::fabs(v) < band;
+    // suggest, so the caller checks their samples against the budget before any is computed.
+    size_t flagBlocks(std::vector<uint8_t>& flags) const {
+        std::atomic<size_t> candidates{0};
+        tbb::parallel_for(0, m_blocks[2], [&](int bk) {
+            size_t count = 0;
+            for (int bj = 0; bj < m_blocks[1]; ++bj)
+                for (int bi = 0; bi < m_blocks[0]; ++bi) {
+                    const int b[3] = {bi, bj, bk};
+                    bool touches = false, anyNeg = false, anyPos = false, near = false;
+                    for (int corner = 0; corner < 8; ++corner) {
+                        int vtx[3];
+                        for (int a = 0; a < 3; ++a) vtx[a] = b[a] * m_B + ((corner >> a) & 1) * m_B;
+                        const auto [x, y, z] = voxel(vtx[0], vtx[1], vtx[2]);
+                        touches |= m_regionLeaf[regionOf(x, y, z)] >= 0;
+                        const float v = value(vtx[0], vtx[1], vtx[2]);
+                        anyNeg |= v < 0;
+                        anyPos |= v >= 0;
+                        near |= std::fabs(v) < m_band;
+                    }
+                    uint8_t& flag = flags[blockIndex(bi, bj, bk)];
+                    if (touches || near || (anyNeg && anyPos)) {
+                        flag = kCandidate;
+                        ++count;
+                    } else {
+                        flag =
+                            static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
+                    }
                 }
-                const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
-                if (touches || near || (anyNeg && anyPos)) {
-                    flags[block] = kCandidate;
-                    ++count;
-                } else {
-                    flags[block] =
-                        static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
-                }
-            }
-        candidates += count;
-    });
-    checkMemoryBudget(
-        numBlocks * 5.0 + 2.0 * V * V * V * sizeof(float) * candidates.load(), path,
-        "the samples of " + std::to_string(candidates.load()) + " blocks near its surface",
-        "resample the level set coarser");
-    // Pass 2: the candidates' samples; a candidate whose samples are all far is not a surface
-    // block after all.
-    std::vector<std::vector<float>> slabSamples(blocks[2]);
-    tbb::parallel_for(0, blocks[2], [&](int bk) {
-        std::vector<float> local(static_cast<size_t>(V) * V * V);
-        for (int bj = 0; bj < blocks[1]; ++bj)
-            for (int bi = 0; bi < blocks[0]; ++bi) {
-                const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
-                if (flags[block] != kCandidate) continue;
-                bool anyNeg = false, anyPos = false, near = false;
-                for (int k = 0; k < V; ++k)
-                    for (int j = 0; j < V; ++j)
-                        for (int i = 0; i < V; ++i) {
-                            float v = value(bi * B + i, bj * B + j, bk * B + k);
-                            v = v < 0 ? -std::fmin(-v, band) : std::fmin(v, band);
-                            local[(static_cast<size_t>(k) * V + j) * V + i] = v;
-                            anyNeg |= v < 0;
-                            anyPos |= v >= 0;
-                            near |= std::fabs(v) < band;
-                        }
-                if (near || (anyNeg && anyPos)) {
-                    flags[block] = static_cast<uint8_t>(BlockFlag::Surface);
-                    slabSamples[bk].insert(slabSamples[bk].end(), local.begin(), local.end());
-                } else {
-                    flags[block] =
-                        static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
-                }
-            }
-    });
-    std::vector<float> samples;
-    size_t total = 0;
-    for (const auto& s : slabSamples) total += s.size();
-    samples.reserve(total);
-    for (auto& s : slabSamples) {
-        samples.insert(samples.end(), s.begin(), s.end());
-        std::vector<float>().swap(s);
+            candidates += count;
+        });
+        return candidates.load();
     }
-    return Grid::sparseFromBuffers(shape, B, (bandVoxels - 1) * h, std::move(flags),
-                                   std::move(samples), path);
+
+    // Pass 2: the candidates' samples, in block order; a candidate whose samples are all far is
+    // not a surface block after all.
+    std::vector<float> sampleCandidates(std::vector<uint8_t>& flags) const {
+        const int V = m_V;
+        std::vector<std::vector<float>> slabSamples(m_blocks[2]);
+        tbb::parallel_for(0, m_blocks[2], [&](int bk) {
+            std::vector<float> local(static_cast<size_t>(V) * V * V);
+            for (int bj = 0; bj < m_blocks[1]; ++bj)
+                for (int bi = 0; bi < m_blocks[0]; ++bi) {
+                    uint8_t& flag = flags[blockIndex(bi, bj, bk)];
+                    if (flag != kCandidate) continue;
+                    bool anyNeg = false, anyPos = false, near = false;
+                    for (int k = 0; k < V; ++k)
+                        for (int j = 0; j < V; ++j)
+                            for (int i = 0; i < V; ++i) {
+                                float v = value(bi * m_B + i, bj * m_B + j, bk * m_B + k);
+                                v = v < 0 ? -std::fmin(-v, m_band) : std::fmin(v, m_band);
+                                local[(static_cast<size_t>(k) * V + j) * V + i] = v;
+                                anyNeg |= v < 0;
+                                anyPos |= v >= 0;
+                                near |= std::fabs(v) < m_band;
+                            }
+                    if (near || (anyNeg && anyPos)) {
+                        flag = static_cast<uint8_t>(BlockFlag::Surface);
+                        slabSamples[bk].insert(slabSamples[bk].end(), local.begin(), local.end());
+                    } else {
+                        flag =
+                            static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
+                    }
+                }
+        });
+        std::vector<float> samples;
+        size_t total = 0;
+        for (const auto& s : slabSamples) total += s.size();
+        samples.reserve(total);
+        for (auto& s : slabSamples) {
+            samples.insert(samples.end(), s.begin(), s.end());
+            std::vector<float>().swap(s);
+        }
+        return samples;
+    }
+
+    const vdb::Tree& m_t;
+    const std::string& m_path;
+    const int m_B, m_V;
+    std::array<int32_t, 3> m_lo{}, m_hi{};
+    GridShape m_shape;
+    float m_bandVoxels = 0, m_band = 0;
+    int m_blocks[3] = {0, 0, 0};
+    size_t m_numBlocks = 0;
+    int32_t m_r0[3] = {0, 0, 0}, m_rn[3] = {0, 0, 0};
+    std::vector<int32_t> m_regionLeaf;
+    std::vector<float> m_regionValue;
+};
+
+}  // namespace
+
+Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
+    const vdb::FloatGrid g = vdb::readVdbFile(path);
+    return TreeToGrid(g, path, options).build();
 }
 
 void saveVdb(const Grid& grid, const std::string& path) {
