@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
     sdft::cli::addBakeCommand(app, action);
     sdft::cli::addInfoCommand(app, action);
     sdft::cli::addConvertCommand(app, action);
+    sdft::cli::addMeshCommand(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -14,6 +14,7 @@ struct SampleOptions {
     float bandVoxels = 3;     // sparse: blocks farther than this from the surface are dropped
     float paddingVoxels = 2;  // empty voxels around the region, beyond the band
     int threads = 0;          // 0 = all
+    bool progress = false;    // a percentage on stderr while sampling
 };
 
 // The grid shape covering `region` (finite) plus padding at `resolution` cells along its longest
@@ -21,7 +22,10 @@ struct SampleOptions {
 GridShape gridShapeFor(const Bounds3& region, const SampleOptions& options);
 
 // Samples tape.eval(p) / tape.lipschitz() at every vertex of `shape`.
-std::vector<float> sampleVertices(const Tape& tape, const GridShape& shape, int threads = 0);
+class Progress;
+// `progress`, when given, advances once per row of vertices (shape.vertices(1) * vertices(2)).
+std::vector<float> sampleVertices(const Tape& tape, const GridShape& shape, int threads = 0,
+                                  Progress* progress = nullptr);
 
 // gridShapeFor + sampleVertices + the layout the options ask for. `region` must be finite.
 Grid sampleGrid(const Tape& tape, const Bounds3& region, const SampleOptions& options);

@@ -10,6 +10,7 @@
 
 #include "sdftrace/core/macros.h"
 #include "sdftrace/core/memory_budget.h"
+#include "sdftrace/exec/progress.h"
 #include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
@@ -31,7 +32,8 @@ GridShape gridShapeFor(const Bounds3& region, const SampleOptions& o) {
     return s;
 }
 
-std::vector<float> sampleVertices(const Tape& tape, const GridShape& s, int threads) {
+std::vector<float> sampleVertices(const Tape& tape, const GridShape& s, int threads,
+                                  Progress* progress) {
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
     std::vector<float> out(s.vertexCount());
     const float invL = 1.0f / tape.lipschitz();
@@ -59,6 +61,7 @@ std::vector<float> sampleVertices(const Tape& tape, const GridShape& s, int thre
                     tape.evalBatch(sc.x.data(), sc.y.data(), sc.z.data(), dst, vx, sc.batch);
                     for (int i = 0; i < vx; ++i) dst[i] *= invL;
                 }
+                if (progress) progress->advance(rows.size());
             });
     });
     return out;
@@ -74,7 +77,12 @@ Grid sampleGrid(const Tape& tape, const Bounds3& region, const SampleOptions& o)
                           std::to_string(shape.cells[1]) + "x" + std::to_string(shape.cells[2]) +
                           " cells",
                       "use a lower resolution");
-    std::vector<float> samples = sampleVertices(tape, shape, o.threads);
+    std::vector<float> samples;
+    {
+        Progress progress("sampling", static_cast<uint64_t>(shape.vertices(1)) * shape.vertices(2),
+                          o.progress);
+        samples = sampleVertices(tape, shape, o.threads, &progress);
+    }
     if (o.kind == GridKind::Dense) return Grid::dense(shape, std::move(samples));
     return Grid::sparseFromDense(shape, samples, o.blockSize, o.bandVoxels);
 }

@@ -2,28 +2,20 @@
 
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
-#include <openvdb/tools/SignedFloodFill.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <mutex>
 #include <sstream>
 
+#include "openvdb_grid.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/io/atomic_file.h"
 #include "vdb_reader.h"
 
 namespace sdft {
-
-namespace {
-void initOpenVdb() {
-    static std::once_flag once;
-    std::call_once(once, [] { openvdb::initialize(); });
-}
-}  // namespace
 
 namespace {
 
@@ -269,46 +261,7 @@ Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
 }
 
 void saveVdb(const Grid& grid, const std::string& path) {
-    initOpenVdb();
-    const GridShape& s = grid.shape();
-    GridView v = grid.view();
-    // Level sets keep a narrow band of about 3 voxels; ours is the sparse grid's band (its
-    // background plus one voxel) or 3 voxels for dense grids.
-    float band =
-        grid.kind() == GridKind::Sparse ? grid.background() + s.voxelSize : 3.0f * s.voxelSize;
-    auto out = openvdb::FloatGrid::create(band);
-    out->setName("surface");
-    out->setGridClass(openvdb::GRID_LEVEL_SET);
-    auto xf = openvdb::math::Transform::createLinearTransform(s.voxelSize);
-    xf->postTranslate(openvdb::Vec3d(s.origin.x, s.origin.y, s.origin.z));
-    out->setTransform(xf);
-    auto acc = out->getAccessor();
-    // Only real samples become active: a sparse grid's surface blocks (its other blocks hold no
-    // samples), a dense grid's samples within the band. Values are clamped to +-band as level sets
-    // expect.
-    auto put = [&](int i, int j, int k) {
-        float value = v.vertex(i, j, k);
-        if (grid.kind() == GridKind::Dense && std::fabs(value) >= band) return;
-        acc.setValue(openvdb::Coord(i, j, k), std::clamp(value, -band, band));
-    };
-    if (grid.kind() == GridKind::Dense) {
-        for (int k = 0; k <= s.cells[2]; ++k)
-            for (int j = 0; j <= s.cells[1]; ++j)
-                for (int i = 0; i <= s.cells[0]; ++i) put(i, j, k);
-    } else {
-        const int B = v.blockSize;
-        for (int bk = 0; bk < v.blocks[2]; ++bk)
-            for (int bj = 0; bj < v.blocks[1]; ++bj)
-                for (int bi = 0; bi < v.blocks[0]; ++bi) {
-                    size_t block = (static_cast<size_t>(bk) * v.blocks[1] + bj) * v.blocks[0] + bi;
-                    if (v.blockData[block] < 0) continue;
-                    for (int k = bk * B; k <= std::min((bk + 1) * B, s.cells[2]); ++k)
-                        for (int j = bj * B; j <= std::min((bj + 1) * B, s.cells[1]); ++j)
-                            for (int i = bi * B; i <= std::min((bi + 1) * B, s.cells[0]); ++i)
-                                put(i, j, k);
-                }
-    }
-    openvdb::tools::signedFloodFill(out->tree());
+    openvdb::FloatGrid::Ptr out = toOpenVdbGrid(grid);
     // Encoded in memory, then written with every write checked.
     std::ostringstream bytes(std::ios::binary);
     try {
