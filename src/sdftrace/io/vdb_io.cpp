@@ -6,12 +6,15 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 #include "openvdb_grid.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
+#include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/io/atomic_file.h"
 #include "vdb_reader.h"
 
@@ -30,11 +33,28 @@ bool activeBounds(const vdb::Tree& t, std::array<int32_t, 3>& lo, std::array<int
         }
         any = true;
     };
-    for (const vdb::Leaf& leaf : t.leaves)
-        for (int i = 0; i < 512; ++i)
-            if ((leaf.active[i >> 6] >> (i & 63)) & 1u)
-                include(leaf.origin[0] + (i >> 6), leaf.origin[1] + ((i >> 3) & 7),
-                        leaf.origin[2] + (i & 7), 1);
+    // A leaf's mask word w holds x = w; its bit b holds y = b >> 3, z = b & 7.
+    for (const vdb::Leaf& leaf : t.leaves) {
+        uint64_t any = 0;
+        int x0 = 8, x1 = -1;
+        for (int w = 0; w < 8; ++w) {
+            if (!leaf.active[w]) continue;
+            any |= leaf.active[w];
+            x0 = std::min(x0, w);
+            x1 = w;
+        }
+        if (!any) continue;
+        uint8_t rows = 0, cols = 0;  // y and z present
+        for (uint64_t bits = any; bits; bits &= bits - 1) {
+            const int b = std::countr_zero(bits);
+            rows |= static_cast<uint8_t>(1u << (b >> 3));
+            cols |= static_cast<uint8_t>(1u << (b & 7));
+        }
+        const int y0 = std::countr_zero(rows), y1 = 7 - std::countl_zero(rows);
+        const int z0 = std::countr_zero(cols), z1 = 7 - std::countl_zero(cols);
+        include(leaf.origin[0] + x0, leaf.origin[1] + y0, leaf.origin[2] + z0, 1);
+        include(leaf.origin[0] + x1, leaf.origin[1] + y1, leaf.origin[2] + z1, 1);
+    }
     for (const vdb::RootTile& tile : t.tiles)
         if (tile.active) include(tile.origin[0], tile.origin[1], tile.origin[2], 4096);
     auto tiles = [&](const std::vector<vdb::Internal>& nodes, int log2, int shift) {
@@ -76,12 +96,14 @@ class TreeToGrid {
 
     Grid build() {
         std::vector<uint8_t> flags(m_numBlocks);
-        const size_t candidates = flagBlocks(flags);
+        std::vector<size_t> slabCandidates(m_blocks[2]);
+        const size_t candidates = flagBlocks(flags, slabCandidates);
+
         checkMemoryBudget(
             m_numBlocks * 5.0 + 2.0 * m_V * m_V * m_V * sizeof(float) * candidates, m_path,
             "the samples of " + std::to_string(candidates) + " blocks near its surface",
             "resample the level set coarser");
-        std::vector<float> samples = sampleCandidates(flags);
+        std::vector<float> samples = sampleCandidates(flags, slabCandidates, candidates);
         return Grid::sparseFromBuffers(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
                                        std::move(flags), std::move(samples), m_path);
     }
@@ -166,7 +188,7 @@ class TreeToGrid {
     // are near the surface or of both signs), the others flagged by their tile's sign. Tiles near
     // zero or a band wider than the level set's can make far more candidates than the leaves
     // suggest, so the caller checks their samples against the budget before any is computed.
-    size_t flagBlocks(std::vector<uint8_t>& flags) const {
+    size_t flagBlocks(std::vector<uint8_t>& flags, std::vector<size_t>& slabCandidates) const {
         std::atomic<size_t> candidates{0};
         tbb::parallel_for(0, m_blocks[2], [&](int bk) {
             size_t count = 0;
@@ -193,6 +215,7 @@ class TreeToGrid {
                             static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
                     }
                 }
+            slabCandidates[bk] = count;
             candidates += count;
         });
         return candidates.load();
@@ -200,43 +223,109 @@ class TreeToGrid {
 
     // Pass 2: the candidates' samples, in block order; a candidate whose samples are all far is
     // not a surface block after all.
-    std::vector<float> sampleCandidates(std::vector<uint8_t>& flags) const {
+    //
+    // Each z-slab of blocks writes its surface blocks' samples in place, from where its first
+    // candidate would go; the slabs are then moved together (one copy, no per-slab buffers).
+    std::vector<float> sampleCandidates(std::vector<uint8_t>& flags,
+                                        const std::vector<size_t>& slabCandidates,
+                                        size_t candidates) const {
         const int V = m_V;
-        std::vector<std::vector<float>> slabSamples(m_blocks[2]);
+        const size_t perBlock = static_cast<size_t>(V) * V * V;
+        std::vector<size_t> slabStart(m_blocks[2] + 1, 0), slabSurface(m_blocks[2], 0);
+        for (int bk = 0; bk < m_blocks[2]; ++bk)
+            slabStart[bk + 1] = slabStart[bk] + slabCandidates[bk];
+        std::vector<float> samples;
+        samples.reserve(candidates * perBlock);
+        adviseHugePages(samples.data(), candidates * perBlock * sizeof(float));
+        samples.resize(candidates * perBlock);
         tbb::parallel_for(0, m_blocks[2], [&](int bk) {
-            std::vector<float> local(static_cast<size_t>(V) * V * V);
+            size_t surface = 0;
+            // A block's V vertices per axis span at most two 8-voxel regions: per axis, each
+            // vertex's region (0 or 1 from the first) and its offset inside the leaf; per region
+            // of the 2x2x2, the leaf's values or a tile value repeated.
+            int region[3][9], offset[3][9];  // V <= 9
+            std::vector<float> tileFill(8 * 512);
+            float filled[8];
+            std::fill(filled, filled + 8, NAN);
+            const float* source[8];
             for (int bj = 0; bj < m_blocks[1]; ++bj)
                 for (int bi = 0; bi < m_blocks[0]; ++bi) {
                     uint8_t& flag = flags[blockIndex(bi, bj, bk)];
                     if (flag != kCandidate) continue;
-                    bool anyNeg = false, anyPos = false, near = false;
-                    for (int k = 0; k < V; ++k)
-                        for (int j = 0; j < V; ++j)
-                            for (int i = 0; i < V; ++i) {
-                                float v = value(bi * m_B + i, bj * m_B + j, bk * m_B + k);
-                                v = v < 0 ? -std::fmin(-v, m_band) : std::fmin(v, m_band);
-                                local[(static_cast<size_t>(k) * V + j) * V + i] = v;
-                                anyNeg |= v < 0;
-                                anyPos |= v >= 0;
-                                near |= std::fabs(v) < m_band;
+                    const int b[3] = {bi, bj, bk};
+                    int first[3];
+                    for (int a = 0; a < 3; ++a) {
+                        first[a] = (m_lo[a] + b[a] * m_B) >> 3;
+                        for (int n = 0; n < V; ++n) {
+                            // Clamped to the grid as GridView::vertex clamps.
+                            const int32_t x = m_lo[a] + std::min(b[a] * m_B + n, m_shape.cells[a]);
+                            region[a][n] = (x >> 3) - first[a];
+                            offset[a][n] = (x & 7) << (a == 0 ? 6 : a == 1 ? 3 : 0);
+                        }
+                    }
+                    for (int c = 0; c < 8; ++c) {
+                        const int32_t x = (first[0] + (c & 1)) * 8,
+                                      y = (first[1] + (c >> 1 & 1)) * 8,
+                                      z = (first[2] + (c >> 2)) * 8;
+                        // Regions past the active region are never read (the vertices clamp).
+                        if ((x >> 3) - m_r0[0] >= m_rn[0] || (y >> 3) - m_r0[1] >= m_rn[1] ||
+                            (z >> 3) - m_r0[2] >= m_rn[2]) {
+                            source[c] = nullptr;
+                            continue;
+                        }
+                        const size_t r = regionOf(x, y, z);
+                        const int32_t leaf = m_regionLeaf[r];
+                        if (leaf >= 0) {
+                            source[c] = m_t.leaves[leaf].values.data();
+                        } else {
+                            // Tiles mostly hold the same +-background: refill only on a change.
+                            float* fill = tileFill.data() + c * 512;
+                            if (!(filled[c] == m_regionValue[r])) {
+                                std::fill(fill, fill + 512, m_regionValue[r]);
+                                filled[c] = m_regionValue[r];
                             }
+                            source[c] = fill;
+                        }
+                    }
+                    // Gather (x splits between the two regions at most once per row), then clamp
+                    // and classify in one contiguous pass.
+                    float* const block = samples.data() + (slabStart[bk] + surface) * perBlock;
+                    float* out = block;
+                    for (int k = 0; k < V; ++k)
+                        for (int j = 0; j < V; ++j) {
+                            const int rjk = 2 * region[1][j] + 4 * region[2][k];
+                            const int ojk = offset[1][j] | offset[2][k];
+                            const float* row0 = source[rjk] + ojk;
+                            const float* row1 = source[rjk + 1] + ojk;
+                            int i = 0;
+                            for (; i < V && region[0][i] == 0; ++i) *out++ = row0[offset[0][i]];
+                            for (; i < V; ++i) *out++ = row1[offset[0][i]];
+                        }
+                    bool anyNeg = false, anyPos = false, near = false;
+                    for (float* v = block; v != block + perBlock; ++v) {
+                        *v = std::clamp(*v, -m_band, m_band);
+                        anyNeg |= *v < 0;
+                        anyPos |= *v >= 0;
+                        near |= std::fabs(*v) < m_band;
+                    }
                     if (near || (anyNeg && anyPos)) {
                         flag = static_cast<uint8_t>(BlockFlag::Surface);
-                        slabSamples[bk].insert(slabSamples[bk].end(), local.begin(), local.end());
+                        ++surface;
                     } else {
                         flag =
                             static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
                     }
                 }
+            slabSurface[bk] = surface;
         });
-        std::vector<float> samples;
-        size_t total = 0;
-        for (const auto& s : slabSamples) total += s.size();
-        samples.reserve(total);
-        for (auto& s : slabSamples) {
-            samples.insert(samples.end(), s.begin(), s.end());
-            std::vector<float>().swap(s);
+        size_t end = 0;
+        for (int bk = 0; bk < m_blocks[2]; ++bk) {
+            const size_t n = slabSurface[bk] * perBlock, from = slabStart[bk] * perBlock;
+            if (from != end)
+                std::memmove(samples.data() + end, samples.data() + from, n * sizeof(float));
+            end += n;
         }
+        samples.resize(end);
         return samples;
     }
 

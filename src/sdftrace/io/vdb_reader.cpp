@@ -112,6 +112,7 @@ struct Reader {
     uint32_t compression = 0;
     bool half = false;
     float background = 0;
+    std::vector<std::array<int32_t, 3>> leafOrigins;  // in topology order
 
     // memcpy, also for zero bytes into an empty buffer (no null pointer handed to memcpy).
     static void copy(char* out, const char* in, uint64_t bytes) {
@@ -224,11 +225,11 @@ struct Reader {
             if (upper) {
                 n.children[i] = readInternal(t, child, false);
             } else {
-                Leaf leaf;
-                leaf.origin = child;
-                std::memcpy(leaf.active.data(), c.take(64, "leaf mask"), 64);
-                n.children[i] = static_cast<int32_t>(t.leaves.size());
-                t.leaves.push_back(leaf);
+                // The leaf's mask is stored again with its values (readBuffers); the leaves
+                // themselves are allocated once, when their number is known.
+                c.take(64, "leaf mask");
+                n.children[i] = static_cast<int32_t>(leafOrigins.size());
+                leafOrigins.push_back(child);
             }
         }
         std::vector<Internal>& list = upper ? t.upper : t.lower;
@@ -264,6 +265,8 @@ struct Reader {
 
     // LeafNode::readBuffers for every leaf, in the order of the topology.
     void readBuffers(Tree& t) {
+        t.leaves.resize(leafOrigins.size());
+        for (size_t i = 0; i < leafOrigins.size(); ++i) t.leaves[i].origin = leafOrigins[i];
         for (Leaf& leaf : t.leaves) {
             std::memcpy(leaf.active.data(), c.take(64, "leaf mask"), 64);
             readValues(leaf.values.data(), kLeafSize, leaf.active.data());
