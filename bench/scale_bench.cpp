@@ -130,8 +130,9 @@ struct EmbreeScene {
         device = rtcNewDevice(nullptr);
         scene = rtcNewScene(device);
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-            g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.positions.size()));
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                              RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                              m.positions.size()));
         for (size_t i = 0; i < m.positions.size(); ++i) {
             v[3 * i] = m.positions[i].x;
             v[3 * i + 1] = m.positions[i].y;
@@ -240,8 +241,8 @@ std::vector<std::pair<std::string, CameraDesc>> cameras(const Grid& grid, int si
         const Vec3 c = b.center();
         const float y = b.hi.y - 0.1f * b.extent().y;
         grazing.target = {c.x, y, c.z};
-        grazing.eye = grazing.target + normalize(Vec3(1.0f, 0.02f, 0.35f)) *
-                                           (1.6f * length(b.extent()));
+        grazing.eye =
+            grazing.target + normalize(Vec3(1.0f, 0.02f, 0.35f)) * (1.6f * length(b.extent()));
         grazing.fovDeg = 25;
     }
     return {{"framed", framed}, {"close", close}, {"grazing", grazing}};
@@ -266,7 +267,8 @@ void runMesh(const std::string& path, const Options& o) {
         openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*xf, points, tris, 3.0f);
     const double bakeMs = ms(t0, Clock::now());
     made->setName("surface");
-    const std::string vdbPath = "/tmp/sdftrace-scale-" + name + "-" + std::to_string(o.res) + ".vdb";
+    const std::string vdbPath =
+        "/tmp/sdftrace-scale-" + name + "-" + std::to_string(o.res) + ".vdb";
     openvdb::io::File(vdbPath).write({made});
     made.reset();
 
@@ -291,14 +293,15 @@ void runMesh(const std::string& path, const Options& o) {
         "mesh load %.0f ms; meshToLevelSet %.0f ms; .vdb %.1f MiB; import: sdftrace %.0f ms, "
         "OpenVDB read %.0f ms (%.2fx); memory: sdftrace sparse grid %.1f MiB (block %d), "
         "OpenVDB memUsage %.1f MiB (%.2fx)\n\n",
-        name.c_str(), mesh.triangles.size(), o.res, size_t(vdb->activeVoxelCount()), loadMs,
-        bakeMs, std::filesystem::file_size(vdbPath) / 1048576.0, importMs, vdbReadMs,
-        vdbReadMs / importMs, grid.memoryBytes() / 1048576.0, grid.blockSize(),
-        vdb->memUsage() / 1048576.0, double(vdb->memUsage()) / grid.memoryBytes());
+        name.c_str(), mesh.triangles.size(), o.res, size_t(vdb->activeVoxelCount()), loadMs, bakeMs,
+        std::filesystem::file_size(vdbPath) / 1048576.0, importMs, vdbReadMs, vdbReadMs / importMs,
+        grid.memoryBytes() / 1048576.0, grid.blockSize(), vdb->memUsage() / 1048576.0,
+        double(vdb->memUsage()) / grid.memoryBytes());
     std::printf(
         "| camera | size | sdftrace render | OpenVDB render | ratio | Embree | vs Embree | "
-        "sdftrace process | OpenVDB read + render | ratio | hit mismatches |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|\n");
+        "sdftrace process | OpenVDB read + render | ratio | hit mismatches | DDA steps / tests per "
+        "pixel |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::fflush(stdout);
 
     const EmbreeScene embree(mesh);
@@ -310,14 +313,19 @@ void runMesh(const std::string& path, const Options& o) {
                 std::to_string(size) + " --eye " + vec(cd.eye) + " --target " + vec(cd.target) +
                 " --up " + vec(cd.up) + " --fov " + fmt("%.9g", cd.fovDeg);
             std::vector<double> phase, wall, vdbRender, vdbWhole, embreeMs;
+            float travSteps = 0, isectTests = 0;
             std::vector<float> image;
             std::vector<uint8_t> vdbMask;
             for (int r = 0; r < o.reps; ++r) {
                 double w = 0;
-                const std::string err =
-                    runProcess(cmd + " -o /tmp/sdftrace-scale-bench.png", w);
+                const std::string err = runProcess(cmd + " -o /tmp/sdftrace-scale-bench.png", w);
                 const size_t at = err.find(" in ");
                 phase.push_back(1000.0 * std::atof(err.c_str() + at + 4));
+                const size_t dda = err.find("DDA: ");
+                if (dda != std::string::npos)
+                    std::sscanf(err.c_str() + dda,
+                                "DDA: %f traversal steps and %f intersection tests", &travSteps,
+                                &isectTests);
                 wall.push_back(w);
                 t0 = Clock::now();
                 openvdb::io::File f(vdbPath);
@@ -334,17 +342,18 @@ void runMesh(const std::string& path, const Options& o) {
                 embreeMs.push_back(ms(t0, Clock::now()));
             }
             double w = 0;
-            runProcess(cmd + " -o /tmp/sdftrace-scale-bench.png --aov depth=/tmp/sdftrace-scale-depth.pfm",
-                       w);
-            const long bad =
-                mismatches(hitsFromDepthPfm("/tmp/sdftrace-scale-depth.pfm", size, size), vdbMask,
-                           size, size);
+            runProcess(
+                cmd + " -o /tmp/sdftrace-scale-bench.png --aov depth=/tmp/sdftrace-scale-depth.pfm",
+                w);
+            const long bad = mismatches(
+                hitsFromDepthPfm("/tmp/sdftrace-scale-depth.pfm", size, size), vdbMask, size, size);
             const double p = median(phase), vr = median(vdbRender), e = median(embreeMs),
                          pw = median(wall), vw = median(vdbWhole);
             std::printf(
                 "| %s | %d² | %.1f ms | %.1f ms | %.2fx | %.1f ms | %.2fx | %.0f ms | %.0f ms | "
-                "%.2fx | %ld |\n",
-                camName.c_str(), size, p, vr, vr / p, e, p / e, pw, vw, vw / pw, bad);
+                "%.2fx | %ld | %.1f / %.2f |\n",
+                camName.c_str(), size, p, vr, vr / p, e, p / e, pw, vw, vw / pw, bad, travSteps,
+                isectTests);
             std::fflush(stdout);
         }
     if (!o.keep) std::remove(vdbPath.c_str());

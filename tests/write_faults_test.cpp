@@ -16,7 +16,8 @@ namespace {
 
 const char* kScene = R"({"objects": [{"type": "smooth_union", "k": 0.2, "children": [
   {"type": "torus", "major_radius": 0.8, "minor_radius": 0.25},
-  {"type": "sphere", "radius": 0.5, "translate": [0, 0.4, 0]}]}]})";
+  {"type": "sphere", "radius": 0.5, "translate": [0, 0.4, 0]}]}],
+  "lights": [{"type": "directional", "direction": [0.3, -1, -0.4]}]})";
 
 // Runs a shell command line; stderr is captured.
 RunResult runShell(const std::string& command, const TempDir& dir) {

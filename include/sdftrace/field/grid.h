@@ -177,11 +177,18 @@ SDFT_HOST_DEVICE inline float GridView::vertex(int i, int j, int k) const {
     k = clampi(k, 0, nz);
     if (kind == GridKind::Dense)
         return samples[(static_cast<size_t>(k) * (ny + 1) + j) * (nx + 1) + i];
-    // The block of the cell below the vertex (the last vertex of an axis belongs to the last cell).
-    int ci = i < nx ? i : nx - 1, cj = j < ny ? j : ny - 1, ck = k < nz ? k : nz - 1;
-    float c[8];
-    cellCorners(ci, cj, ck, c);
-    return c[(i - ci) + 2 * (j - cj) + 4 * (k - ck)];
+    // The block of the cell below the vertex (the last vertex of an axis belongs to the last cell),
+    // its one sample read directly.
+    const int ci = i < nx ? i : nx - 1, cj = j < ny ? j : ny - 1, ck = k < nz ? k : nz - 1;
+    const int B = blockSize;
+    const int bi = ci / B, bj = cj / B, bk = ck / B;
+    const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
+    const int32_t data = blockData[block];
+    if (data < 0)
+        return flags[block] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
+    const size_t sy = B + 1, sz = sy * (B + 1);
+    return blockSamples[static_cast<size_t>(data) * sz * (B + 1) + (k - bk * B) * sz +
+                        (j - bj * B) * sy + (i - bi * B)];
 }
 
 SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[8]) const {

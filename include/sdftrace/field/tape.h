@@ -101,6 +101,10 @@ class Tape {
     void evalBatch(const float* x, const float* y, const float* z, float* out, int n,
                    BatchScratch& scratch) const;
     MaterialBlend evalMaterial(Vec3 p) const;
+    // The one material every point gets, when the tape has a single primitive or grid (a grid
+    // without texture coordinates): evalMaterial(p) is single(id, local) everywhere, so renderers
+    // whose materials ignore `local` skip it. -1 when the blend varies or needs the point.
+    int uniformMaterial() const;
 
     float lipschitz() const { return m_lipschitz; }
     const Bounds3& bounds() const { return m_bounds; }

@@ -229,8 +229,8 @@ Bounds3 Grid::surfaceBounds() const {
                     if (hi[0] < 0) continue;
                     const Vec3 cell0(static_cast<float>(b % m_blocks[0] * B),
                                      static_cast<float>(b / m_blocks[0] % m_blocks[1] * B),
-                                     static_cast<float>(b / (static_cast<size_t>(m_blocks[0]) *
-                                                             m_blocks[1]) * B));
+                                     static_cast<float>(
+                                         b / (static_cast<size_t>(m_blocks[0]) * m_blocks[1]) * B));
                     Bounds3& out = perThread.local();
                     out.include(m_shape.origin + (cell0 + Vec3(lo[0], lo[1], lo[2])) * h);
                     out.include(m_shape.origin +
@@ -318,15 +318,15 @@ float blockMasksAndBoundB(const float* s, int ni, int nj, int nk, uint64_t* mask
             for (int i = 0; i < B; ++i) {
                 // cellGradientBound2's edges, in its order: x-edges at corners 0, 2, 4, 6; y at 0,
                 // 1, 4, 5; z at 0, 1, 2, 3.
-                const float gx = std::max(std::max(std::max(ex[k][j][i], ex[k][j + 1][i]),
-                                                   ex[k + 1][j][i]),
-                                          ex[k + 1][j + 1][i]);
-                const float gy = std::max(std::max(std::max(ey[k][j][i], ey[k][j][i + 1]),
-                                                   ey[k + 1][j][i]),
-                                          ey[k + 1][j][i + 1]);
-                const float gz = std::max(std::max(std::max(ez[k][j][i], ez[k][j][i + 1]),
-                                                   ez[k][j + 1][i]),
-                                          ez[k][j + 1][i + 1]);
+                const float gx =
+                    std::max(std::max(std::max(ex[k][j][i], ex[k][j + 1][i]), ex[k + 1][j][i]),
+                             ex[k + 1][j + 1][i]);
+                const float gy =
+                    std::max(std::max(std::max(ey[k][j][i], ey[k][j][i + 1]), ey[k + 1][j][i]),
+                             ey[k + 1][j][i + 1]);
+                const float gz =
+                    std::max(std::max(std::max(ez[k][j][i], ez[k][j][i + 1]), ez[k][j + 1][i]),
+                             ez[k][j + 1][i + 1]);
                 bound[i] = gx * gx + gy * gy + gz * gz;
                 const float* v = r + i;
                 const int neg = (v[0] < 0) + (v[1] < 0) + (v[sy] < 0) + (v[sy + 1] < 0) +

@@ -201,6 +201,19 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
 
 float Tape::eval(Vec3 p) const { return evalScalar<false>(p, nullptr); }
 
+int Tape::uniformMaterial() const {
+    const Instr* leaf = nullptr;
+    for (const Instr& in : m_instrs) {
+        if (in.op > Op::Grid) continue;
+        if (leaf) return -1;
+        leaf = &in;
+    }
+    if (!leaf || leaf->material < 0) return -1;
+    if (leaf->op == Op::Grid && m_gridViews[static_cast<size_t>(m_consts[leaf->k])].texcoords)
+        return -1;
+    return leaf->material;
+}
+
 MaterialBlend Tape::evalMaterial(Vec3 p) const {
     MaterialBlend blend;
     evalScalar<true>(p, &blend);

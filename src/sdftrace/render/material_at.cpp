@@ -6,8 +6,13 @@ namespace sdft {
 
 Material materialAt(const RenderPlan& plan, Vec3 p, Vec3 n) {
     const Tape& tape = plan.tape;
-    const MaterialBlend b = tape.evalMaterial(p);
     const auto& table = plan.materials;
+    // One object with one untextured material (a grid file rendered directly): the blend is that
+    // material with weight 1 everywhere, and the sums below would return it unchanged.
+    const int only = tape.uniformMaterial();
+    if (only >= 0 && only < static_cast<int>(table.size()) && table[only].colorTexture < 0)
+        return table[only];
+    const MaterialBlend b = tape.evalMaterial(p);
     Material m;
     m.color = Vec3(0.0f);
     m.diffuse = m.specular = m.shininess = 0;
