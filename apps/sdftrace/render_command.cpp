@@ -231,14 +231,29 @@ int runRender(const RenderArgs& a) {
         return 0;
     }
     const auto aovs = validateOutputs(a);
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
     Scene scene = loadInput(a.scene, !a.quiet && stderrIsTerminal(), a.quiet);
     applyOverrides(a, scene);
+    const auto t1 = Clock::now();
     const RenderPlan plan = planRender(scene);
     Film film(plan.camera.width, plan.camera.height);
+    const auto t2 = Clock::now();
     const RenderStats st = renderImage(a, plan, film);
+    const auto t3 = Clock::now();
     writeAov(film, Aov::Color, a.output);
     for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
+    const auto t4 = Clock::now();
     printSummary(st, film, plan);
+    if (!a.quiet) {
+        auto s = [](Clock::time_point x, Clock::time_point y) {
+            return std::chrono::duration<double>(y - x).count();
+        };
+        std::fprintf(stderr,
+                     "sdftrace render: phases: load %.3f s, plan %.3f s, render %.3f s, write "
+                     "%.3f s\n",
+                     s(t0, t1), s(t1, t2), s(t2, t3), s(t3, t4));
+    }
     return 0;
 }
 

@@ -57,6 +57,8 @@ struct GridView {
     const float* texcoords = nullptr;
     int texcoordKind = 0;
 
+    // log2 of blockSize (4 or 8): block coordinates by shifts, not divisions.
+    SDFT_HOST_DEVICE int blockShift() const { return blockSize == 8 ? 3 : 2; }
     SDFT_HOST_DEVICE int wordsPerMask() const {
         return (blockSize * blockSize * blockSize + 63) / 64;
     }
@@ -181,7 +183,8 @@ SDFT_HOST_DEVICE inline float GridView::vertex(int i, int j, int k) const {
     // its one sample read directly.
     const int ci = i < nx ? i : nx - 1, cj = j < ny ? j : ny - 1, ck = k < nz ? k : nz - 1;
     const int B = blockSize;
-    const int bi = ci / B, bj = cj / B, bk = ck / B;
+    const int sh = blockShift();
+    const int bi = ci >> sh, bj = cj >> sh, bk = ck >> sh;
     const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
     const int32_t data = blockData[block];
     if (data < 0)
@@ -196,8 +199,9 @@ SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[
     // are constant at +-background by their flag.
     size_t idx[8];
     if (!cornerIndices(i, j, k, idx)) {
-        const int B = blockSize;
-        size_t block = (static_cast<size_t>(k / B) * blocks[1] + j / B) * blocks[0] + i / B;
+        const int sh = blockShift();
+        size_t block =
+            (static_cast<size_t>(k >> sh) * blocks[1] + (j >> sh)) * blocks[0] + (i >> sh);
         float v =
             flags[block] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
         for (int n = 0; n < 8; ++n) c[n] = v;
@@ -244,7 +248,8 @@ SDFT_HOST_DEVICE inline bool GridView::cornerIndices(int i, int j, int k, size_t
         base = k * sz + j * sy + i;
     } else {
         const int B = blockSize;
-        int bi = i / B, bj = j / B, bk = k / B;
+        const int sh = blockShift();
+        int bi = i >> sh, bj = j >> sh, bk = k >> sh;
         size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
         int32_t data = blockData[block];
         if (data < 0) return false;

@@ -28,6 +28,8 @@ void writeAov(const Film& film, Aov aov, const std::string& path);
 
 // 8-bit renderings used for PNG output (exposed for tests).
 std::vector<unsigned char> toneMapSrgb(const std::vector<float>& linearRgb);
+// One channel of it: the sRGB-encoded byte of a linear value (clamped to [0, 1]; NaN gives 0).
+unsigned char srgbByte(float linear);
 // Heat map of a scalar image over its finite range, with a legend strip appended at the bottom;
 // returns RGB rows and sets outHeight. Non-finite pixels are drawn black.
 std::vector<unsigned char> heatMapWithLegend(const std::vector<float>& values, int width,

@@ -42,6 +42,7 @@ Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& sam
     Grid g;
     g.m_kind = GridKind::Sparse;
     g.m_shape = shape;
+    SDFT_CHECK(B == 4 || B == 8);  // GridView::blockShift
     g.m_blockSize = B;
     for (int a = 0; a < 3; ++a) g.m_blocks[a] = (shape.cells[a] + B - 1) / B;
     // Samples of non-surface blocks are all at least band voxels from the surface; a point in such
@@ -94,6 +95,7 @@ Grid Grid::sparseFromBuffers(const GridShape& shape, int B, float background,
     Grid g;
     g.m_kind = GridKind::Sparse;
     g.m_shape = shape;
+    SDFT_CHECK(B == 4 || B == 8);  // GridView::blockShift
     g.m_blockSize = B;
     g.m_background = background;
     for (int a = 0; a < 3; ++a) g.m_blocks[a] = (shape.cells[a] + B - 1) / B;

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -93,6 +95,43 @@ TEST(ImageIo, FailedWriteLeavesNoFile) {
     EXPECT_THROW(writeAov(film, Aov::Color, "/nonexistent-dir/x.exr"), InputError);
     EXPECT_THROW(writeAov(film, Aov::Color, tempName("x.jpg")), InputError);
     EXPECT_FALSE(std::filesystem::exists(tempName("x.jpg")));
+}
+
+}  // namespace
+}  // namespace sdft
+
+namespace sdft {
+namespace {
+
+// The table lookup gives the byte of the formula (IEC 61966-2-1 with round-to-nearest) for every
+// float in [0, 1] stepped finely, around every byte boundary, and at the edges.
+TEST(ImageIo, SrgbBytesMatchTheFormula) {
+    auto formula = [](float v) -> unsigned char {
+        v = std::clamp(v, 0.0f, 1.0f);
+        if (!(v > 0)) return 0;
+        const float s = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+        if (!(s > 0)) return 0;
+        if (s >= 1) return 255;
+        return static_cast<unsigned char>(s * 255.0f + 0.5f);
+    };
+    size_t checked = 0;
+    // Every 64th float bit pattern in (0, 1]: ~16M values, all byte boundaries crossed.
+    for (uint32_t bits = 1; bits <= std::bit_cast<uint32_t>(1.0f); bits += 64, ++checked) {
+        const float v = std::bit_cast<float>(bits);
+        ASSERT_EQ(srgbByte(v), formula(v)) << v;
+    }
+    // The 128 floats on each side of every boundary.
+    float prev = 0;
+    for (uint32_t bits = 1; bits <= std::bit_cast<uint32_t>(1.0f); bits += 4096) {
+        const float v = std::bit_cast<float>(bits);
+        if (formula(v) != formula(prev))
+            for (uint32_t b = bits - 4096 > bits ? 1 : bits - 4096; b <= bits; ++b, ++checked)
+                ASSERT_EQ(srgbByte(std::bit_cast<float>(b)), formula(std::bit_cast<float>(b)));
+        prev = v;
+    }
+    for (float v : {0.0f, -0.0f, -1.0f, 1.0f, 1.5f, INFINITY, -INFINITY, NAN})
+        EXPECT_EQ(srgbByte(v), formula(std::isnan(v) ? 0.0f : v)) << v;
+    EXPECT_GT(checked, 10000000u);
 }
 
 }  // namespace

@@ -11,9 +11,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
+#include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/io/mapped_file.h"
 
 namespace sdft::vdb {
 
@@ -41,8 +44,8 @@ constexpr int kUpperTotal = kUpperLog2 + kLowerTotal;  // 12
 // The file's bytes, read front to back; every read is bounds-checked.
 class Cursor {
   public:
-    Cursor(const std::vector<char>& bytes, const std::string& path)
-        : m_data(bytes.data()), m_size(bytes.size()), m_path(path) {}
+    Cursor(const char* data, size_t size, const std::string& path)
+        : m_data(data), m_size(size), m_path(path) {}
 
     [[noreturn]] void fail(const std::string& what) const {
         throw InputError(m_path + ": not a readable OpenVDB file: " + what + " (at byte " +
@@ -108,6 +111,7 @@ float halfToFloat(uint16_t h) {
 }
 
 struct Reader {
+    explicit Reader(Cursor& cursor) : c(cursor) {}
     Cursor& c;
     uint32_t compression = 0;
     bool half = false;
@@ -265,6 +269,8 @@ struct Reader {
 
     // LeafNode::readBuffers for every leaf, in the order of the topology.
     void readBuffers(Tree& t) {
+        t.leaves.reserve(leafOrigins.size());
+        adviseHugePages(t.leaves.data(), leafOrigins.size() * sizeof(Leaf));
         t.leaves.resize(leafOrigins.size());
         for (size_t i = 0; i < leafOrigins.size(); ++i) t.leaves[i].origin = leafOrigins[i];
         for (Leaf& leaf : t.leaves) {
@@ -337,19 +343,16 @@ void readTransform(Cursor& c, FloatGrid& g) {
     g.voxelSize = h;
 }
 
-std::vector<char> readWholeFile(const std::string& path) {
+// The file, mapped; its size checked against the memory budget first.
+std::unique_ptr<MappedFile> mapFile(const std::string& path) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
-    std::ifstream in(path, std::ios::binary);
-    if (ec || !in) throw InputError(path + ": cannot open grid file (does it exist?)");
+    if (ec) throw InputError(path + ": cannot open grid file (does it exist?)");
     // The nodes built from a file take at most ~40 times its bytes (an upper node's 8 KiB of
     // masks become 256 KiB of tile values and child indices).
     checkMemoryBudget(41.0 * static_cast<double>(size), path, "the file and its tree",
                       "resample the level set coarser");
-    std::vector<char> bytes(size);
-    if (!in.read(bytes.data(), static_cast<std::streamsize>(size)))
-        throw InputError(path + ": cannot read the file");
-    return bytes;
+    return std::make_unique<MappedFile>(path);
 }
 
 }  // namespace
@@ -375,9 +378,9 @@ float Tree::value(int32_t x, int32_t y, int32_t z) const {
 }
 
 FloatGrid readVdbFile(const std::string& path) {
-    const std::vector<char> bytes = readWholeFile(path);
-    Cursor c(bytes, path);
-    if (bytes.size() < 8 || c.get<int64_t>("magic") != kMagic)
+    const std::unique_ptr<MappedFile> file = mapFile(path);
+    Cursor c(file->data(), file->size(), path);
+    if (file->size() < 8 || c.get<int64_t>("magic") != kMagic)
         throw InputError(path + ": not an OpenVDB file (no VDB magic number)");
     const uint32_t version = c.get<uint32_t>("version");
     if (version < kMinVersion || version > kMaxVersion)
@@ -417,7 +420,7 @@ FloatGrid readVdbFile(const std::string& path) {
         }
         FloatGrid grid;
         grid.name = name;
-        Reader r{c};
+        Reader r(c);
         r.half = half;
         r.compression = c.get<uint32_t>("compression");
         if (r.compression > (kZip | kActiveMask | kBlosc))
