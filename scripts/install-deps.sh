@@ -11,6 +11,7 @@ packages=(
     libopenvdb-dev        # .vdb level sets (interop) and the OpenVDB baseline in bench/
     libboost-iostreams-dev libblosc-dev  # OpenVDB's CMake module needs them; sdftrace's .vdb reader too
     zlib1g-dev            # sdftrace's .vdb reader (zip-compressed level sets)
+    libzstd-dev           # compressed .sdfg files (version 3)
     libassimp-dev         # mesh loading (OBJ, PLY, STL, OFF, glTF)
     libembree-dev         # BVH closest-point queries and ray casts for mesh baking
     libgtest-dev          # tests

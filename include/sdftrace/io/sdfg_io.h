@@ -11,10 +11,18 @@
 namespace sdft {
 
 // Version 1: distances only. Version 2 appends texture coordinates (Liktor 2008, §5.5.2); it is
-// written only for grids that carry them, and both versions are read.
-constexpr uint32_t kSdfgVersion = 2;
+// written only for grids that carry them. Version 3 holds the same sections compressed: chunks of
+// byte-shuffled floats compressed by zstd independently (written and read in parallel, each with
+// its own checksum). All three are read.
+constexpr uint32_t kSdfgVersion = 3;
 
-void saveSdfg(const Grid& grid, const std::string& path);  // atomic (temporary name + rename)
+struct SdfgWriteOptions {
+    bool compress = true;  // version 3; false: version 1 or 2, the raw buffers
+    int level = 3;         // zstd level (1 fastest .. 19 smallest)
+};
+
+// Atomic (temporary name + rename).
+void saveSdfg(const Grid& grid, const std::string& path, const SdfgWriteOptions& options = {});
 Grid loadSdfg(const std::string& path);
 
 // FNV-1a 64 of a byte range (the payload checksum).

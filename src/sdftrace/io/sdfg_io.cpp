@@ -1,15 +1,20 @@
 #include "sdftrace/io/sdfg_io.h"
 
+#include <tbb/parallel_for.h>
 #include <unistd.h>
+#include <zstd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 
+#include "block_aprons.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/io/atomic_file.h"
+#include "sdftrace/io/mapped_file.h"
 
 namespace sdft {
 
@@ -33,13 +38,6 @@ struct Header {
 };
 static_assert(sizeof(Header) == 64, "the .sdfg header is 64 bytes");
 
-struct File {
-    FILE* f;
-    ~File() {
-        if (f) std::fclose(f);
-    }
-};
-
 }  // namespace
 
 uint64_t fnv1a64(const void* data, size_t bytes, uint64_t h) {
@@ -51,12 +49,13 @@ uint64_t fnv1a64(const void* data, size_t bytes, uint64_t h) {
     return h;
 }
 
-void saveSdfg(const Grid& grid, const std::string& path) {
+namespace {
+// The header's fields that describe the grid (payload size and checksum left to the writer).
+Header headerOf(const Grid& grid, uint32_t version) {
     const GridShape& s = grid.shape();
     Header h{};
+    h.version = version;
     std::memcpy(h.magic, kMagic, 4);
-    const bool tex = !grid.texcoords().empty();
-    h.version = tex ? 2 : 1;
     h.kind = static_cast<uint32_t>(grid.kind());
     for (int a = 0; a < 3; ++a) {
         h.cells[a] = s.cells[a];
@@ -65,6 +64,12 @@ void saveSdfg(const Grid& grid, const std::string& path) {
     h.voxelSize = s.voxelSize;
     h.blockSize = grid.kind() == GridKind::Sparse ? grid.blockSize() : 0;
     h.background = grid.background();
+    return h;
+}
+
+void saveRaw(const Grid& grid, const std::string& path) {
+    const bool tex = !grid.texcoords().empty();
+    Header h = headerOf(grid, tex ? 2 : 1);
     uint64_t sum = 0xcbf29ce484222325ull;
     if (grid.kind() == GridKind::Dense) {
         h.payloadBytes = grid.samples().size() * sizeof(float);
@@ -97,6 +102,128 @@ void saveSdfg(const Grid& grid, const std::string& path) {
     out.commit();
 }
 
+// ---- version 3: compressed sections ----
+
+constexpr uint32_t kChunkBytes = 1u << 22;  // uncompressed bytes per chunk (4 MiB)
+
+// After the 64-byte header of a version-3 file.
+struct CompressedHeader {
+    uint32_t texKind;      // 0: no texture coordinates; else TexcoordKind
+    uint32_t chunkBytes;   // uncompressed bytes per chunk (the last of a section may be shorter)
+    uint64_t sampleCount;  // stored samples (dense: every vertex; sparse: surface blocks')
+    uint64_t apronCount;   // sparse: apron samples kept explicitly (block_aprons.h)
+    uint64_t chunkCount;   // then chunkCount u64 compressed sizes, then the chunks
+};
+static_assert(sizeof(CompressedHeader) == 32);
+
+// The sections of the uncompressed payload, in file order. Dense: samples. Sparse: block flags,
+// the surface blocks' own samples, their apron masks, the explicit apron samples
+// (block_aprons.h). Then texture coordinates, if any, per stored sample. Floats are byte-shuffled
+// before compression (the four bytes of each float in four planes: sign and exponent bytes
+// repeat, and compress far better).
+struct Section {
+    const char* data;
+    uint64_t bytes;
+    bool floats;
+};
+
+template <class T>
+Section section(const std::vector<T>& v, bool floats) {
+    return {reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T), floats};
+}
+
+// One chunk: section `section`, bytes [offset, offset + bytes).
+struct Chunk {
+    int section;
+    uint64_t offset, bytes;
+};
+
+std::vector<Chunk> chunksOf(const std::vector<uint64_t>& sectionBytes, uint32_t chunkBytes) {
+    std::vector<Chunk> out;
+    for (size_t s = 0; s < sectionBytes.size(); ++s)
+        for (uint64_t o = 0; o < sectionBytes[s]; o += chunkBytes)
+            out.push_back(
+                {static_cast<int>(s), o, std::min<uint64_t>(chunkBytes, sectionBytes[s] - o)});
+    return out;
+}
+
+void shuffleFloats(const char* in, char* out, uint64_t bytes) {
+    const uint64_t n = bytes / 4;
+    for (uint64_t i = 0; i < n; ++i)
+        for (int b = 0; b < 4; ++b) out[b * n + i] = in[4 * i + b];
+}
+
+void unshuffleFloats(const char* in, char* out, uint64_t bytes) {
+    const uint64_t n = bytes / 4;
+    for (uint64_t i = 0; i < n; ++i)
+        for (int b = 0; b < 4; ++b) out[4 * i + b] = in[b * n + i];
+}
+
+void saveCompressed(const Grid& grid, const std::string& path, int level) {
+    std::vector<Section> sections;
+    SplitBlocks split;
+    if (grid.kind() == GridKind::Dense) {
+        sections.push_back(section(grid.samples(), true));
+    } else {
+        split = splitBlocks(grid);
+        sections = {section(grid.flags(), false), section(split.own, true),
+                    section(split.masks, false), section(split.explicitly, true)};
+    }
+    if (!grid.texcoords().empty()) sections.push_back(section(grid.texcoords(), true));
+    std::vector<uint64_t> sectionBytes;
+    for (const Section& s : sections) sectionBytes.push_back(s.bytes);
+    const std::vector<Chunk> chunks = chunksOf(sectionBytes, kChunkBytes);
+    std::vector<std::vector<char>> packed(chunks.size());
+    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
+        const Chunk& ch = chunks[c];
+        const Section& sec = sections[static_cast<size_t>(ch.section)];
+        const char* src = sec.data + ch.offset;
+        std::vector<char> shuffled;
+        if (sec.floats) {
+            shuffled.resize(ch.bytes);
+            shuffleFloats(src, shuffled.data(), ch.bytes);
+            src = shuffled.data();
+        }
+        ZSTD_CCtx* ctx = ZSTD_createCCtx();
+        ZSTD_CCtx_setParameter(ctx, ZSTD_c_compressionLevel, level);
+        ZSTD_CCtx_setParameter(ctx, ZSTD_c_checksumFlag, 1);
+        std::vector<char>& out = packed[c];
+        out.resize(ZSTD_compressBound(ch.bytes));
+        const size_t n = ZSTD_compress2(ctx, out.data(), out.size(), src, ch.bytes);
+        ZSTD_freeCCtx(ctx);
+        if (ZSTD_isError(n))
+            throw InputError(path + ": compression failed (" + ZSTD_getErrorName(n) + ")");
+        out.resize(n);
+    });
+
+    Header h = headerOf(grid, 3);
+    CompressedHeader ch{};
+    ch.texKind = grid.texcoords().empty() ? 0 : static_cast<uint32_t>(grid.texcoordKind());
+    ch.chunkBytes = kChunkBytes;
+    ch.sampleCount = grid.storedSamples();
+    ch.apronCount = split.explicitly.size();
+    ch.chunkCount = chunks.size();
+    std::vector<uint64_t> table;
+    for (const auto& p : packed) table.push_back(p.size());
+    h.payloadBytes = sizeof ch + table.size() * sizeof(uint64_t);
+    for (uint64_t n : table) h.payloadBytes += n;
+    h.checksum = fnv1a64(table.data(), table.size() * sizeof(uint64_t), fnv1a64(&ch, sizeof ch));
+    AtomicOutput out(path);
+    out.write(&h, sizeof h);
+    out.write(&ch, sizeof ch);
+    out.write(table.data(), table.size() * sizeof(uint64_t));
+    for (const auto& p : packed) out.write(p.data(), p.size());
+    out.commit();
+}
+}  // namespace
+
+void saveSdfg(const Grid& grid, const std::string& path, const SdfgWriteOptions& options) {
+    if (options.compress)
+        saveCompressed(grid, path, options.level);
+    else
+        saveRaw(grid, path);
+}
+
 namespace {
 
 // What the header says the payload holds, checked against the file's size.
@@ -108,11 +235,11 @@ struct PayloadLayout {
     uint64_t texHeaderBytes = 0, floatsPerSample = 1;
 };
 
-Header readHeader(std::FILE* f, const std::string& path, uint64_t fileBytes) {
+Header readHeader(const MappedFile& file, const std::string& path) {
     Header h{};
-    if (fileBytes < sizeof h || std::fread(&h, sizeof h, 1, f) != 1) {
+    if (file.size() < sizeof h)
         throw InputError(path + ": truncated: shorter than the 64-byte .sdfg header");
-    }
+    std::memcpy(&h, file.data(), sizeof h);
     if (std::memcmp(h.magic, kMagic, 4) != 0)
         throw InputError(path + ": not an .sdfg file (bad magic)");
     if (h.version < 1 || h.version > kSdfgVersion) {
@@ -190,20 +317,154 @@ PayloadLayout layoutOf(const Header& h, const GridShape& s, const std::string& p
 
 }  // namespace
 
+namespace {
+
+// Checks a version-3 file's tables against the header and the file, then decompresses its chunks
+// in parallel straight into the grid's buffers.
+Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
+                    const std::string& path) {
+    const uint64_t fileBytes = file.size();
+    auto corrupt = [&](const std::string& what) -> InputError {
+        return InputError(path + ": corrupt compressed .sdfg: " + what);
+    };
+    if (h.payloadBytes != fileBytes - sizeof h)
+        throw corrupt("the header's payload size does not match the file size");
+    CompressedHeader ch{};
+    if (fileBytes - sizeof h < sizeof ch) throw corrupt("truncated section header");
+    std::memcpy(&ch, file.data() + sizeof h, sizeof ch);
+    if (ch.chunkBytes < 4096 || ch.chunkBytes > (1u << 28) || ch.chunkBytes % 4 != 0)
+        throw corrupt("chunk size " + std::to_string(ch.chunkBytes));
+    if (ch.texKind > static_cast<uint32_t>(TexcoordKind::Cylinder))
+        throw corrupt("unknown texture-coordinate kind " + std::to_string(ch.texKind));
+    const GridKind kind = static_cast<GridKind>(h.kind);
+    uint64_t numBlocks = 0, perBlock = 0;
+    if (kind == GridKind::Dense) {
+        if (ch.sampleCount != s.vertexCount()) throw corrupt("sample count");
+    } else {
+        if (h.blockSize != 4 && h.blockSize != 8)
+            throw InputError(path + ": block size " + std::to_string(h.blockSize) +
+                             " (accepted: 4, 8)");
+        if (!(h.background > 0) || !std::isfinite(h.background))
+            throw InputError(path + ": background must be positive and finite");
+        numBlocks = 1;
+        for (int a = 0; a < 3; ++a) numBlocks *= (s.cells[a] + h.blockSize - 1) / h.blockSize;
+        perBlock = static_cast<uint64_t>(h.blockSize + 1) * (h.blockSize + 1) * (h.blockSize + 1);
+        if (ch.sampleCount % perBlock != 0 || ch.sampleCount / perBlock > numBlocks)
+            throw corrupt("sample count does not fit the block layout");
+    }
+    const uint64_t surface = perBlock ? ch.sampleCount / perBlock : 0;
+    const int B = static_cast<int>(h.blockSize);
+    if (kind == GridKind::Sparse && ch.apronCount > surface * apronSize(B))
+        throw corrupt("apron sample count");
+    if (kind == GridKind::Dense && ch.apronCount != 0) throw corrupt("apron sample count");
+    std::vector<uint64_t> sectionBytes;
+    if (kind == GridKind::Sparse) {
+        sectionBytes = {numBlocks, surface * B * B * B * sizeof(float),
+                        surface * apronWords(B) * sizeof(uint64_t), ch.apronCount * sizeof(float)};
+    } else {
+        sectionBytes = {ch.sampleCount * sizeof(float)};
+    }
+    if (ch.texKind) sectionBytes.push_back(3 * ch.sampleCount * sizeof(float));
+    // The chunk count follows from the sections; checked (and the table against the file) before
+    // anything is allocated from these numbers.
+    uint64_t total = 0, expectedChunks = 0;
+    for (uint64_t b : sectionBytes) {
+        total += b;
+        expectedChunks += (b + ch.chunkBytes - 1) / ch.chunkBytes;
+    }
+    if (ch.chunkCount != expectedChunks) throw corrupt("chunk count");
+    if (ch.chunkCount > (fileBytes - sizeof h - sizeof ch) / sizeof(uint64_t))
+        throw corrupt("truncated chunk table");
+    checkMemoryBudget(2.0 * static_cast<double>(total), path,
+                      "the grid's samples and the structures built from them",
+                      "convert or bake it at a lower resolution");
+    const std::vector<Chunk> chunks = chunksOf(sectionBytes, ch.chunkBytes);
+    const uint64_t tableEnd = sizeof h + sizeof ch + chunks.size() * sizeof(uint64_t);
+    std::vector<uint64_t> table(chunks.size());
+    std::memcpy(table.data(), file.data() + sizeof h + sizeof ch, table.size() * sizeof(uint64_t));
+    if (fnv1a64(table.data(), table.size() * sizeof(uint64_t), fnv1a64(&ch, sizeof ch)) !=
+        h.checksum)
+        throw corrupt("table checksum mismatch");
+    std::vector<uint64_t> start(chunks.size());
+    uint64_t at = tableEnd;
+    for (size_t c = 0; c < chunks.size(); ++c) {
+        if (table[c] > fileBytes - at)
+            throw corrupt("chunk " + std::to_string(c) + " past the end");
+        start[c] = at;
+        at += table[c];
+    }
+    if (at != fileBytes) throw corrupt("trailing bytes after the chunks");
+
+    std::vector<uint8_t> flags;
+    std::vector<float> samples, texcoords(ch.texKind ? 3 * ch.sampleCount : 0);
+    SplitBlocks split;
+    std::vector<char*> dest;
+    std::vector<bool> floats;
+    auto into = [&](auto& v, uint64_t bytes, bool isFloat) {
+        v.resize(bytes / sizeof(v[0]));
+        dest.push_back(reinterpret_cast<char*>(v.data()));
+        floats.push_back(isFloat);
+    };
+    for (size_t i = 0; i < sectionBytes.size(); ++i) {
+        const uint64_t b = sectionBytes[i];
+        if (kind == GridKind::Dense) {
+            if (i == 0)
+                into(samples, b, true);
+            else
+                into(texcoords, b, true);
+        } else if (i == 0) {
+            into(flags, b, false);
+        } else if (i == 1) {
+            into(split.own, b, true);
+        } else if (i == 2) {
+            into(split.masks, b, false);
+        } else if (i == 3) {
+            into(split.explicitly, b, true);
+        } else {
+            into(texcoords, b, true);
+        }
+    }
+    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
+        const Chunk& k = chunks[c];
+        char* out = dest[k.section] + k.offset;
+        std::vector<char> shuffled(floats[k.section] ? k.bytes : 0);
+        char* target = floats[k.section] ? shuffled.data() : out;
+        const size_t got = ZSTD_decompress(target, k.bytes, file.data() + start[c], table[c]);
+        if (ZSTD_isError(got) || got != k.bytes)
+            throw corrupt("chunk " + std::to_string(c) + " (" +
+                          (ZSTD_isError(got) ? ZSTD_getErrorName(got) : "wrong size") + ")");
+        if (floats[k.section]) unshuffleFloats(shuffled.data(), out, k.bytes);
+    });
+    if (kind == GridKind::Sparse) {
+        samples = joinBlocks(s, B, flags, split, path);
+        split = {};
+    }
+    for (float v : samples)
+        if (!std::isfinite(v)) throw corrupt("non-finite sample");
+    Grid grid = kind == GridKind::Dense
+                    ? Grid::dense(s, std::move(samples))
+                    : Grid::sparseFromBuffers(s, static_cast<int>(h.blockSize), h.background,
+                                              std::move(flags), std::move(samples), path);
+    if (ch.texKind)
+        grid.setTexcoords(static_cast<TexcoordKind>(ch.texKind), std::move(texcoords), path);
+    return grid;
+}
+
+}  // namespace
+
 Grid loadSdfg(const std::string& path) {
-    File file{std::fopen(path.c_str(), "rb")};
-    if (!file.f)
-        throw InputError(path + ": cannot open grid file (does it exist and is it readable?)");
-    std::error_code ec;
-    uint64_t fileBytes = std::filesystem::file_size(path, ec);
-    if (ec) throw InputError(path + ": cannot read the file size");
-    const Header h = readHeader(file.f, path, fileBytes);
+    const MappedFile file(path);
+    const uint64_t fileBytes = file.size();
+    const Header h = readHeader(file, path);
     const GridShape s = shapeOf(h, path);
+    if (h.version == 3) return loadCompressed(file, h, s, path);
     const PayloadLayout l = layoutOf(h, s, path, fileBytes);
 
+    uint64_t pos = sizeof h;
     auto readExact = [&](void* dst, size_t bytes) {
-        if (bytes && std::fread(dst, 1, bytes, file.f) != bytes)
-            throw InputError(path + ": truncated payload");
+        if (bytes > fileBytes - pos) throw InputError(path + ": truncated payload");
+        if (bytes) std::memcpy(dst, file.data() + pos, bytes);
+        pos += bytes;
     };
     uint64_t sum = 0xcbf29ce484222325ull;
     std::vector<float> samples;

@@ -35,21 +35,25 @@ void writeAll(const std::string& path, const std::string& bytes) {
     std::ofstream(path, std::ios::binary) << bytes;
 }
 
-TEST(Sdfg, RoundTripIsExactForBothLayouts) {
-    for (GridKind kind : {GridKind::Dense, GridKind::Sparse}) {
-        Grid g = makeGrid(kind);
-        std::string path = tempPath("rt.sdfg");
-        saveSdfg(g, path);
-        Grid back = loadSdfg(path);
-        EXPECT_EQ(back.kind(), kind);
-        EXPECT_EQ(back.samples(), g.samples());
-        EXPECT_EQ(back.flags(), g.flags());
-        EXPECT_EQ(back.blockSamples(), g.blockSamples());
-        EXPECT_EQ(back.cellMasks(), g.cellMasks());
-        EXPECT_EQ(back.lipschitz(), g.lipschitz());
-        EXPECT_EQ(back.shape().voxelSize, g.shape().voxelSize);
-        std::filesystem::remove(path);
-    }
+TEST(Sdfg, RoundTripIsExactForBothLayoutsCompressedOrNot) {
+    for (bool compress : {true, false})
+        for (GridKind kind : {GridKind::Dense, GridKind::Sparse}) {
+            Grid g = makeGrid(kind);
+            std::string path = tempPath("rt.sdfg");
+            saveSdfg(g, path, {.compress = compress});
+            uint32_t version = 0;
+            std::memcpy(&version, readAll(path).data() + 4, 4);
+            EXPECT_EQ(version, compress ? 3u : 1u);
+            Grid back = loadSdfg(path);
+            EXPECT_EQ(back.kind(), kind);
+            EXPECT_EQ(back.samples(), g.samples());
+            EXPECT_EQ(back.flags(), g.flags());
+            EXPECT_EQ(back.blockSamples(), g.blockSamples());
+            EXPECT_EQ(back.cellMasks(), g.cellMasks());
+            EXPECT_EQ(back.lipschitz(), g.lipschitz());
+            EXPECT_EQ(back.shape().voxelSize, g.shape().voxelSize);
+            std::filesystem::remove(path);
+        }
 }
 
 // Version 2 stores texture coordinates beside the distances; grids without them stay version 1.
@@ -57,14 +61,21 @@ TEST(Sdfg, TextureCoordinatesRoundTripAsVersionTwo) {
     for (GridKind kind : {GridKind::Dense, GridKind::Sparse}) {
         Grid g = makeGrid(kind);
         std::string path = tempPath("v1.sdfg");
-        saveSdfg(g, path);
+        const SdfgWriteOptions raw{.compress = false};
+        saveSdfg(g, path, raw);
         uint32_t version = 0;
         std::memcpy(&version, readAll(path).data() + 4, 4);
         EXPECT_EQ(version, 1u);
         std::vector<float> tex(3 * g.storedSamples());
         for (size_t i = 0; i < tex.size(); ++i) tex[i] = 0.001f * static_cast<float>(i % 997);
         g.setTexcoords(TexcoordKind::Cylinder, tex, "test");
+        // Compressed (version 3) with texture coordinates.
         saveSdfg(g, path);
+        Grid packed = loadSdfg(path);
+        EXPECT_EQ(packed.texcoordKind(), TexcoordKind::Cylinder);
+        EXPECT_EQ(packed.texcoords(), tex);
+        EXPECT_EQ(packed.blockSamples(), g.blockSamples());
+        saveSdfg(g, path, raw);
         std::memcpy(&version, readAll(path).data() + 4, 4);
         EXPECT_EQ(version, 2u);
         Grid back = loadSdfg(path);
@@ -98,7 +109,7 @@ void expectRejected(const std::string& bytes, const std::string& fragment) {
 
 TEST(Sdfg, RejectsBadFilesBeforeAllocating) {
     std::string path = tempPath("good.sdfg");
-    saveSdfg(makeGrid(GridKind::Sparse), path);
+    saveSdfg(makeGrid(GridKind::Sparse), path, {.compress = false});
     std::string good = readAll(path);
     std::filesystem::remove(path);
 
@@ -129,6 +140,38 @@ TEST(Sdfg, RejectsBadFilesBeforeAllocating) {
     uint32_t five = 5;
     std::memcpy(&block[40], &five, 4);
     expectRejected(block, "block size 5");
+}
+
+// Version 3: every table and chunk is checked against the header, the file and its checksums.
+TEST(Sdfg, RejectsBadCompressedFiles) {
+    std::string path = tempPath("good3.sdfg");
+    saveSdfg(makeGrid(GridKind::Sparse), path);
+    std::string good = readAll(path);
+    std::filesystem::remove(path);
+    ASSERT_GT(good.size(), 64u + 32u + 8u);
+
+    expectRejected(good.substr(0, 40), "truncated");
+    expectRejected(good.substr(0, good.size() - 10), "payload size");
+    expectRejected(good + "xx", "payload size");
+    std::string chunk = good;
+    chunk[good.size() - 6] ^= 0x55;
+    expectRejected(chunk, "chunk 3 (");  // the explicit aprons (flags, own samples, masks first)
+    std::string table = good;
+    table[64 + 32] ^= 0x01;
+    expectRejected(table, "table checksum");
+    std::string chunkSize = good;
+    uint32_t odd = 4097;
+    std::memcpy(&chunkSize[64 + 4], &odd, 4);
+    expectRejected(chunkSize, "chunk size");
+    // Absurd cells: the chunk count no longer follows, rejected before any allocation.
+    std::string absurd = good;
+    int32_t huge = 30000;
+    for (int a = 0; a < 3; ++a) std::memcpy(&absurd[12 + 4 * a], &huge, 4);
+    expectRejected(absurd, "chunk count");
+    std::string count = good;
+    uint64_t many = uint64_t{1} << 40;
+    std::memcpy(&count[64 + 24], &many, 8);
+    expectRejected(count, "chunk count");
 }
 
 TEST(Sdfg, FailedSaveLeavesNoFile) {

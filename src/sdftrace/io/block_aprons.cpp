@@ -1,0 +1,178 @@
+#include "block_aprons.h"
+
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <bit>
+#include <cstring>
+
+#include "sdftrace/core/error.h"
+
+namespace sdft {
+
+namespace {
+
+// The apron's local vertices (some coordinate == B), z slowest, x fastest.
+std::vector<std::array<int, 3>> apronPositions(int B) {
+    std::vector<std::array<int, 3>> out;
+    for (int k = 0; k <= B; ++k)
+        for (int j = 0; j <= B; ++j)
+            for (int i = 0; i <= B; ++i)
+                if (i == B || j == B || k == B) out.push_back({i, j, k});
+    return out;
+}
+
+struct Layout {
+    int B, V, own, per, apron, words;
+    int blocks[3];
+    explicit Layout(const GridShape& s, int blockSize)
+        : B(blockSize),
+          V(blockSize + 1),
+          own(B * B * B),
+          per(V * V * V),
+          apron(per - own),
+          words((apron + 63) / 64) {
+        for (int a = 0; a < 3; ++a) blocks[a] = (s.cells[a] + B - 1) / B;
+    }
+    size_t numBlocks() const { return static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2]; }
+    void coords(size_t b, int c[3]) const {
+        c[0] = static_cast<int>(b % blocks[0]);
+        c[1] = static_cast<int>(b / blocks[0] % blocks[1]);
+        c[2] = static_cast<int>(b / (static_cast<size_t>(blocks[0]) * blocks[1]));
+    }
+    // The block owning apron vertex p of block c (p's coordinates == B step to the neighbour);
+    // false when it lies past the grid's last block.
+    bool owner(const int c[3], const std::array<int, 3>& p, size_t& block) const {
+        int o[3];
+        for (int a = 0; a < 3; ++a) {
+            o[a] = c[a] + (p[a] == B);
+            if (o[a] >= blocks[a]) return false;
+        }
+        block = (static_cast<size_t>(o[2]) * blocks[1] + o[1]) * blocks[0] + o[0];
+        return true;
+    }
+    // Index of p (mod B) in an owner's B^3 own samples.
+    int ownIndex(const std::array<int, 3>& p) const {
+        return ((p[2] % B) * B + p[1] % B) * B + p[0] % B;
+    }
+};
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+}  // namespace
+
+int apronSize(int B) { return (B + 1) * (B + 1) * (B + 1) - B * B * B; }
+int apronWords(int B) { return (apronSize(B) + 63) / 64; }
+
+SplitBlocks splitBlocks(const Grid& grid) {
+    const Layout L(grid.shape(), grid.blockSize());
+    const auto aprons = apronPositions(L.B);
+    const std::vector<int32_t>& data = grid.blockData();
+    const std::vector<float>& samples = grid.blockSamples();
+    const size_t surface = samples.size() / L.per;
+    std::vector<size_t> blockOf(surface);  // surface index -> block
+    for (size_t b = 0; b < data.size(); ++b)
+        if (data[b] >= 0) blockOf[static_cast<size_t>(data[b])] = b;
+    SplitBlocks out;
+    out.own.resize(surface * L.own);
+    out.masks.assign(surface * L.words, 0);
+    std::vector<uint32_t> kept(surface);
+    // Pass 1: own samples and masks; pass 2 (after the prefix sums) the explicit samples.
+    tbb::parallel_for(size_t(0), surface, [&](size_t s) {
+        const float* src = samples.data() + s * L.per;
+        float* own = out.own.data() + s * L.own;
+        for (int k = 0; k < L.B; ++k)
+            for (int j = 0; j < L.B; ++j)
+                for (int i = 0; i < L.B; ++i)
+                    own[(k * L.B + j) * L.B + i] = src[(k * L.V + j) * L.V + i];
+        int c[3];
+        L.coords(blockOf[s], c);
+        uint64_t* mask = out.masks.data() + s * L.words;
+        for (int a = 0; a < L.apron; ++a) {
+            const auto& p = aprons[static_cast<size_t>(a)];
+            const float v = src[(p[2] * L.V + p[1]) * L.V + p[0]];
+            size_t o = 0;
+            const bool implicit =
+                L.owner(c, p, o) && data[o] >= 0 &&
+                sameBits(v, samples[static_cast<size_t>(data[o]) * L.per +
+                                    (((p[2] % L.B) * L.V + p[1] % L.B) * L.V + p[0] % L.B)]);
+            if (!implicit) {
+                mask[a / 64] |= uint64_t{1} << (a % 64);
+                ++kept[s];
+            }
+        }
+    });
+    std::vector<size_t> start(surface + 1, 0);
+    for (size_t s = 0; s < surface; ++s) start[s + 1] = start[s] + kept[s];
+    out.explicitly.resize(start[surface]);
+    tbb::parallel_for(size_t(0), surface, [&](size_t s) {
+        const float* src = samples.data() + s * L.per;
+        const uint64_t* mask = out.masks.data() + s * L.words;
+        size_t n = start[s];
+        for (int a = 0; a < L.apron; ++a)
+            if ((mask[a / 64] >> (a % 64)) & 1u) {
+                const auto& p = aprons[static_cast<size_t>(a)];
+                out.explicitly[n++] = src[(p[2] * L.V + p[1]) * L.V + p[0]];
+            }
+    });
+    return out;
+}
+
+std::vector<float> joinBlocks(const GridShape& shape, int blockSize,
+                              const std::vector<uint8_t>& flags, const SplitBlocks& split,
+                              const std::string& source) {
+    const Layout L(shape, blockSize);
+    const auto aprons = apronPositions(L.B);
+    auto corrupt = [&](const std::string& what) {
+        return InputError(source + ": corrupt compressed .sdfg: " + what);
+    };
+    if (flags.size() != L.numBlocks()) throw corrupt("block flag count");
+    std::vector<int64_t> surfaceOf(flags.size(), -1);
+    std::vector<size_t> blockOf;
+    for (size_t b = 0; b < flags.size(); ++b)
+        if (flags[b] == static_cast<uint8_t>(BlockFlag::Surface)) {
+            surfaceOf[b] = static_cast<int64_t>(blockOf.size());
+            blockOf.push_back(b);
+        }
+    const size_t surface = blockOf.size();
+    if (split.own.size() != surface * L.own || split.masks.size() != surface * L.words)
+        throw corrupt("the flags name " + std::to_string(surface) +
+                      " surface blocks; the samples and masks do not");
+    std::vector<size_t> start(surface + 1, 0);
+    for (size_t s = 0; s < surface; ++s) {
+        size_t kept = 0;
+        for (int w = 0; w < L.words; ++w) kept += std::popcount(split.masks[s * L.words + w]);
+        start[s + 1] = start[s] + kept;
+    }
+    if (start[surface] != split.explicitly.size()) throw corrupt("explicit apron sample count");
+    std::vector<float> samples(surface * L.per);
+    tbb::parallel_for(size_t(0), surface, [&](size_t s) {
+        float* dst = samples.data() + s * L.per;
+        const float* own = split.own.data() + s * L.own;
+        for (int k = 0; k < L.B; ++k)
+            for (int j = 0; j < L.B; ++j)
+                for (int i = 0; i < L.B; ++i)
+                    dst[(k * L.V + j) * L.V + i] = own[(k * L.B + j) * L.B + i];
+        int c[3];
+        L.coords(blockOf[s], c);
+        const uint64_t* mask = split.masks.data() + s * L.words;
+        size_t n = start[s];
+        for (int a = 0; a < L.apron; ++a) {
+            const auto& p = aprons[static_cast<size_t>(a)];
+            float& v = dst[(p[2] * L.V + p[1]) * L.V + p[0]];
+            if ((mask[a / 64] >> (a % 64)) & 1u) {
+                v = split.explicitly[n++];
+                continue;
+            }
+            size_t o = 0;
+            if (!L.owner(c, p, o) || surfaceOf[o] < 0)
+                throw corrupt("an apron sample refers to a block without samples");
+            v = split.own[static_cast<size_t>(surfaceOf[o]) * L.own + L.ownIndex(p)];
+        }
+        for (int a = L.apron; a < L.words * 64; ++a)
+            if ((mask[a / 64] >> (a % 64)) & 1u) throw corrupt("apron mask bits past the apron");
+    });
+    return samples;
+}
+
+}  // namespace sdft
