@@ -39,7 +39,9 @@ const std::map<std::string, std::set<std::string>>& allowedIncludes() {
 // order.
 std::vector<std::string> violations(const std::string& module, const std::string& file,
                                     const std::string& text) {
-    static const std::regex include(R"(#include\s+"sdftrace/([a-z_]+)/)");
+    // Public headers ("sdftrace/<module>/...") and private ones reached by a relative path
+    // ("../<module>/...").
+    static const std::regex include(R"(#include\s+"(?:sdftrace|\.\.)/([a-z_]+)/)");
     std::vector<std::string> out;
     const auto& allowed = allowedIncludes().at(module);
     for (std::sregex_iterator it(text.begin(), text.end(), include), end; it != end; ++it) {
@@ -65,6 +67,8 @@ TEST(ModuleOrder, CheckerFindsAnIncludeAgainstTheOrder) {
     EXPECT_EQ(violations("trace", "x.h", "#include \"sdftrace/render/camera.h\"\n").size(), 1u);
     EXPECT_EQ(violations("render", "x.h", "#include \"sdftrace/scene/scene.h\"\n").size(), 1u);
     EXPECT_EQ(violations("bake", "x.h", "#include \"sdftrace/io/mesh_io.h\"\n").size(), 1u);
+    EXPECT_EQ(violations("bake", "x.cpp", "#include \"../io/vdb_reader.h\"\n").size(), 1u);
+    EXPECT_TRUE(violations("bake", "x.cpp", "#include \"../field/openvdb_grid.h\"\n").empty());
     EXPECT_TRUE(violations("scene", "x.h", "#include \"sdftrace/render/film.h\"\n").empty());
     EXPECT_TRUE(violations("field", "x.h", "#include \"sdftrace/field/grid.h\"\n").empty());
 }

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "../io/openvdb_grid.h"
+#include "../field/openvdb_grid.h"
 #include "sdftrace/core/error.h"
 
 namespace sdft {

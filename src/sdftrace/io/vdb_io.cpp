@@ -11,7 +11,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "openvdb_grid.h"
+#include "../field/openvdb_grid.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/huge_pages.h"
