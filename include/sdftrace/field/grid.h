@@ -50,6 +50,10 @@ struct GridView {
     const int32_t* blockData = nullptr;   // per block: index of its (B+1)^3 samples, -1 if none
     const float* blockSamples = nullptr;  // surface blocks' samples, x fastest inside a block
     const uint64_t* cellMasks = nullptr;  // per surface block: B^3 bits, (B^3 + 63) / 64 words
+    // Per block: r such that every block within Chebyshev distance r (in blocks) holds no surface
+    // (0 for surface blocks and their neighbours): a ray may skip the cube of side 2r + 1 around
+    // it.
+    const uint8_t* blockSkip = nullptr;
     float background = 1;  // |value| assumed in non-surface blocks (a lower bound of the distance)
     // Optional texture coordinates (Liktor 2008, §5.5.2): 3 floats per stored sample, beside the
     // distance (dense: per vertex; sparse: per surface-block sample), mapped to (u, v) by
@@ -123,6 +127,7 @@ class Grid {
     const std::vector<int32_t>& blockData() const { return m_blockData; }
     const std::vector<float>& blockSamples() const { return m_blockSamples; }
     const std::vector<uint64_t>& cellMasks() const { return m_cellMasks; }
+    const std::vector<uint8_t>& blockSkip() const { return m_blockSkip; }
     // Texture coordinates beside the distances (GridView::texcoords); empty when none.
     const std::vector<float>& texcoords() const { return m_texcoords; }
     TexcoordKind texcoordKind() const { return m_texcoordKind; }
@@ -143,6 +148,7 @@ class Grid {
   private:
     void computeLipschitz();              // dense
     void computeCellMasksAndLipschitz();  // sparse
+    void computeBlockSkip();              // sparse, from the flags
 
     GridKind m_kind = GridKind::Dense;
     GridShape m_shape;
@@ -155,6 +161,7 @@ class Grid {
     std::vector<int32_t> m_blockData;
     std::vector<float> m_blockSamples;
     std::vector<uint64_t> m_cellMasks;
+    std::vector<uint8_t> m_blockSkip;
     std::vector<float> m_texcoords;
     TexcoordKind m_texcoordKind = TexcoordKind::None;
 };

@@ -136,6 +136,7 @@ GridView Grid::view() const {
     v.blockData = m_blockData.data();
     v.blockSamples = m_blockSamples.data();
     v.cellMasks = m_cellMasks.data();
+    v.blockSkip = m_blockSkip.empty() ? nullptr : m_blockSkip.data();
     v.background = m_background;
     if (!m_texcoords.empty()) {
         v.texcoords = m_texcoords.data();
@@ -261,7 +262,7 @@ Bounds3 Grid::surfaceBounds() const {
 size_t Grid::memoryBytes() const {
     return m_samples.size() * sizeof(float) + m_flags.size() +
            m_blockData.size() * sizeof(int32_t) + m_blockSamples.size() * sizeof(float) +
-           m_cellMasks.size() * sizeof(uint64_t);
+           m_cellMasks.size() * sizeof(uint64_t) + m_blockSkip.size();
 }
 
 void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
@@ -391,6 +392,46 @@ void Grid::computeCellMasksAndLipschitz() {
     const float worst = worstPerThread.combine([](float a, float b) { return std::max(a, b); });
     // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
     m_lipschitz = std::max(1.0f, std::sqrt(worst) / m_shape.voxelSize);
+    computeBlockSkip();
+}
+
+// Empty-space skipping for the block DDA: the Chebyshev distance (in blocks) from each block to
+// the nearest surface block, by a two-pass chamfer transform over the 26-neighbourhood (exact for
+// this metric), stored as that distance minus one, capped at 255.
+void Grid::computeBlockSkip() {
+    const int nx = m_blocks[0], ny = m_blocks[1], nz = m_blocks[2];
+    const size_t n = m_flags.size();
+    std::vector<uint16_t> d(n);
+    constexpr uint16_t kFar = 256;
+    for (size_t b = 0; b < n; ++b)
+        d[b] = m_flags[b] == static_cast<uint8_t>(BlockFlag::Surface) ? 0 : kFar;
+    auto at = [&](int i, int j, int k) { return (static_cast<size_t>(k) * ny + j) * nx + i; };
+    // Forward: neighbours earlier in raster order; backward: later ones.
+    for (int pass = 0; pass < 2; ++pass) {
+        const int s = pass == 0 ? -1 : 1;
+        for (int kk = 0; kk < nz; ++kk)
+            for (int jj = 0; jj < ny; ++jj)
+                for (int ii = 0; ii < nx; ++ii) {
+                    const int i = pass == 0 ? ii : nx - 1 - ii, j = pass == 0 ? jj : ny - 1 - jj,
+                              k = pass == 0 ? kk : nz - 1 - kk;
+                    uint16_t& v = d[at(i, j, k)];
+                    if (v == 0) continue;
+                    for (int dk = -1; dk <= 1; ++dk)
+                        for (int dj = -1; dj <= 1; ++dj)
+                            for (int di = -1; di <= 1; ++di) {
+                                // Raster order: only neighbours already visited in this pass.
+                                const int order = dk != 0 ? dk : dj != 0 ? dj : di;
+                                if (order != s) continue;
+                                const int x = i + di, y = j + dj, z = k + dk;
+                                if (x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz)
+                                    continue;
+                                v = std::min<uint16_t>(v, d[at(x, y, z)] + 1);
+                            }
+                }
+    }
+    m_blockSkip.resize(n);
+    for (size_t b = 0; b < n; ++b)
+        m_blockSkip[b] = static_cast<uint8_t>(std::min<int>(255, std::max(0, d[b] - 1)));
 }
 
 }  // namespace sdft

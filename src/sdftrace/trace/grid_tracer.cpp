@@ -9,32 +9,35 @@ namespace {
 
 // Amanatides & Woo 3D-DDA over a lattice of cubes of edge `size` (grid units) whose indices lie in
 // [lo, hi] per axis, starting at parameter t (ray in grid units: p(t) = o + t d).
+// Each boundary's parameter is computed from its index, not accumulated, so a traversal that
+// restarts further along the ray (empty-space skipping) meets exactly the same values.
 struct Dda {
     int idx[3], step[3], lo[3], hi[3];
-    float tNext[3], tDelta[3];
+    float tNext[3];
     float t;
+    float org[3], inv[3], size;
 
     // invD: 1 / d per axis (inf where d is 0), computed once per ray.
-    void init(const Vec3& o, const Vec3& d, const float invD[3], float tStart, float size,
+    void init(const Vec3& o, const Vec3& d, const float invD[3], float tStart, float size_,
               const int lo_[3], const int hi_[3]) {
         t = tStart;
+        size = size_;
         Vec3 p = o + d * tStart;
         for (int a = 0; a < 3; ++a) {
+            org[a] = o[a];
+            inv[a] = invD[a];
             lo[a] = lo_[a];
             hi[a] = hi_[a];
             int i = static_cast<int>(std::floor(p[a] / size));
             idx[a] = std::clamp(i, lo[a], hi[a]);
             if (d[a] > 0) {
                 step[a] = 1;
-                tDelta[a] = size * invD[a];
                 tNext[a] = ((idx[a] + 1) * size - o[a]) * invD[a];
             } else if (d[a] < 0) {
                 step[a] = -1;
-                tDelta[a] = -size * invD[a];
                 tNext[a] = (idx[a] * size - o[a]) * invD[a];
             } else {
                 step[a] = 0;
-                tDelta[a] = kInfinity;
                 tNext[a] = kInfinity;
             }
         }
@@ -46,7 +49,7 @@ struct Dda {
         int a = tNext[0] < tNext[1] ? (tNext[0] < tNext[2] ? 0 : 2) : (tNext[1] < tNext[2] ? 1 : 2);
         t = tNext[a];
         idx[a] += step[a];
-        tNext[a] += tDelta[a];
+        tNext[a] = ((idx[a] + (step[a] > 0)) * size - org[a]) * inv[a];
         return idx[a] >= lo[a] && idx[a] <= hi[a];
     }
 };
@@ -195,15 +198,36 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
 // skipped, surface blocks walked cell by cell. Fills res.hit and res.t on a hit.
 void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTraceOptions& o,
                     GridTraceResult& res) {
+    const float B = static_cast<float>(s.B);
     for (;;) {
         res.traversalSteps++;
         float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
-        if (blockFlag(g, blocks.idx) == BlockFlag::Surface) {
+        const size_t b =
+            (static_cast<size_t>(blocks.idx[2]) * g.blocks[1] + blocks.idx[1]) * g.blocks[0] +
+            blocks.idx[0];
+        if (g.kind == GridKind::Dense || g.flags[b] == static_cast<uint8_t>(BlockFlag::Surface)) {
             float tHit;
             if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
                 res.hit = true;
                 res.t = tHit;
                 return;
+            }
+        } else if (g.blockSkip && g.blockSkip[b] > 0) {
+            // Empty-space skipping: no block within r of this one holds a surface, so the ray
+            // continues where it leaves that cube of blocks (only blocks without samples are
+            // skipped: the hits are the plain traversal's).
+            const int r = g.blockSkip[b];
+            float tCube = kInfinity;
+            for (int a = 0; a < 3; ++a) {
+                if (s.r.d[a] > 0)
+                    tCube = std::min(tCube, ((blocks.idx[a] + r + 1) * B - s.r.o[a]) * s.invD[a]);
+                else if (s.r.d[a] < 0)
+                    tCube = std::min(tCube, ((blocks.idx[a] - r) * B - s.r.o[a]) * s.invD[a]);
+            }
+            if (tCube >= s.t1) return;
+            if (tCube > tExit) {
+                blocks.init(s.r.o, s.r.d, s.invD, tCube, B, s.blockLo, s.blockHi);
+                continue;
             }
         }
         if (tExit >= s.t1 || !blocks.advance()) return;

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/trace/field_tracer.h"
@@ -83,6 +86,58 @@ TEST(GridTracer, BitMasksAndDenseTraversalChangeNoHit) {
         if (a.hit) {
             ASSERT_NEAR(a.t, c.t, 1e-4f);
         }
+    }
+}
+
+// Skipping cubes of blocks without a surface (GridView::blockSkip) changes no hit and no t, and
+// saves traversal steps.
+TEST(GridTracer, EmptySpaceSkippingChangesNoHit) {
+    const Fixture& f = fixture();
+    const GridView with = f.sparse->view();
+    GridView without = with;
+    without.blockSkip = nullptr;
+    ASSERT_NE(with.blockSkip, nullptr);
+    int maxSkip = 0;
+    for (uint8_t r : f.sparse->blockSkip()) maxSkip = std::max<int>(maxSkip, r);
+    EXPECT_GE(maxSkip, 2);
+    long stepsWith = 0, stepsWithout = 0;
+    int hits = 0;
+    for (const RaySegment& seg : f.rays) {
+        GridTraceResult a = traceGridRay(with, seg.ray, seg.tMin, seg.tMax, GridTraceOptions{});
+        GridTraceResult b = traceGridRay(without, seg.ray, seg.tMin, seg.tMax, GridTraceOptions{});
+        ASSERT_EQ(a.hit, b.hit);
+        if (a.hit) {
+            ASSERT_EQ(a.t, b.t);
+        }
+        ASSERT_LE(a.traversalSteps, b.traversalSteps);
+        ASSERT_EQ(a.intersectionTests, b.intersectionTests);
+        hits += a.hit;
+        stepsWith += a.traversalSteps;
+        stepsWithout += b.traversalSteps;
+    }
+    EXPECT_GT(hits, 1000);
+    EXPECT_LT(stepsWith, stepsWithout);
+}
+
+// The skip distances are the Chebyshev distance to the nearest surface block, minus one.
+TEST(GridTracer, BlockSkipIsTheDistanceToTheNearestSurfaceBlock) {
+    const Grid& g = *fixture().sparse;
+    const GridView v = g.view();
+    const int nx = v.blocks[0], ny = v.blocks[1], nz = v.blocks[2];
+    std::vector<std::array<int, 3>> surface;
+    for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i)
+                if (v.flags[(static_cast<size_t>(k) * ny + j) * nx + i] == 2)
+                    surface.push_back({i, j, k});
+    ASSERT_FALSE(surface.empty());
+    for (size_t b = 0; b < g.flags().size(); b += 7) {
+        const int i = static_cast<int>(b % nx), j = static_cast<int>(b / nx % ny),
+                  k = static_cast<int>(b / (static_cast<size_t>(nx) * ny));
+        int d = 1 << 30;
+        for (const auto& s : surface)
+            d = std::min(d, std::max({std::abs(s[0] - i), std::abs(s[1] - j), std::abs(s[2] - k)}));
+        ASSERT_EQ(v.blockSkip[b], std::min(255, std::max(0, d - 1))) << i << " " << j << " " << k;
     }
 }
 
