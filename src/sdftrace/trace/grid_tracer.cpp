@@ -311,12 +311,20 @@ Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
         // Central differences at the 8 cell vertices, then trilinear interpolation of them.
         int i = cellOf(q.x, 0), j = cellOf(q.y, 1), k = cellOf(q.z, 2);
         float u = clampf(q.x - i, 0, 1), v = clampf(q.y - j, 0, 1), w = clampf(q.z - k, 0, 1);
+        // The 32 distinct vertices the 8 central differences read, each once: nb[z][y][x] for
+        // offsets -1..2 from (i, j, k) (index + 1), at most one of them outside {0, 1}.
+        float nb[4][4][4];
+        for (int z = 0; z < 4; ++z)
+            for (int y = 0; y < 4; ++y)
+                for (int x = 0; x < 4; ++x) {
+                    const int outer = (x == 0 || x == 3) + (y == 0 || y == 3) + (z == 0 || z == 3);
+                    if (outer <= 1) nb[z][y][x] = g.vertex(i + x - 1, j + y - 1, k + z - 1);
+                }
         Vec3 corner[8];
         for (int n = 0; n < 8; ++n) {
-            int x = i + (n & 1), y = j + ((n >> 1) & 1), z = k + ((n >> 2) & 1);
-            corner[n] = {g.vertex(x + 1, y, z) - g.vertex(x - 1, y, z),
-                         g.vertex(x, y + 1, z) - g.vertex(x, y - 1, z),
-                         g.vertex(x, y, z + 1) - g.vertex(x, y, z - 1)};
+            const int x = 1 + (n & 1), y = 1 + ((n >> 1) & 1), z = 1 + ((n >> 2) & 1);
+            corner[n] = {nb[z][y][x + 1] - nb[z][y][x - 1], nb[z][y + 1][x] - nb[z][y - 1][x],
+                         nb[z + 1][y][x] - nb[z - 1][y][x]};
         }
         Vec3 c00 = lerp(corner[0], corner[1], u), c10 = lerp(corner[2], corner[3], u);
         Vec3 c01 = lerp(corner[4], corner[5], u), c11 = lerp(corner[6], corner[7], u);
