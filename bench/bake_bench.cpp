@@ -6,7 +6,8 @@
 // hierarchical sum, or the exact one where that is within 0.1 of 1/2).
 //
 //   build/release/bench/sdftrace_bake_bench                      # bunny + teapot, everything
-//   build/release/bench/sdftrace_bake_bench --meshes bunny --sparse 256 --dense none
+//   build/release/bench/sdftrace_bake_bench --meshes bunny,/tmp/sdftrace-meshes/rock.ply
+//       --sparse 256 --dense none
 //       --methods exact,openvdb --threads 2 --reps 5
 //   build/release/bench/sdftrace_bake_bench --sparse none --dense 128,256
 //       --methods exact,exact-bvh --threads 1,2 --reps 3   # closest point transform vs BVH
@@ -232,8 +233,11 @@ int main(int argc, char** argv) {
         reps);
     std::fflush(stdout);
     for (const std::string& m : split(meshes)) {
-        std::string path = std::string(SDFT_SOURCE_DIR) + "/data/meshes/" +
-                           (m == "bunny" ? "stanford-bunny.obj" : m + ".obj");
+        // A name of data/meshes ("bunny" is the Stanford scan), or any mesh file's path.
+        std::string path = m.find('/') != std::string::npos
+                               ? m
+                               : std::string(SDFT_SOURCE_DIR) + "/data/meshes/" +
+                                     (m == "bunny" ? "stanford-bunny.obj" : m + ".obj");
         for (int pass = 0; pass < 2; ++pass) {
             std::string list = pass == 0 ? sparse : dense;
             if (list == "none") continue;

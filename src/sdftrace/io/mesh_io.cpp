@@ -2,15 +2,15 @@
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <map>
 #include <numeric>
-#include <unordered_map>
+#include <tuple>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
@@ -31,20 +31,6 @@ std::string MeshReport::summary() const {
 
 namespace {
 
-struct Vec3Hash {
-    size_t operator()(const Vec3& v) const {
-        uint32_t b[3];
-        std::memcpy(b, &v, sizeof b);
-        return (static_cast<size_t>(b[0]) * 73856093u) ^ (static_cast<size_t>(b[1]) * 19349663u) ^
-               (static_cast<size_t>(b[2]) * 83492791u);
-    }
-};
-struct Vec3Eq {
-    bool operator()(const Vec3& a, const Vec3& b) const {
-        return a.x == b.x && a.y == b.y && a.z == b.z;
-    }
-};
-
 size_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
@@ -63,17 +49,37 @@ TriangleMesh cleanMesh(const std::vector<Vec3>& positions,
                                  std::to_string(v) + ", but there are " +
                                  std::to_string(positions.size()) +
                                  " vertices (accepted: indices below the vertex count)");
-    // Weld exact duplicates (bitwise-equal positions; -0 and +0 compare equal too).
-    std::unordered_map<Vec3, uint32_t, Vec3Hash, Vec3Eq> index;
-    std::vector<uint32_t> remap(positions.size());
-    std::vector<Vec3> welded;
+    // Weld exact duplicates (bitwise-equal positions; -0 and +0 compare equal too), by sorting
+    // the positions' bit patterns: each run of equal ones becomes the vertex of its first record.
+    struct Key {
+        uint32_t bits[3];
+        uint32_t index;
+        bool operator<(const Key& o) const {
+            return std::tie(bits[0], bits[1], bits[2], index) <
+                   std::tie(o.bits[0], o.bits[1], o.bits[2], o.index);
+        }
+        bool samePosition(const Key& o) const {
+            return bits[0] == o.bits[0] && bits[1] == o.bits[1] && bits[2] == o.bits[2];
+        }
+    };
+    std::vector<Key> order(positions.size());
     for (size_t i = 0; i < positions.size(); ++i) {
         Vec3 p = positions[i];
         for (int a = 0; a < 3; ++a)
             if (p[a] == 0.0f) p[a] = 0.0f;  // one zero
-        auto [it, inserted] = index.emplace(p, static_cast<uint32_t>(welded.size()));
-        if (inserted) welded.push_back(p);
-        remap[i] = it->second;
+        std::memcpy(order[i].bits, &p, sizeof order[i].bits);
+        order[i].index = static_cast<uint32_t>(i);
+    }
+    tbb::parallel_sort(order.begin(), order.end());
+    std::vector<uint32_t> remap(positions.size());
+    std::vector<Vec3> welded;
+    for (size_t i = 0; i < order.size(); ++i) {
+        if (i == 0 || !order[i].samePosition(order[i - 1])) {
+            Vec3 p;
+            std::memcpy(&p, order[i].bits, sizeof order[i].bits);
+            welded.push_back(p);
+        }
+        remap[order[i].index] = static_cast<uint32_t>(welded.size() - 1);
     }
     r.weldedVertices = positions.size() - welded.size();
     // Drop degenerate triangles: a repeated vertex or (numerically) zero area.
@@ -100,22 +106,32 @@ TriangleMesh cleanMesh(const std::vector<Vec3>& positions,
         }
     r.unusedVertices = welded.size() - mesh.positions.size();
     mesh.triangles = std::move(kept);
-    // Duplicate (either winding) triangles, boundary edges, components.
-    std::map<std::array<uint32_t, 3>, int> seen;
-    std::map<std::pair<uint32_t, uint32_t>, int> edges;
+    // Duplicate (either winding) triangles, boundary edges, components. Counted by sorting (a
+    // std::map of 3M edges took 2 s of a million-triangle mesh's 2.4 s load).
+    std::vector<std::array<uint32_t, 3>> keys(mesh.triangles.size());
+    std::vector<uint64_t> edges(3 * mesh.triangles.size());
     std::vector<uint32_t> parent(mesh.positions.size());
     std::iota(parent.begin(), parent.end(), 0u);
-    for (const auto& t : mesh.triangles) {
-        std::array<uint32_t, 3> key = t;
-        std::sort(key.begin(), key.end());
-        if (seen[key]++ > 0) ++r.duplicateTriangles;
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const auto& t = mesh.triangles[i];
+        keys[i] = t;
+        std::sort(keys[i].begin(), keys[i].end());
         for (int e = 0; e < 3; ++e) {
             uint32_t a = t[e], b = t[(e + 1) % 3];
-            edges[{std::min(a, b), std::max(a, b)}]++;
+            edges[3 * i + e] = static_cast<uint64_t>(std::min(a, b)) << 32 | std::max(a, b);
             parent[findRoot(parent, a)] = static_cast<uint32_t>(findRoot(parent, b));
         }
     }
-    for (const auto& [e, count] : edges) r.boundaryEdges += count == 1;
+    tbb::parallel_sort(keys.begin(), keys.end());
+    r.duplicateTriangles =
+        keys.size() - static_cast<size_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+    tbb::parallel_sort(edges.begin(), edges.end());
+    for (size_t i = 0; i < edges.size();) {
+        size_t j = i + 1;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        r.boundaryEdges += j - i == 1;
+        i = j;
+    }
     for (uint32_t v = 0; v < parent.size(); ++v) r.components += findRoot(parent, v) == v;
     return mesh;
 }
