@@ -1,6 +1,8 @@
-// Fuzz target: the .sdfg reader. The payload checksum is recomputed over the input before reading
-// (mutations would otherwise stop at it), so the header and payload checks behind it are reached;
-// a grid that loads is sampled and its surface blocks walked.
+// Fuzz target: the .sdfg reader. The header's checksum is recomputed over the input before
+// reading (mutations would otherwise stop at it): versions 1-2 over the payload, version 3 over its
+// section header and chunk table, so the checks behind it and the zstd chunks are reached; a grid
+// that loads is sampled and its surface blocks walked.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -15,8 +17,21 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fuzz::limitMemoryForFuzzing();
     constexpr size_t kHeader = 64, kChecksumAt = 56;
     std::vector<uint8_t> bytes(data, data + size);
+    constexpr size_t kSections = 32, kChunkCountAt = kHeader + 24;
     if (size >= kHeader) {
-        const uint64_t sum = fnv1a64(bytes.data() + kHeader, size - kHeader);
+        uint32_t version = 0;
+        std::memcpy(&version, bytes.data() + 4, sizeof version);
+        uint64_t sum = 0;
+        if (version == 3 && size >= kHeader + kSections) {
+            uint64_t chunks = 0;
+            std::memcpy(&chunks, bytes.data() + kChunkCountAt, sizeof chunks);
+            const size_t available = (size - kHeader - kSections) / sizeof(uint64_t);
+            const size_t table = static_cast<size_t>(std::min<uint64_t>(chunks, available));
+            sum = fnv1a64(bytes.data() + kHeader + kSections, table * sizeof(uint64_t),
+                          fnv1a64(bytes.data() + kHeader, kSections));
+        } else {
+            sum = fnv1a64(bytes.data() + kHeader, size - kHeader);
+        }
         std::memcpy(bytes.data() + kChecksumAt, &sum, sizeof sum);
     }
     const std::string path = fuzz::writeScratchFile(bytes.data(), bytes.size(), ".sdfg");
