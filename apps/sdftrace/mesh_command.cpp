@@ -53,7 +53,6 @@ SampleOptions sampling(const MeshArgs& a, bool progress) {
     o.resolution = a.resolution > 0 ? a.resolution : kDefaultRes;
     o.kind = GridKind::Sparse;
     o.blockSize = 8;
-    // The band must hold the offset surface and a voxel of samples beyond it.
     o.threads = a.threads;
     o.progress = progress;
     return o;

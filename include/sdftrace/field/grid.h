@@ -71,6 +71,8 @@ struct GridView {
     SDFT_HOST_DEVICE float vertex(int i, int j, int k) const;
     // The 8 corner samples of cell (i, j, k), index = di + 2 dj + 4 dk.
     SDFT_HOST_DEVICE void cellCorners(int i, int j, int k, float c[8]) const;
+    // +-background of a sparse block without samples, by its flag (cell (i, j, k) in it).
+    SDFT_HOST_DEVICE float constantBlockValue(int i, int j, int k) const;
     // Trilinear reconstruction inside the grid; outside, a distance bound through the nearest grid
     // point q: sqrt(|p - q|^2 + max(f(q), 0)^2) (the surface lies in the box, which is convex).
     SDFT_HOST_DEVICE float sample(Vec3 p) const;
@@ -184,21 +186,20 @@ SDFT_HOST_DEVICE inline float GridView::vertex(int i, int j, int k) const {
     i = clampi(i, 0, nx);
     j = clampi(j, 0, ny);
     k = clampi(k, 0, nz);
-    if (kind == GridKind::Dense)
-        return samples[(static_cast<size_t>(k) * (ny + 1) + j) * (nx + 1) + i];
-    // The block of the cell below the vertex (the last vertex of an axis belongs to the last cell),
-    // its one sample read directly.
+    // A corner of the cell below the vertex (the last vertex of an axis belongs to the last cell):
+    // its one sample read, not the cell's eight.
     const int ci = i < nx ? i : nx - 1, cj = j < ny ? j : ny - 1, ck = k < nz ? k : nz - 1;
-    const int B = blockSize;
+    size_t idx[8];
+    if (!cornerIndices(ci, cj, ck, idx)) return constantBlockValue(ci, cj, ck);
+    const float* s = kind == GridKind::Dense ? samples : blockSamples;
+    return s[idx[(i - ci) + 2 * (j - cj) + 4 * (k - ck)]];
+}
+
+SDFT_HOST_DEVICE inline float GridView::constantBlockValue(int i, int j, int k) const {
     const int sh = blockShift();
-    const int bi = ci >> sh, bj = cj >> sh, bk = ck >> sh;
-    const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
-    const int32_t data = blockData[block];
-    if (data < 0)
-        return flags[block] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
-    const size_t sy = B + 1, sz = sy * (B + 1);
-    return blockSamples[static_cast<size_t>(data) * sz * (B + 1) + (k - bk * B) * sz +
-                        (j - bj * B) * sy + (i - bi * B)];
+    const size_t block =
+        (static_cast<size_t>(k >> sh) * blocks[1] + (j >> sh)) * blocks[0] + (i >> sh);
+    return flags[block] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
 }
 
 SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[8]) const {
@@ -206,11 +207,7 @@ SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[
     // are constant at +-background by their flag.
     size_t idx[8];
     if (!cornerIndices(i, j, k, idx)) {
-        const int sh = blockShift();
-        size_t block =
-            (static_cast<size_t>(k >> sh) * blocks[1] + (j >> sh)) * blocks[0] + (i >> sh);
-        float v =
-            flags[block] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
+        const float v = constantBlockValue(i, j, k);
         for (int n = 0; n < 8; ++n) c[n] = v;
         return;
     }

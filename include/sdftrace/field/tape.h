@@ -103,8 +103,9 @@ class Tape {
     MaterialBlend evalMaterial(Vec3 p) const;
     // The one material every point gets, when the tape has a single primitive or grid (a grid
     // without texture coordinates): evalMaterial(p) is single(id, local) everywhere, so renderers
-    // whose materials ignore `local` skip it. -1 when the blend varies or needs the point.
-    int uniformMaterial() const;
+    // whose materials ignore `local` skip it. -1 when the blend varies or needs the point. Found
+    // once, when the tape is compiled.
+    int uniformMaterial() const { return m_uniformMaterial; }
 
     float lipschitz() const { return m_lipschitz; }
     const Bounds3& bounds() const { return m_bounds; }
@@ -117,6 +118,7 @@ class Tape {
     friend Tape compileTape(const NodePtr& root, const CompileOptions& options);
     template <bool kMaterial>
     float evalScalar(Vec3 p, MaterialBlend* blend) const;
+    int findUniformMaterial() const;
     void evalChunk(const float* x, const float* y, const float* z, float* out, int n,
                    BatchScratch& scratch) const;
 
@@ -127,6 +129,7 @@ class Tape {
     int m_numPointRegs = 1;
     int m_numScalarRegs = 1;
     int m_numCulls = 0;
+    int m_uniformMaterial = -1;
     uint16_t m_result = 0;
     float m_lipschitz = 1;
     Bounds3 m_bounds;

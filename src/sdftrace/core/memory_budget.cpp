@@ -19,8 +19,8 @@ std::atomic<double> g_budget{0.0};  // 0: the default
 double physicalMemoryBytes() {
     // Once: sysconf(_SC_PHYS_PAGES) is a sysinfo() system call, and the allocation guard asks for
     // the budget on every operator new (it made a million-triangle mesh load 6x slower).
-    static const double bytes = static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
-                                static_cast<double>(sysconf(_SC_PAGE_SIZE));
+    static const double bytes =
+        static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
     return bytes;
 }
 

@@ -406,29 +406,38 @@ void Grid::computeBlockSkip() {
     for (size_t b = 0; b < n; ++b)
         d[b] = m_flags[b] == static_cast<uint8_t>(BlockFlag::Surface) ? 0 : kFar;
     auto at = [&](int i, int j, int k) { return (static_cast<size_t>(k) * ny + j) * nx + i; };
-    // Forward: neighbours earlier in raster order; backward: later ones.
-    for (int pass = 0; pass < 2; ++pass) {
-        const int s = pass == 0 ? -1 : 1;
-        for (int kk = 0; kk < nz; ++kk)
-            for (int jj = 0; jj < ny; ++jj)
-                for (int ii = 0; ii < nx; ++ii) {
-                    const int i = pass == 0 ? ii : nx - 1 - ii, j = pass == 0 ? jj : ny - 1 - jj,
-                              k = pass == 0 ? kk : nz - 1 - kk;
-                    uint16_t& v = d[at(i, j, k)];
-                    if (v == 0) continue;
-                    for (int dk = -1; dk <= 1; ++dk)
-                        for (int dj = -1; dj <= 1; ++dj)
-                            for (int di = -1; di <= 1; ++di) {
-                                // Raster order: only neighbours already visited in this pass.
-                                const int order = dk != 0 ? dk : dj != 0 ? dj : di;
-                                if (order != s) continue;
-                                const int x = i + di, y = j + dj, z = k + dk;
-                                if (x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz)
-                                    continue;
-                                v = std::min<uint16_t>(v, d[at(x, y, z)] + 1);
-                            }
-                }
-    }
+    // Forward: the 13 neighbours earlier in raster order; backward: the 13 later ones.
+    struct Offset {
+        int di, dj, dk;
+    };
+    std::vector<Offset> earlier;
+    for (int dk = -1; dk <= 1; ++dk)
+        for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di)
+                if ((dk != 0 ? dk : dj != 0 ? dj : di) < 0) earlier.push_back({di, dj, dk});
+    std::vector<ptrdiff_t> step;  // the same neighbours as index offsets
+    for (const Offset& o : earlier)
+        step.push_back((static_cast<ptrdiff_t>(o.dk) * ny + o.dj) * nx + o.di);
+    auto relax = [&](int i, int j, int k, int s) {
+        const size_t here = at(i, j, k);
+        uint16_t& v = d[here];
+        if (v == 0) return;  // a surface block
+        if (i > 0 && j > 0 && k > 0 && i < nx - 1 && j < ny - 1 && k < nz - 1) {
+            for (ptrdiff_t off : step) v = std::min<uint16_t>(v, d[here + s * off] + 1);
+            return;
+        }
+        for (const Offset& o : earlier) {
+            const int x = i + s * o.di, y = j + s * o.dj, z = k + s * o.dk;
+            if (x >= 0 && y >= 0 && z >= 0 && x < nx && y < ny && z < nz)
+                v = std::min<uint16_t>(v, d[at(x, y, z)] + 1);
+        }
+    };
+    for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) relax(i, j, k, 1);
+    for (int k = nz - 1; k >= 0; --k)
+        for (int j = ny - 1; j >= 0; --j)
+            for (int i = nx - 1; i >= 0; --i) relax(i, j, k, -1);
     m_blockSkip.resize(n);
     for (size_t b = 0; b < n; ++b)
         m_blockSkip[b] = static_cast<uint8_t>(std::min<int>(255, std::max(0, d[b] - 1)));

@@ -272,6 +272,7 @@ Tape compileTape(const NodePtr& root, const CompileOptions& options) {
     for (const auto& g : tape.m_grids) tape.m_gridViews.push_back(g->view());
     tape.m_lipschitz = lipschitzBound(*root);
     tape.m_bounds = nodeBounds(*root);
+    tape.m_uniformMaterial = tape.findUniformMaterial();
     return tape;
 }
 

@@ -201,7 +201,7 @@ float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
 
 float Tape::eval(Vec3 p) const { return evalScalar<false>(p, nullptr); }
 
-int Tape::uniformMaterial() const {
+int Tape::findUniformMaterial() const {
     const Instr* leaf = nullptr;
     for (const Instr& in : m_instrs) {
         if (in.op > Op::Grid) continue;

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 
 #include "block_aprons.h"
 #include "sdftrace/core/error.h"
@@ -272,6 +273,18 @@ GridShape shapeOf(const Header& h, const std::string& path) {
     return s;
 }
 
+// A sparse header's block size and background, checked; the number of blocks they give.
+uint64_t sparseBlockCount(const Header& h, const GridShape& s, const std::string& path) {
+    if (h.blockSize != 4 && h.blockSize != 8)
+        throw InputError(path + ": block size " + std::to_string(h.blockSize) +
+                         " (accepted: 4, 8)");
+    if (!(h.background > 0) || !std::isfinite(h.background))
+        throw InputError(path + ": background must be positive and finite");
+    uint64_t n = 1;
+    for (int a = 0; a < 3; ++a) n *= (s.cells[a] + h.blockSize - 1) / h.blockSize;
+    return n;
+}
+
 // The payload expected from the header alone, checked against the file before allocating.
 PayloadLayout layoutOf(const Header& h, const GridShape& s, const std::string& path,
                        uint64_t fileBytes) {
@@ -284,14 +297,7 @@ PayloadLayout layoutOf(const Header& h, const GridShape& s, const std::string& p
         l.bytes = static_cast<uint64_t>(s.vertexCount()) * sizeof(float) * l.floatsPerSample +
                   l.texHeaderBytes;
     } else {
-        if (h.blockSize != 4 && h.blockSize != 8)
-            throw InputError(path + ": block size " + std::to_string(h.blockSize) +
-                             " (accepted: 4, 8)");
-        if (!(h.background > 0) || !std::isfinite(h.background))
-            throw InputError(path + ": background must be positive and finite");
-        for (int a = 0; a < 3; ++a)
-            l.numBlocks =
-                (a == 0 ? 1 : l.numBlocks) * ((s.cells[a] + h.blockSize - 1) / h.blockSize);
+        l.numBlocks = sparseBlockCount(h, s, path);
         const uint64_t perBlockBytes = static_cast<uint64_t>(h.blockSize + 1) * (h.blockSize + 1) *
                                        (h.blockSize + 1) * sizeof(float) * l.floatsPerSample;
         const uint64_t fixed = l.numBlocks + l.texHeaderBytes;
@@ -319,12 +325,66 @@ PayloadLayout layoutOf(const Header& h, const GridShape& s, const std::string& p
 
 namespace {
 
+using CorruptError = std::function<InputError(const std::string&)>;
+
+// A version-3 file's section sizes (section order as in sectionsOf), from its headers; every count
+// checked against the grid before anything is allocated from it.
+std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
+                                         const CompressedHeader& ch, const std::string& path,
+                                         const CorruptError& corrupt) {
+    if (ch.chunkBytes < 4096 || ch.chunkBytes > (1u << 28) || ch.chunkBytes % 4 != 0)
+        throw corrupt("chunk size " + std::to_string(ch.chunkBytes));
+    if (ch.texKind > static_cast<uint32_t>(TexcoordKind::Cylinder))
+        throw corrupt("unknown texture-coordinate kind " + std::to_string(ch.texKind));
+    std::vector<uint64_t> sections;
+    if (static_cast<GridKind>(h.kind) == GridKind::Dense) {
+        if (ch.sampleCount != s.vertexCount()) throw corrupt("sample count");
+        if (ch.apronCount != 0) throw corrupt("apron sample count");
+        sections = {ch.sampleCount * sizeof(float)};
+    } else {
+        const uint64_t numBlocks = sparseBlockCount(h, s, path);
+        const int B = static_cast<int>(h.blockSize);
+        const uint64_t perBlock = static_cast<uint64_t>(B + 1) * (B + 1) * (B + 1);
+        if (ch.sampleCount % perBlock != 0 || ch.sampleCount / perBlock > numBlocks)
+            throw corrupt("sample count does not fit the block layout");
+        const uint64_t surface = ch.sampleCount / perBlock;
+        if (ch.apronCount > surface * apronSize(B)) throw corrupt("apron sample count");
+        sections = {numBlocks, surface * B * B * B * sizeof(float),
+                    surface * apronWords(B) * sizeof(uint64_t), ch.apronCount * sizeof(float)};
+    }
+    if (ch.texKind) sections.push_back(3 * ch.sampleCount * sizeof(float));
+    return sections;
+}
+
+// Where each chunk starts in the file: the chunk table read, checked against the header's checksum
+// and the file's size.
+std::vector<uint64_t> chunkStarts(const MappedFile& file, const Header& h,
+                                  const CompressedHeader& ch, std::vector<uint64_t>& table,
+                                  const CorruptError& corrupt) {
+    const uint64_t fileBytes = file.size();
+    table.resize(ch.chunkCount);
+    std::memcpy(table.data(), file.data() + sizeof h + sizeof ch, table.size() * sizeof(uint64_t));
+    if (fnv1a64(table.data(), table.size() * sizeof(uint64_t), fnv1a64(&ch, sizeof ch)) !=
+        h.checksum)
+        throw corrupt("table checksum mismatch");
+    std::vector<uint64_t> start(table.size());
+    uint64_t at = sizeof h + sizeof ch + table.size() * sizeof(uint64_t);
+    for (size_t c = 0; c < table.size(); ++c) {
+        if (table[c] > fileBytes - at)
+            throw corrupt("chunk " + std::to_string(c) + " past the end");
+        start[c] = at;
+        at += table[c];
+    }
+    if (at != fileBytes) throw corrupt("trailing bytes after the chunks");
+    return start;
+}
+
 // Checks a version-3 file's tables against the header and the file, then decompresses its chunks
 // in parallel straight into the grid's buffers.
 Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
                     const std::string& path) {
     const uint64_t fileBytes = file.size();
-    auto corrupt = [&](const std::string& what) -> InputError {
+    const CorruptError corrupt = [&](const std::string& what) {
         return InputError(path + ": corrupt compressed .sdfg: " + what);
     };
     if (h.payloadBytes != fileBytes - sizeof h)
@@ -332,39 +392,7 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
     CompressedHeader ch{};
     if (fileBytes - sizeof h < sizeof ch) throw corrupt("truncated section header");
     std::memcpy(&ch, file.data() + sizeof h, sizeof ch);
-    if (ch.chunkBytes < 4096 || ch.chunkBytes > (1u << 28) || ch.chunkBytes % 4 != 0)
-        throw corrupt("chunk size " + std::to_string(ch.chunkBytes));
-    if (ch.texKind > static_cast<uint32_t>(TexcoordKind::Cylinder))
-        throw corrupt("unknown texture-coordinate kind " + std::to_string(ch.texKind));
-    const GridKind kind = static_cast<GridKind>(h.kind);
-    uint64_t numBlocks = 0, perBlock = 0;
-    if (kind == GridKind::Dense) {
-        if (ch.sampleCount != s.vertexCount()) throw corrupt("sample count");
-    } else {
-        if (h.blockSize != 4 && h.blockSize != 8)
-            throw InputError(path + ": block size " + std::to_string(h.blockSize) +
-                             " (accepted: 4, 8)");
-        if (!(h.background > 0) || !std::isfinite(h.background))
-            throw InputError(path + ": background must be positive and finite");
-        numBlocks = 1;
-        for (int a = 0; a < 3; ++a) numBlocks *= (s.cells[a] + h.blockSize - 1) / h.blockSize;
-        perBlock = static_cast<uint64_t>(h.blockSize + 1) * (h.blockSize + 1) * (h.blockSize + 1);
-        if (ch.sampleCount % perBlock != 0 || ch.sampleCount / perBlock > numBlocks)
-            throw corrupt("sample count does not fit the block layout");
-    }
-    const uint64_t surface = perBlock ? ch.sampleCount / perBlock : 0;
-    const int B = static_cast<int>(h.blockSize);
-    if (kind == GridKind::Sparse && ch.apronCount > surface * apronSize(B))
-        throw corrupt("apron sample count");
-    if (kind == GridKind::Dense && ch.apronCount != 0) throw corrupt("apron sample count");
-    std::vector<uint64_t> sectionBytes;
-    if (kind == GridKind::Sparse) {
-        sectionBytes = {numBlocks, surface * B * B * B * sizeof(float),
-                        surface * apronWords(B) * sizeof(uint64_t), ch.apronCount * sizeof(float)};
-    } else {
-        sectionBytes = {ch.sampleCount * sizeof(float)};
-    }
-    if (ch.texKind) sectionBytes.push_back(3 * ch.sampleCount * sizeof(float));
+    const std::vector<uint64_t> sectionBytes = compressedSections(h, s, ch, path, corrupt);
     // The chunk count follows from the sections; checked (and the table against the file) before
     // anything is allocated from these numbers.
     uint64_t total = 0, expectedChunks = 0;
@@ -379,51 +407,30 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
                       "the grid's samples and the structures built from them",
                       "convert or bake it at a lower resolution");
     const std::vector<Chunk> chunks = chunksOf(sectionBytes, ch.chunkBytes);
-    const uint64_t tableEnd = sizeof h + sizeof ch + chunks.size() * sizeof(uint64_t);
-    std::vector<uint64_t> table(chunks.size());
-    std::memcpy(table.data(), file.data() + sizeof h + sizeof ch, table.size() * sizeof(uint64_t));
-    if (fnv1a64(table.data(), table.size() * sizeof(uint64_t), fnv1a64(&ch, sizeof ch)) !=
-        h.checksum)
-        throw corrupt("table checksum mismatch");
-    std::vector<uint64_t> start(chunks.size());
-    uint64_t at = tableEnd;
-    for (size_t c = 0; c < chunks.size(); ++c) {
-        if (table[c] > fileBytes - at)
-            throw corrupt("chunk " + std::to_string(c) + " past the end");
-        start[c] = at;
-        at += table[c];
-    }
-    if (at != fileBytes) throw corrupt("trailing bytes after the chunks");
+    std::vector<uint64_t> table;
+    const std::vector<uint64_t> start = chunkStarts(file, h, ch, table, corrupt);
 
+    // The sections' destinations, in file order.
+    const GridKind kind = static_cast<GridKind>(h.kind);
     std::vector<uint8_t> flags;
-    std::vector<float> samples, texcoords(ch.texKind ? 3 * ch.sampleCount : 0);
+    std::vector<float> samples, texcoords;
     SplitBlocks split;
     std::vector<char*> dest;
     std::vector<bool> floats;
-    auto into = [&](auto& v, uint64_t bytes, bool isFloat) {
-        v.resize(bytes / sizeof(v[0]));
+    auto into = [&](auto& v, bool isFloat) {
+        v.resize(sectionBytes[dest.size()] / sizeof(v[0]));
         dest.push_back(reinterpret_cast<char*>(v.data()));
         floats.push_back(isFloat);
     };
-    for (size_t i = 0; i < sectionBytes.size(); ++i) {
-        const uint64_t b = sectionBytes[i];
-        if (kind == GridKind::Dense) {
-            if (i == 0)
-                into(samples, b, true);
-            else
-                into(texcoords, b, true);
-        } else if (i == 0) {
-            into(flags, b, false);
-        } else if (i == 1) {
-            into(split.own, b, true);
-        } else if (i == 2) {
-            into(split.masks, b, false);
-        } else if (i == 3) {
-            into(split.explicitly, b, true);
-        } else {
-            into(texcoords, b, true);
-        }
+    if (kind == GridKind::Dense) {
+        into(samples, true);
+    } else {
+        into(flags, false);
+        into(split.own, true);
+        into(split.masks, false);
+        into(split.explicitly, true);
     }
+    if (ch.texKind) into(texcoords, true);
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
         const Chunk& k = chunks[c];
         char* out = dest[k.section] + k.offset;
@@ -436,7 +443,7 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
         if (floats[k.section]) unshuffleFloats(shuffled.data(), out, k.bytes);
     });
     if (kind == GridKind::Sparse) {
-        samples = joinBlocks(s, B, flags, split, path);
+        samples = joinBlocks(s, static_cast<int>(h.blockSize), flags, split, path);
         split = {};
     }
     for (float v : samples)

@@ -221,6 +221,66 @@ class TreeToGrid {
         return candidates.load();
     }
 
+    // Per worker: tile regions filled with their value, so that leaves and tiles read alike.
+    struct GatherScratch {
+        std::vector<float> tileFill = std::vector<float>(8 * 512);
+        float filled[8] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
+    };
+
+    // Block b's (B+1)^3 samples into `out`, x fastest. Its V vertices per axis span at most two
+    // 8-voxel regions: per axis, each vertex's region (0 or 1 from the first) and its offset inside
+    // the leaf; per region of the 2x2x2, the leaf's values or a tile value repeated.
+    void gatherBlock(const int b[3], float* out, GatherScratch& scratch) const {
+        const int V = m_V;
+        int region[3][9], offset[3][9];  // V <= 9
+        int first[3];
+        for (int a = 0; a < 3; ++a) {
+            first[a] = (m_lo[a] + b[a] * m_B) >> 3;
+            for (int n = 0; n < V; ++n) {
+                // Clamped to the grid as GridView::vertex clamps.
+                const int32_t x = m_lo[a] + std::min(b[a] * m_B + n, m_shape.cells[a]);
+                region[a][n] = (x >> 3) - first[a];
+                offset[a][n] = (x & 7) << (a == 0 ? 6 : a == 1 ? 3 : 0);
+            }
+        }
+        const float* source[8];
+        for (int c = 0; c < 8; ++c) {
+            const int32_t x = (first[0] + (c & 1)) * 8, y = (first[1] + (c >> 1 & 1)) * 8,
+                          z = (first[2] + (c >> 2)) * 8;
+            // Regions past the active region are never read (the vertices clamp).
+            if ((x >> 3) - m_r0[0] >= m_rn[0] || (y >> 3) - m_r0[1] >= m_rn[1] ||
+                (z >> 3) - m_r0[2] >= m_rn[2]) {
+                source[c] = nullptr;
+                continue;
+            }
+            const size_t r = regionOf(x, y, z);
+            const int32_t leaf = m_regionLeaf[r];
+            if (leaf >= 0) {
+                source[c] = m_t.leaves[leaf].values.data();
+                continue;
+            }
+            // Tiles mostly hold the same +-background: refill only on a change.
+            float* fill = scratch.tileFill.data() + c * 512;
+            if (!(scratch.filled[c] == m_regionValue[r])) {
+                std::fill(fill, fill + 512, m_regionValue[r]);
+                scratch.filled[c] = m_regionValue[r];
+            }
+            source[c] = fill;
+        }
+        // x splits between the two regions at most once per row.
+        for (int k = 0; k < V; ++k)
+            for (int j = 0; j < V; ++j) {
+                const int rjk = 2 * region[1][j] + 4 * region[2][k];
+                const int ojk = offset[1][j] | offset[2][k];
+                // (The offsets' bits are disjoint; a null source is never indexed.)
+                const float* row0 = source[rjk];
+                const float* row1 = source[rjk + 1];
+                int i = 0;
+                for (; i < V && region[0][i] == 0; ++i) *out++ = row0[ojk | offset[0][i]];
+                for (; i < V; ++i) *out++ = row1[ojk | offset[0][i]];
+            }
+    }
+
     // Pass 2: the candidates' samples, in block order; a candidate whose samples are all far is
     // not a surface block after all.
     //
@@ -240,67 +300,15 @@ class TreeToGrid {
         samples.resize(candidates * perBlock);
         tbb::parallel_for(0, m_blocks[2], [&](int bk) {
             size_t surface = 0;
-            // A block's V vertices per axis span at most two 8-voxel regions: per axis, each
-            // vertex's region (0 or 1 from the first) and its offset inside the leaf; per region
-            // of the 2x2x2, the leaf's values or a tile value repeated.
-            int region[3][9], offset[3][9];  // V <= 9
-            std::vector<float> tileFill(8 * 512);
-            float filled[8];
-            std::fill(filled, filled + 8, NAN);
-            const float* source[8];
+            GatherScratch scratch;
             for (int bj = 0; bj < m_blocks[1]; ++bj)
                 for (int bi = 0; bi < m_blocks[0]; ++bi) {
                     uint8_t& flag = flags[blockIndex(bi, bj, bk)];
                     if (flag != kCandidate) continue;
-                    const int b[3] = {bi, bj, bk};
-                    int first[3];
-                    for (int a = 0; a < 3; ++a) {
-                        first[a] = (m_lo[a] + b[a] * m_B) >> 3;
-                        for (int n = 0; n < V; ++n) {
-                            // Clamped to the grid as GridView::vertex clamps.
-                            const int32_t x = m_lo[a] + std::min(b[a] * m_B + n, m_shape.cells[a]);
-                            region[a][n] = (x >> 3) - first[a];
-                            offset[a][n] = (x & 7) << (a == 0 ? 6 : a == 1 ? 3 : 0);
-                        }
-                    }
-                    for (int c = 0; c < 8; ++c) {
-                        const int32_t x = (first[0] + (c & 1)) * 8,
-                                      y = (first[1] + (c >> 1 & 1)) * 8,
-                                      z = (first[2] + (c >> 2)) * 8;
-                        // Regions past the active region are never read (the vertices clamp).
-                        if ((x >> 3) - m_r0[0] >= m_rn[0] || (y >> 3) - m_r0[1] >= m_rn[1] ||
-                            (z >> 3) - m_r0[2] >= m_rn[2]) {
-                            source[c] = nullptr;
-                            continue;
-                        }
-                        const size_t r = regionOf(x, y, z);
-                        const int32_t leaf = m_regionLeaf[r];
-                        if (leaf >= 0) {
-                            source[c] = m_t.leaves[leaf].values.data();
-                        } else {
-                            // Tiles mostly hold the same +-background: refill only on a change.
-                            float* fill = tileFill.data() + c * 512;
-                            if (!(filled[c] == m_regionValue[r])) {
-                                std::fill(fill, fill + 512, m_regionValue[r]);
-                                filled[c] = m_regionValue[r];
-                            }
-                            source[c] = fill;
-                        }
-                    }
-                    // Gather (x splits between the two regions at most once per row), then clamp
-                    // and classify in one contiguous pass.
                     float* const block = samples.data() + (slabStart[bk] + surface) * perBlock;
-                    float* out = block;
-                    for (int k = 0; k < V; ++k)
-                        for (int j = 0; j < V; ++j) {
-                            const int rjk = 2 * region[1][j] + 4 * region[2][k];
-                            const int ojk = offset[1][j] | offset[2][k];
-                            const float* row0 = source[rjk] + ojk;
-                            const float* row1 = source[rjk + 1] + ojk;
-                            int i = 0;
-                            for (; i < V && region[0][i] == 0; ++i) *out++ = row0[offset[0][i]];
-                            for (; i < V; ++i) *out++ = row1[offset[0][i]];
-                        }
+                    const int b[3] = {bi, bj, bk};
+                    gatherBlock(b, block, scratch);
+                    // Clamped to the band and classified in one contiguous pass.
                     bool anyNeg = false, anyPos = false, near = false;
                     for (float* v = block; v != block + perBlock; ++v) {
                         *v = std::clamp(*v, -m_band, m_band);

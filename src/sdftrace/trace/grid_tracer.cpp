@@ -213,8 +213,9 @@ void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTra
                 return;
             }
         } else if (g.blockSkip && g.blockSkip[b] > 0) {
-            // Empty-space skipping: no block within r of this one holds a surface, so the ray
-            // continues where it leaves that cube of blocks (only blocks without samples are
+            // Empty-space skipping (not in the papers: Cohen & Sheffer's proximity clouds on
+            // Jamriška's block level, §4.1): no block within r of this one holds a surface, so the
+            // ray continues where it leaves that cube of blocks (only blocks without samples are
             // skipped: the hits are the plain traversal's).
             const int r = g.blockSkip[b];
             float tCube = kInfinity;
