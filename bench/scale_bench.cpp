@@ -15,7 +15,7 @@
 // Times are medians of --reps runs.
 //
 //   build/release/bench/sdftrace_scale_bench [--res 256] [--sizes 512,1024] [--reps 5]
-//       [--threads 2] [--keep] mesh.obj|ply ...
+//       [--threads 2] [--keep] [--commands] mesh.obj|ply ...
 //
 // Prints markdown tables on stdout.
 #include <embree3/rtcore.h>
@@ -67,7 +67,8 @@ std::vector<int> splitInts(const std::string& s) {
 
 struct Options {
     int res = 256, reps = 5, threads = 2;
-    bool keep = false;  // keep the .vdb files in /tmp
+    bool keep = false;      // keep the .vdb files in /tmp
+    bool commands = false;  // print each sdftrace command line to stderr (to profile one case)
     std::vector<int> sizes{512, 1024};
     std::vector<std::string> meshes;
 };
@@ -333,6 +334,8 @@ void runMesh(const std::string& path, const Options& o) {
                                        fmt("%.9g", cd.fovDeg) + " " + std::to_string(size) + " " +
                                        std::to_string(size) + " " + std::to_string(o.threads) +
                                        " /tmp/sdftrace-scale-bench.ppm";
+            if (o.commands)
+                std::fprintf(stderr, "%s %d²: %s\n", camName.c_str(), size, cmd.c_str());
             std::vector<double> phase, wall, vdbRender, vdbWhole, embreeMs;
             float travSteps = 0, isectTests = 0, hitPercent = 0;
             std::vector<float> image;
@@ -402,6 +405,8 @@ int main(int argc, char** argv) {
             o.threads = std::stoi(next());
         else if (a == "--keep")
             o.keep = true;
+        else if (a == "--commands")
+            o.commands = true;
         else if (a == "--sizes")
             o.sizes = splitInts(next());
         else

@@ -50,9 +50,9 @@ struct GridView {
     const int32_t* blockData = nullptr;   // per block: index of its (B+1)^3 samples, -1 if none
     const float* blockSamples = nullptr;  // surface blocks' samples, x fastest inside a block
     const uint64_t* cellMasks = nullptr;  // per surface block: B^3 bits, (B^3 + 63) / 64 words
-    // Per block: r such that every block within Chebyshev distance r (in blocks) holds no surface
-    // (0 for surface blocks and their neighbours): a ray may skip the cube of side 2r + 1 around
-    // it.
+    // Per block: its Chebyshev distance d (in blocks, capped at 255) to the nearest block with a
+    // sign-changing cell (a set bit in its cell mask), 0 for those. A ray can hit the surface only
+    // in a block with d = 0 and may skip the cube of side 2d - 1 around any other.
     const uint8_t* blockSkip = nullptr;
     float background = 1;  // |value| assumed in non-surface blocks (a lower bound of the distance)
     // Optional texture coordinates (Liktor 2008, §5.5.2): 3 floats per stored sample, beside the
@@ -69,6 +69,11 @@ struct GridView {
 
     // Sample at integer vertex (i, j, k), clamped to the grid.
     SDFT_HOST_DEVICE float vertex(int i, int j, int k) const;
+    // The vertices that central differences at the 8 corners of cell (i, j, k) read, each
+    // clamped to the grid as vertex() does: out[z][y][x] = vertex(i - 1 + x, j - 1 + y, k - 1 + z)
+    // for the 32 entries with at most one of x, y, z in {0, 3} (the others are left unset), the
+    // block lookups shared.
+    SDFT_HOST_DEVICE void gradientStencil(int i, int j, int k, float out[4][4][4]) const;
     // The 8 corner samples of cell (i, j, k), index = di + 2 dj + 4 dk.
     SDFT_HOST_DEVICE void cellCorners(int i, int j, int k, float c[8]) const;
     // +-background of a sparse block without samples, by its flag (cell (i, j, k) in it).
@@ -193,6 +198,51 @@ SDFT_HOST_DEVICE inline float GridView::vertex(int i, int j, int k) const {
     if (!cornerIndices(ci, cj, ck, idx)) return constantBlockValue(ci, cj, ck);
     const float* s = kind == GridKind::Dense ? samples : blockSamples;
     return s[idx[(i - ci) + 2 * (j - cj) + 4 * (k - ck)]];
+}
+
+SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
+                                                       float out[4][4][4]) const {
+    const int n[3] = {shape.cells[0], shape.cells[1], shape.cells[2]};
+    const int start[3] = {i - 1, j - 1, k - 1};
+    // Per axis: the clamped vertex, and for sparse grids the block of the cell below it (as in
+    // vertex()) and the vertex's index inside that block's (B+1)^3 samples.
+    int at[3][4], block[3][4], local[3][4];
+    const int sh = blockShift();
+    for (int a = 0; a < 3; ++a)
+        for (int d = 0; d < 4; ++d) {
+            const int v = clampi(start[a] + d, 0, n[a]);
+            const int c = v < n[a] ? v : n[a] - 1;
+            at[a][d] = v;
+            block[a][d] = c >> sh;
+            local[a][d] = v - (block[a][d] << sh);
+        }
+    // Rows (z, y) with both inside {1, 2} need x = 0..3; rows with one of them outside, x = 1, 2;
+    // rows with both outside, nothing.
+    const size_t sy = static_cast<size_t>(blockSize) + 1, sz = sy * sy, perBlock = sz * sy;
+    for (int z = 0; z < 4; ++z)
+        for (int y = 0; y < 4; ++y) {
+            const int outer = (z == 0 || z == 3) + (y == 0 || y == 3);
+            if (outer == 2) continue;
+            const int x0 = outer ? 1 : 0, x1 = outer ? 3 : 4;
+            if (kind == GridKind::Dense) {
+                const float* row =
+                    samples +
+                    at[2][z] * (static_cast<size_t>(n[1]) + 1) * (static_cast<size_t>(n[0]) + 1) +
+                    at[1][y] * (static_cast<size_t>(n[0]) + 1);
+                for (int x = x0; x < x1; ++x) out[z][y][x] = row[at[0][x]];
+                continue;
+            }
+            const size_t rowBlock =
+                (static_cast<size_t>(block[2][z]) * blocks[1] + block[1][y]) * blocks[0];
+            const size_t rowSample = local[2][z] * sz + local[1][y] * sy;
+            for (int x = x0; x < x1; ++x) {
+                const size_t b = rowBlock + block[0][x];
+                const int32_t data = blockData[b];
+                out[z][y][x] = data >= 0 ? blockSamples[data * perBlock + rowSample + local[0][x]]
+                               : flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background
+                                                                                     : background;
+            }
+        }
 }
 
 SDFT_HOST_DEVICE inline float GridView::constantBlockValue(int i, int j, int k) const {

@@ -396,15 +396,27 @@ void Grid::computeCellMasksAndLipschitz() {
 }
 
 // Empty-space skipping for the block DDA: the Chebyshev distance (in blocks) from each block to
-// the nearest surface block, by a two-pass chamfer transform over the 26-neighbourhood (exact for
-// this metric), stored as that distance minus one, capped at 255.
+// the nearest block holding a sign-changing cell, by a two-pass chamfer transform over the
+// 26-neighbourhood (exact for this metric), capped at 255. Surface blocks of a narrow band whose
+// cells all keep one sign (about half of them) are skipped like empty space: no cell in them can
+// be hit.
 void Grid::computeBlockSkip() {
     const int nx = m_blocks[0], ny = m_blocks[1], nz = m_blocks[2];
     const size_t n = m_flags.size();
+    const int words = (m_blockSize * m_blockSize * m_blockSize + 63) / 64;
     std::vector<uint16_t> d(n);
     constexpr uint16_t kFar = 256;
-    for (size_t b = 0; b < n; ++b)
-        d[b] = m_flags[b] == static_cast<uint8_t>(BlockFlag::Surface) ? 0 : kFar;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const auto& range) {
+        for (size_t b = range.begin(); b != range.end(); ++b) {
+            const int32_t data = m_blockData[b];
+            bool crossing = false;
+            if (data >= 0) {
+                const uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
+                for (int w = 0; w < words; ++w) crossing |= mask[w] != 0;
+            }
+            d[b] = crossing ? 0 : kFar;
+        }
+    });
     auto at = [&](int i, int j, int k) { return (static_cast<size_t>(k) * ny + j) * nx + i; };
     // Forward: the 13 neighbours earlier in raster order; backward: the 13 later ones.
     struct Offset {
@@ -439,8 +451,7 @@ void Grid::computeBlockSkip() {
         for (int j = ny - 1; j >= 0; --j)
             for (int i = nx - 1; i >= 0; --i) relax(i, j, k, -1);
     m_blockSkip.resize(n);
-    for (size_t b = 0; b < n; ++b)
-        m_blockSkip[b] = static_cast<uint8_t>(std::min<int>(255, std::max(0, d[b] - 1)));
+    for (size_t b = 0; b < n; ++b) m_blockSkip[b] = static_cast<uint8_t>(std::min<int>(255, d[b]));
 }
 
 }  // namespace sdft

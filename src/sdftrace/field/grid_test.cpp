@@ -106,6 +106,36 @@ TEST(Grid, CellMasksMarkExactlyTheCellsWithASignChange) {
     EXPECT_GT(marked, 100);
 }
 
+// The normal estimator's stencil reads what vertex() reads, clamping included, for dense and
+// sparse grids (both block sizes), at cells inside, at block seams and on the grid's faces.
+TEST(Grid, GradientStencilMatchesVertexLookups) {
+    for (int B : {4, 8}) {
+        Sampled s = sampleTorusAndBox(37, B);
+        for (const Grid* grid : {&s.dense, &s.sparse}) {
+            const GridView v = grid->view();
+            int compared = 0;
+            for (int k = 0; k < v.shape.cells[2]; k += 3)
+                for (int j = 0; j < v.shape.cells[1]; j += 2)
+                    for (int i = 0; i < v.shape.cells[0]; ++i) {
+                        float nb[4][4][4];
+                        v.gradientStencil(i, j, k, nb);
+                        for (int z = 0; z < 4; ++z)
+                            for (int y = 0; y < 4; ++y)
+                                for (int x = 0; x < 4; ++x) {
+                                    const int outer = (x == 0 || x == 3) + (y == 0 || y == 3) +
+                                                      (z == 0 || z == 3);
+                                    if (outer > 1) continue;
+                                    ASSERT_EQ(nb[z][y][x],
+                                              v.vertex(i + x - 1, j + y - 1, k + z - 1))
+                                        << "B=" << B << " cell " << i << "," << j << "," << k;
+                                    ++compared;
+                                }
+                    }
+            EXPECT_GT(compared, 100000);
+        }
+    }
+}
+
 TEST(Grid, LipschitzBoundHoldsForTheReconstruction) {
     Sampled s = sampleTorusAndBox(40, 4);
     GridView v = s.dense.view();

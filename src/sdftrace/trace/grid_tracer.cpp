@@ -205,19 +205,24 @@ void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTra
         const size_t b =
             (static_cast<size_t>(blocks.idx[2]) * g.blocks[1] + blocks.idx[1]) * g.blocks[0] +
             blocks.idx[0];
-        if (g.kind == GridKind::Dense || g.flags[b] == static_cast<uint8_t>(BlockFlag::Surface)) {
+        // With the skip table, only blocks holding a sign-changing cell are walked cell by cell
+        // (the others' cells are never tested, so the hits are the same).
+        const bool walk = g.kind == GridKind::Dense ||
+                          (g.blockSkip ? g.blockSkip[b] == 0
+                                       : g.flags[b] == static_cast<uint8_t>(BlockFlag::Surface));
+        if (walk) {
             float tHit;
             if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
                 res.hit = true;
                 res.t = tHit;
                 return;
             }
-        } else if (g.blockSkip && g.blockSkip[b] > 0) {
+        } else if (g.blockSkip && g.blockSkip[b] > 1) {
             // Empty-space skipping (not in the papers: Cohen & Sheffer's proximity clouds on
-            // Jamriška's block level, §4.1): no block within r of this one holds a surface, so the
-            // ray continues where it leaves that cube of blocks (only blocks without samples are
-            // skipped: the hits are the plain traversal's).
-            const int r = g.blockSkip[b];
+            // Jamriška's block level, §4.1): no block within r of this one holds a sign-changing
+            // cell, so the ray continues where it leaves that cube of blocks (only cells that are
+            // never tested are skipped: the hits are the plain traversal's).
+            const int r = g.blockSkip[b] - 1;
             float tCube = kInfinity;
             for (int a = 0; a < 3; ++a) {
                 if (s.r.d[a] > 0)
@@ -312,15 +317,10 @@ Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
         // Central differences at the 8 cell vertices, then trilinear interpolation of them.
         int i = cellOf(q.x, 0), j = cellOf(q.y, 1), k = cellOf(q.z, 2);
         float u = clampf(q.x - i, 0, 1), v = clampf(q.y - j, 0, 1), w = clampf(q.z - k, 0, 1);
-        // The 32 distinct vertices the 8 central differences read, each once: nb[z][y][x] for
-        // offsets -1..2 from (i, j, k) (index + 1), at most one of them outside {0, 1}.
+        // The 32 vertices the 8 central differences read: nb[z][y][x] for offsets -1..2 from
+        // (i, j, k) (index + 1).
         float nb[4][4][4];
-        for (int z = 0; z < 4; ++z)
-            for (int y = 0; y < 4; ++y)
-                for (int x = 0; x < 4; ++x) {
-                    const int outer = (x == 0 || x == 3) + (y == 0 || y == 3) + (z == 0 || z == 3);
-                    if (outer <= 1) nb[z][y][x] = g.vertex(i + x - 1, j + y - 1, k + z - 1);
-                }
+        g.gradientStencil(i, j, k, nb);
         Vec3 corner[8];
         for (int n = 0; n < 8; ++n) {
             const int x = 1 + (n & 1), y = 1 + ((n >> 1) & 1), z = 1 + ((n >> 2) & 1);

@@ -99,7 +99,7 @@ TEST(GridTracer, EmptySpaceSkippingChangesNoHit) {
     ASSERT_NE(with.blockSkip, nullptr);
     int maxSkip = 0;
     for (uint8_t r : f.sparse->blockSkip()) maxSkip = std::max<int>(maxSkip, r);
-    EXPECT_GE(maxSkip, 2);
+    EXPECT_GE(maxSkip, 3);
     long stepsWith = 0, stepsWithout = 0;
     int hits = 0;
     for (const RaySegment& seg : f.rays) {
@@ -119,25 +119,42 @@ TEST(GridTracer, EmptySpaceSkippingChangesNoHit) {
     EXPECT_LT(stepsWith, stepsWithout);
 }
 
-// The skip distances are the Chebyshev distance to the nearest surface block, minus one.
-TEST(GridTracer, BlockSkipIsTheDistanceToTheNearestSurfaceBlock) {
+// The skip distances are the Chebyshev distance to the nearest block with a sign-changing cell,
+// and the narrow band has surface blocks without one (which the DDA skips).
+TEST(GridTracer, BlockSkipIsTheDistanceToTheNearestCrossingBlock) {
     const Grid& g = *fixture().sparse;
     const GridView v = g.view();
     const int nx = v.blocks[0], ny = v.blocks[1], nz = v.blocks[2];
-    std::vector<std::array<int, 3>> surface;
+    // Blocks with a cell whose corners change sign, found from the samples (not the masks).
+    std::vector<std::array<int, 3>> crossing;
+    size_t surfaceBlocks = 0;
     for (int k = 0; k < nz; ++k)
         for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i)
-                if (v.flags[(static_cast<size_t>(k) * ny + j) * nx + i] == 2)
-                    surface.push_back({i, j, k});
-    ASSERT_FALSE(surface.empty());
+            for (int i = 0; i < nx; ++i) {
+                if (v.flags[(static_cast<size_t>(k) * ny + j) * nx + i] != 2) continue;
+                ++surfaceBlocks;
+                bool any = false;
+                for (int z = k * v.blockSize; z < std::min((k + 1) * v.blockSize, v.shape.cells[2]);
+                     ++z)
+                    for (int y = j * v.blockSize;
+                         y < std::min((j + 1) * v.blockSize, v.shape.cells[1]); ++y)
+                        for (int x = i * v.blockSize;
+                             x < std::min((i + 1) * v.blockSize, v.shape.cells[0]); ++x) {
+                            float c[8];
+                            v.cellCorners(x, y, z, c);
+                            any |= cornersChangeSign(c);
+                        }
+                if (any) crossing.push_back({i, j, k});
+            }
+    ASSERT_FALSE(crossing.empty());
+    EXPECT_LT(crossing.size(), surfaceBlocks);
     for (size_t b = 0; b < g.flags().size(); b += 7) {
         const int i = static_cast<int>(b % nx), j = static_cast<int>(b / nx % ny),
                   k = static_cast<int>(b / (static_cast<size_t>(nx) * ny));
         int d = 1 << 30;
-        for (const auto& s : surface)
+        for (const auto& s : crossing)
             d = std::min(d, std::max({std::abs(s[0] - i), std::abs(s[1] - j), std::abs(s[2] - k)}));
-        ASSERT_EQ(v.blockSkip[b], std::min(255, std::max(0, d - 1))) << i << " " << j << " " << k;
+        ASSERT_EQ(v.blockSkip[b], std::min(255, d)) << i << " " << j << " " << k;
     }
 }
 
