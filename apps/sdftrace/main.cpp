@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
+#include "sdftrace/exec/simd.h"
 #include "sdftrace/io/atomic_file.h"
 
 namespace {
@@ -22,7 +23,8 @@ int main(int argc, char** argv) {
     CLI::App app{"sdftrace: build and ray trace signed distance fields"};
     app.name("sdftrace");
     app.require_subcommand(1);
-    app.set_version_flag("--version", "sdftrace 0.1.0");
+    app.set_version_flag("--version", std::string("sdftrace 0.1.0 (SIMD: ") +
+                                          sdft::simdLevelName(sdft::simdLevel()) + ")");
     app.fallthrough();  // --max-memory may follow the subcommand
     app.add_option_function<std::string>(
            "--max-memory",

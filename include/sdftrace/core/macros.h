@@ -12,6 +12,21 @@
 #define SDFT_HOST_DEVICE
 #endif
 
+// Run-time SIMD dispatch (issue 15; exec/simd.h chooses): a hot CPU function is compiled twice,
+// SDFT_TARGET_AVX2 for AVX2 and SDFT_TARGET_BASELINE for the x86-64 baseline (SSE2), both
+// `flatten` so that every callee below them is inlined and built for the same target. FMA is not
+// enabled: both versions round alike and return the same values. Without x86-64 GCC/Clang (CUDA,
+// other CPUs) both are plain functions.
+#if defined(__x86_64__) && !defined(__CUDACC__) && (defined(__GNUC__) || defined(__clang__))
+#define SDFT_HAVE_AVX2_DISPATCH 1
+#define SDFT_TARGET_AVX2 __attribute__((target("avx2"), flatten))
+#define SDFT_TARGET_BASELINE __attribute__((flatten))
+#else
+#define SDFT_HAVE_AVX2_DISPATCH 0
+#define SDFT_TARGET_AVX2
+#define SDFT_TARGET_BASELINE
+#endif
+
 // Fatal invariant check: prints file, line and the failed condition, then aborts.
 // For programmer errors only; bad user input throws sdft::InputError instead.
 #define SDFT_CHECK(cond)                                                                      \

@@ -121,6 +121,11 @@ class Tape {
     int findUniformMaterial() const;
     void evalChunk(const float* x, const float* y, const float* z, float* out, int n,
                    BatchScratch& scratch) const;
+    // evalBatch's loop over chunks, built for AVX2 and for the x86-64 baseline (exec/simd.h).
+    void evalChunksAvx2(const float* x, const float* y, const float* z, float* out, int n,
+                        BatchScratch& scratch) const;
+    void evalChunksBaseline(const float* x, const float* y, const float* z, float* out, int n,
+                            BatchScratch& scratch) const;
 
     std::vector<Instr> m_instrs;
     std::vector<float> m_consts;

@@ -303,42 +303,51 @@ float cellGradientBound2(const float c[8]) {
 template <int B>
 float blockMasksAndBoundB(const float* s, int ni, int nj, int nk, uint64_t* mask) {
     constexpr int V = B + 1, sy = V, sz = V * V;
+    // Edge differences, in straight rows (the compiler vectorizes each).
     float ex[V][V][B], ey[V][B][V], ez[B][V][V];
     for (int k = 0; k < V; ++k)
-        for (int j = 0; j < V; ++j)
-            for (int i = 0; i < V; ++i) {
-                const float* v = s + k * sz + j * sy + i;
-                if (i < B) ex[k][j][i] = std::fabs(v[1] - v[0]);
-                if (j < B) ey[k][j][i] = std::fabs(v[sy] - v[0]);
-                if (k < B) ez[k][j][i] = std::fabs(v[sz] - v[0]);
-            }
+        for (int j = 0; j < V; ++j) {
+            const float* r = s + k * sz + j * sy;
+            for (int i = 0; i < B; ++i) ex[k][j][i] = std::fabs(r[i + 1] - r[i]);
+            if (j < B)
+                for (int i = 0; i < V; ++i) ey[k][j][i] = std::fabs(r[i + sy] - r[i]);
+            if (k < B)
+                for (int i = 0; i < V; ++i) ez[k][j][i] = std::fabs(r[i + sz] - r[i]);
+        }
+    // Vertex signs, one bit per x along each (j, k) row.
+    uint32_t negative[V][V];
+    for (int k = 0; k < V; ++k)
+        for (int j = 0; j < V; ++j) {
+            const float* r = s + k * sz + j * sy;
+            uint32_t bits = 0;
+            for (int i = 0; i < V; ++i) bits |= static_cast<uint32_t>(r[i] < 0) << i;
+            negative[k][j] = bits;
+        }
+    // Cells past ni (a block cut by the grid's face) count for neither.
+    float keep[B];
+    for (int i = 0; i < B; ++i) keep[i] = i < ni ? 1.0f : 0.0f;
     float worst = 0;
     for (int k = 0; k < nk; ++k)
         for (int j = 0; j < nj; ++j) {
-            const float* r = s + k * sz + j * sy;
-            float bound[B];
-            uint32_t change = 0;
+            // cellGradientBound2 of each cell of the row: its 4 x-, y- and z-edges' largest.
+            float rowWorst = 0;
             for (int i = 0; i < B; ++i) {
-                // cellGradientBound2's edges, in its order: x-edges at corners 0, 2, 4, 6; y at 0,
-                // 1, 4, 5; z at 0, 1, 2, 3.
-                const float gx =
-                    std::max(std::max(std::max(ex[k][j][i], ex[k][j + 1][i]), ex[k + 1][j][i]),
-                             ex[k + 1][j + 1][i]);
-                const float gy =
-                    std::max(std::max(std::max(ey[k][j][i], ey[k][j][i + 1]), ey[k + 1][j][i]),
-                             ey[k + 1][j][i + 1]);
-                const float gz =
-                    std::max(std::max(std::max(ez[k][j][i], ez[k][j][i + 1]), ez[k][j + 1][i]),
-                             ez[k][j + 1][i + 1]);
-                bound[i] = gx * gx + gy * gy + gz * gz;
-                const float* v = r + i;
-                const int neg = (v[0] < 0) + (v[1] < 0) + (v[sy] < 0) + (v[sy + 1] < 0) +
-                                (v[sz] < 0) + (v[sz + 1] < 0) + (v[sz + sy] < 0) +
-                                (v[sz + sy + 1] < 0);
-                change |= static_cast<uint32_t>(neg != 0 && neg != 8) << i;
+                const float gx = std::max(std::max(ex[k][j][i], ex[k][j + 1][i]),
+                                          std::max(ex[k + 1][j][i], ex[k + 1][j + 1][i]));
+                const float gy = std::max(std::max(ey[k][j][i], ey[k][j][i + 1]),
+                                          std::max(ey[k + 1][j][i], ey[k + 1][j][i + 1]));
+                const float gz = std::max(std::max(ez[k][j][i], ez[k][j][i + 1]),
+                                          std::max(ez[k][j + 1][i], ez[k][j + 1][i + 1]));
+                rowWorst = std::max(rowWorst, (gx * gx + gy * gy + gz * gz) * keep[i]);
             }
-            for (int i = 0; i < ni; ++i) worst = std::max(worst, bound[i]);
-            change &= (1u << ni) - 1;
+            worst = std::max(worst, rowWorst);
+            // A cell changes sign when some corner is negative and not all are: its 4 corner
+            // rows' bits at i and i + 1.
+            const uint32_t any = negative[k][j] | negative[k][j + 1] | negative[k + 1][j] |
+                                 negative[k + 1][j + 1],
+                           all = negative[k][j] & negative[k][j + 1] & negative[k + 1][j] &
+                                 negative[k + 1][j + 1];
+            const uint32_t change = ((any | any >> 1) & ~(all & all >> 1)) & ((1u << ni) - 1);
             const int bit = (k * B + j) * B;
             mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
         }

@@ -79,31 +79,64 @@ TEST(Grid, SparseMatchesDenseInsideTheBandAndKeepsTheSignElsewhere) {
 }
 
 TEST(Grid, CellMasksMarkExactlyTheCellsWithASignChange) {
-    Sampled s = sampleTorusAndBox(48, 4);
-    GridView v = s.sparse.view();
-    const int B = v.blockSize;
-    int marked = 0;
-    for (int k = 0; k < v.shape.cells[2]; ++k)
-        for (int j = 0; j < v.shape.cells[1]; ++j)
-            for (int i = 0; i < v.shape.cells[0]; ++i) {
-                float c[8];
-                v.cellCorners(i, j, k, c);
-                bool neg = false, pos = false;
-                for (float x : c) (x < 0 ? neg : pos) = true;
-                size_t block =
-                    (static_cast<size_t>(k / B) * v.blocks[1] + j / B) * v.blocks[0] + i / B;
-                int32_t data = v.blockData[block];
-                bool bit = false;
-                if (data >= 0) {
-                    int local = ((k % B) * B + j % B) * B + i % B;
-                    bit = (v.cellMasks[static_cast<size_t>(data) * v.wordsPerMask() + local / 64] >>
-                           (local % 64)) &
-                          1;
+    for (int blockSize : {4, 8}) {
+        // 45 cells: the last blocks are cut by the grid's faces.
+        Sampled s = sampleTorusAndBox(45, blockSize);
+        GridView v = s.sparse.view();
+        const int B = v.blockSize;
+        int marked = 0;
+        for (int k = 0; k < v.shape.cells[2]; ++k)
+            for (int j = 0; j < v.shape.cells[1]; ++j)
+                for (int i = 0; i < v.shape.cells[0]; ++i) {
+                    float c[8];
+                    v.cellCorners(i, j, k, c);
+                    bool neg = false, pos = false;
+                    for (float x : c) (x < 0 ? neg : pos) = true;
+                    size_t block =
+                        (static_cast<size_t>(k / B) * v.blocks[1] + j / B) * v.blocks[0] + i / B;
+                    int32_t data = v.blockData[block];
+                    bool bit = false;
+                    if (data >= 0) {
+                        int local = ((k % B) * B + j % B) * B + i % B;
+                        bit = (v.cellMasks[static_cast<size_t>(data) * v.wordsPerMask() +
+                                           local / 64] >>
+                               (local % 64)) &
+                              1;
+                    }
+                    ASSERT_EQ(bit, neg && pos) << i << "," << j << "," << k << " B=" << B;
+                    marked += bit;
                 }
-                ASSERT_EQ(bit, neg && pos) << i << "," << j << "," << k;
-                marked += bit;
-            }
-    EXPECT_GT(marked, 100);
+        EXPECT_GT(marked, 100);
+    }
+}
+
+// A sparse grid's Lipschitz bound is the largest per-cell bound over its surface blocks' cells
+// (each axis: the largest |edge difference| / h), never below 1.
+TEST(Grid, SparseLipschitzBoundIsTheLargestCellBound) {
+    for (int blockSize : {4, 8}) {
+        Sampled s = sampleTorusAndBox(45, blockSize);
+        const GridView v = s.sparse.view();
+        const int B = v.blockSize;
+        float worst = 0;
+        for (int k = 0; k < v.shape.cells[2]; ++k)
+            for (int j = 0; j < v.shape.cells[1]; ++j)
+                for (int i = 0; i < v.shape.cells[0]; ++i) {
+                    const size_t block =
+                        (static_cast<size_t>(k / B) * v.blocks[1] + j / B) * v.blocks[0] + i / B;
+                    if (v.blockData[block] < 0) continue;
+                    float c[8];
+                    v.cellCorners(i, j, k, c);
+                    float g[3] = {0, 0, 0};
+                    for (int n = 0; n < 8; ++n)
+                        for (int a = 0; a < 3; ++a)
+                            if (!(n & (1 << a)))
+                                g[a] = std::max(g[a], std::fabs(c[n | (1 << a)] - c[n]));
+                    worst = std::max(worst, g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+                }
+        EXPECT_FLOAT_EQ(s.sparse.lipschitz(), std::max(1.0f, std::sqrt(worst) / v.shape.voxelSize))
+            << "B=" << B;
+        EXPECT_GT(s.sparse.lipschitz(), 1.0f);  // a box corner's clamped band is steeper than 1
+    }
 }
 
 // The normal estimator's stencil reads what vertex() reads, clamping included, for dense and

@@ -2,6 +2,8 @@
 // Both dispatch to the same per-op functions in primitives.h / operators.h / transforms.h.
 #include <algorithm>
 
+#include "sdftrace/core/macros.h"
+#include "sdftrace/exec/simd.h"
 #include "sdftrace/field/noise.h"
 #include "sdftrace/field/operators.h"
 #include "sdftrace/field/primitives.h"
@@ -228,10 +230,24 @@ void Tape::evalBatch(const float* x, const float* y, const float* z, float* out,
     if (scratch.scalars.size() < needS) scratch.scalars.resize(needS);
     size_t needC = static_cast<size_t>(m_numCulls) * kBatchWidth;
     if (scratch.culled.size() < needC) scratch.culled.resize(needC);
-    for (int start = 0; start < n; start += kBatchWidth) {
-        int count = std::min(kBatchWidth, n - start);
-        evalChunk(x + start, y + start, z + start, out + start, count, scratch);
-    }
+    if (useAvx2())
+        evalChunksAvx2(x, y, z, out, n, scratch);
+    else
+        evalChunksBaseline(x, y, z, out, n, scratch);
+}
+
+SDFT_TARGET_AVX2 void Tape::evalChunksAvx2(const float* x, const float* y, const float* z,
+                                           float* out, int n, BatchScratch& scratch) const {
+    for (int start = 0; start < n; start += kBatchWidth)
+        evalChunk(x + start, y + start, z + start, out + start, std::min(kBatchWidth, n - start),
+                  scratch);
+}
+
+SDFT_TARGET_BASELINE void Tape::evalChunksBaseline(const float* x, const float* y, const float* z,
+                                                   float* out, int n, BatchScratch& scratch) const {
+    for (int start = 0; start < n; start += kBatchWidth)
+        evalChunk(x + start, y + start, z + start, out + start, std::min(kBatchWidth, n - start),
+                  scratch);
 }
 
 // One switch over every opcode, deliberately: split into a function per kind of instruction

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "sdftrace/exec/simd.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/field/transforms.h"
 
@@ -62,9 +63,16 @@ TEST(Tape, BatchMatchesScalar) {
         Vec3 p = rng.inCube(4);
         x[i] = p.x, y[i] = p.y, z[i] = p.z;
     }
-    BatchScratch scratch;
-    tape.evalBatch(x.data(), y.data(), z.data(), out.data(), n, scratch);
-    for (int i = 0; i < n; ++i) ASSERT_EQ(out[i], tape.eval({x[i], y[i], z[i]})) << i;
+    // Both builds of the batch loop (exec/simd.h): the same values as the scalar path.
+    const SimdLevel was = simdLevel();
+    for (SimdLevel level : {SimdLevel::Baseline, SimdLevel::Avx2}) {
+        if (setSimdLevel(level) != level) continue;  // a CPU without AVX2
+        BatchScratch scratch;
+        tape.evalBatch(x.data(), y.data(), z.data(), out.data(), n, scratch);
+        for (int i = 0; i < n; ++i)
+            ASSERT_EQ(out[i], tape.eval({x[i], y[i], z[i]})) << i << " " << simdLevelName(level);
+    }
+    setSimdLevel(was);
 }
 
 TEST(Tape, RecyclesRegisters) {

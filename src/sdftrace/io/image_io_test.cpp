@@ -124,9 +124,11 @@ TEST(ImageIo, SrgbBytesMatchTheFormula) {
     float prev = 0;
     for (uint32_t bits = 1; bits <= std::bit_cast<uint32_t>(1.0f); bits += 4096) {
         const float v = std::bit_cast<float>(bits);
-        if (formula(v) != formula(prev))
-            for (uint32_t b = bits - 4096 > bits ? 1 : bits - 4096; b <= bits; ++b, ++checked)
+        if (formula(v) != formula(prev)) {
+            for (uint32_t b = bits - 4096 > bits ? 1 : bits - 4096; b <= bits; ++b, ++checked) {
                 ASSERT_EQ(srgbByte(std::bit_cast<float>(b)), formula(std::bit_cast<float>(b)));
+            }
+        }
         prev = v;
     }
     for (float v : {0.0f, -0.0f, -1.0f, 1.0f, 1.5f, INFINITY, -INFINITY, NAN})

@@ -54,7 +54,9 @@ TEST(Texture, ProceduralPatternsStayInRange) {
         }
         const double mean = sum / n, sd = std::sqrt(sq / n - mean * mean);
         EXPECT_GT(sd, 0.05);  // a pattern, not a constant
-        if (kind == Texture::Kind::Noise) EXPECT_NEAR(mean, 0.5, 0.03);
+        if (kind == Texture::Kind::Noise) {
+            EXPECT_NEAR(mean, 0.5, 0.03);
+        }
     }
 }
 

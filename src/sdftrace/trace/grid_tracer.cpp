@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sdftrace/core/macros.h"
+#include "sdftrace/exec/simd.h"
+
 namespace sdft {
 
 namespace {
@@ -242,8 +245,10 @@ void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTra
 
 }  // namespace
 
-GridTraceResult traceGridRay(const GridView& g, const Ray& ray, float tMin, float tMax,
-                             const GridTraceOptions& o) {
+namespace {
+
+GridTraceResult traceGridRayImpl(const GridView& g, const Ray& ray, float tMin, float tMax,
+                                 const GridTraceOptions& o) {
     GridTraceResult res;
     Setup s;
     if (!setup(g, ray, tMin, tMax, s)) return res;
@@ -253,9 +258,10 @@ GridTraceResult traceGridRay(const GridView& g, const Ray& ray, float tMin, floa
     return res;
 }
 
-GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, float tMax,
-                                const GridTraceOptions& o, int threshold) {
-    if (threshold <= 0 || g.kind != GridKind::Sparse) return traceGridRay(g, ray, tMin, tMax, o);
+GridTraceResult traceGridShadowImpl(const GridView& g, const Ray& ray, float tMin, float tMax,
+                                    const GridTraceOptions& o, int threshold) {
+    if (threshold <= 0 || g.kind != GridKind::Sparse)
+        return traceGridRayImpl(g, ray, tMin, tMax, o);
     GridTraceResult res;
     Setup s;
     if (!setup(g, ray, tMin, tMax, s)) return res;
@@ -289,7 +295,7 @@ GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, f
     return res;
 }
 
-Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
+Vec3 gridNormalImpl(const GridView& g, Vec3 p, GridNormal method) {
     const float h = g.shape.voxelSize;
     Vec3 q = (p - g.shape.origin) / h;
     auto cellOf = [&](float x, int axis) {
@@ -332,6 +338,52 @@ Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
         grad = lerp(lerp(c00, c10, v), lerp(c01, c11, v), w);
     }
     return normalize(grad);
+}
+
+// Each entry point built for AVX2 and for the baseline (core/macros.h); exec/simd.h picks.
+SDFT_TARGET_AVX2 GridTraceResult traceGridRayAvx2(const GridView& g, const Ray& ray, float tMin,
+                                                  float tMax, const GridTraceOptions& o) {
+    return traceGridRayImpl(g, ray, tMin, tMax, o);
+}
+SDFT_TARGET_BASELINE GridTraceResult traceGridRayBaseline(const GridView& g, const Ray& ray,
+                                                          float tMin, float tMax,
+                                                          const GridTraceOptions& o) {
+    return traceGridRayImpl(g, ray, tMin, tMax, o);
+}
+SDFT_TARGET_AVX2 GridTraceResult traceGridShadowAvx2(const GridView& g, const Ray& ray, float tMin,
+                                                     float tMax, const GridTraceOptions& o,
+                                                     int threshold) {
+    return traceGridShadowImpl(g, ray, tMin, tMax, o, threshold);
+}
+SDFT_TARGET_BASELINE GridTraceResult traceGridShadowBaseline(const GridView& g, const Ray& ray,
+                                                             float tMin, float tMax,
+                                                             const GridTraceOptions& o,
+                                                             int threshold) {
+    return traceGridShadowImpl(g, ray, tMin, tMax, o, threshold);
+}
+SDFT_TARGET_AVX2 Vec3 gridNormalAvx2(const GridView& g, Vec3 p, GridNormal method) {
+    return gridNormalImpl(g, p, method);
+}
+SDFT_TARGET_BASELINE Vec3 gridNormalBaseline(const GridView& g, Vec3 p, GridNormal method) {
+    return gridNormalImpl(g, p, method);
+}
+
+}  // namespace
+
+GridTraceResult traceGridRay(const GridView& g, const Ray& ray, float tMin, float tMax,
+                             const GridTraceOptions& o) {
+    return useAvx2() ? traceGridRayAvx2(g, ray, tMin, tMax, o)
+                     : traceGridRayBaseline(g, ray, tMin, tMax, o);
+}
+
+GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, float tMax,
+                                const GridTraceOptions& o, int threshold) {
+    return useAvx2() ? traceGridShadowAvx2(g, ray, tMin, tMax, o, threshold)
+                     : traceGridShadowBaseline(g, ray, tMin, tMax, o, threshold);
+}
+
+Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
+    return useAvx2() ? gridNormalAvx2(g, p, method) : gridNormalBaseline(g, p, method);
 }
 
 }  // namespace sdft

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 
+#include "sdftrace/exec/simd.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/trace/field_tracer.h"
@@ -156,6 +157,40 @@ TEST(GridTracer, BlockSkipIsTheDistanceToTheNearestCrossingBlock) {
             d = std::min(d, std::max({std::abs(s[0] - i), std::abs(s[1] - j), std::abs(s[2] - k)}));
         ASSERT_EQ(v.blockSkip[b], std::min(255, d)) << i << " " << j << " " << k;
     }
+}
+
+// The AVX2 and baseline builds of the tracer (exec/simd.h) take the same steps and return the
+// same hits, parameters, shadow decisions and normals.
+TEST(GridTracer, BothSimdLevelsTraceAlike) {
+    if (!cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2: only the baseline build runs";
+    const Fixture& f = fixture();
+    const GridView v = f.sparse->view();
+    const SimdLevel was = simdLevel();
+    int hits = 0;
+    for (const RaySegment& seg : f.rays) {
+        GridTraceResult r[2], sh[2];
+        Vec3 n[2][3];
+        for (int level = 0; level < 2; ++level) {
+            setSimdLevel(level ? SimdLevel::Avx2 : SimdLevel::Baseline);
+            r[level] = traceGridRay(v, seg.ray, seg.tMin, seg.tMax, GridTraceOptions{});
+            sh[level] = traceGridShadow(v, seg.ray, seg.tMin, seg.tMax, GridTraceOptions{}, 3);
+            const Vec3 p = seg.ray.at(r[level].hit ? r[level].t : seg.tMin);
+            for (int m = 0; m < 3; ++m) n[level][m] = gridNormal(v, p, static_cast<GridNormal>(m));
+        }
+        ASSERT_EQ(r[0].hit, r[1].hit);
+        ASSERT_EQ(r[0].t, r[1].t);
+        ASSERT_EQ(r[0].traversalSteps, r[1].traversalSteps);
+        ASSERT_EQ(sh[0].hit, sh[1].hit);
+        ASSERT_EQ(sh[0].t, sh[1].t);
+        for (int m = 0; m < 3; ++m) {
+            ASSERT_EQ(n[0][m].x, n[1][m].x);
+            ASSERT_EQ(n[0][m].y, n[1][m].y);
+            ASSERT_EQ(n[0][m].z, n[1][m].z);
+        }
+        hits += r[0].hit;
+    }
+    setSimdLevel(was);
+    EXPECT_GT(hits, 1000);
 }
 
 TEST(GridTracer, MidpointStaysWithinTheHitCell) {
