@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "cli_runner.h"
 
@@ -75,6 +76,44 @@ TEST(ExtractMeshCli, BadInputIsOneLineAndNoFile) {
     RunResult help = runCli("mesh --help", dir);
     EXPECT_EQ(help.status, 0);
     EXPECT_NE(help.out.find("--adaptivity"), std::string::npos);
+}
+
+// OpenVDB's tools are a plugin (docs/decisions/0008-openvdb-as-a-plugin.md): the executable does
+// not load libopenvdb; without the plugin, writing .vdb and meshing fail with one line naming it
+// and leave no file, and everything else (reading and rendering .vdb) still works.
+TEST(ExtractMeshCli, OpenVdbIsAPluginLoadedOnlyWhenNeeded) {
+    TempDir dir;
+    const std::string scene =
+        dir.write("s.json", R"({"objects": [{"type": "sphere", "radius": 1}]})");
+    ASSERT_EQ(runCli("bake " + scene + " --res 24 -o " + dir.file("s.vdb"), dir).status, 0);
+    // The dynamic loader's own listing of what the executable loads at start.
+    std::string libs;
+    {
+        FILE* p = popen(("LD_TRACE_LOADED_OBJECTS=1 " + std::string(SDFT_CLI_PATH)).c_str(), "r");
+        ASSERT_NE(p, nullptr);
+        char buf[4096];
+        for (size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) libs.append(buf, n);
+        pclose(p);
+    }
+    EXPECT_NE(libs.find("libtbb"), std::string::npos) << libs;
+    EXPECT_EQ(libs.find("libopenvdb"), std::string::npos) << libs;
+
+    setenv("SDFT_PLUGIN_DIR", dir.file("no-plugins-here").c_str(), 1);
+    for (const std::string& args : {"mesh -q " + scene + " -o " + dir.file("x.ply"),
+                                    "bake " + scene + " --res 24 -o " + dir.file("x.vdb"),
+                                    "convert " + dir.file("s.vdb") + " " + dir.file("x.vdb")}) {
+        const RunResult r = runCli(args, dir);
+        EXPECT_NE(r.status, 0) << args;
+        EXPECT_NE(r.err.find("libsdftrace_openvdb.so not found"), std::string::npos) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    }
+    const RunResult render = runCli(
+        "render -q " + dir.file("s.vdb") + " --width 32 --height 24 -o " + dir.file("s.png"), dir);
+    unsetenv("SDFT_PLUGIN_DIR");
+    EXPECT_EQ(render.status, 0) << render.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.ply")));
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.vdb")));
+    EXPECT_EQ(dir.count(), 3);  // s.json, s.vdb, s.png: no output, no temporary
 }
 
 }  // namespace

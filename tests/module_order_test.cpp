@@ -68,7 +68,7 @@ TEST(ModuleOrder, CheckerFindsAnIncludeAgainstTheOrder) {
     EXPECT_EQ(violations("render", "x.h", "#include \"sdftrace/scene/scene.h\"\n").size(), 1u);
     EXPECT_EQ(violations("bake", "x.h", "#include \"sdftrace/io/mesh_io.h\"\n").size(), 1u);
     EXPECT_EQ(violations("bake", "x.cpp", "#include \"../io/vdb_reader.h\"\n").size(), 1u);
-    EXPECT_TRUE(violations("bake", "x.cpp", "#include \"../field/openvdb_grid.h\"\n").empty());
+    EXPECT_TRUE(violations("bake", "x.cpp", "#include \"../field/openvdb_plugin.h\"\n").empty());
     EXPECT_TRUE(violations("scene", "x.h", "#include \"sdftrace/render/film.h\"\n").empty());
     EXPECT_TRUE(violations("field", "x.h", "#include \"sdftrace/field/grid.h\"\n").empty());
 }

@@ -42,6 +42,7 @@ struct BakeArgs {
     std::string closest = "transform";
     std::string jfaVariant = "plain";
     float beta = 0.5f;
+    bool quiet = false;
     int rays = 64;
     float mask = 3;
     bool verify = false;
@@ -212,7 +213,7 @@ int bakeMesh(const BakeArgs& a) {
     o.betaVoxels = a.beta;
     o.rtsdf.rays = a.rays;
     o.rtsdf.maskVoxels = a.mask;
-    o.progress = true;
+    o.progress = !a.quiet;
     validateMeshBakeOptions(o);
     auto t0 = std::chrono::steady_clock::now();
     MeshReport report;
@@ -376,6 +377,7 @@ void addBakeCommand(CLI::App& app, Action& action) {
     cmd->add_option("--res", args->resolution, "Cells along the longest axis of the region")
         ->check(CLI::Range(8, 4096))
         ->capture_default_str();
+    cmd->add_flag("-q,--quiet", args->quiet, "No progress on stderr (the summary lines stay)");
     auto* dense = cmd->add_flag("--dense", args->dense, "Store every sample");
     auto* sparse =
         cmd->add_flag("--sparse", args->sparse, "Sparse block grid (default; Jamriška §3)");

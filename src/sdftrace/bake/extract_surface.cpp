@@ -1,12 +1,9 @@
 #include "sdftrace/bake/extract_surface.h"
 
-#include <openvdb/tools/VolumeToMesh.h>
-
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
-#include "../field/openvdb_grid.h"
+#include "../field/openvdb_plugin.h"
 #include "sdftrace/core/error.h"
 
 namespace sdft {
@@ -18,16 +15,15 @@ std::string number(float v) {
     return buf;
 }
 
-double since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 }  // namespace
 
 TriangleMesh extractSurface(const Grid& grid, const ExtractOptions& o, const std::string& source,
                             ExtractStats* stats) {
     if (!(o.adaptivity >= 0 && o.adaptivity <= 1))
         throw InputError("--adaptivity " + number(o.adaptivity) + ": accepted values are 0 to 1");
-    const float band = openVdbBand(grid);
+    const OpenVdbPlugin& openVdb = openVdbPlugin("extracting a mesh");
+    const GridView view = grid.view();
+    const float band = openVdb.band(view);
     const float voxel = grid.shape().voxelSize;
     // Samples are clamped to +-band; an isovalue within a voxel of it is not a surface of the
     // field.
@@ -36,22 +32,20 @@ TriangleMesh extractSurface(const Grid& grid, const ExtractOptions& o, const std
                          " stores distances within +-" + number(band - voxel) +
                          " of the surface only (its narrow band); bake a wider --band for offset "
                          "surfaces farther out");
-    auto t0 = std::chrono::steady_clock::now();
-    openvdb::FloatGrid::Ptr vdb = toOpenVdbGrid(grid);
-    const double convertSeconds = since(t0);
-    t0 = std::chrono::steady_clock::now();
-    std::vector<openvdb::Vec3s> points;
-    std::vector<openvdb::Vec3I> tris;
-    std::vector<openvdb::Vec4I> quads;
-    openvdb::tools::volumeToMesh(*vdb, points, tris, quads, o.isovalue, o.adaptivity);
-    vdb.reset();
+    std::vector<std::array<float, 3>> points;
+    std::vector<std::array<uint32_t, 3>> tris;
+    std::vector<std::array<uint32_t, 4>> quads;
+    std::string error;
+    double seconds[2] = {0, 0};
+    if (!openVdb.volumeToMesh(view, o.isovalue, o.adaptivity, points, tris, quads, seconds, error))
+        throw InputError(source + ": OpenVDB's volumeToMesh failed (" + error + ")");
     if (tris.empty() && quads.empty())
         throw InputError(source + ": no surface at isovalue " + number(o.isovalue) +
                          " (the field does not change sign there)");
 
     TriangleMesh mesh;
     mesh.positions.reserve(points.size());
-    for (const auto& p : points) mesh.positions.push_back({p.x(), p.y(), p.z()});
+    for (const auto& p : points) mesh.positions.push_back({p[0], p[1], p[2]});
     mesh.triangles.reserve(tris.size() + 2 * quads.size());
     // volumeToMesh winds its polygons clockwise seen from outside; ours are counter-clockwise.
     for (const auto& t : tris) mesh.triangles.push_back({t[0], t[2], t[1]});
@@ -70,8 +64,8 @@ TriangleMesh extractSurface(const Grid& grid, const ExtractOptions& o, const std
     if (stats) {
         stats->quads = quads.size();
         stats->triangles = tris.size();
-        stats->convertSeconds = convertSeconds;
-        stats->contourSeconds = since(t0);
+        stats->convertSeconds = seconds[0];
+        stats->contourSeconds = seconds[1];
     }
     return mesh;
 }

@@ -1,7 +1,5 @@
 #include "sdftrace/io/vdb_io.h"
 
-#include <openvdb/io/Stream.h>
-#include <openvdb/openvdb.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -9,9 +7,8 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
-#include <sstream>
 
-#include "../field/openvdb_grid.h"
+#include "../field/openvdb_plugin.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/huge_pages.h"
@@ -358,17 +355,11 @@ Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
 }
 
 void saveVdb(const Grid& grid, const std::string& path) {
-    openvdb::FloatGrid::Ptr out = toOpenVdbGrid(grid);
-    // Encoded in memory, then written with every write checked.
-    std::ostringstream bytes(std::ios::binary);
-    try {
-        openvdb::GridPtrVec grids{out};
-        openvdb::io::Stream(bytes).write(grids);
-    } catch (const std::exception& e) {
-        throw InputError(path + ": cannot write OpenVDB file (" + e.what() + ")");
-    }
-    const std::string data = bytes.str();
-    writeFileAtomically(path, data.data(), data.size());
+    // Encoded in memory by OpenVDB (its plugin), then written with every write checked.
+    std::string bytes, error;
+    if (!openVdbPlugin("writing " + path).encodeVdb(grid.view(), bytes, error))
+        throw InputError(path + ": cannot write OpenVDB file (" + error + ")");
+    writeFileAtomically(path, bytes.data(), bytes.size());
 }
 
 }  // namespace sdft
