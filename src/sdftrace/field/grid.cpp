@@ -11,6 +11,10 @@
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/huge_pages.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace sdft {
 
 Grid Grid::dense(const GridShape& shape, std::vector<float> samples) {
@@ -354,9 +358,74 @@ float blockMasksAndBoundB(const float* s, int ni, int nj, int nk, uint64_t* mask
     return worst;
 }
 
+#if defined(__SSE2__)
+// blockMasksAndBoundB<4> in SSE2 (the x86-64 baseline): a row of 4 cells is one vector. The same
+// operations in the same order, so the same values.
+float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask) {
+    constexpr int V = 5, sy = V, sz = V * V;
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    auto absDiff = [&](const float* a, const float* b) {
+        return _mm_andnot_ps(sign, _mm_sub_ps(_mm_loadu_ps(a), _mm_loadu_ps(b)));
+    };
+    // Edge differences: x-edges 4 per row; y- and z-edges 5 per row (padded for loads at +1).
+    alignas(16) float ex[V][V][4];
+    float ey[V][4][8], ez[4][V][8];
+    uint32_t negative[V][V];
+    for (int k = 0; k < V; ++k)
+        for (int j = 0; j < V; ++j) {
+            const float* r = s + k * sz + j * sy;
+            _mm_store_ps(ex[k][j], absDiff(r + 1, r));
+            if (j < 4) {
+                _mm_storeu_ps(ey[k][j], absDiff(r + sy, r));
+                ey[k][j][4] = std::fabs(r[sy + 4] - r[4]);
+            }
+            if (k < 4) {
+                _mm_storeu_ps(ez[k][j], absDiff(r + sz, r));
+                ez[k][j][4] = std::fabs(r[sz + 4] - r[4]);
+            }
+            negative[k][j] = static_cast<uint32_t>(
+                                 _mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(r), _mm_setzero_ps()))) |
+                             static_cast<uint32_t>(r[4] < 0) << 4;
+        }
+    // Lanes of cells past ni (a block cut by the grid's face) count for nothing.
+    const __m128 keep = _mm_castsi128_ps(
+        _mm_set_epi32(ni > 3 ? -1 : 0, ni > 2 ? -1 : 0, ni > 1 ? -1 : 0, ni > 0 ? -1 : 0));
+    __m128 worst = _mm_setzero_ps();
+    for (int k = 0; k < nk; ++k)
+        for (int j = 0; j < nj; ++j) {
+            const __m128 gx =
+                _mm_max_ps(_mm_max_ps(_mm_load_ps(ex[k][j]), _mm_load_ps(ex[k][j + 1])),
+                           _mm_max_ps(_mm_load_ps(ex[k + 1][j]), _mm_load_ps(ex[k + 1][j + 1])));
+            const __m128 gy =
+                _mm_max_ps(_mm_max_ps(_mm_loadu_ps(ey[k][j]), _mm_loadu_ps(ey[k][j] + 1)),
+                           _mm_max_ps(_mm_loadu_ps(ey[k + 1][j]), _mm_loadu_ps(ey[k + 1][j] + 1)));
+            const __m128 gz =
+                _mm_max_ps(_mm_max_ps(_mm_loadu_ps(ez[k][j]), _mm_loadu_ps(ez[k][j] + 1)),
+                           _mm_max_ps(_mm_loadu_ps(ez[k][j + 1]), _mm_loadu_ps(ez[k][j + 1] + 1)));
+            const __m128 bound =
+                _mm_add_ps(_mm_add_ps(_mm_mul_ps(gx, gx), _mm_mul_ps(gy, gy)), _mm_mul_ps(gz, gz));
+            worst = _mm_max_ps(worst, _mm_and_ps(bound, keep));
+            const uint32_t any = negative[k][j] | negative[k][j + 1] | negative[k + 1][j] |
+                                 negative[k + 1][j + 1],
+                           all = negative[k][j] & negative[k][j + 1] & negative[k + 1][j] &
+                                 negative[k + 1][j + 1];
+            const uint32_t change = ((any | any >> 1) & ~(all & all >> 1)) & ((1u << ni) - 1);
+            const int bit = (k * 4 + j) * 4;
+            mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
+        }
+    alignas(16) float lanes[4];
+    _mm_store_ps(lanes, worst);
+    return std::max(std::max(lanes[0], lanes[1]), std::max(lanes[2], lanes[3]));
+}
+#else
+float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask) {
+    return blockMasksAndBoundB<4>(s, ni, nj, nk, mask);
+}
+#endif
+
 float blockMasksAndBound(const float* s, int B, int ni, int nj, int nk, uint64_t* mask) {
     return B == 8 ? blockMasksAndBoundB<8>(s, ni, nj, nk, mask)
-                  : blockMasksAndBoundB<4>(s, ni, nj, nk, mask);
+                  : blockMasksAndBound4(s, ni, nj, nk, mask);
 }
 }  // namespace
 
@@ -426,39 +495,39 @@ void Grid::computeBlockSkip() {
             d[b] = crossing ? 0 : kFar;
         }
     });
-    auto at = [&](int i, int j, int k) { return (static_cast<size_t>(k) * ny + j) * nx + i; };
-    // Forward: the 13 neighbours earlier in raster order; backward: the 13 later ones.
-    struct Offset {
-        int di, dj, dk;
+    // Forward over rows in raster order: each block takes the least of its 13 earlier
+    // neighbours plus one; backward likewise with the 13 later ones. Row by row: the 12
+    // neighbours in the 4 rows already done are a minimum across the row (vectorized), then the
+    // one before it in the row is a sweep.
+    std::vector<uint16_t> fromRows(nx);
+    auto pass = [&](int s) {
+        for (int kk = 0; kk < nz; ++kk)
+            for (int jj = 0; jj < ny; ++jj) {
+                const int k = s > 0 ? kk : nz - 1 - kk, j = s > 0 ? jj : ny - 1 - jj;
+                uint16_t* row = d.data() + (static_cast<size_t>(k) * ny + j) * nx;
+                std::fill(fromRows.begin(), fromRows.end(), kFar);
+                // Rows (j - s, k) and (j - 1..j + 1, k - s): done before this one.
+                const int rows[4][2] = {{j - s, k}, {j - 1, k - s}, {j, k - s}, {j + 1, k - s}};
+                for (const auto& [y, z] : rows) {
+                    if (y < 0 || y >= ny || z < 0 || z >= nz) continue;
+                    const uint16_t* r = d.data() + (static_cast<size_t>(z) * ny + y) * nx;
+                    for (int i = 0; i < nx; ++i) {
+                        const uint16_t left = i > 0 ? r[i - 1] : kFar;
+                        const uint16_t right = i + 1 < nx ? r[i + 1] : kFar;
+                        fromRows[i] = std::min({fromRows[i], left, r[i], right});
+                    }
+                }
+                for (int i = 0; i < nx; ++i) row[i] = std::min<uint16_t>(row[i], fromRows[i] + 1);
+                if (s > 0)
+                    for (int i = 1; i < nx; ++i)
+                        row[i] = std::min<uint16_t>(row[i], row[i - 1] + 1);
+                else
+                    for (int i = nx - 2; i >= 0; --i)
+                        row[i] = std::min<uint16_t>(row[i], row[i + 1] + 1);
+            }
     };
-    std::vector<Offset> earlier;
-    for (int dk = -1; dk <= 1; ++dk)
-        for (int dj = -1; dj <= 1; ++dj)
-            for (int di = -1; di <= 1; ++di)
-                if ((dk != 0 ? dk : dj != 0 ? dj : di) < 0) earlier.push_back({di, dj, dk});
-    std::vector<ptrdiff_t> step;  // the same neighbours as index offsets
-    for (const Offset& o : earlier)
-        step.push_back((static_cast<ptrdiff_t>(o.dk) * ny + o.dj) * nx + o.di);
-    auto relax = [&](int i, int j, int k, int s) {
-        const size_t here = at(i, j, k);
-        uint16_t& v = d[here];
-        if (v == 0) return;  // a surface block
-        if (i > 0 && j > 0 && k > 0 && i < nx - 1 && j < ny - 1 && k < nz - 1) {
-            for (ptrdiff_t off : step) v = std::min<uint16_t>(v, d[here + s * off] + 1);
-            return;
-        }
-        for (const Offset& o : earlier) {
-            const int x = i + s * o.di, y = j + s * o.dj, z = k + s * o.dk;
-            if (x >= 0 && y >= 0 && z >= 0 && x < nx && y < ny && z < nz)
-                v = std::min<uint16_t>(v, d[at(x, y, z)] + 1);
-        }
-    };
-    for (int k = 0; k < nz; ++k)
-        for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i) relax(i, j, k, 1);
-    for (int k = nz - 1; k >= 0; --k)
-        for (int j = ny - 1; j >= 0; --j)
-            for (int i = nx - 1; i >= 0; --i) relax(i, j, k, -1);
+    pass(1);
+    pass(-1);
     m_blockSkip.resize(n);
     for (size_t b = 0; b < n; ++b) m_blockSkip[b] = static_cast<uint8_t>(std::min<int>(255, d[b]));
 }

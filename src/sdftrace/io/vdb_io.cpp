@@ -1,5 +1,6 @@
 #include "sdftrace/io/vdb_io.h"
 
+#include <emmintrin.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "../field/openvdb_plugin.h"
 #include "sdftrace/core/error.h"
@@ -93,21 +95,20 @@ class TreeToGrid {
 
     Grid build() {
         std::vector<uint8_t> flags(m_numBlocks);
-        std::vector<size_t> slabCandidates(m_blocks[2]);
-        const size_t candidates = flagBlocks(flags, slabCandidates);
+        std::vector<size_t> slabSurface(m_blocks[2]);
+        computeLeafBits();
+        const size_t surface = flagBlocks(flags, slabSurface);
 
         checkMemoryBudget(
-            m_numBlocks * 5.0 + 2.0 * m_V * m_V * m_V * sizeof(float) * candidates, m_path,
-            "the samples of " + std::to_string(candidates) + " blocks near its surface",
+            m_numBlocks * 5.0 + m_V * m_V * m_V * sizeof(float) * static_cast<double>(surface),
+            m_path, "the samples of " + std::to_string(surface) + " blocks near its surface",
             "resample the level set coarser");
-        std::vector<float> samples = sampleCandidates(flags, slabCandidates, candidates);
+        std::vector<float> samples = sampleSurfaceBlocks(flags, slabSurface, surface);
         return Grid::sparseFromBuffers(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
                                        std::move(flags), std::move(samples), m_path);
     }
 
   private:
-    static constexpr uint8_t kCandidate = 3;
-
     void makeShape(const vdb::FloatGrid& g) {
         for (int a = 0; a < 3; ++a) {
             const int64_t dim = static_cast<int64_t>(m_hi[a]) - m_lo[a] + 1;
@@ -120,10 +121,7 @@ class TreeToGrid {
                 throw InputError(m_path + ": the grid lies beyond +-1e9");
         }
         m_shape.voxelSize = static_cast<float>(g.voxelSize);
-        for (const vdb::Leaf& leaf : m_t.leaves)
-            for (float v : leaf.values)
-                if (!std::isfinite(v))
-                    throw InputError(m_path + ": non-finite values in grid '" + g.name + "'");
+        m_gridName = g.name;
     }
 
     // The active region in 8^3-voxel regions on the VDB leaf grid: per region its leaf (or -1)
@@ -181,47 +179,162 @@ class TreeToGrid {
         return (static_cast<size_t>(bk) * m_blocks[1] + bj) * m_blocks[0] + bi;
     }
 
-    // Pass 1, cheap: which blocks need their samples (they touch a leaf, or their tile corners
-    // are near the surface or of both signs), the others flagged by their tile's sign. Tiles near
-    // zero or a band wider than the level set's can make far more candidates than the leaves
-    // suggest, so the caller checks their samples against the budget before any is computed.
-    size_t flagBlocks(std::vector<uint8_t>& flags, std::vector<size_t>& slabCandidates) const {
-        std::atomic<size_t> candidates{0};
+    // Pass 1: every block's flag. Blocks whose corners are far from a leaf, far from the surface
+    // and of one sign take it from there; the others (candidates) are classified by their
+    // samples' sign and band bits (classify), without gathering them. Returns the number of
+    // surface blocks, per z-slab in `slabSurface`. Tiles near zero or a band wider than the level
+    // set's can make far more surface blocks than the leaves suggest, so the caller checks their
+    // samples against the budget before any is gathered.
+    size_t flagBlocks(std::vector<uint8_t>& flags, std::vector<size_t>& slabSurface) const {
+        // Block corners are shared by 8 blocks: each lattice vertex (a multiple of B) looked up
+        // once, as bits: 1 its region holds a leaf, 2 negative, 4 within the band.
+        const int lx = m_blocks[0] + 1, ly = m_blocks[1] + 1, lz = m_blocks[2] + 1;
+        std::vector<uint8_t> corner(static_cast<size_t>(lx) * ly * lz);
+        tbb::parallel_for(0, lz, [&](int ck) {
+            for (int cj = 0; cj < ly; ++cj)
+                for (int ci = 0; ci < lx; ++ci) {
+                    const int i = ci * m_B, j = cj * m_B, k = ck * m_B;
+                    const auto [x, y, z] = voxel(i, j, k);
+                    const float v = value(i, j, k);
+                    corner[(static_cast<size_t>(ck) * ly + cj) * lx + ci] =
+                        static_cast<uint8_t>((m_regionLeaf[regionOf(x, y, z)] >= 0 ? 1 : 0) |
+                                             (v < 0 ? 2 : 0) | (std::fabs(v) < m_band ? 4 : 0));
+                }
+        });
+        std::atomic<size_t> surface{0};
         tbb::parallel_for(0, m_blocks[2], [&](int bk) {
             size_t count = 0;
             for (int bj = 0; bj < m_blocks[1]; ++bj)
                 for (int bi = 0; bi < m_blocks[0]; ++bi) {
-                    const int b[3] = {bi, bj, bk};
-                    bool touches = false, anyNeg = false, anyPos = false, near = false;
-                    for (int corner = 0; corner < 8; ++corner) {
-                        int vtx[3];
-                        for (int a = 0; a < 3; ++a) vtx[a] = b[a] * m_B + ((corner >> a) & 1) * m_B;
-                        const auto [x, y, z] = voxel(vtx[0], vtx[1], vtx[2]);
-                        touches |= m_regionLeaf[regionOf(x, y, z)] >= 0;
-                        const float v = value(vtx[0], vtx[1], vtx[2]);
-                        anyNeg |= v < 0;
-                        anyPos |= v >= 0;
-                        near |= std::fabs(v) < m_band;
+                    uint8_t any = 0, all = 0xff;
+                    for (int c = 0; c < 8; ++c) {
+                        const uint8_t bits =
+                            corner[(static_cast<size_t>(bk + (c >> 2)) * ly + bj + (c >> 1 & 1)) *
+                                       lx +
+                                   bi + (c & 1)];
+                        any |= bits;
+                        all &= bits;
                     }
+                    const bool touches = any & 1, anyNeg = any & 2, anyPos = !(all & 2),
+                               near = any & 4;
                     uint8_t& flag = flags[blockIndex(bi, bj, bk)];
                     if (touches || near || (anyNeg && anyPos)) {
-                        flag = kCandidate;
-                        ++count;
+                        const int b[3] = {bi, bj, bk};
+                        flag = classify(b);
+                        count += flag == static_cast<uint8_t>(BlockFlag::Surface);
                     } else {
                         flag =
                             static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
                     }
                 }
-            slabCandidates[bk] = count;
-            candidates += count;
+            slabSurface[bk] = count;
+            surface += count;
         });
-        return candidates.load();
+        return surface.load();
     }
 
-    // Per worker: tile regions filled with their value, so that leaves and tiles read alike.
+    // Per leaf, one bit per voxel (word x, bit y << 3 | z, as the leaf stores them): negative,
+    // and within the band.
+    struct LeafBits {
+        uint64_t negative[8], near[8];
+    };
+
+    // Also refuses non-finite values (|v| <= FLT_MAX fails for them).
+    void computeLeafBits() {
+        m_leafBits.resize(m_t.leaves.size());
+        std::atomic<bool> finite{true};
+        tbb::parallel_for(
+            tbb::blocked_range<size_t>(0, m_t.leaves.size(), 256), [&](const auto& range) {
+                const __m128 sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps(),
+                             band = _mm_set1_ps(m_band),
+                             largest = _mm_set1_ps(std::numeric_limits<float>::max());
+                int allFinite = 0xf;
+                for (size_t l = range.begin(); l != range.end(); ++l) {
+                    const float* v = m_t.leaves[l].values.data();
+                    LeafBits& bits = m_leafBits[l];
+                    for (int x = 0; x < 8; ++x) {
+                        uint64_t negative = 0, near = 0;
+                        for (int q = 0; q < 16; ++q) {
+                            const __m128 f = _mm_loadu_ps(v + x * 64 + q * 4);
+                            const __m128 magnitude = _mm_andnot_ps(sign, f);
+                            negative |= uint64_t(_mm_movemask_ps(_mm_cmplt_ps(f, zero))) << (4 * q);
+                            near |= uint64_t(_mm_movemask_ps(_mm_cmplt_ps(magnitude, band)))
+                                    << (4 * q);
+                            allFinite &= _mm_movemask_ps(_mm_cmple_ps(magnitude, largest));
+                        }
+                        bits.negative[x] = negative;
+                        bits.near[x] = near;
+                    }
+                }
+                if (allFinite != 0xf) finite = false;
+            });
+        if (!finite) throw InputError(m_path + ": non-finite values in grid '" + m_gridName + "'");
+    }
+
+    // Block b's flag from its (B+1)^3 samples' bits, without gathering them: surface if one is
+    // within the band or their signs differ (as Grid::sparseFromDense decides), else inside or
+    // outside by their sign. Its vertices per axis span at most two 8-voxel regions, a box in
+    // each.
+    uint8_t classify(const int b[3]) const {
+        int first[3], lo[3][2], hi[3][2];
+        for (int a = 0; a < 3; ++a) {
+            first[a] = (m_lo[a] + b[a] * m_B) >> 3;
+            // The first and last vertex, clamped to the grid as GridView::vertex clamps.
+            const int32_t v0 = m_lo[a] + std::min(b[a] * m_B, m_shape.cells[a]),
+                          v1 = m_lo[a] + std::min(b[a] * m_B + m_B, m_shape.cells[a]);
+            for (int r = 0; r < 2; ++r) {
+                const int32_t start = (first[a] + r) * 8;
+                lo[a][r] = std::max(v0, start) - start;
+                hi[a][r] = std::min(v1, start + 7) - start;
+            }
+        }
+        bool anyNeg = false, anyPos = false, near = false;
+        for (int c = 0; c < 8; ++c) {
+            const int rx = c & 1, ry = c >> 1 & 1, rz = c >> 2;
+            if (lo[0][rx] > hi[0][rx] || lo[1][ry] > hi[1][ry] || lo[2][rz] > hi[2][rz]) continue;
+            const size_t r =
+                regionOf((first[0] + rx) * 8, (first[1] + ry) * 8, (first[2] + rz) * 8);
+            const int32_t leaf = m_regionLeaf[r];
+            if (leaf < 0) {
+                const float v = m_regionValue[r];
+                anyNeg |= v < 0;
+                anyPos |= !(v < 0);
+                near |= std::fabs(v) < m_band;
+                continue;
+            }
+            // The y rows (bytes) and z bits of the box inside each x word.
+            const uint64_t zBits = ((2u << hi[2][rz]) - 1) & ~((1u << lo[2][rz]) - 1);
+            const uint64_t yBytes =
+                (hi[1][ry] == 7 ? ~uint64_t{0} : (uint64_t{1} << (8 * (hi[1][ry] + 1))) - 1) &
+                ~((uint64_t{1} << (8 * lo[1][ry])) - 1);
+            const uint64_t box = zBits * 0x0101010101010101ull & yBytes;
+            const LeafBits& bits = m_leafBits[leaf];
+            for (int x = lo[0][rx]; x <= hi[0][rx]; ++x) {
+                anyNeg |= (bits.negative[x] & box) != 0;
+                anyPos |= (~bits.negative[x] & box) != 0;
+                near |= (bits.near[x] & box) != 0;
+            }
+        }
+        if (near || (anyNeg && anyPos)) return static_cast<uint8_t>(BlockFlag::Surface);
+        return static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
+    }
+
+    // Per worker: tile regions filled with their value, so that leaves and tiles read alike. Tile
+    // values are mostly +-background: a few filled regions, each kept for its value.
     struct GatherScratch {
-        std::vector<float> tileFill = std::vector<float>(8 * 512);
-        float filled[8] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
+        static constexpr int kSlots = 4;
+        std::vector<float> tileFill = std::vector<float>(kSlots * 512);
+        float value[kSlots] = {NAN, NAN, NAN, NAN};
+        int next = 0;  // the slot refilled next when no slot holds a value
+        const float* region(float v) {
+            for (int s = 0; s < kSlots; ++s)
+                if (value[s] == v) return tileFill.data() + s * 512;
+            float* fill = tileFill.data() + next * 512;
+            std::fill(fill, fill + 512, v);
+            value[next] = v;
+            next = (next + 1) % kSlots;
+            return fill;
+        }
     };
 
     // Block b's (B+1)^3 samples into `out`, x fastest. Its V vertices per axis span at most two
@@ -256,15 +369,11 @@ class TreeToGrid {
                 source[c] = m_t.leaves[leaf].values.data();
                 continue;
             }
-            // Tiles mostly hold the same +-background: refill only on a change.
-            float* fill = scratch.tileFill.data() + c * 512;
-            if (!(scratch.filled[c] == m_regionValue[r])) {
-                std::fill(fill, fill + 512, m_regionValue[r]);
-                scratch.filled[c] = m_regionValue[r];
-            }
-            source[c] = fill;
+            source[c] = scratch.region(m_regionValue[r]);
         }
-        // x splits between the two regions at most once per row.
+        // x splits between the two regions at most once per row, at the same place in every row.
+        int split = 0;
+        while (split < V && region[0][split] == 0) ++split;
         for (int k = 0; k < V; ++k)
             for (int j = 0; j < V; ++j) {
                 const int rjk = 2 * region[1][j] + 4 * region[2][k];
@@ -272,65 +381,41 @@ class TreeToGrid {
                 // (The offsets' bits are disjoint; a null source is never indexed.)
                 const float* row0 = source[rjk];
                 const float* row1 = source[rjk + 1];
-                int i = 0;
-                for (; i < V && region[0][i] == 0; ++i) *out++ = row0[ojk | offset[0][i]];
-                for (; i < V; ++i) *out++ = row1[ojk | offset[0][i]];
+                for (int i = 0; i < split; ++i) out[i] = row0[ojk | offset[0][i]];
+                for (int i = split; i < V; ++i) out[i] = row1[ojk | offset[0][i]];
+                out += V;
             }
     }
 
-    // Pass 2: the candidates' samples, in block order; a candidate whose samples are all far is
-    // not a surface block after all.
-    //
-    // Each z-slab of blocks writes its surface blocks' samples in place, from where its first
-    // candidate would go; the slabs are then moved together (one copy, no per-slab buffers).
-    std::vector<float> sampleCandidates(std::vector<uint8_t>& flags,
-                                        const std::vector<size_t>& slabCandidates,
-                                        size_t candidates) const {
+    // Pass 2: the surface blocks' samples, in block order, clamped to the band; each z-slab of
+    // blocks writes from where its first surface block goes.
+    std::vector<float> sampleSurfaceBlocks(const std::vector<uint8_t>& flags,
+                                           const std::vector<size_t>& slabSurface,
+                                           size_t surface) const {
         const int V = m_V;
         const size_t perBlock = static_cast<size_t>(V) * V * V;
-        std::vector<size_t> slabStart(m_blocks[2] + 1, 0), slabSurface(m_blocks[2], 0);
+        std::vector<size_t> slabStart(m_blocks[2] + 1, 0);
         for (int bk = 0; bk < m_blocks[2]; ++bk)
-            slabStart[bk + 1] = slabStart[bk] + slabCandidates[bk];
+            slabStart[bk + 1] = slabStart[bk] + slabSurface[bk];
         std::vector<float> samples;
-        samples.reserve(candidates * perBlock);
-        adviseHugePages(samples.data(), candidates * perBlock * sizeof(float));
-        samples.resize(candidates * perBlock);
+        samples.reserve(surface * perBlock);
+        adviseHugePages(samples.data(), surface * perBlock * sizeof(float));
+        samples.resize(surface * perBlock);
+        const float band = m_band;
         tbb::parallel_for(0, m_blocks[2], [&](int bk) {
-            size_t surface = 0;
+            float* block = samples.data() + slabStart[bk] * perBlock;
             GatherScratch scratch;
             for (int bj = 0; bj < m_blocks[1]; ++bj)
                 for (int bi = 0; bi < m_blocks[0]; ++bi) {
-                    uint8_t& flag = flags[blockIndex(bi, bj, bk)];
-                    if (flag != kCandidate) continue;
-                    float* const block = samples.data() + (slabStart[bk] + surface) * perBlock;
+                    if (flags[blockIndex(bi, bj, bk)] != static_cast<uint8_t>(BlockFlag::Surface))
+                        continue;
                     const int b[3] = {bi, bj, bk};
                     gatherBlock(b, block, scratch);
-                    // Clamped to the band and classified in one contiguous pass.
-                    bool anyNeg = false, anyPos = false, near = false;
-                    for (float* v = block; v != block + perBlock; ++v) {
-                        *v = std::clamp(*v, -m_band, m_band);
-                        anyNeg |= *v < 0;
-                        anyPos |= *v >= 0;
-                        near |= std::fabs(*v) < m_band;
-                    }
-                    if (near || (anyNeg && anyPos)) {
-                        flag = static_cast<uint8_t>(BlockFlag::Surface);
-                        ++surface;
-                    } else {
-                        flag =
-                            static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
-                    }
+                    for (size_t n = 0; n < perBlock; ++n)
+                        block[n] = std::min(std::max(block[n], -band), band);
+                    block += perBlock;
                 }
-            slabSurface[bk] = surface;
         });
-        size_t end = 0;
-        for (int bk = 0; bk < m_blocks[2]; ++bk) {
-            const size_t n = slabSurface[bk] * perBlock, from = slabStart[bk] * perBlock;
-            if (from != end)
-                std::memmove(samples.data() + end, samples.data() + from, n * sizeof(float));
-            end += n;
-        }
-        samples.resize(end);
         return samples;
     }
 
@@ -345,6 +430,8 @@ class TreeToGrid {
     int32_t m_r0[3] = {0, 0, 0}, m_rn[3] = {0, 0, 0};
     std::vector<int32_t> m_regionLeaf;
     std::vector<float> m_regionValue;
+    std::vector<LeafBits> m_leafBits;
+    std::string m_gridName;
 };
 
 }  // namespace

@@ -111,7 +111,16 @@ TEST(Vdb, RejectsUnusableFiles) {
     openvdb::io::File(stretched).write({f});
     expectError(stretched, "non-uniform");
     expectError(tempPath("x.obj"), "accepted: .sdfg, .vdb");
-    for (const auto& p : {garbage, vec, stretched}) std::filesystem::remove(p);
+    // A NaN or an infinity anywhere in a leaf.
+    std::string nan = tempPath("nan.vdb");
+    for (float bad : {NAN, INFINITY}) {
+        auto g =
+            openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(1.0f, openvdb::Vec3f(0), 0.1f);
+        g->tree().setValueOff(openvdb::Coord(10, 0, 0), bad);
+        openvdb::io::File(nan).write({g});
+        expectError(nan, "non-finite values");
+    }
+    for (const auto& p : {garbage, vec, stretched, nan}) std::filesystem::remove(p);
 }
 
 // The import as it was through OpenVDB's reader: the dense active region, sparsified. The native
@@ -228,7 +237,11 @@ TEST(Vdb, NativeReaderMatchesOpenVdbOnEveryEncoding) {
                                   *it)
                             << what;
                     if (grid == sphere)
-                        expectSameGrid(loadVdb(path), importThroughOpenVdb(*ref, {}), what);
+                        for (int B : {4, 8}) {
+                            const VdbImportOptions o{.blockSize = B};
+                            expectSameGrid(loadVdb(path, o), importThroughOpenVdb(*ref, o),
+                                           what + " B=" + std::to_string(B));
+                        }
                     ++checked;
                 }
     EXPECT_EQ(checked, 2 * 2 * 6);

@@ -4,6 +4,8 @@
 #include "vdb_reader.h"
 
 #include <blosc.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <zlib.h>
 
 #include <bit>
@@ -117,16 +119,23 @@ struct Reader {
     bool half = false;
     float background = 0;
     std::vector<std::array<int32_t, 3>> leafOrigins;  // in topology order
+    // Reused by every node this reader decodes.
+    std::vector<char> bloscScratch;
+    std::vector<uint64_t> selectionScratch;
+    std::vector<float> valueScratch;
+    std::vector<uint16_t> halfScratch;
 
     // memcpy, also for zero bytes into an empty buffer (no null pointer handed to memcpy).
     static void copy(char* out, const char* in, uint64_t bytes) {
         if (bytes) std::memcpy(out, in, bytes);
     }
 
-    // io::readData: `bytes` bytes of values, zipped, blosc-compressed or plain.
+    // io::readData: `bytes` bytes of values, zipped, blosc-compressed or plain. With a null
+    // `out`, only steps over them (readBuffers' first pass).
     void readData(char* out, uint64_t bytes) {
         if (!(compression & (kZip | kBlosc))) {
-            copy(out, c.take(bytes, "values"), bytes);
+            const char* src = c.take(bytes, "values");
+            if (out) copy(out, src, bytes);
             return;
         }
         const int64_t stored = c.get<int64_t>("compressed size");
@@ -134,10 +143,12 @@ struct Reader {
             if (static_cast<uint64_t>(-stored) != bytes)
                 c.fail("uncompressed block of " + std::to_string(-stored) + " bytes, expected " +
                        std::to_string(bytes));
-            copy(out, c.take(bytes, "values"), bytes);
+            const char* src = c.take(bytes, "values");
+            if (out) copy(out, src, bytes);
             return;
         }
         const char* src = c.take(static_cast<uint64_t>(stored), "compressed values");
+        if (!out) return;
         if (compression & kBlosc) {
             size_t nbytes = 0;
             if (blosc_cbuffer_validate(src, static_cast<size_t>(stored), &nbytes) != 0)
@@ -147,10 +158,11 @@ struct Reader {
                 c.fail("blosc block of " + std::to_string(nbytes) + " bytes, expected " +
                        std::to_string(bytes));
             if (nbytes == 0) return;
-            std::vector<char> tmp(nbytes);
-            if (blosc_decompress_ctx(src, tmp.data(), nbytes, 1) != static_cast<int>(nbytes))
+            bloscScratch.resize(nbytes);
+            if (blosc_decompress_ctx(src, bloscScratch.data(), nbytes, 1) !=
+                static_cast<int>(nbytes))
                 c.fail("corrupt blosc block");
-            copy(out, tmp.data(), bytes);
+            copy(out, bloscScratch.data(), bytes);
         } else {
             uLongf outLen = static_cast<uLongf>(bytes);
             if (uncompress(reinterpret_cast<Bytef*>(out), &outLen,
@@ -161,7 +173,8 @@ struct Reader {
         }
     }
 
-    // io::readCompressedValues for a node of `count` values with value mask `mask`.
+    // io::readCompressedValues for a node of `count` values with value mask `mask`. With a null
+    // `dest`, only steps over them.
     void readValues(float* dest, int count, const uint64_t* mask) {
         const int8_t meta = c.get<int8_t>("compression metadata");
         if (meta < kNoMaskOrInactiveVals || meta > kNoMaskAndAllVals)
@@ -174,7 +187,8 @@ struct Reader {
             if (meta == kMaskAndTwoInactiveVals) inactive1 = c.get<float>("inactive value");
         }
         const int words = count / 64;
-        std::vector<uint64_t> selection(words, 0);
+        std::vector<uint64_t>& selection = selectionScratch;
+        selection.assign(words, 0);
         if (meta == kMaskAndNoInactiveVals || meta == kMaskAndOneInactiveVal ||
             meta == kMaskAndTwoInactiveVals)
             std::memcpy(selection.data(), c.take(words * 8ull, "selection mask"), words * 8ull);
@@ -183,10 +197,16 @@ struct Reader {
             stored = 0;
             for (int w = 0; w < words; ++w) stored += std::popcount(mask[w]);
         }
-        std::vector<float> values(stored);
-        if (half) {
+        if (!dest) {
             // io::HalfReader reads nothing at all for zero values (readData would read a size).
-            std::vector<uint16_t> h(stored);
+            if (!half || stored > 0) readData(nullptr, stored * (half ? 2ull : 4ull));
+            return;
+        }
+        std::vector<float>& values = valueScratch;
+        values.resize(stored);
+        if (half) {
+            std::vector<uint16_t>& h = halfScratch;
+            h.resize(stored);
             if (stored > 0) readData(reinterpret_cast<char*>(h.data()), stored * 2ull);
             for (int i = 0; i < stored; ++i) values[i] = halfToFloat(h[i]);
         } else {
@@ -267,16 +287,36 @@ struct Reader {
         }
     }
 
-    // LeafNode::readBuffers for every leaf, in the order of the topology.
+    // LeafNode::readBuffers for every leaf, in the order of the topology: one pass finds where
+    // each leaf's buffer starts (its headers read, its values stepped over), then the leaves are
+    // decoded in parallel, each from its own cursor.
     void readBuffers(Tree& t) {
-        t.leaves.reserve(leafOrigins.size());
-        adviseHugePages(t.leaves.data(), leafOrigins.size() * sizeof(Leaf));
-        t.leaves.resize(leafOrigins.size());
-        for (size_t i = 0; i < leafOrigins.size(); ++i) t.leaves[i].origin = leafOrigins[i];
-        for (Leaf& leaf : t.leaves) {
-            std::memcpy(leaf.active.data(), c.take(64, "leaf mask"), 64);
-            readValues(leaf.values.data(), kLeafSize, leaf.active.data());
+        const size_t n = leafOrigins.size();
+        std::vector<size_t> start(n);
+        for (size_t i = 0; i < n; ++i) {
+            start[i] = c.pos();
+            const char* mask = c.take(64, "leaf mask");
+            uint64_t active[8];
+            std::memcpy(active, mask, 64);
+            readValues(nullptr, kLeafSize, active);
         }
+        t.leaves.reserve(n);
+        adviseHugePages(t.leaves.data(), n * sizeof(Leaf));
+        t.leaves.resize(n);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const auto& range) {
+            Cursor own = c;
+            Reader r(own);
+            r.compression = compression;
+            r.half = half;
+            r.background = background;
+            for (size_t i = range.begin(); i != range.end(); ++i) {
+                Leaf& leaf = t.leaves[i];
+                leaf.origin = leafOrigins[i];
+                own.seek(static_cast<int64_t>(start[i]), "a leaf buffer");
+                std::memcpy(leaf.active.data(), own.take(64, "leaf mask"), 64);
+                r.readValues(leaf.values.data(), kLeafSize, leaf.active.data());
+            }
+        });
     }
 };
 
