@@ -204,45 +204,52 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                                                        float out[4][4][4]) const {
     const int n[3] = {shape.cells[0], shape.cells[1], shape.cells[2]};
     const int start[3] = {i - 1, j - 1, k - 1};
-    // Per axis: the clamped vertex, and for sparse grids the block of the cell below it (as in
-    // vertex()) and the vertex's index inside that block's (B+1)^3 samples.
-    int at[3][4], block[3][4], local[3][4];
+    // Per axis and offset: the clamped vertex's part of the flat index (dense), or of its block's
+    // index and of its index inside that block's (B+1)^3 samples (sparse; the block of the cell
+    // below the vertex, as in vertex()).
+    size_t blockPart[3][4], samplePart[3][4];
     const int sh = blockShift();
+    const size_t sy = static_cast<size_t>(blockSize) + 1, sz = sy * sy, perBlock = sz * sy;
+    const size_t blockStride[3] = {1, static_cast<size_t>(blocks[0]),
+                                   static_cast<size_t>(blocks[0]) * blocks[1]};
+    const size_t vertexStride[3] = {1, static_cast<size_t>(n[0]) + 1,
+                                    (static_cast<size_t>(n[0]) + 1) * (n[1] + 1)};
+    const size_t localStride[3] = {1, sy, sz};
     for (int a = 0; a < 3; ++a)
         for (int d = 0; d < 4; ++d) {
             const int v = clampi(start[a] + d, 0, n[a]);
-            const int c = v < n[a] ? v : n[a] - 1;
-            at[a][d] = v;
-            block[a][d] = c >> sh;
-            local[a][d] = v - (block[a][d] << sh);
-        }
-    // Rows (z, y) with both inside {1, 2} need x = 0..3; rows with one of them outside, x = 1, 2;
-    // rows with both outside, nothing.
-    const size_t sy = static_cast<size_t>(blockSize) + 1, sz = sy * sy, perBlock = sz * sy;
-    for (int z = 0; z < 4; ++z)
-        for (int y = 0; y < 4; ++y) {
-            const int outer = (z == 0 || z == 3) + (y == 0 || y == 3);
-            if (outer == 2) continue;
-            const int x0 = outer ? 1 : 0, x1 = outer ? 3 : 4;
             if (kind == GridKind::Dense) {
-                const float* row =
-                    samples +
-                    at[2][z] * (static_cast<size_t>(n[1]) + 1) * (static_cast<size_t>(n[0]) + 1) +
-                    at[1][y] * (static_cast<size_t>(n[0]) + 1);
-                for (int x = x0; x < x1; ++x) out[z][y][x] = row[at[0][x]];
+                samplePart[a][d] = v * vertexStride[a];
                 continue;
             }
-            const size_t rowBlock =
-                (static_cast<size_t>(block[2][z]) * blocks[1] + block[1][y]) * blocks[0];
-            const size_t rowSample = local[2][z] * sz + local[1][y] * sy;
-            for (int x = x0; x < x1; ++x) {
-                const size_t b = rowBlock + block[0][x];
-                const int32_t data = blockData[b];
-                out[z][y][x] = data >= 0 ? blockSamples[data * perBlock + rowSample + local[0][x]]
-                               : flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background
-                                                                                     : background;
-            }
+            const int c = v < n[a] ? v : n[a] - 1;
+            blockPart[a][d] = static_cast<size_t>(c >> sh) * blockStride[a];
+            samplePart[a][d] = static_cast<size_t>(v - ((c >> sh) << sh)) * localStride[a];
         }
+    // The 32 entries: rows (y, z) both in {1, 2} with x = 0..3, rows with one of them in {0, 3}
+    // with x = 1, 2.
+    constexpr int kEntries[32][3] = {
+        {1, 0, 1}, {2, 0, 1}, {1, 0, 2}, {2, 0, 2}, {1, 3, 1}, {2, 3, 1}, {1, 3, 2}, {2, 3, 2},
+        {1, 1, 0}, {2, 1, 0}, {1, 2, 0}, {2, 2, 0}, {1, 1, 3}, {2, 1, 3}, {1, 2, 3}, {2, 2, 3},
+        {0, 1, 1}, {1, 1, 1}, {2, 1, 1}, {3, 1, 1}, {0, 2, 1}, {1, 2, 1}, {2, 2, 1}, {3, 2, 1},
+        {0, 1, 2}, {1, 1, 2}, {2, 1, 2}, {3, 1, 2}, {0, 2, 2}, {1, 2, 2}, {2, 2, 2}, {3, 2, 2}};
+    if (kind == GridKind::Dense) {
+        for (const auto& e : kEntries)
+            out[e[2]][e[1]][e[0]] =
+                samples[samplePart[0][e[0]] + samplePart[1][e[1]] + samplePart[2][e[2]]];
+        return;
+    }
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
+#pragma GCC unroll 32
+#endif
+    for (const auto& e : kEntries) {
+        const size_t b = blockPart[0][e[0]] + blockPart[1][e[1]] + blockPart[2][e[2]];
+        const int32_t data = blockData[b];
+        out[e[2]][e[1]][e[0]] = data >= 0 ? blockSamples[data * perBlock + samplePart[0][e[0]] +
+                                                         samplePart[1][e[1]] + samplePart[2][e[2]]]
+                                : flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background
+                                                                                      : background;
+    }
 }
 
 SDFT_HOST_DEVICE inline float GridView::constantBlockValue(int i, int j, int k) const {

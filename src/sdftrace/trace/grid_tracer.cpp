@@ -173,8 +173,10 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
         c[0] = q[0], c[1] = q[1], c[2] = q[sy], c[3] = q[sy + 1];
         c[4] = q[sz], c[5] = q[sz + 1], c[6] = q[sz + sy], c[7] = q[sz + sy + 1];
     };
+    // Counted locally: res may alias the grid's buffers, a store per step otherwise.
+    int steps = 0;
     for (;;) {
-        res.traversalSteps++;
+        ++steps;
         float tIn = cells.t, tOut = std::min(cells.exit(), tExit);
         float c[8];
         bool surface, haveCorners = false;
@@ -190,10 +192,15 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
         if (surface) {
             if (!haveCorners) corners(c);
             if (intersectCell(g, s.r, cells.idx[0], cells.idx[1], cells.idx[2], c, tIn, tOut,
-                              s.sign, o, res, tHit))
+                              s.sign, o, res, tHit)) {
+                res.traversalSteps += steps;
                 return true;
+            }
         }
-        if (tOut >= tExit || !cells.advance()) return false;
+        if (tOut >= tExit || !cells.advance()) {
+            res.traversalSteps += steps;
+            return false;
+        }
     }
 }
 
