@@ -237,7 +237,9 @@ int runRender(const RenderArgs& a) {
     applyOverrides(a, scene);
     const auto t1 = Clock::now();
     const RenderPlan plan = planRender(scene);
-    Film film(plan.camera.width, plan.camera.height);
+    unsigned kept = Film::bit(Aov::Color);  // the film keeps only the AOVs to be written
+    for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
+    Film film(plan.camera.width, plan.camera.height, kept);
     const auto t2 = Clock::now();
     const RenderStats st = renderImage(a, plan, film);
     const auto t3 = Clock::now();

@@ -31,9 +31,15 @@ struct Film {
     std::vector<float> shadow;
     std::vector<float> ao;  // ambient occlusion (1: none, or off); 1 on a miss
 
-    Film(int w, int h);
+    // Which AOVs a film keeps, one bit per Aov (color always): the others stay empty and are
+    // not written, so a plain render does not fill 13 floats a pixel to keep 3.
+    static constexpr unsigned kAllAovs = 0x1ff;
+    static constexpr unsigned bit(Aov aov) { return 1u << static_cast<unsigned>(aov); }
+
+    explicit Film(int w, int h, unsigned aovs = kAllAovs);
+    bool has(Aov aov) const { return !channel(aov).empty(); }
     size_t pixels() const { return static_cast<size_t>(width) * height; }
-    // Bytes a film of this size needs (to refuse absurd sizes before allocating).
+    // Bytes a film of this size needs with every AOV (to refuse absurd sizes before allocating).
     static double bytesNeeded(int w, int h);
     // Interleaved channels of one AOV.
     const std::vector<float>& channel(Aov aov) const;

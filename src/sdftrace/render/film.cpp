@@ -1,6 +1,10 @@
 #include "sdftrace/render/film.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <limits>
+
+#include "sdftrace/exec/huge_pages.h"
 
 namespace sdft {
 
@@ -41,17 +45,28 @@ bool parseAov(const std::string& name, Aov& out) {
 
 int aovChannels(Aov aov) { return (aov == Aov::Color || aov == Aov::Normal) ? 3 : 1; }
 
-Film::Film(int w, int h) : width(w), height(h) {
-    size_t n = pixels();
-    color.assign(3 * n, 0.0f);
-    depth.assign(n, std::numeric_limits<float>::infinity());
-    normal.assign(3 * n, 0.0f);
-    steps.assign(n, 0.0f);
-    error.assign(n, 0.0f);
-    travSteps.assign(n, 0.0f);
-    isectTests.assign(n, 0.0f);
-    shadow.assign(n, 1.0f);
-    ao.assign(n, 1.0f);
+Film::Film(int w, int h, unsigned aovs) : width(w), height(h) {
+    // Up to 13 floats a pixel (52 MiB at 1024x1024): on huge pages, filled side by side.
+    const size_t n = pixels();
+    const float inf = std::numeric_limits<float>::infinity();
+    auto keep = [&](std::vector<float>& v, Aov aov, size_t size, float value) {
+        if (aov == Aov::Color || (aovs & bit(aov))) assignHuge(v, size, value);
+    };
+    tbb::parallel_invoke([&] { keep(color, Aov::Color, 3 * n, 0.0f); },
+                         [&] { keep(normal, Aov::Normal, 3 * n, 0.0f); },
+                         [&] {
+                             keep(depth, Aov::Depth, n, inf);
+                             keep(steps, Aov::Steps, n, 0.0f);
+                         },
+                         [&] {
+                             keep(error, Aov::Error, n, 0.0f);
+                             keep(travSteps, Aov::TravSteps, n, 0.0f);
+                         },
+                         [&] {
+                             keep(isectTests, Aov::IsectTests, n, 0.0f);
+                             keep(shadow, Aov::Shadow, n, 1.0f);
+                             keep(ao, Aov::Ao, n, 1.0f);
+                         });
 }
 
 double Film::bytesNeeded(int w, int h) {

@@ -262,10 +262,10 @@ RenderStats renderPaths(const RenderPlan& plan, const FrameView& view, Film& fil
                 const Vec3 c = sum / static_cast<float>(spp);
                 for (int a = 0; a < 3; ++a) {
                     film.color[3 * p + a] = c[a];
-                    film.normal[3 * p + a] = normal[a];
+                    if (!film.normal.empty()) film.normal[3 * p + a] = normal[a];
                 }
-                film.depth[p] = depth;
-                film.steps[p] = static_cast<float>(steps);
+                if (!film.depth.empty()) film.depth[p] = depth;
+                if (!film.steps.empty()) film.steps[p] = static_cast<float>(steps);
             }
             bar.advance();
         });

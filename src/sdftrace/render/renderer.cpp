@@ -330,8 +330,12 @@ void TileRenderer::writeFilm(const TileScratch& s) {
         m_film.color[3 * p + 0] = bg.x;
         m_film.color[3 * p + 1] = bg.y;
         m_film.color[3 * p + 2] = bg.z;
-        m_film.steps[p] = static_cast<float>(s.results[i].evaluations);
+        if (!m_film.steps.empty()) m_film.steps[p] = static_cast<float>(s.results[i].evaluations);
     }
+    // AOVs the film does not keep are empty (Film's AOV set).
+    const bool normals = !m_film.normal.empty(), depth = !m_film.depth.empty(),
+               error = !m_film.error.empty(), shadow = !m_film.shadow.empty(),
+               ao = !m_film.ao.empty();
     for (int h = 0; h < hits; ++h) {
         int i = s.hitPixel[h];
         size_t p = static_cast<size_t>(s.y0 + i / tw) * m_film.width + (s.x0 + i % tw);
@@ -339,12 +343,12 @@ void TileRenderer::writeFilm(const TileScratch& s) {
         if (!isFinite(c)) c = Vec3(0.0f);
         for (int a = 0; a < 3; ++a) {
             m_film.color[3 * p + a] = c[a];
-            m_film.normal[3 * p + a] = s.hitNormal[h][a];
+            if (normals) m_film.normal[3 * p + a] = s.hitNormal[h][a];
         }
-        m_film.depth[p] = s.results[i].t;
-        m_film.error[p] = s.results[i].value;
-        m_film.shadow[p] = s.shadow[h];
-        m_film.ao[p] = s.ao[h];
+        if (depth) m_film.depth[p] = s.results[i].t;
+        if (error) m_film.error[p] = s.results[i].value;
+        if (shadow) m_film.shadow[p] = s.shadow[h];
+        if (ao) m_film.ao[p] = s.ao[h];
     }
 }
 
@@ -401,8 +405,9 @@ void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
         r.value = g.hit ? m_grid->interpolate(seg.ray.at(g.t)) : 0.0f;
         s.results[i] = r;
         size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
-        m_film.travSteps[p] = static_cast<float>(g.traversalSteps);
-        m_film.isectTests[p] = static_cast<float>(g.intersectionTests);
+        if (!m_film.travSteps.empty()) m_film.travSteps[p] = static_cast<float>(g.traversalSteps);
+        if (!m_film.isectTests.empty())
+            m_film.isectTests[p] = static_cast<float>(g.intersectionTests);
         s.stats.traversalSteps += g.traversalSteps;
         s.stats.intersectionTests += g.intersectionTests;
     }
@@ -449,8 +454,10 @@ void TileRenderer::traceShadowSegments(TileScratch& s) {
             s.shadowResults[j] = TraceResult{g.hit, g.t, 0, g.interpolations, 0};
             int i = s.hitPixel[s.shadowOwner[j]];
             size_t p = static_cast<size_t>(s.y0 + i / s.tw) * m_film.width + (s.x0 + i % s.tw);
-            m_film.travSteps[p] += static_cast<float>(g.traversalSteps);
-            m_film.isectTests[p] += static_cast<float>(g.intersectionTests);
+            if (!m_film.travSteps.empty())
+                m_film.travSteps[p] += static_cast<float>(g.traversalSteps);
+            if (!m_film.isectTests.empty())
+                m_film.isectTests[p] += static_cast<float>(g.intersectionTests);
             s.stats.traversalSteps += g.traversalSteps;
             s.stats.intersectionTests += g.intersectionTests;
         }
