@@ -47,9 +47,15 @@ struct Dda {
     }
     // Parameter where the current cube is left.
     float exit() const { return std::min({tNext[0], tNext[1], tNext[2]}); }
-    // Moves to the next cube; false when it leaves [lo, hi].
+    // Moves to the next cube; false when it leaves [lo, hi]. Each axis with constant indices, so
+    // that the compiler can keep the whole walker in registers.
     bool advance() {
-        int a = tNext[0] < tNext[1] ? (tNext[0] < tNext[2] ? 0 : 2) : (tNext[1] < tNext[2] ? 1 : 2);
+        if (tNext[0] < tNext[1] ? tNext[0] < tNext[2] : false) return advanceAxis<0>();
+        if (!(tNext[0] < tNext[1]) && tNext[1] < tNext[2]) return advanceAxis<1>();
+        return advanceAxis<2>();
+    }
+    template <int a>
+    bool advanceAxis() {
         t = tNext[a];
         idx[a] += step[a];
         tNext[a] = ((idx[a] + (step[a] > 0)) * size - org[a]) * inv[a];
