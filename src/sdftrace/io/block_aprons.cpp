@@ -145,6 +145,15 @@ std::vector<float> joinBlocks(const GridShape& shape, int blockSize,
         start[s + 1] = start[s] + kept;
     }
     if (start[surface] != split.explicitly.size()) throw corrupt("explicit apron sample count");
+    // Per apron vertex, once: where it goes, which neighbour owns it (bit 0: +x, 1: +y, 2: +z)
+    // and its index among that neighbour's own samples.
+    struct Entry {
+        int dst, neighbour, ownIndex;
+    };
+    std::vector<Entry> entries;
+    for (const auto& p : aprons)
+        entries.push_back({(p[2] * L.V + p[1]) * L.V + p[0],
+                           (p[0] == L.B) | (p[1] == L.B) << 1 | (p[2] == L.B) << 2, L.ownIndex(p)});
     std::vector<float> samples(surface * L.per);
     tbb::parallel_for(size_t(0), surface, [&](size_t s) {
         float* dst = samples.data() + s * L.per;
@@ -155,19 +164,31 @@ std::vector<float> joinBlocks(const GridShape& shape, int blockSize,
                     dst[(k * L.V + j) * L.V + i] = own[(k * L.B + j) * L.B + i];
         int c[3];
         L.coords(blockOf[s], c);
+        // The 7 neighbours' own samples (null: past the grid or without samples).
+        const float* neighbour[8] = {nullptr};
+        for (int code = 1; code < 8; ++code) {
+            int o[3];
+            bool inside = true;
+            for (int a = 0; a < 3; ++a) {
+                o[a] = c[a] + ((code >> a) & 1);
+                inside = inside && o[a] < L.blocks[a];
+            }
+            if (!inside) continue;
+            const int64_t n =
+                surfaceOf[(static_cast<size_t>(o[2]) * L.blocks[1] + o[1]) * L.blocks[0] + o[0]];
+            if (n >= 0) neighbour[code] = split.own.data() + static_cast<size_t>(n) * L.own;
+        }
         const uint64_t* mask = split.masks.data() + s * L.words;
         size_t n = start[s];
         for (int a = 0; a < L.apron; ++a) {
-            const auto& p = aprons[static_cast<size_t>(a)];
-            float& v = dst[(p[2] * L.V + p[1]) * L.V + p[0]];
+            const Entry& e = entries[static_cast<size_t>(a)];
             if ((mask[a / 64] >> (a % 64)) & 1u) {
-                v = split.explicitly[n++];
+                dst[e.dst] = split.explicitly[n++];
                 continue;
             }
-            size_t o = 0;
-            if (!L.owner(c, p, o) || surfaceOf[o] < 0)
-                throw corrupt("an apron sample refers to a block without samples");
-            v = split.own[static_cast<size_t>(surfaceOf[o]) * L.own + L.ownIndex(p)];
+            const float* from = neighbour[e.neighbour];
+            if (!from) throw corrupt("an apron sample refers to a block without samples");
+            dst[e.dst] = from[e.ownIndex];
         }
         for (int a = L.apron; a < L.words * 64; ++a)
             if ((mask[a / 64] >> (a % 64)) & 1u) throw corrupt("apron mask bits past the apron");
