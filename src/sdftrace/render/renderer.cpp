@@ -74,6 +74,11 @@ class TileRenderer {
         if (plan.ddaGrid) {
             m_gridView = plan.ddaGrid->view();
             m_grid = &m_gridView;
+            // The reconstruction at a DDA hit (TraceResult::value) feeds shadow-ray offsets,
+            // Whitted rays and the error AOV; without any of them it is not computed.
+            m_gridHitValue = m_settings.shadows || !m_film.error.empty();
+            for (const Material& m : plan.materials)
+                m_gridHitValue |= m.kind != Material::Kind::Plastic;
             if (m_settings.minMaxResolution > 0) {
                 m_minMax = MinMaxBuffer::build(m_gridView, m_camera, m_settings.minMaxResolution);
                 m_useMinMax = true;
@@ -145,6 +150,7 @@ class TileRenderer {
     const GridView* m_grid = nullptr;
     GridView m_gridView;
     bool m_useMinMax = false;
+    bool m_gridHitValue = true;
     MinMaxBuffer m_minMax;                           // Jamriška §6, built once per render
     std::vector<std::unique_ptr<ShadowMap>> m_maps;  // per light, shadow-map methods
     uint64_t m_mapEvaluations = 0;
@@ -402,7 +408,7 @@ void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
         r.hit = g.hit;
         r.t = g.t;
         r.evaluations = g.interpolations;
-        r.value = g.hit ? m_grid->interpolate(seg.ray.at(g.t)) : 0.0f;
+        r.value = g.hit && m_gridHitValue ? m_grid->interpolate(seg.ray.at(g.t)) : 0.0f;
         s.results[i] = r;
         size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
         if (!m_film.travSteps.empty()) m_film.travSteps[p] = static_cast<float>(g.traversalSteps);
