@@ -74,6 +74,13 @@ struct GridView {
     // for the 32 entries with at most one of x, y, z in {0, 3} (the others are left unset), the
     // block lookups shared.
     SDFT_HOST_DEVICE void gradientStencil(int i, int j, int k, float out[4][4][4]) const;
+    // Whether a ray can meet the surface in sparse block `block` (flat index): with the skip
+    // table, only in a block holding a sign-changing cell (the others' cells are never tested);
+    // without it, in any surface block.
+    SDFT_HOST_DEVICE bool mayHoldHit(size_t block) const {
+        return blockSkip ? blockSkip[block] == 0
+                         : flags[block] == static_cast<uint8_t>(BlockFlag::Surface);
+    }
     // The 8 corner samples of cell (i, j, k), index = di + 2 dj + 4 dk.
     SDFT_HOST_DEVICE void cellCorners(int i, int j, int k, float c[8]) const;
     // +-background of a sparse block without samples, by its flag (cell (i, j, k) in it).

@@ -121,7 +121,10 @@ class Tape {
     int findUniformMaterial() const;
     void evalChunk(const float* x, const float* y, const float* z, float* out, int n,
                    BatchScratch& scratch) const;
-    // evalBatch's loop over chunks, built for AVX2 and for the x86-64 baseline (exec/simd.h).
+    // evalBatch's loop over chunks, and its builds for AVX2 and for the x86-64 baseline
+    // (exec/simd.h).
+    void evalChunks(const float* x, const float* y, const float* z, float* out, int n,
+                    BatchScratch& scratch) const;
     void evalChunksAvx2(const float* x, const float* y, const float* z, float* out, int n,
                         BatchScratch& scratch) const;
     void evalChunksBaseline(const float* x, const float* y, const float* z, float* out, int n,

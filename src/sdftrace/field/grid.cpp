@@ -304,6 +304,14 @@ float cellGradientBound2(const float c[8]) {
 // first ni x nj x nk cells. The same values as cell by cell, computed once per vertex and edge
 // rather than once per cell corner (each edge is shared by four cells), in fixed-size rows the
 // compiler vectorizes.
+// The cells of a row of a block that change sign, one bit per cell (the first ni), from the
+// negative-vertex bits of the row's 4 corner rows of vertices: some corner of cell i (bits i and
+// i + 1) is negative and not all are.
+inline uint32_t rowSignChanges(uint32_t a, uint32_t b, uint32_t c, uint32_t d, int ni) {
+    const uint32_t any = a | b | c | d, all = a & b & c & d;
+    return ((any | any >> 1) & ~(all & all >> 1)) & ((1u << ni) - 1);
+}
+
 template <int B>
 float blockMasksAndBoundB(const float* s, int ni, int nj, int nk, uint64_t* mask) {
     constexpr int V = B + 1, sy = V, sz = V * V;
@@ -345,13 +353,8 @@ float blockMasksAndBoundB(const float* s, int ni, int nj, int nk, uint64_t* mask
                 rowWorst = std::max(rowWorst, (gx * gx + gy * gy + gz * gz) * keep[i]);
             }
             worst = std::max(worst, rowWorst);
-            // A cell changes sign when some corner is negative and not all are: its 4 corner
-            // rows' bits at i and i + 1.
-            const uint32_t any = negative[k][j] | negative[k][j + 1] | negative[k + 1][j] |
-                                 negative[k + 1][j + 1],
-                           all = negative[k][j] & negative[k][j + 1] & negative[k + 1][j] &
-                                 negative[k + 1][j + 1];
-            const uint32_t change = ((any | any >> 1) & ~(all & all >> 1)) & ((1u << ni) - 1);
+            const uint32_t change = rowSignChanges(negative[k][j], negative[k][j + 1],
+                                                   negative[k + 1][j], negative[k + 1][j + 1], ni);
             const int bit = (k * B + j) * B;
             mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
         }
@@ -405,11 +408,8 @@ float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask
             const __m128 bound =
                 _mm_add_ps(_mm_add_ps(_mm_mul_ps(gx, gx), _mm_mul_ps(gy, gy)), _mm_mul_ps(gz, gz));
             worst = _mm_max_ps(worst, _mm_and_ps(bound, keep));
-            const uint32_t any = negative[k][j] | negative[k][j + 1] | negative[k + 1][j] |
-                                 negative[k + 1][j + 1],
-                           all = negative[k][j] & negative[k][j + 1] & negative[k + 1][j] &
-                                 negative[k + 1][j + 1];
-            const uint32_t change = ((any | any >> 1) & ~(all & all >> 1)) & ((1u << ni) - 1);
+            const uint32_t change = rowSignChanges(negative[k][j], negative[k][j + 1],
+                                                   negative[k + 1][j], negative[k + 1][j + 1], ni);
             const int bit = (k * 4 + j) * 4;
             mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
         }

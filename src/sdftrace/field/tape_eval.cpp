@@ -236,18 +236,21 @@ void Tape::evalBatch(const float* x, const float* y, const float* z, float* out,
         evalChunksBaseline(x, y, z, out, n, scratch);
 }
 
-SDFT_TARGET_AVX2 void Tape::evalChunksAvx2(const float* x, const float* y, const float* z,
-                                           float* out, int n, BatchScratch& scratch) const {
+void Tape::evalChunks(const float* x, const float* y, const float* z, float* out, int n,
+                      BatchScratch& scratch) const {
     for (int start = 0; start < n; start += kBatchWidth)
         evalChunk(x + start, y + start, z + start, out + start, std::min(kBatchWidth, n - start),
                   scratch);
 }
 
+SDFT_TARGET_AVX2 void Tape::evalChunksAvx2(const float* x, const float* y, const float* z,
+                                           float* out, int n, BatchScratch& scratch) const {
+    evalChunks(x, y, z, out, n, scratch);
+}
+
 SDFT_TARGET_BASELINE void Tape::evalChunksBaseline(const float* x, const float* y, const float* z,
                                                    float* out, int n, BatchScratch& scratch) const {
-    for (int start = 0; start < n; start += kBatchWidth)
-        evalChunk(x + start, y + start, z + start, out + start, std::min(kBatchWidth, n - start),
-                  scratch);
+    evalChunks(x, y, z, out, n, scratch);
 }
 
 // One switch over every opcode, deliberately: split into a function per kind of instruction

@@ -248,6 +248,8 @@ RenderStats renderPaths(const RenderPlan& plan, const FrameView& view, Film& fil
     const int spp = std::max(1, plan.settings.samplesPerPixel);
     tbb::enumerable_thread_specific<RenderStats> stats;
     Progress bar("path tracing", static_cast<uint64_t>(film.height), progress);
+    const bool normals = film.has(Aov::Normal), depths = film.has(Aov::Depth),
+               keepSteps = film.has(Aov::Steps);
     arena.execute([&] {
         tbb::parallel_for(0, film.height, [&](int y) {
             RenderStats& st = stats.local();
@@ -262,10 +264,10 @@ RenderStats renderPaths(const RenderPlan& plan, const FrameView& view, Film& fil
                 const Vec3 c = sum / static_cast<float>(spp);
                 for (int a = 0; a < 3; ++a) {
                     film.color[3 * p + a] = c[a];
-                    if (!film.normal.empty()) film.normal[3 * p + a] = normal[a];
+                    if (normals) film.normal[3 * p + a] = normal[a];
                 }
-                if (!film.depth.empty()) film.depth[p] = depth;
-                if (!film.steps.empty()) film.steps[p] = static_cast<float>(steps);
+                if (depths) film.depth[p] = depth;
+                if (keepSteps) film.steps[p] = static_cast<float>(steps);
             }
             bar.advance();
         });

@@ -76,7 +76,7 @@ class TileRenderer {
             m_grid = &m_gridView;
             // The reconstruction at a DDA hit (TraceResult::value) feeds shadow-ray offsets,
             // Whitted rays and the error AOV; without any of them it is not computed.
-            m_gridHitValue = m_settings.shadows || !m_film.error.empty();
+            m_gridHitValue = m_settings.shadows || m_film.has(Aov::Error);
             for (const Material& m : plan.materials)
                 m_gridHitValue |= m.kind != Material::Kind::Plastic;
             if (m_settings.minMaxResolution > 0) {
@@ -331,17 +331,17 @@ void TileRenderer::writeFilm(const TileScratch& s) {
     const int count = static_cast<int>(s.results.size()), tw = s.tw;
     const int hits = static_cast<int>(s.hitPixel.size());
     const Vec3 bg = m_plan.lighting.background;
+    // Only the AOVs the film keeps (Film's AOV set).
+    const bool steps = m_film.has(Aov::Steps), normals = m_film.has(Aov::Normal),
+               depth = m_film.has(Aov::Depth), error = m_film.has(Aov::Error),
+               shadow = m_film.has(Aov::Shadow), ao = m_film.has(Aov::Ao);
     for (int i = 0; i < count; ++i) {
         size_t p = static_cast<size_t>(s.y0 + i / tw) * m_film.width + (s.x0 + i % tw);
         m_film.color[3 * p + 0] = bg.x;
         m_film.color[3 * p + 1] = bg.y;
         m_film.color[3 * p + 2] = bg.z;
-        if (!m_film.steps.empty()) m_film.steps[p] = static_cast<float>(s.results[i].evaluations);
+        if (steps) m_film.steps[p] = static_cast<float>(s.results[i].evaluations);
     }
-    // AOVs the film does not keep are empty (Film's AOV set).
-    const bool normals = !m_film.normal.empty(), depth = !m_film.depth.empty(),
-               error = !m_film.error.empty(), shadow = !m_film.shadow.empty(),
-               ao = !m_film.ao.empty();
     for (int h = 0; h < hits; ++h) {
         int i = s.hitPixel[h];
         size_t p = static_cast<size_t>(s.y0 + i / tw) * m_film.width + (s.x0 + i % tw);
@@ -392,6 +392,7 @@ void TileRenderer::stencilNormals(TileScratch& s) {
 // Jamriška 2010, §4: primary rays of a single-grid scene by two-level DDA; the counters go to the
 // trav_steps and isect_tests AOVs.
 void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
+    const bool trav = m_film.has(Aov::TravSteps), isect = m_film.has(Aov::IsectTests);
     for (size_t i = 0; i < s.segments.size(); ++i) {
         const RaySegment& seg = s.segments[i];
         float tMin = seg.tMin, tMax = seg.tMax;
@@ -411,9 +412,8 @@ void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
         r.value = g.hit && m_gridHitValue ? m_grid->interpolate(seg.ray.at(g.t)) : 0.0f;
         s.results[i] = r;
         size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
-        if (!m_film.travSteps.empty()) m_film.travSteps[p] = static_cast<float>(g.traversalSteps);
-        if (!m_film.isectTests.empty())
-            m_film.isectTests[p] = static_cast<float>(g.intersectionTests);
+        if (trav) m_film.travSteps[p] = static_cast<float>(g.traversalSteps);
+        if (isect) m_film.isectTests[p] = static_cast<float>(g.intersectionTests);
         s.stats.traversalSteps += g.traversalSteps;
         s.stats.intersectionTests += g.intersectionTests;
     }
@@ -453,6 +453,7 @@ void TileRenderer::traceShadowSegments(TileScratch& s) {
     s.shadowResults.resize(s.shadowSegments.size());
     if (m_grid) {
         // Jamriška §7: optionally the volumetric-occluder traversal.
+        const bool trav = m_film.has(Aov::TravSteps), isect = m_film.has(Aov::IsectTests);
         for (size_t j = 0; j < s.shadowSegments.size(); ++j) {
             const RaySegment& seg = s.shadowSegments[j];
             GridTraceResult g = traceGridShadow(*m_grid, seg.ray, seg.tMin, seg.tMax,
@@ -460,10 +461,8 @@ void TileRenderer::traceShadowSegments(TileScratch& s) {
             s.shadowResults[j] = TraceResult{g.hit, g.t, 0, g.interpolations, 0};
             int i = s.hitPixel[s.shadowOwner[j]];
             size_t p = static_cast<size_t>(s.y0 + i / s.tw) * m_film.width + (s.x0 + i % s.tw);
-            if (!m_film.travSteps.empty())
-                m_film.travSteps[p] += static_cast<float>(g.traversalSteps);
-            if (!m_film.isectTests.empty())
-                m_film.isectTests[p] += static_cast<float>(g.intersectionTests);
+            if (trav) m_film.travSteps[p] += static_cast<float>(g.traversalSteps);
+            if (isect) m_film.isectTests[p] += static_cast<float>(g.intersectionTests);
             s.stats.traversalSteps += g.traversalSteps;
             s.stats.intersectionTests += g.intersectionTests;
         }

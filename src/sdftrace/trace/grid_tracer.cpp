@@ -150,34 +150,20 @@ BlockFlag blockFlag(const GridView& g, const int b[3]) {
         g.flags[(static_cast<size_t>(b[2]) * g.blocks[1] + b[1]) * g.blocks[0] + b[0]]);
 }
 
-// traverseBlock's cell walk for a sparse block with its bit mask (the common case), the DDA's
-// state in scalars so that it stays in registers, and the mask bit and sample offset stepped
-// along with the cell: the same cells, boundaries and tests as the Dda (the same expressions in
-// the same order), so the same hits and t.
+// traverseBlock's cell walk for a sparse block with its bit mask (Jamriška §4.1, the common
+// case): the Dda's start, then its state in scalars so that it stays in registers, and the mask
+// bit and sample offset stepped along with the cell. The same cells, boundaries and tests as the
+// Dda (the same expressions and tie-breaking), so the same hits and t.
 bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const int hi[3],
                      const uint64_t* mask, const float* samples, float tEnter, float tExit,
                      const GridTraceOptions& o, GridTraceResult& res, float& tHit) {
     const int B = s.B;
     const int sy = B + 1, sz = sy * sy;
-    const Vec3 p = s.r.o + s.r.d * tEnter;
-    int idx[3], step[3];
-    float tNext[3];
-    for (int a = 0; a < 3; ++a) {
-        idx[a] = std::clamp(static_cast<int>(std::floor(p[a] / 1.0f)), lo[a], hi[a]);
-        if (s.r.d[a] > 0) {
-            step[a] = 1;
-            tNext[a] = ((idx[a] + 1) * 1.0f - s.r.o[a]) * s.invD[a];
-        } else if (s.r.d[a] < 0) {
-            step[a] = -1;
-            tNext[a] = (idx[a] * 1.0f - s.r.o[a]) * s.invD[a];
-        } else {
-            step[a] = 0;
-            tNext[a] = kInfinity;
-        }
-    }
-    int ix = idx[0], iy = idx[1], iz = idx[2];
-    const int sx0 = step[0], sy0 = step[1], sz0 = step[2];
-    float tx = tNext[0], ty = tNext[1], tz = tNext[2];
+    Dda start;
+    start.init(s.r.o, s.r.d, s.invD, tEnter, 1.0f, lo, hi);
+    int ix = start.idx[0], iy = start.idx[1], iz = start.idx[2];
+    const int sx0 = start.step[0], sy0 = start.step[1], sz0 = start.step[2];
+    float tx = start.tNext[0], ty = start.tNext[1], tz = start.tNext[2];
     const float ox = s.r.o[0], oy = s.r.o[1], oz = s.r.o[2];
     const float vx = s.invD[0], vy = s.invD[1], vz = s.invD[2];
     int bit = ((iz - lo[2]) * B + (iy - lo[1])) * B + (ix - lo[0]);
@@ -225,7 +211,9 @@ bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const i
     return hit;
 }
 
-// The inner loop over the cells of one block on [tEnter, tExit]; true with tHit on a hit.
+// The inner loop over the cells of one block on [tEnter, tExit]; true with tHit on a hit. A
+// masked sparse block goes to walkMaskedCells; here dense grids and walks without masks, which
+// test each cell's corner signs.
 bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float tEnter, float tExit,
                    const GridTraceOptions& o, GridTraceResult& res, float& tHit) {
     int lo[3], hi[3];
@@ -233,11 +221,7 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
         lo[a] = block[a] * s.B;
         hi[a] = std::min(lo[a] + s.B, g.shape.cells[a]) - 1;
     }
-    Dda cells;
-    cells.init(s.r.o, s.r.d, s.invD, tEnter, 1.0f, lo, hi);
-    // The block's mask and samples, looked up once (§4.1): one bit per cell, x fastest; the
-    // (B+1)^3 vertex samples of its cells.
-    const uint64_t* mask = nullptr;
+    // The block's (B+1)^3 vertex samples and mask, looked up once (§4.1).
     const float* samples = nullptr;
     const size_t sy = s.B + 1, sz = sy * sy;
     if (g.kind == GridKind::Sparse) {
@@ -245,41 +229,30 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
             (static_cast<size_t>(block[2]) * g.blocks[1] + block[1]) * g.blocks[0] + block[0];
         size_t data = static_cast<size_t>(g.blockData[b]);
         samples = g.blockSamples + data * sz * sy;
-        if (o.bitMasks) {
-            mask = g.cellMasks + data * g.wordsPerMask();
-            return walkMaskedCells(g, s, lo, hi, mask, samples, tEnter, tExit, o, res, tHit);
-        }
+        if (o.bitMasks)
+            return walkMaskedCells(g, s, lo, hi, g.cellMasks + data * g.wordsPerMask(), samples,
+                                   tEnter, tExit, o, res, tHit);
     }
-    auto corners = [&](float c[8]) {
-        if (!samples) return g.cellCorners(cells.idx[0], cells.idx[1], cells.idx[2], c);
-        const float* q = samples + (cells.idx[2] - lo[2]) * sz + (cells.idx[1] - lo[1]) * sy +
-                         (cells.idx[0] - lo[0]);
-        c[0] = q[0], c[1] = q[1], c[2] = q[sy], c[3] = q[sy + 1];
-        c[4] = q[sz], c[5] = q[sz + 1], c[6] = q[sz + sy], c[7] = q[sz + sy + 1];
-    };
+    Dda cells;
+    cells.init(s.r.o, s.r.d, s.invD, tEnter, 1.0f, lo, hi);
     // Counted locally: res may alias the grid's buffers, a store per step otherwise.
     int steps = 0;
     for (;;) {
         ++steps;
         float tIn = cells.t, tOut = std::min(cells.exit(), tExit);
         float c[8];
-        bool surface, haveCorners = false;
-        if (mask) {
-            int bit = ((cells.idx[2] - lo[2]) * s.B + (cells.idx[1] - lo[1])) * s.B +
-                      (cells.idx[0] - lo[0]);
-            surface = (mask[bit >> 6] >> (bit & 63)) & 1;
+        if (samples) {
+            const float* q = samples + (cells.idx[2] - lo[2]) * sz + (cells.idx[1] - lo[1]) * sy +
+                             (cells.idx[0] - lo[0]);
+            c[0] = q[0], c[1] = q[1], c[2] = q[sy], c[3] = q[sy + 1];
+            c[4] = q[sz], c[5] = q[sz + 1], c[6] = q[sz + sy], c[7] = q[sz + sy + 1];
         } else {
-            corners(c);
-            haveCorners = true;
-            surface = cornersChangeSign(c);
+            g.cellCorners(cells.idx[0], cells.idx[1], cells.idx[2], c);
         }
-        if (surface) {
-            if (!haveCorners) corners(c);
-            if (intersectCell(g, s.r, cells.idx[0], cells.idx[1], cells.idx[2], c, tIn, tOut,
-                              s.sign, o, res, tHit)) {
-                res.traversalSteps += steps;
-                return true;
-            }
+        if (cornersChangeSign(c) && intersectCell(g, s.r, cells.idx[0], cells.idx[1], cells.idx[2],
+                                                  c, tIn, tOut, s.sign, o, res, tHit)) {
+            res.traversalSteps += steps;
+            return true;
         }
         if (tOut >= tExit || !cells.advance()) {
             res.traversalSteps += steps;
@@ -299,12 +272,7 @@ void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTra
         const size_t b =
             (static_cast<size_t>(blocks.idx[2]) * g.blocks[1] + blocks.idx[1]) * g.blocks[0] +
             blocks.idx[0];
-        // With the skip table, only blocks holding a sign-changing cell are walked cell by cell
-        // (the others' cells are never tested, so the hits are the same).
-        const bool walk = g.kind == GridKind::Dense ||
-                          (g.blockSkip ? g.blockSkip[b] == 0
-                                       : g.flags[b] == static_cast<uint8_t>(BlockFlag::Surface));
-        if (walk) {
+        if (g.kind == GridKind::Dense || g.mayHoldHit(b)) {
             float tHit;
             if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
                 res.hit = true;

@@ -81,12 +81,9 @@ MinMaxBuffer MinMaxBuffer::build(const GridView& g, const Camera& cam, int resol
             for (int k = slices.begin(); k != slices.end(); ++k)
                 for (int j = 0; j < nb[1]; ++j)
                     for (int i = 0; i < nb[0]; ++i) {
-                        // Only blocks a ray can hit in: with the skip table, those holding a
-                        // sign-changing cell (the DDA walks no other); else every surface block.
-                        const size_t block = (static_cast<size_t>(k) * nb[1] + j) * nb[0] + i;
-                        if (sparse && (g.blockSkip ? g.blockSkip[block] != 0
-                                                   : g.flags[block] !=
-                                                         static_cast<uint8_t>(BlockFlag::Surface)))
+                        // Only blocks a ray can hit in (the DDA walks no other).
+                        if (sparse &&
+                            !g.mayHoldHit((static_cast<size_t>(k) * nb[1] + j) * nb[0] + i))
                             continue;
                         const Vec3 c = g.shape.origin + (Vec3(i, j, k) + Vec3(0.5f)) * (B * h);
                         splatBlock(cam, c, radius, b.m_w, b.m_h, b.m_scaleX, b.m_scaleY, L);
