@@ -147,8 +147,7 @@ Result runOnce(const TriangleMesh& mesh, const Case& c, bool measure) {
                     int B = v.blockSize;
                     int bi = std::min(i, s.cells[0] - 1) / B, bj = std::min(j, s.cells[1] - 1) / B,
                         bk = std::min(k, s.cells[2] - 1) / B;
-                    if (v.blockData[(size_t(bk) * v.blocks[1] + bj) * v.blocks[0] + bi] < 0)
-                        continue;
+                    if (v.blockData[v.blockSlot(bi, bj, bk)] < 0) continue;
                 }
                 if (std::fabs(v.vertex(i, j, k)) < band * h) band3.push_back({i, j, k});
             }

@@ -4,16 +4,19 @@
 //  - dense: every vertex stored;
 //  - sparse block grid: a coarse grid of blocks of B^3 cells (B = 4 or 8), each flagged inside,
 //    outside or surface; only surface blocks store their (B+1)^3 vertex samples (Jamriška §3), with
-//    a bit mask of the cells that contain the surface (§4.1).
+//    a bit mask of the cells that contain the surface (§4.1). The per-block tables are paged by
+//    tiles of 8^3 blocks (block_table.h), so that they follow the surface, not the bounding box.
 // Buffers are flat (std::vector) and the view holds plain pointers, so a device upload is one copy
 // per buffer (docs/design.md; NanoVDB's handle + flat layout).
 #pragma once
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "sdftrace/field/block_table.h"
 #include "sdftrace/math/ray.h"
 
 namespace sdft {
@@ -44,16 +47,24 @@ struct GridView {
     // dense: vertexCount() samples, x fastest
     const float* samples = nullptr;
     // sparse
-    int blockSize = 4;                    // B cells per block edge
-    int blocks[3] = {0, 0, 0};            // coarse grid dimensions (in blocks)
-    const uint8_t* flags = nullptr;       // BlockFlag per block
-    const int32_t* blockData = nullptr;   // per block: index of its (B+1)^3 samples, -1 if none
+    int blockSize = 4;                  // B cells per block edge
+    int blocks[3] = {0, 0, 0};          // coarse grid dimensions (in blocks)
+    int tiles[3] = {0, 0, 0};           // tiles of 8^3 blocks (block_table.h)
+    const int32_t* tilePage = nullptr;  // per tile: its page of per-block entries
+    // Per block slot (blockSlot()):
+    const uint8_t* flags = nullptr;       // BlockFlag
+    const int32_t* blockData = nullptr;   // index of the block's (B+1)^3 samples, -1 if none
     const float* blockSamples = nullptr;  // surface blocks' samples, x fastest inside a block
     const uint64_t* cellMasks = nullptr;  // per surface block: B^3 bits, (B^3 + 63) / 64 words
-    // Per block: its Chebyshev distance d (in blocks, capped at 255) to the nearest block with a
-    // sign-changing cell (a set bit in its cell mask), 0 for those. A ray can hit the surface only
-    // in a block with d = 0 and may skip the cube of side 2d - 1 around any other.
+    // Per block slot: its Chebyshev distance d (in blocks) to the nearest block with a
+    // sign-changing cell (a set bit in its cell mask), 0 for those, exact up to 8 (larger
+    // distances are stored as 9). A ray can hit the surface only in a block with d = 0 and may
+    // skip the cube of side 2d - 1 around any other.
     const uint8_t* blockSkip = nullptr;
+    // Per tile: the same distance in tiles (capped at 255) to the nearest tile holding a block
+    // with d = 0; a ray in a tile with a nonzero entry may skip the cube of tiles of side 2d - 1.
+    // Both are null for a traversal without empty-space skipping.
+    const uint8_t* tileSkip = nullptr;
     float background = 1;  // |value| assumed in non-surface blocks (a lower bound of the distance)
     // Optional texture coordinates (Liktor 2008, §5.5.2): 3 floats per stored sample, beside the
     // distance (dense: per vertex; sparse: per surface-block sample), mapped to (u, v) by
@@ -66,6 +77,15 @@ struct GridView {
     SDFT_HOST_DEVICE int wordsPerMask() const {
         return (blockSize * blockSize * blockSize + 63) / 64;
     }
+    SDFT_HOST_DEVICE size_t tileIndex(int bi, int bj, int bk) const {
+        return (static_cast<size_t>(bk >> kTileShift) * tiles[1] + (bj >> kTileShift)) * tiles[0] +
+               (bi >> kTileShift);
+    }
+    // The slot of sparse block (bi, bj, bk) in the per-block tables.
+    SDFT_HOST_DEVICE size_t blockSlot(int bi, int bj, int bk) const {
+        return static_cast<size_t>(tilePage[tileIndex(bi, bj, bk)]) * kPageEntries +
+               pageLocal(bi, bj, bk);
+    }
 
     // Sample at integer vertex (i, j, k), clamped to the grid.
     SDFT_HOST_DEVICE float vertex(int i, int j, int k) const;
@@ -74,7 +94,7 @@ struct GridView {
     // for the 32 entries with at most one of x, y, z in {0, 3} (the others are left unset), the
     // block lookups shared.
     SDFT_HOST_DEVICE void gradientStencil(int i, int j, int k, float out[4][4][4]) const;
-    // Whether a ray can meet the surface in sparse block `block` (flat index): with the skip
+    // Whether a ray can meet the surface in the sparse block at slot `block`: with the skip
     // table, only in a block holding a sign-changing cell (the others' cells are never tested);
     // without it, in any surface block.
     SDFT_HOST_DEVICE bool mayHoldHit(size_t block) const {
@@ -137,8 +157,11 @@ class Grid {
 
     // Raw buffers, for file I/O and tests.
     const std::vector<float>& samples() const { return m_samples; }
+    // Per block slot (GridView::blockSlot; pages 0 and 1 constant), and per tile.
     const std::vector<uint8_t>& flags() const { return m_flags; }
     const std::vector<int32_t>& blockData() const { return m_blockData; }
+    const std::vector<int32_t>& tilePage() const { return m_tilePage; }
+    const std::vector<uint8_t>& tileSkip() const { return m_tileSkip; }
     const std::vector<float>& blockSamples() const { return m_blockSamples; }
     const std::vector<uint64_t>& cellMasks() const { return m_cellMasks; }
     const std::vector<uint8_t>& blockSkip() const { return m_blockSkip; }
@@ -153,11 +176,23 @@ class Grid {
     // non-finite values.
     void setTexcoords(TexcoordKind kind, std::vector<float> texcoords, const std::string& source);
 
-    // Rebuilds a sparse grid from its stored buffers (file loading); recomputes the cell masks and
-    // the Lipschitz bound. Throws InputError naming `source` if the buffers are inconsistent.
+    // Rebuilds a sparse grid from its stored buffers (file loading): flat per-block flags (x
+    // fastest) and the surface blocks' samples in that order; recomputes the cell masks and the
+    // Lipschitz bound. Throws InputError naming `source` if the buffers are inconsistent.
     static Grid sparseFromBuffers(const GridShape& shape, int blockSize, float background,
-                                  std::vector<uint8_t> flags, std::vector<float> blockSamples,
-                                  const std::string& source);
+                                  const std::vector<uint8_t>& flags,
+                                  std::vector<float> blockSamples, const std::string& source);
+    // The same from a two-level table (block_table.h): never a per-block array of the whole
+    // bounding box. The samples are the surface blocks' in flat block order (z, y, x).
+    static Grid sparseFromTable(const GridShape& shape, int blockSize, float background,
+                                BlockTable table, std::vector<float> blockSamples,
+                                const std::string& source);
+    // The flat per-block flags (x fastest; sparse only): what .sdfg files store.
+    std::vector<uint8_t> denseFlags() const;
+    // Calls f(bi, bj, bk, slot) for each block inside the grid on a page of its own (the blocks
+    // whose flags vary; the others are constant), tiles in parallel when `parallel`.
+    void forEachPagedBlock(const std::function<void(int, int, int, size_t)>& f,
+                           bool parallel = true) const;
 
   private:
     void computeLipschitz();              // dense
@@ -170,7 +205,11 @@ class Grid {
     std::vector<float> m_samples;
     int m_blockSize = 4;
     int m_blocks[3] = {0, 0, 0};
+    int m_tiles[3] = {0, 0, 0};
     float m_background = 1;
+    std::vector<int32_t> m_tilePage;
+    std::vector<uint8_t> m_tileSkip;
+    std::vector<int> m_ownTiles;  // (ti, tj, tk) per own page, from kFirstOwnPage
     std::vector<uint8_t> m_flags;
     std::vector<int32_t> m_blockData;
     std::vector<float> m_blockSamples;
@@ -211,14 +250,14 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                                                        float out[4][4][4]) const {
     const int n[3] = {shape.cells[0], shape.cells[1], shape.cells[2]};
     const int start[3] = {i - 1, j - 1, k - 1};
-    // Per axis and offset: the clamped vertex's part of the flat index (dense), or of its block's
-    // index and of its index inside that block's (B+1)^3 samples (sparse; the block of the cell
-    // below the vertex, as in vertex()).
-    size_t blockPart[3][4], samplePart[3][4];
+    // Per axis and offset: the clamped vertex's part of the flat index (dense), or of its tile's
+    // index, of its block's index in the tile's page and of its index inside that block's
+    // (B+1)^3 samples (sparse; the block of the cell below the vertex, as in vertex()).
+    size_t tilePart[3][4], localPart[3][4], samplePart[3][4];
     const int sh = blockShift();
     const size_t sy = static_cast<size_t>(blockSize) + 1, sz = sy * sy, perBlock = sz * sy;
-    const size_t blockStride[3] = {1, static_cast<size_t>(blocks[0]),
-                                   static_cast<size_t>(blocks[0]) * blocks[1]};
+    const size_t tileStride[3] = {1, static_cast<size_t>(tiles[0]),
+                                  static_cast<size_t>(tiles[0]) * tiles[1]};
     const size_t vertexStride[3] = {1, static_cast<size_t>(n[0]) + 1,
                                     (static_cast<size_t>(n[0]) + 1) * (n[1] + 1)};
     const size_t localStride[3] = {1, sy, sz};
@@ -230,8 +269,10 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                 continue;
             }
             const int c = v < n[a] ? v : n[a] - 1;
-            blockPart[a][d] = static_cast<size_t>(c >> sh) * blockStride[a];
-            samplePart[a][d] = static_cast<size_t>(v - ((c >> sh) << sh)) * localStride[a];
+            const int b = c >> sh;
+            tilePart[a][d] = static_cast<size_t>(b >> kTileShift) * tileStride[a];
+            localPart[a][d] = static_cast<size_t>(b & (kTileBlocks - 1)) << (kTileShift * a);
+            samplePart[a][d] = static_cast<size_t>(v - (b << sh)) * localStride[a];
         }
     // The 32 entries: rows (y, z) both in {1, 2} with x = 0..3, rows with one of them in {0, 3}
     // with x = 1, 2.
@@ -250,7 +291,10 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
 #pragma GCC unroll 32
 #endif
     for (const auto& e : kEntries) {
-        const size_t b = blockPart[0][e[0]] + blockPart[1][e[1]] + blockPart[2][e[2]];
+        const size_t b = static_cast<size_t>(
+                             tilePage[tilePart[0][e[0]] + tilePart[1][e[1]] + tilePart[2][e[2]]]) *
+                             kPageEntries +
+                         localPart[0][e[0]] + localPart[1][e[1]] + localPart[2][e[2]];
         const int32_t data = blockData[b];
         out[e[2]][e[1]][e[0]] = data >= 0 ? blockSamples[data * perBlock + samplePart[0][e[0]] +
                                                          samplePart[1][e[1]] + samplePart[2][e[2]]]
@@ -261,9 +305,9 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
 
 SDFT_HOST_DEVICE inline float GridView::constantBlockValue(int i, int j, int k) const {
     const int sh = blockShift();
-    const size_t block =
-        (static_cast<size_t>(k >> sh) * blocks[1] + (j >> sh)) * blocks[0] + (i >> sh);
-    return flags[block] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
+    return flags[blockSlot(i >> sh, j >> sh, k >> sh)] == static_cast<uint8_t>(BlockFlag::Inside)
+               ? -background
+               : background;
 }
 
 SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[8]) const {
@@ -318,8 +362,7 @@ SDFT_HOST_DEVICE inline bool GridView::cornerIndices(int i, int j, int k, size_t
         const int B = blockSize;
         const int sh = blockShift();
         int bi = i >> sh, bj = j >> sh, bk = k >> sh;
-        size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
-        int32_t data = blockData[block];
+        int32_t data = blockData[blockSlot(bi, bj, bk)];
         if (data < 0) return false;
         sy = B + 1;
         sz = sy * (B + 1);

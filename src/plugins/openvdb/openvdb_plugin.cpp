@@ -67,9 +67,7 @@ openvdb::FloatGrid::Ptr toOpenVdbGrid(const GridView& v) {
                 for (int bk = r.begin(); bk != r.end(); ++bk)
                     for (int bj = 0; bj < v.blocks[1]; ++bj)
                         for (int bi = 0; bi < v.blocks[0]; ++bi) {
-                            const size_t block =
-                                (static_cast<size_t>(bk) * v.blocks[1] + bj) * v.blocks[0] + bi;
-                            if (v.blockData[block] < 0) continue;
+                            if (v.blockData[v.blockSlot(bi, bj, bk)] < 0) continue;
                             for (int k = bk * B; k <= std::min((bk + 1) * B, s.cells[2]); ++k)
                                 for (int j = bj * B; j <= std::min((bj + 1) * B, s.cells[1]); ++j)
                                     for (int i = bi * B; i <= std::min((bi + 1) * B, s.cells[0]);

@@ -84,14 +84,14 @@ Bounds3 crossingBounds(const Grid& grid) {
               shape.origin);
     } else {
         const int B = grid.blockSize(), V = B + 1;
-        for (int block = 0; block < view.blocks[0] * view.blocks[1] * view.blocks[2]; ++block) {
-            const int32_t data = view.blockData[block];
-            if (data < 0) continue;
-            const int bi = block % view.blocks[0], bj = (block / view.blocks[0]) % view.blocks[1],
-                      bk = block / (view.blocks[0] * view.blocks[1]);
-            edges(grid.blockSamples().data() + static_cast<size_t>(data) * V * V * V, V, V, V,
-                  shape.origin + Vec3(bi * B, bj * B, bk * B) * shape.voxelSize);
-        }
+        grid.forEachPagedBlock(
+            [&](int bi, int bj, int bk, size_t slot) {
+                const int32_t data = view.blockData[slot];
+                if (data < 0) return;
+                edges(grid.blockSamples().data() + static_cast<size_t>(data) * V * V * V, V, V, V,
+                      shape.origin + Vec3(bi * B, bj * B, bk * B) * shape.voxelSize);
+            },
+            false);
     }
     return box;
 }
@@ -239,11 +239,9 @@ void forEachStoredSample(const Grid& grid, F&& f) {
     }
     const GridView view = grid.view();
     const int B = grid.blockSize(), V = B + 1;
-    const int bx = view.blocks[0], by = view.blocks[1], bz = view.blocks[2];
-    tbb::parallel_for(0, bx * by * bz, [&](int block) {
-        const int32_t data = view.blockData[block];
+    grid.forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
+        const int32_t data = view.blockData[slot];
         if (data < 0) return;
-        const int bi = block % bx, bj = (block / bx) % by, bk = block / (bx * by);
         const size_t base = static_cast<size_t>(data) * V * V * V;
         for (int lk = 0; lk < V; ++lk)
             for (int lj = 0; lj < V; ++lj)

@@ -48,9 +48,7 @@ BakeVerification verifyBake(const Grid& grid, const std::vector<float>& exact, f
                     int B = v.blockSize;
                     int ci = std::min(i, s.cells[0] - 1) / B, cj = std::min(j, s.cells[1] - 1) / B,
                         ck = std::min(k, s.cells[2] - 1) / B;
-                    stored =
-                        v.blockData[(static_cast<size_t>(ck) * v.blocks[1] + cj) * v.blocks[0] +
-                                    ci] >= 0;
+                    stored = v.blockData[v.blockSlot(ci, cj, ck)] >= 0;
                 }
                 if (!stored) continue;
                 // Sparse grids store samples clamped to the band (background + one voxel).

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
@@ -41,31 +42,23 @@ std::vector<float> Grid::vertexSamples() const {
 Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& samples, int B,
                            float bandVoxels) {
     SDFT_CHECK(samples.size() == shape.vertexCount());
-    SDFT_CHECK(B == 4 || B == 8);
-    SDFT_CHECK(bandVoxels >= 2);
-    Grid g;
-    g.m_kind = GridKind::Sparse;
-    g.m_shape = shape;
     SDFT_CHECK(B == 4 || B == 8);  // GridView::blockShift
-    g.m_blockSize = B;
-    for (int a = 0; a < 3; ++a) g.m_blocks[a] = (shape.cells[a] + B - 1) / B;
-    // Samples of non-surface blocks are all at least band voxels from the surface; a point in such
-    // a block is within half a cell diagonal (< 1 voxel) of one, so (band - 1) voxels is a lower
-    // bound of its distance.
-    g.m_background = (bandVoxels - 1) * shape.voxelSize;
+    SDFT_CHECK(bandVoxels >= 2);
+    int blocks[3];
+    for (int a = 0; a < 3; ++a) blocks[a] = (shape.cells[a] + B - 1) / B;
     const float band = bandVoxels * shape.voxelSize;
-    const size_t numBlocks = static_cast<size_t>(g.m_blocks[0]) * g.m_blocks[1] * g.m_blocks[2];
-    assignHuge(g.m_flags, numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
-    assignHuge(g.m_blockData, numBlocks, int32_t{-1});
+    const size_t numBlocks = static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2];
+    std::vector<uint8_t> flags(numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
+    std::vector<float> blockSamples;
     const int V = B + 1;
     GridView dense;
     dense.kind = GridKind::Dense;
     dense.shape = shape;
     dense.samples = samples.data();
     std::vector<float> local(static_cast<size_t>(V) * V * V);
-    for (int bk = 0; bk < g.m_blocks[2]; ++bk)
-        for (int bj = 0; bj < g.m_blocks[1]; ++bj)
-            for (int bi = 0; bi < g.m_blocks[0]; ++bi) {
+    for (int bk = 0; bk < blocks[2]; ++bk)
+        for (int bj = 0; bj < blocks[1]; ++bj)
+            for (int bi = 0; bi < blocks[0]; ++bi) {
                 bool anyNeg = false, anyPos = false, near = false;
                 for (int k = 0; k < V; ++k)
                     for (int j = 0; j < V; ++j)
@@ -78,54 +71,138 @@ Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& sam
                             anyPos |= v >= 0;
                             near |= std::fabs(v) < band;
                         }
-                size_t block = (static_cast<size_t>(bk) * g.m_blocks[1] + bj) * g.m_blocks[0] + bi;
+                size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
                 if (near || (anyNeg && anyPos)) {
-                    g.m_flags[block] = static_cast<uint8_t>(BlockFlag::Surface);
-                    g.m_blockData[block] =
-                        static_cast<int32_t>(g.m_blockSamples.size() / local.size());
-                    g.m_blockSamples.insert(g.m_blockSamples.end(), local.begin(), local.end());
+                    flags[block] = static_cast<uint8_t>(BlockFlag::Surface);
+                    blockSamples.insert(blockSamples.end(), local.begin(), local.end());
                 } else {
-                    g.m_flags[block] =
+                    flags[block] =
                         static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
                 }
             }
-    g.computeCellMasksAndLipschitz();
-    return g;
+    // Samples of non-surface blocks are all at least band voxels from the surface; a point in such
+    // a block is within half a cell diagonal (< 1 voxel) of one, so (band - 1) voxels is a lower
+    // bound of its distance.
+    return sparseFromBuffers(shape, B, (bandVoxels - 1) * shape.voxelSize, flags,
+                             std::move(blockSamples), "dense samples");
 }
 
 Grid Grid::sparseFromBuffers(const GridShape& shape, int B, float background,
-                             std::vector<uint8_t> flags, std::vector<float> blockSamples,
+                             const std::vector<uint8_t>& flags, std::vector<float> blockSamples,
                              const std::string& source) {
+    int blocks[3];
+    for (int a = 0; a < 3; ++a) blocks[a] = (shape.cells[a] + B - 1) / B;
+    return sparseFromTable(shape, B, background, BlockTable::fromDense(blocks, flags, source),
+                           std::move(blockSamples), source);
+}
+
+Grid Grid::sparseFromTable(const GridShape& shape, int B, float background, BlockTable table,
+                           std::vector<float> blockSamples, const std::string& source) {
     Grid g;
     g.m_kind = GridKind::Sparse;
     g.m_shape = shape;
     SDFT_CHECK(B == 4 || B == 8);  // GridView::blockShift
     g.m_blockSize = B;
     g.m_background = background;
-    for (int a = 0; a < 3; ++a) g.m_blocks[a] = (shape.cells[a] + B - 1) / B;
-    size_t numBlocks = static_cast<size_t>(g.m_blocks[0]) * g.m_blocks[1] * g.m_blocks[2];
-    if (flags.size() != numBlocks)
-        throw InputError(source + ": block flag count does not match the grid size");
-    assignHuge(g.m_blockData, numBlocks, int32_t{-1});
-    size_t perBlock = static_cast<size_t>(B + 1) * (B + 1) * (B + 1);
-    int32_t next = 0;
-    for (size_t b = 0; b < numBlocks; ++b) {
-        if (flags[b] > static_cast<uint8_t>(BlockFlag::Surface)) {
-            throw InputError(source + ": block " + std::to_string(b) + " has an invalid flag " +
-                             std::to_string(flags[b]) +
-                             " (accepted: 0 outside, 1 inside, 2 surface)");
+    for (int a = 0; a < 3; ++a) {
+        g.m_blocks[a] = (shape.cells[a] + B - 1) / B;
+        SDFT_CHECK(table.blocks[a] == g.m_blocks[a]);
+        g.m_tiles[a] = table.tiles[a];
+    }
+    // Own pages are numbered in tile order (the flat sample order below relies on it).
+    int32_t nextPage = kFirstOwnPage;
+    for (int32_t page : table.tilePage) {
+        SDFT_CHECK(page >= kOutsidePage && page <= nextPage);
+        if (page >= kFirstOwnPage) {
+            SDFT_CHECK(page == nextPage);
+            ++nextPage;
         }
-        if (flags[b] == static_cast<uint8_t>(BlockFlag::Surface)) g.m_blockData[b] = next++;
     }
-    if (blockSamples.size() != static_cast<size_t>(next) * perBlock) {
-        throw InputError(source + ": " + std::to_string(next) + " surface blocks need " +
-                         std::to_string(static_cast<size_t>(next) * perBlock) +
-                         " samples, the file has " + std::to_string(blockSamples.size()));
+    SDFT_CHECK(table.flags.size() == static_cast<size_t>(nextPage) * kPageEntries);
+    g.m_ownTiles = table.ownTiles();
+    g.m_tilePage = std::move(table.tilePage);
+    g.m_flags = std::move(table.flags);
+    for (size_t slot = 0; slot < g.m_flags.size(); ++slot)
+        if (g.m_flags[slot] > static_cast<uint8_t>(BlockFlag::Surface))
+            throw InputError(source + ": a block has an invalid flag " +
+                             std::to_string(g.m_flags[slot]) +
+                             " (accepted: 0 outside, 1 inside, 2 surface)");
+    // The surface blocks' sample indices in flat block order (z, y, x): per row of blocks, the
+    // own tiles of its row of tiles (in page order, which is tile order) left to right.
+    const size_t perBlock = static_cast<size_t>(B + 1) * (B + 1) * (B + 1);
+    assignHuge(g.m_blockData, g.m_flags.size(), int32_t{-1});
+    const size_t tileRows = static_cast<size_t>(g.m_tiles[1]) * g.m_tiles[2];
+    std::vector<size_t> rowStart(tileRows + 1, 0);  // own pages before each row of tiles
+    for (size_t p = 0; p * 3 < g.m_ownTiles.size(); ++p)
+        ++rowStart[static_cast<size_t>(g.m_ownTiles[3 * p + 2]) * g.m_tiles[1] +
+                   g.m_ownTiles[3 * p + 1] + 1];
+    for (size_t r = 0; r < tileRows; ++r) rowStart[r + 1] += rowStart[r];
+    const int nz = g.m_blocks[2], ny = g.m_blocks[1], nx = g.m_blocks[0];
+    auto forSlab = [&](int bk, auto&& visit) {
+        for (int bj = 0; bj < ny; ++bj) {
+            const size_t row =
+                static_cast<size_t>(bk >> kTileShift) * g.m_tiles[1] + (bj >> kTileShift);
+            for (size_t p = rowStart[row]; p < rowStart[row + 1]; ++p) {
+                const int ti = g.m_ownTiles[3 * p];
+                const size_t page = (p + kFirstOwnPage) * kPageEntries;
+                for (int bi = ti * kTileBlocks; bi < std::min(nx, (ti + 1) * kTileBlocks); ++bi) {
+                    const size_t slot = page + pageLocal(bi, bj, bk);
+                    if (g.m_flags[slot] == static_cast<uint8_t>(BlockFlag::Surface)) visit(slot);
+                }
+            }
+        }
+    };
+    std::vector<size_t> slabStart(static_cast<size_t>(nz) + 1, 0);
+    tbb::parallel_for(0, nz, [&](int bk) {
+        size_t n = 0;
+        forSlab(bk, [&](size_t) { ++n; });
+        slabStart[static_cast<size_t>(bk) + 1] = n;
+    });
+    for (int bk = 0; bk < nz; ++bk) slabStart[bk + 1] += slabStart[bk];
+    const size_t surface = slabStart[static_cast<size_t>(nz)];
+    if (surface > static_cast<size_t>(INT32_MAX))
+        throw InputError(source + ": " + std::to_string(surface) +
+                         " surface blocks (at most 2^31 - 1 are accepted)");
+    if (blockSamples.size() != surface * perBlock) {
+        throw InputError(source + ": " + std::to_string(surface) + " surface blocks need " +
+                         std::to_string(surface * perBlock) + " samples, the file has " +
+                         std::to_string(blockSamples.size()));
     }
-    g.m_flags = std::move(flags);
+    tbb::parallel_for(0, nz, [&](int bk) {
+        auto next = static_cast<int32_t>(slabStart[static_cast<size_t>(bk)]);
+        forSlab(bk, [&](size_t slot) { g.m_blockData[slot] = next++; });
+    });
     g.m_blockSamples = std::move(blockSamples);
     g.computeCellMasksAndLipschitz();
     return g;
+}
+
+std::vector<uint8_t> Grid::denseFlags() const {
+    SDFT_CHECK(m_kind == GridKind::Sparse);
+    BlockTable t;
+    for (int a = 0; a < 3; ++a) {
+        t.blocks[a] = m_blocks[a];
+        t.tiles[a] = m_tiles[a];
+    }
+    t.tilePage = m_tilePage;
+    t.flags = m_flags;
+    return t.dense();
+}
+
+void Grid::forEachPagedBlock(const std::function<void(int, int, int, size_t)>& f,
+                             bool parallel) const {
+    auto page = [&](size_t p) {
+        const int* t = m_ownTiles.data() + 3 * p;
+        const size_t base = (p + kFirstOwnPage) * kPageEntries;
+        forEachBlockOfTile(m_blocks, t[0], t[1], t[2], [&](int bi, int bj, int bk) {
+            f(bi, bj, bk, base + pageLocal(bi, bj, bk));
+        });
+    };
+    const size_t pages = m_ownTiles.size() / 3;
+    if (parallel)
+        tbb::parallel_for(size_t(0), pages, page);
+    else
+        for (size_t p = 0; p < pages; ++p) page(p);
 }
 
 GridView Grid::view() const {
@@ -135,7 +212,12 @@ GridView Grid::view() const {
     v.lipschitz = m_lipschitz;
     v.samples = m_samples.data();
     v.blockSize = m_blockSize;
-    for (int a = 0; a < 3; ++a) v.blocks[a] = m_blocks[a];
+    for (int a = 0; a < 3; ++a) {
+        v.blocks[a] = m_blocks[a];
+        v.tiles[a] = m_tiles[a];
+    }
+    v.tilePage = m_tilePage.data();
+    v.tileSkip = m_tileSkip.empty() ? nullptr : m_tileSkip.data();
     v.flags = m_flags.data();
     v.blockData = m_blockData.data();
     v.blockSamples = m_blockSamples.data();
@@ -168,45 +250,17 @@ void Grid::setTexcoords(TexcoordKind kind, std::vector<float> texcoords,
 }
 
 namespace {
-// Calls f(i, j, k, corners) for every cell of the grid, x fastest.
-// Calls f(i, j, k, corners) for every cell that can hold a sign change or a slope: all cells of a
-// dense grid, the cells of a sparse grid's surface blocks (the others are constant). In parallel,
-// each task a z slab (dense) or a block (sparse), so per-block writes never race.
+// Calls f(i, j, k, corners) for every cell of a dense grid, in parallel by z slabs.
 template <class F>
 void forEachCell(const GridView& v, F&& f) {
-    if (v.kind == GridKind::Dense) {
-        tbb::parallel_for(0, v.shape.cells[2], [&](int k) {
-            for (int j = 0; j < v.shape.cells[1]; ++j)
-                for (int i = 0; i < v.shape.cells[0]; ++i) {
-                    float c[8];
-                    v.cellCorners(i, j, k, c);
-                    f(i, j, k, c);
-                }
-        });
-        return;
-    }
-    const int B = v.blockSize;
-    const size_t blocks = static_cast<size_t>(v.blocks[0]) * v.blocks[1] * v.blocks[2];
-    const size_t sy = B + 1, sz = sy * (B + 1), perBlock = sz * (B + 1);
-    // Ranges of blocks per task: most blocks hold no samples and cost one test.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1024), [&](const auto& range) {
-        for (size_t b = range.begin(); b != range.end(); ++b) {
-            if (v.blockData[b] < 0) continue;
-            int bi = static_cast<int>(b % v.blocks[0]),
-                bj = static_cast<int>((b / v.blocks[0]) % v.blocks[1]),
-                bk = static_cast<int>(b / (static_cast<size_t>(v.blocks[0]) * v.blocks[1]));
-            // The block's own (B+1)^3 samples, read directly.
-            const float* data = v.blockSamples + static_cast<size_t>(v.blockData[b]) * perBlock;
-            for (int k = bk * B; k < std::min(bk * B + B, v.shape.cells[2]); ++k)
-                for (int j = bj * B; j < std::min(bj * B + B, v.shape.cells[1]); ++j)
-                    for (int i = bi * B; i < std::min(bi * B + B, v.shape.cells[0]); ++i) {
-                        const float* s =
-                            data + (k - bk * B) * sz + (j - bj * B) * sy + (i - bi * B);
-                        float c[8] = {s[0],  s[1],      s[sy],      s[sy + 1],
-                                      s[sz], s[sz + 1], s[sz + sy], s[sz + sy + 1]};
-                        f(i, j, k, c);
-                    }
-        }
+    SDFT_CHECK(v.kind == GridKind::Dense);
+    tbb::parallel_for(0, v.shape.cells[2], [&](int k) {
+        for (int j = 0; j < v.shape.cells[1]; ++j)
+            for (int i = 0; i < v.shape.cells[0]; ++i) {
+                float c[8];
+                v.cellCorners(i, j, k, c);
+                f(i, j, k, c);
+            }
     });
 }
 }  // namespace
@@ -217,33 +271,27 @@ Bounds3 Grid::surfaceBounds() const {
     if (m_kind == GridKind::Sparse) {
         // The cell masks hold exactly the cells with a sign change (other blocks are constant).
         const int B = m_blockSize, words = (B * B * B + 63) / 64;
-        tbb::parallel_for(
-            tbb::blocked_range<size_t>(0, m_blockData.size(), 1024), [&](const auto& range) {
-                for (size_t b = range.begin(); b != range.end(); ++b) {
-                    const int32_t data = m_blockData[b];
-                    if (data < 0) continue;
-                    const uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
-                    int lo[3] = {B, B, B}, hi[3] = {-1, -1, -1};
-                    for (int w = 0; w < words; ++w)
-                        for (uint64_t bits = mask[w]; bits; bits &= bits - 1) {
-                            const int bit = w * 64 + std::countr_zero(bits);
-                            const int c[3] = {bit % B, (bit / B) % B, bit / (B * B)};
-                            for (int a = 0; a < 3; ++a) {
-                                lo[a] = std::min(lo[a], c[a]);
-                                hi[a] = std::max(hi[a], c[a]);
-                            }
-                        }
-                    if (hi[0] < 0) continue;
-                    const Vec3 cell0(static_cast<float>(b % m_blocks[0] * B),
-                                     static_cast<float>(b / m_blocks[0] % m_blocks[1] * B),
-                                     static_cast<float>(
-                                         b / (static_cast<size_t>(m_blocks[0]) * m_blocks[1]) * B));
-                    Bounds3& out = perThread.local();
-                    out.include(m_shape.origin + (cell0 + Vec3(lo[0], lo[1], lo[2])) * h);
-                    out.include(m_shape.origin +
-                                (cell0 + Vec3(hi[0] + 1, hi[1] + 1, hi[2] + 1)) * h);
+        forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
+            const int32_t data = m_blockData[slot];
+            if (data < 0) return;
+            const uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
+            int lo[3] = {B, B, B}, hi[3] = {-1, -1, -1};
+            for (int w = 0; w < words; ++w)
+                for (uint64_t bits = mask[w]; bits; bits &= bits - 1) {
+                    const int bit = w * 64 + std::countr_zero(bits);
+                    const int c[3] = {bit % B, (bit / B) % B, bit / (B * B)};
+                    for (int a = 0; a < 3; ++a) {
+                        lo[a] = std::min(lo[a], c[a]);
+                        hi[a] = std::max(hi[a], c[a]);
+                    }
                 }
-            });
+            if (hi[0] < 0) return;
+            const Vec3 cell0(static_cast<float>(bi * B), static_cast<float>(bj * B),
+                             static_cast<float>(bk * B));
+            Bounds3& out = perThread.local();
+            out.include(m_shape.origin + (cell0 + Vec3(lo[0], lo[1], lo[2])) * h);
+            out.include(m_shape.origin + (cell0 + Vec3(hi[0] + 1, hi[1] + 1, hi[2] + 1)) * h);
+        });
     } else {
         forEachCell(view(), [&](int i, int j, int k, const float c[8]) {
             if (!cornersChangeSign(c)) return;
@@ -266,19 +314,38 @@ Bounds3 Grid::surfaceBounds() const {
 size_t Grid::memoryBytes() const {
     return m_samples.size() * sizeof(float) + m_flags.size() +
            m_blockData.size() * sizeof(int32_t) + m_blockSamples.size() * sizeof(float) +
-           m_cellMasks.size() * sizeof(uint64_t) + m_blockSkip.size();
+           m_cellMasks.size() * sizeof(uint64_t) + m_blockSkip.size() +
+           m_tilePage.size() * sizeof(int32_t) + m_tileSkip.size() +
+           m_ownTiles.size() * sizeof(int);
 }
 
 void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
     inside = outside = surface = 0;
-    for (uint8_t f : m_flags) {
-        if (f == static_cast<uint8_t>(BlockFlag::Inside))
-            ++inside;
-        else if (f == static_cast<uint8_t>(BlockFlag::Outside))
-            ++outside;
-        else
-            ++surface;
+    if (m_kind != GridKind::Sparse) return;
+    // Constant tiles: their blocks inside the grid; own pages: their flags.
+    for (size_t tile = 0; tile < m_tilePage.size(); ++tile) {
+        const int32_t page = m_tilePage[tile];
+        if (page >= kFirstOwnPage) continue;
+        const int t[3] = {static_cast<int>(tile % m_tiles[0]),
+                          static_cast<int>(tile / m_tiles[0] % m_tiles[1]),
+                          static_cast<int>(tile / (static_cast<size_t>(m_tiles[0]) * m_tiles[1]))};
+        size_t n = 1;
+        for (int a = 0; a < 3; ++a)
+            n *= static_cast<size_t>(std::min(m_blocks[a], (t[a] + 1) * kTileBlocks) -
+                                     t[a] * kTileBlocks);
+        (page == kInsidePage ? inside : outside) += n;
     }
+    forEachPagedBlock(
+        [&](int, int, int, size_t slot) {
+            const uint8_t f = m_flags[slot];
+            if (f == static_cast<uint8_t>(BlockFlag::Inside))
+                ++inside;
+            else if (f == static_cast<uint8_t>(BlockFlag::Outside))
+                ++outside;
+            else
+                ++surface;
+        },
+        false);
 }
 
 // Jamriška §4.1: one bit per cell of each surface block, set when the signs of its 8 corner samples
@@ -447,25 +514,17 @@ void Grid::computeCellMasksAndLipschitz() {
     const size_t sy = B + 1, sz = sy * (B + 1), perBlock = sz * (B + 1);
     const size_t surfaceBlocks = m_blockSamples.size() / perBlock;
     assignHuge(m_cellMasks, surfaceBlocks * words, uint64_t{0});
-    const size_t blocks = m_blockData.size();
-    tbb::combinable<float> worstPerThread([] { return 0.0f; });
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1024), [&](const auto& range) {
-        float worst = 0;  // of gx^2 + gy^2 + gz^2
-        for (size_t b = range.begin(); b != range.end(); ++b) {
-            const int32_t data = m_blockData[b];
-            if (data < 0) continue;
-            const int bi = static_cast<int>(b % m_blocks[0]),
-                      bj = static_cast<int>((b / m_blocks[0]) % m_blocks[1]),
-                      bk = static_cast<int>(b / (static_cast<size_t>(m_blocks[0]) * m_blocks[1]));
-            const int ni = std::min(B, m_shape.cells[0] - bi * B),
-                      nj = std::min(B, m_shape.cells[1] - bj * B),
-                      nk = std::min(B, m_shape.cells[2] - bk * B);
-            const float* base = m_blockSamples.data() + static_cast<size_t>(data) * perBlock;
-            uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
-            worst = std::max(worst, blockMasksAndBound(base, B, ni, nj, nk, mask));
-        }
+    tbb::combinable<float> worstPerThread([] { return 0.0f; });  // of gx^2 + gy^2 + gz^2
+    forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
+        const int32_t data = m_blockData[slot];
+        if (data < 0) return;
+        const int ni = std::min(B, m_shape.cells[0] - bi * B),
+                  nj = std::min(B, m_shape.cells[1] - bj * B),
+                  nk = std::min(B, m_shape.cells[2] - bk * B);
+        const float* base = m_blockSamples.data() + static_cast<size_t>(data) * perBlock;
+        uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
         float& w = worstPerThread.local();
-        w = std::max(w, worst);
+        w = std::max(w, blockMasksAndBound(base, B, ni, nj, nk, mask));
     });
     const float worst = worstPerThread.combine([](float a, float b) { return std::max(a, b); });
     // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
@@ -473,47 +532,28 @@ void Grid::computeCellMasksAndLipschitz() {
     computeBlockSkip();
 }
 
-// Empty-space skipping for the block DDA: the Chebyshev distance (in blocks) from each block to
-// the nearest block holding a sign-changing cell, by a two-pass chamfer transform over the
-// 26-neighbourhood (exact for this metric), capped at 255. Surface blocks of a narrow band whose
-// cells all keep one sign (about half of them) are skipped like empty space: no cell in them can
-// be hit.
-void Grid::computeBlockSkip() {
-    const int nx = m_blocks[0], ny = m_blocks[1], nz = m_blocks[2];
-    const size_t n = m_flags.size();
-    const int words = (m_blockSize * m_blockSize * m_blockSize + 63) / 64;
-    std::vector<uint16_t> d(n);
-    constexpr uint16_t kFar = 256;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const auto& range) {
-        for (size_t b = range.begin(); b != range.end(); ++b) {
-            const int32_t data = m_blockData[b];
-            bool crossing = false;
-            if (data >= 0) {
-                const uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
-                for (int w = 0; w < words; ++w) crossing |= mask[w] != 0;
-            }
-            d[b] = crossing ? 0 : kFar;
-        }
-    });
-    // Forward over rows in raster order: each block takes the least of its 13 earlier
-    // neighbours plus one; backward likewise with the 13 later ones. Row by row: the 12
-    // neighbours in the 4 rows already done are a minimum across the row (vectorized), then the
-    // one before it in the row is a sweep.
+namespace {
+// Chebyshev distance transform in place over an nx x ny x nz array (x fastest): entries start at
+// 0 (a source) or kFar, and end at the distance to the nearest source, by a two-pass chamfer
+// transform over the 26-neighbourhood (exact for this metric). Row by row: the 12 neighbours in
+// the 4 rows already done are a minimum across the row (vectorized), then the one before it in
+// the row is a sweep.
+void chebyshevTransform(std::vector<uint16_t>& d, int nx, int ny, int nz, uint16_t far) {
     std::vector<uint16_t> fromRows(nx);
     auto pass = [&](int s) {
         for (int kk = 0; kk < nz; ++kk)
             for (int jj = 0; jj < ny; ++jj) {
                 const int k = s > 0 ? kk : nz - 1 - kk, j = s > 0 ? jj : ny - 1 - jj;
                 uint16_t* row = d.data() + (static_cast<size_t>(k) * ny + j) * nx;
-                std::fill(fromRows.begin(), fromRows.end(), kFar);
+                std::fill(fromRows.begin(), fromRows.end(), far);
                 // Rows (j - s, k) and (j - 1..j + 1, k - s): done before this one.
                 const int rows[4][2] = {{j - s, k}, {j - 1, k - s}, {j, k - s}, {j + 1, k - s}};
                 for (const auto& [y, z] : rows) {
                     if (y < 0 || y >= ny || z < 0 || z >= nz) continue;
                     const uint16_t* r = d.data() + (static_cast<size_t>(z) * ny + y) * nx;
                     for (int i = 0; i < nx; ++i) {
-                        const uint16_t left = i > 0 ? r[i - 1] : kFar;
-                        const uint16_t right = i + 1 < nx ? r[i + 1] : kFar;
+                        const uint16_t left = i > 0 ? r[i - 1] : far;
+                        const uint16_t right = i + 1 < nx ? r[i + 1] : far;
                         fromRows[i] = std::min({fromRows[i], left, r[i], right});
                     }
                 }
@@ -528,8 +568,120 @@ void Grid::computeBlockSkip() {
     };
     pass(1);
     pass(-1);
-    m_blockSkip.resize(n);
-    for (size_t b = 0; b < n; ++b) m_blockSkip[b] = static_cast<uint8_t>(std::min<int>(255, d[b]));
+}
+}  // namespace
+
+// Empty-space skipping for the block DDA (not in the papers: Cohen & Sheffer's proximity clouds on
+// Jamriška's block level, §4.1), on both levels of the table. Sources are the blocks holding a
+// sign-changing cell: surface blocks of a narrow band whose cells all keep one sign (about half
+// of them) are skipped like empty space, since no cell in them can be hit.
+//  - tiles: the Chebyshev distance in tiles to the nearest tile holding a source (chamfer
+//    transform over the tile grid, capped at 255);
+//  - blocks of own pages: the distance in blocks to the nearest source, exact up to 8 and 9
+//    beyond (a source within 8 blocks lies in the 3^3 tiles around the page): the page's window
+//    of 24^3 blocks as bit rows, dilated by one block 8 times.
+void Grid::computeBlockSkip() {
+    const int words = (m_blockSize * m_blockSize * m_blockSize + 63) / 64;
+    const size_t pages = m_ownTiles.size() / 3;
+    // Per own page, its sources: one byte of x bits per (z, y) row.
+    std::vector<uint8_t> rows(pages * kTileBlocks * kTileBlocks, 0);
+    std::vector<uint8_t> pageHasSource(pages, 0);
+    tbb::parallel_for(size_t(0), pages, [&](size_t p) {
+        const size_t base = (p + kFirstOwnPage) * kPageEntries;
+        uint8_t any = 0;
+        for (int local = 0; local < kPageEntries; ++local) {
+            const int32_t data = m_blockData[base + static_cast<size_t>(local)];
+            if (data < 0) continue;
+            const uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
+            bool crossing = false;
+            for (int w = 0; w < words; ++w) crossing |= mask[w] != 0;
+            if (crossing) {
+                rows[p * 64 + static_cast<size_t>(local >> kTileShift)] |=
+                    static_cast<uint8_t>(1u << (local & (kTileBlocks - 1)));
+                any = 1;
+            }
+        }
+        pageHasSource[p] = any;
+    });
+
+    constexpr uint16_t kFar = 256;
+    std::vector<uint16_t> d(m_tilePage.size(), kFar);
+    for (size_t tile = 0; tile < m_tilePage.size(); ++tile) {
+        const int32_t page = m_tilePage[tile];
+        if (page >= kFirstOwnPage && pageHasSource[static_cast<size_t>(page - kFirstOwnPage)])
+            d[tile] = 0;
+    }
+    chebyshevTransform(d, m_tiles[0], m_tiles[1], m_tiles[2], kFar);
+    m_tileSkip.resize(d.size());
+    for (size_t t = 0; t < d.size(); ++t)
+        m_tileSkip[t] = static_cast<uint8_t>(std::min<int>(255, d[t]));
+
+    constexpr int kFarBlocks = kTileBlocks + 1;
+    m_blockSkip.assign(m_flags.size(), 1);  // the constant pages: no source, no skip
+    tbb::parallel_for(size_t(0), pages, [&](size_t p) {
+        const int* t = m_ownTiles.data() + 3 * p;
+        uint8_t* out = m_blockSkip.data() + (p + kFirstOwnPage) * kPageEntries;
+        std::fill(out, out + kPageEntries, static_cast<uint8_t>(kFarBlocks));
+        // The window: 3 x 3 x 3 tiles, bit x of row (y, z) = block x of the window.
+        constexpr int W = 3 * kTileBlocks;
+        uint32_t win[W][W] = {};
+        bool any = false;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int n[3] = {t[0] + dx, t[1] + dy, t[2] + dz};
+                    if (n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= m_tiles[0] ||
+                        n[1] >= m_tiles[1] || n[2] >= m_tiles[2])
+                        continue;
+                    const int32_t page =
+                        m_tilePage[(static_cast<size_t>(n[2]) * m_tiles[1] + n[1]) * m_tiles[0] +
+                                   n[0]];
+                    if (page < kFirstOwnPage) continue;
+                    const uint8_t* r = rows.data() + static_cast<size_t>(page - kFirstOwnPage) * 64;
+                    for (int z = 0; z < kTileBlocks; ++z)
+                        for (int y = 0; y < kTileBlocks; ++y) {
+                            const uint32_t bits = r[z * kTileBlocks + y];
+                            any |= bits != 0;
+                            win[(dz + 1) * kTileBlocks + z][(dy + 1) * kTileBlocks + y] |=
+                                bits << ((dx + 1) * kTileBlocks);
+                        }
+                }
+        if (!any) return;
+        constexpr uint32_t kRow = (1u << W) - 1;
+        auto record = [&](int r, const uint32_t(&now)[W][W], const uint32_t(&before)[W][W]) {
+            for (int z = 0; z < kTileBlocks; ++z)
+                for (int y = 0; y < kTileBlocks; ++y) {
+                    const uint32_t fresh = (now[z + kTileBlocks][y + kTileBlocks] &
+                                            ~before[z + kTileBlocks][y + kTileBlocks]) >>
+                                           kTileBlocks;
+                    for (uint32_t bits = fresh & 0xffu; bits; bits &= bits - 1)
+                        out[(z * kTileBlocks + y) * kTileBlocks + std::countr_zero(bits)] =
+                            static_cast<uint8_t>(r);
+                }
+        };
+        uint32_t none[W][W] = {};
+        record(0, win, none);
+        uint32_t prev[W][W];
+        for (int r = 1; r <= kTileBlocks; ++r) {
+            std::memcpy(prev, win, sizeof win);
+            uint32_t tmp[W][W];
+            for (int z = 0; z < W; ++z)
+                for (int y = 0; y < W; ++y) {
+                    const uint32_t m = prev[z][y];
+                    tmp[z][y] = (m | m << 1 | m >> 1) & kRow;
+                }
+            uint32_t tmp2[W][W];
+            for (int z = 0; z < W; ++z)
+                for (int y = 0; y < W; ++y)
+                    tmp2[z][y] =
+                        tmp[z][y] | (y > 0 ? tmp[z][y - 1] : 0) | (y + 1 < W ? tmp[z][y + 1] : 0);
+            for (int z = 0; z < W; ++z)
+                for (int y = 0; y < W; ++y)
+                    win[z][y] = tmp2[z][y] | (z > 0 ? tmp2[z - 1][y] : 0) |
+                                (z + 1 < W ? tmp2[z + 1][y] : 0);
+            record(r, win, prev);
+        }
+    });
 }
 
 }  // namespace sdft

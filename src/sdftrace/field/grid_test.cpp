@@ -92,9 +92,7 @@ TEST(Grid, CellMasksMarkExactlyTheCellsWithASignChange) {
                     v.cellCorners(i, j, k, c);
                     bool neg = false, pos = false;
                     for (float x : c) (x < 0 ? neg : pos) = true;
-                    size_t block =
-                        (static_cast<size_t>(k / B) * v.blocks[1] + j / B) * v.blocks[0] + i / B;
-                    int32_t data = v.blockData[block];
+                    int32_t data = v.blockData[v.blockSlot(i / B, j / B, k / B)];
                     bool bit = false;
                     if (data >= 0) {
                         int local = ((k % B) * B + j % B) * B + i % B;
@@ -121,9 +119,7 @@ TEST(Grid, SparseLipschitzBoundIsTheLargestCellBound) {
         for (int k = 0; k < v.shape.cells[2]; ++k)
             for (int j = 0; j < v.shape.cells[1]; ++j)
                 for (int i = 0; i < v.shape.cells[0]; ++i) {
-                    const size_t block =
-                        (static_cast<size_t>(k / B) * v.blocks[1] + j / B) * v.blocks[0] + i / B;
-                    if (v.blockData[block] < 0) continue;
+                    if (v.blockData[v.blockSlot(i / B, j / B, k / B)] < 0) continue;
                     float c[8];
                     v.cellCorners(i, j, k, c);
                     float g[3] = {0, 0, 0};

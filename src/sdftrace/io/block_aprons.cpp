@@ -67,12 +67,22 @@ int apronWords(int B) { return (apronSize(B) + 63) / 64; }
 SplitBlocks splitBlocks(const Grid& grid) {
     const Layout L(grid.shape(), grid.blockSize());
     const auto aprons = apronPositions(L.B);
-    const std::vector<int32_t>& data = grid.blockData();
+    const GridView view = grid.view();
     const std::vector<float>& samples = grid.blockSamples();
     const size_t surface = samples.size() / L.per;
-    std::vector<size_t> blockOf(surface);  // surface index -> block
-    for (size_t b = 0; b < data.size(); ++b)
-        if (data[b] >= 0) blockOf[static_cast<size_t>(data[b])] = b;
+    std::vector<size_t> blockOf(surface);  // surface index -> flat block index
+    grid.forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
+        const int32_t data = view.blockData[slot];
+        if (data >= 0)
+            blockOf[static_cast<size_t>(data)] =
+                (static_cast<size_t>(bk) * L.blocks[1] + bj) * L.blocks[0] + bi;
+    });
+    // The sample index of flat block o, -1 for none.
+    auto dataOf = [&](size_t o) {
+        int c[3];
+        L.coords(o, c);
+        return view.blockData[view.blockSlot(c[0], c[1], c[2])];
+    };
     SplitBlocks out;
     out.own.resize(surface * L.own);
     out.masks.assign(surface * L.words, 0);
@@ -92,9 +102,10 @@ SplitBlocks splitBlocks(const Grid& grid) {
             const auto& p = aprons[static_cast<size_t>(a)];
             const float v = src[(p[2] * L.V + p[1]) * L.V + p[0]];
             size_t o = 0;
+            int32_t owner = -1;
             const bool implicit =
-                L.owner(c, p, o) && data[o] >= 0 &&
-                sameBits(v, samples[static_cast<size_t>(data[o]) * L.per +
+                L.owner(c, p, o) && (owner = dataOf(o)) >= 0 &&
+                sameBits(v, samples[static_cast<size_t>(owner) * L.per +
                                     (((p[2] % L.B) * L.V + p[1] % L.B) * L.V + p[0] % L.B)]);
             if (!implicit) {
                 mask[a / 64] |= uint64_t{1} << (a % 64);

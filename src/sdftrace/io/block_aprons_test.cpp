@@ -26,7 +26,7 @@ TEST(BlockAprons, SplitAndJoinGiveTheSameSamples) {
         EXPECT_EQ(split.own.size(), surface * B * B * B);
         // Most aprons are shared with a surface neighbour: far fewer kept than stored.
         EXPECT_LT(split.explicitly.size(), surface * apronSize(B) / 2) << B;
-        EXPECT_EQ(joinBlocks(g.shape(), B, g.flags(), split, "t"), g.blockSamples()) << B;
+        EXPECT_EQ(joinBlocks(g.shape(), B, g.denseFlags(), split, "t"), g.blockSamples()) << B;
     }
 }
 
@@ -36,10 +36,10 @@ TEST(BlockAprons, ApronsThatDisagreeWithTheirOwnerAreKept) {
     std::vector<float> samples = g.blockSamples();
     for (size_t i = 124; i < samples.size(); i += 125) samples[i] += 1e-3f;
     const Grid changed =
-        Grid::sparseFromBuffers(g.shape(), 4, g.background(), g.flags(), samples, "t");
+        Grid::sparseFromBuffers(g.shape(), 4, g.background(), g.denseFlags(), samples, "t");
     const SplitBlocks split = splitBlocks(changed);
     EXPECT_GE(split.explicitly.size(), samples.size() / 125);
-    EXPECT_EQ(joinBlocks(changed.shape(), 4, changed.flags(), split, "t"), samples);
+    EXPECT_EQ(joinBlocks(changed.shape(), 4, changed.denseFlags(), split, "t"), samples);
 }
 
 TEST(BlockAprons, InconsistentSplitsAreRejected) {
@@ -53,10 +53,10 @@ TEST(BlockAprons, InconsistentSplitsAreRejected) {
             changed = true;
         }
     ASSERT_TRUE(changed);
-    EXPECT_THROW(joinBlocks(g.shape(), 4, g.flags(), split, "t"), InputError);
+    EXPECT_THROW(joinBlocks(g.shape(), 4, g.denseFlags(), split, "t"), InputError);
     SplitBlocks shortOwn = splitBlocks(g);
     shortOwn.own.pop_back();
-    EXPECT_THROW(joinBlocks(g.shape(), 4, g.flags(), shortOwn, "t"), InputError);
+    EXPECT_THROW(joinBlocks(g.shape(), 4, g.denseFlags(), shortOwn, "t"), InputError);
 }
 
 }  // namespace

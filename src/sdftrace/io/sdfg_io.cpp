@@ -72,12 +72,14 @@ void saveRaw(const Grid& grid, const std::string& path) {
     const bool tex = !grid.texcoords().empty();
     Header h = headerOf(grid, tex ? 2 : 1);
     uint64_t sum = 0xcbf29ce484222325ull;
+    const std::vector<uint8_t> flags =
+        grid.kind() == GridKind::Sparse ? grid.denseFlags() : std::vector<uint8_t>();
     if (grid.kind() == GridKind::Dense) {
         h.payloadBytes = grid.samples().size() * sizeof(float);
         sum = fnv1a64(grid.samples().data(), h.payloadBytes, sum);
     } else {
-        h.payloadBytes = grid.flags().size() + grid.blockSamples().size() * sizeof(float);
-        sum = fnv1a64(grid.flags().data(), grid.flags().size(), sum);
+        h.payloadBytes = flags.size() + grid.blockSamples().size() * sizeof(float);
+        sum = fnv1a64(flags.data(), flags.size(), sum);
         sum = fnv1a64(grid.blockSamples().data(), grid.blockSamples().size() * sizeof(float), sum);
     }
     const uint32_t texHeader[2] = {static_cast<uint32_t>(grid.texcoordKind()), 0};
@@ -93,7 +95,7 @@ void saveRaw(const Grid& grid, const std::string& path) {
     if (grid.kind() == GridKind::Dense) {
         out.write(grid.samples().data(), grid.samples().size() * sizeof(float));
     } else {
-        out.write(grid.flags().data(), grid.flags().size());
+        out.write(flags.data(), flags.size());
         out.write(grid.blockSamples().data(), grid.blockSamples().size() * sizeof(float));
     }
     if (tex) {
@@ -163,12 +165,14 @@ void unshuffleFloats(const char* in, char* out, uint64_t bytes) {
 void saveCompressed(const Grid& grid, const std::string& path, int level) {
     std::vector<Section> sections;
     SplitBlocks split;
+    std::vector<uint8_t> flags;
     if (grid.kind() == GridKind::Dense) {
         sections.push_back(section(grid.samples(), true));
     } else {
         split = splitBlocks(grid);
-        sections = {section(grid.flags(), false), section(split.own, true),
-                    section(split.masks, false), section(split.explicitly, true)};
+        flags = grid.denseFlags();
+        sections = {section(flags, false), section(split.own, true), section(split.masks, false),
+                    section(split.explicitly, true)};
     }
     if (!grid.texcoords().empty()) sections.push_back(section(grid.texcoords(), true));
     std::vector<uint64_t> sectionBytes;

@@ -146,8 +146,7 @@ bool setup(const GridView& g, const Ray& ray, float tMin, float tMax, Setup& s) 
 
 BlockFlag blockFlag(const GridView& g, const int b[3]) {
     if (g.kind == GridKind::Dense) return BlockFlag::Surface;
-    return static_cast<BlockFlag>(
-        g.flags[(static_cast<size_t>(b[2]) * g.blocks[1] + b[1]) * g.blocks[0] + b[0]]);
+    return static_cast<BlockFlag>(g.flags[g.blockSlot(b[0], b[1], b[2])]);
 }
 
 // traverseBlock's cell walk for a sparse block with its bit mask (Jamriška §4.1, the common
@@ -225,9 +224,7 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
     const float* samples = nullptr;
     const size_t sy = s.B + 1, sz = sy * sy;
     if (g.kind == GridKind::Sparse) {
-        size_t b =
-            (static_cast<size_t>(block[2]) * g.blocks[1] + block[1]) * g.blocks[0] + block[0];
-        size_t data = static_cast<size_t>(g.blockData[b]);
+        size_t data = static_cast<size_t>(g.blockData[g.blockSlot(block[0], block[1], block[2])]);
         samples = g.blockSamples + data * sz * sy;
         if (o.bitMasks)
             return walkMaskedCells(g, s, lo, hi, g.cellMasks + data * g.wordsPerMask(), samples,
@@ -269,28 +266,48 @@ void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTra
     for (;;) {
         res.traversalSteps++;
         float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
-        const size_t b =
-            (static_cast<size_t>(blocks.idx[2]) * g.blocks[1] + blocks.idx[1]) * g.blocks[0] +
-            blocks.idx[0];
-        if (g.kind == GridKind::Dense || g.mayHoldHit(b)) {
+        // Empty-space skipping (not in the papers: Cohen & Sheffer's proximity clouds on
+        // Jamriška's block level, §4.1): no block within r of this one (a tile: no tile within r)
+        // holds a sign-changing cell, so the ray continues where it leaves that cube of blocks
+        // (tiles); only cells that are never tested are skipped, so the hits are the plain
+        // traversal's.
+        int r = 0, scale = 1;  // cube radius and its unit, in blocks
+        if (g.kind == GridKind::Dense) {
             float tHit;
             if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
                 res.hit = true;
                 res.t = tHit;
                 return;
             }
-        } else if (g.blockSkip && g.blockSkip[b] > 1) {
-            // Empty-space skipping (not in the papers: Cohen & Sheffer's proximity clouds on
-            // Jamriška's block level, §4.1): no block within r of this one holds a sign-changing
-            // cell, so the ray continues where it leaves that cube of blocks (only cells that are
-            // never tested are skipped: the hits are the plain traversal's).
-            const int r = g.blockSkip[b] - 1;
+        } else {
+            const size_t tile = g.tileIndex(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
+            if (g.tileSkip && g.tileSkip[tile] > 0) {
+                r = g.tileSkip[tile] - 1;
+                scale = kTileBlocks;
+            } else {
+                const size_t b = static_cast<size_t>(g.tilePage[tile]) * kPageEntries +
+                                 pageLocal(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
+                if (g.mayHoldHit(b)) {
+                    float tHit;
+                    if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
+                        res.hit = true;
+                        res.t = tHit;
+                        return;
+                    }
+                } else if (g.blockSkip && g.blockSkip[b] > 1) {
+                    r = g.blockSkip[b] - 1;
+                }
+            }
+        }
+        if (r > 0 || scale > 1) {
+            const float unit = B * static_cast<float>(scale);
             float tCube = kInfinity;
             for (int a = 0; a < 3; ++a) {
+                const int c = blocks.idx[a] / scale;  // block or tile index (non-negative)
                 if (s.r.d[a] > 0)
-                    tCube = std::min(tCube, ((blocks.idx[a] + r + 1) * B - s.r.o[a]) * s.invD[a]);
+                    tCube = std::min(tCube, ((c + r + 1) * unit - s.r.o[a]) * s.invD[a]);
                 else if (s.r.d[a] < 0)
-                    tCube = std::min(tCube, ((blocks.idx[a] - r) * B - s.r.o[a]) * s.invD[a]);
+                    tCube = std::min(tCube, ((c - r) * unit - s.r.o[a]) * s.invD[a]);
             }
             if (tCube >= s.t1) return;
             if (tCube > tExit) {

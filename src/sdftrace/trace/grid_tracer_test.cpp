@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
 
 #include "sdftrace/exec/simd.h"
 #include "sdftrace/field/sample_grid.h"
@@ -97,7 +98,9 @@ TEST(GridTracer, EmptySpaceSkippingChangesNoHit) {
     const GridView with = f.sparse->view();
     GridView without = with;
     without.blockSkip = nullptr;
+    without.tileSkip = nullptr;
     ASSERT_NE(with.blockSkip, nullptr);
+    ASSERT_NE(with.tileSkip, nullptr);
     int maxSkip = 0;
     for (uint8_t r : f.sparse->blockSkip()) maxSkip = std::max<int>(maxSkip, r);
     EXPECT_GE(maxSkip, 3);
@@ -120,8 +123,101 @@ TEST(GridTracer, EmptySpaceSkippingChangesNoHit) {
     EXPECT_LT(stepsWith, stepsWithout);
 }
 
-// The skip distances are the Chebyshev distance to the nearest block with a sign-changing cell,
-// and the narrow band has surface blocks without one (which the DDA skips).
+// A grid much larger than its surface: 1600^3 cells (50 tiles of 8^3 blocks per axis) holding two
+// spheres of radius 12 cells at opposite corners, built straight into the two-level table (most
+// tiles on the constant outside page).
+Grid twoSpheresInALargeGrid() {
+    GridShape shape;
+    for (int a = 0; a < 3; ++a) shape.cells[a] = 1600;
+    shape.voxelSize = 1;
+    const int B = 4, V = B + 1;
+    const float band = 3;
+    const Vec3 centres[2] = {Vec3(150, 170, 160), Vec3(1450, 1420, 1440)};
+    const int n[3] = {400, 400, 400};
+    auto dist = [&](Vec3 p) {
+        return std::min(length(p - centres[0]), length(p - centres[1])) - 12.0f;
+    };
+    BlockTable t = BlockTable::empty(n);
+    std::map<size_t, uint8_t> flags;  // flat block -> flag, for blocks near a sphere
+    for (const Vec3& c : centres)
+        for (int bk = int(c.z) / B - 5; bk <= int(c.z) / B + 5; ++bk)
+            for (int bj = int(c.y) / B - 5; bj <= int(c.y) / B + 5; ++bj)
+                for (int bi = int(c.x) / B - 5; bi <= int(c.x) / B + 5; ++bi) {
+                    bool neg = false, pos = false, near = false;
+                    for (int k = 0; k < V; ++k)
+                        for (int j = 0; j < V; ++j)
+                            for (int i = 0; i < V; ++i) {
+                                const float d = dist(Vec3(bi * B + i, bj * B + j, bk * B + k));
+                                (d < 0 ? neg : pos) = true;
+                                near |= std::fabs(d) < band;
+                            }
+                    flags[(static_cast<size_t>(bk) * 400 + bj) * 400 + bi] = near || (neg && pos)
+                                                                                 ? 2
+                                                                             : neg ? 1
+                                                                                   : 0;
+                }
+    // Own pages in tile order.
+    std::map<size_t, int32_t> pageOf;
+    for (const auto& [b, f] : flags) {
+        const int bi = b % 400, bj = b / 400 % 400, bk = b / 160000;
+        pageOf[t.tileOf(bi, bj, bk)] = 0;
+    }
+    int32_t next = kFirstOwnPage;
+    for (auto& [tile, page] : pageOf) t.tilePage[tile] = page = next++;
+    t.flags.resize(static_cast<size_t>(next) * kPageEntries, 0);
+    std::vector<float> samples;
+    for (const auto& [b, f] : flags) {
+        const int bi = b % 400, bj = b / 400 % 400, bk = b / 160000;
+        t.flags[t.slot(bi, bj, bk)] = f;
+        if (f != 2) continue;
+        for (int k = 0; k < V; ++k)
+            for (int j = 0; j < V; ++j)
+                for (int i = 0; i < V; ++i)
+                    samples.push_back(
+                        std::clamp(dist(Vec3(bi * B + i, bj * B + j, bk * B + k)), -band, band));
+    }
+    return Grid::sparseFromTable(shape, B, band - 1, std::move(t), std::move(samples), "test");
+}
+
+TEST(GridTracer, TileSkippingAcrossALargeEmptyGridChangesNoHit) {
+    const Grid g = twoSpheresInALargeGrid();
+    const GridView with = g.view();
+    GridView without = with;
+    without.blockSkip = nullptr;
+    without.tileSkip = nullptr;
+    size_t own = 0;
+    for (int32_t p : g.tilePage()) own += p >= kFirstOwnPage;
+    EXPECT_LT(own, 30u);
+    EXPECT_EQ(g.tilePage().size(), 50u * 50 * 50);
+    testing::Rng rng(11);
+    int hits = 0;
+    long stepsWith = 0, stepsWithout = 0;
+    const Vec3 centres[2] = {Vec3(150, 170, 160), Vec3(1450, 1420, 1440)};
+    for (int n = 0; n < 400; ++n) {
+        // From near one sphere towards the other, and from outside the grid at either.
+        const Vec3 target = centres[n % 2] + rng.inCube(14.0f);
+        const Vec3 from = n % 4 < 2 ? centres[1 - n % 2] + rng.inCube(30.0f)
+                                    : Vec3(800.0f) + rng.direction() * 1500.0f;
+        const Ray ray{from, normalize(target - from)};
+        GridTraceResult a = traceGridRay(with, ray, 0, 1e5f, GridTraceOptions{});
+        GridTraceResult b = traceGridRay(without, ray, 0, 1e5f, GridTraceOptions{});
+        ASSERT_EQ(a.hit, b.hit) << n;
+        if (a.hit) {
+            ASSERT_EQ(a.t, b.t) << n;
+        }
+        ASSERT_EQ(a.intersectionTests, b.intersectionTests) << n;
+        hits += a.hit;
+        stepsWith += a.traversalSteps;
+        stepsWithout += b.traversalSteps;
+    }
+    EXPECT_GT(hits, 150);
+    // The plain DDA walks ~400 blocks per ray; skipping walks a few per tile it leaves.
+    EXPECT_LT(stepsWith * 5, stepsWithout);
+}
+
+// The skip distances are the Chebyshev distance to the nearest block with a sign-changing cell
+// (exact up to 8, 9 beyond, on the blocks of own pages), and the tiles' to the nearest tile with
+// one; the narrow band has surface blocks without one (which the DDA skips).
 TEST(GridTracer, BlockSkipIsTheDistanceToTheNearestCrossingBlock) {
     const Grid& g = *fixture().sparse;
     const GridView v = g.view();
@@ -132,7 +228,7 @@ TEST(GridTracer, BlockSkipIsTheDistanceToTheNearestCrossingBlock) {
     for (int k = 0; k < nz; ++k)
         for (int j = 0; j < ny; ++j)
             for (int i = 0; i < nx; ++i) {
-                if (v.flags[(static_cast<size_t>(k) * ny + j) * nx + i] != 2) continue;
+                if (v.flags[v.blockSlot(i, j, k)] != 2) continue;
                 ++surfaceBlocks;
                 bool any = false;
                 for (int z = k * v.blockSize; z < std::min((k + 1) * v.blockSize, v.shape.cells[2]);
@@ -149,14 +245,32 @@ TEST(GridTracer, BlockSkipIsTheDistanceToTheNearestCrossingBlock) {
             }
     ASSERT_FALSE(crossing.empty());
     EXPECT_LT(crossing.size(), surfaceBlocks);
-    for (size_t b = 0; b < g.flags().size(); b += 7) {
+    int checked = 0;
+    for (size_t b = 0; b < static_cast<size_t>(nx) * ny * nz; b += 7) {
         const int i = static_cast<int>(b % nx), j = static_cast<int>(b / nx % ny),
                   k = static_cast<int>(b / (static_cast<size_t>(nx) * ny));
+        if (v.tilePage[v.tileIndex(i, j, k)] < kFirstOwnPage) continue;
         int d = 1 << 30;
         for (const auto& s : crossing)
             d = std::min(d, std::max({std::abs(s[0] - i), std::abs(s[1] - j), std::abs(s[2] - k)}));
-        ASSERT_EQ(v.blockSkip[b], std::min(255, d)) << i << " " << j << " " << k;
+        ASSERT_EQ(v.blockSkip[v.blockSlot(i, j, k)], std::min(kTileBlocks + 1, d))
+            << i << " " << j << " " << k;
+        ++checked;
     }
+    EXPECT_GT(checked, 100);
+    // Tiles: the same distance on the tile grid.
+    for (int k = 0; k < v.tiles[2]; ++k)
+        for (int j = 0; j < v.tiles[1]; ++j)
+            for (int i = 0; i < v.tiles[0]; ++i) {
+                int d = 1 << 30;
+                for (const auto& s : crossing)
+                    d = std::min(d, std::max({std::abs(s[0] / kTileBlocks - i),
+                                              std::abs(s[1] / kTileBlocks - j),
+                                              std::abs(s[2] / kTileBlocks - k)}));
+                ASSERT_EQ(v.tileSkip[(static_cast<size_t>(k) * v.tiles[1] + j) * v.tiles[0] + i],
+                          std::min(255, d))
+                    << "tile " << i << " " << j << " " << k;
+            }
 }
 
 // The AVX2 and baseline builds of the tracer (exec/simd.h) take the same steps and return the

@@ -75,20 +75,31 @@ MinMaxBuffer MinMaxBuffer::build(const GridView& g, const Camera& cam, int resol
         return LocalBuffers{std::vector<float>(b.m_min.size(), kInfinity),
                             std::vector<float>(b.m_max.size(), -kInfinity)};
     });
-    tbb::parallel_for(
-        tbb::blocked_range<int>(0, nb[2]), [&](const tbb::blocked_range<int>& slices) {
-            LocalBuffers& L = locals.local();
-            for (int k = slices.begin(); k != slices.end(); ++k)
-                for (int j = 0; j < nb[1]; ++j)
-                    for (int i = 0; i < nb[0]; ++i) {
-                        // Only blocks a ray can hit in (the DDA walks no other).
-                        if (sparse &&
-                            !g.mayHoldHit((static_cast<size_t>(k) * nb[1] + j) * nb[0] + i))
-                            continue;
-                        const Vec3 c = g.shape.origin + (Vec3(i, j, k) + Vec3(0.5f)) * (B * h);
-                        splatBlock(cam, c, radius, b.m_w, b.m_h, b.m_scaleX, b.m_scaleY, L);
-                    }
-        });
+    // Only blocks a ray can hit in (the DDA walks no other): the blocks of a dense grid's one
+    // block, or of a sparse grid's own pages (block_table.h).
+    const size_t tiles = sparse ? static_cast<size_t>(g.tiles[0]) * g.tiles[1] * g.tiles[2] : 1;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles, 64), [&](const auto& range) {
+        LocalBuffers& L = locals.local();
+        for (size_t tile = range.begin(); tile != range.end(); ++tile) {
+            if (!sparse) {
+                const Vec3 c = g.shape.origin + Vec3(0.5f) * (B * h);
+                splatBlock(cam, c, radius, b.m_w, b.m_h, b.m_scaleX, b.m_scaleY, L);
+                continue;
+            }
+            const int32_t page = g.tilePage[tile];
+            if (page < kFirstOwnPage) continue;
+            const int t[3] = {
+                static_cast<int>(tile % g.tiles[0]),
+                static_cast<int>(tile / g.tiles[0] % g.tiles[1]),
+                static_cast<int>(tile / (static_cast<size_t>(g.tiles[0]) * g.tiles[1]))};
+            forEachBlockOfTile(nb, t[0], t[1], t[2], [&](int i, int j, int k) {
+                if (!g.mayHoldHit(static_cast<size_t>(page) * kPageEntries + pageLocal(i, j, k)))
+                    return;
+                const Vec3 c = g.shape.origin + (Vec3(i, j, k) + Vec3(0.5f)) * (B * h);
+                splatBlock(cam, c, radius, b.m_w, b.m_h, b.m_scaleX, b.m_scaleY, L);
+            });
+        }
+    });
     for (const LocalBuffers& L : locals) {
         b.m_squares += L.squares;
         b.m_everything |= L.everything;

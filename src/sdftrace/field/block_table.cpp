@@ -1,0 +1,109 @@
+#include "sdftrace/field/block_table.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/field/grid.h"
+
+namespace sdft {
+
+namespace {
+constexpr uint8_t kOutside = static_cast<uint8_t>(BlockFlag::Outside);
+constexpr uint8_t kInside = static_cast<uint8_t>(BlockFlag::Inside);
+constexpr uint8_t kSurface = static_cast<uint8_t>(BlockFlag::Surface);
+}  // namespace
+
+BlockTable BlockTable::empty(const int blocks[3]) {
+    BlockTable t;
+    for (int a = 0; a < 3; ++a) {
+        t.blocks[a] = blocks[a];
+        t.tiles[a] = (blocks[a] + kTileBlocks - 1) >> kTileShift;
+    }
+    t.tilePage.assign(static_cast<size_t>(t.tiles[0]) * t.tiles[1] * t.tiles[2], kOutsidePage);
+    t.flags.assign(2 * kPageEntries, kOutside);
+    std::fill(t.flags.begin() + kPageEntries, t.flags.end(), kInside);
+    return t;
+}
+
+size_t BlockTable::surfaceBlocks() const {
+    return static_cast<size_t>(
+        std::count(flags.begin() + kFirstOwnPage * kPageEntries, flags.end(), kSurface));
+}
+
+BlockTable BlockTable::fromDense(const int blocks[3], const std::vector<uint8_t>& dense,
+                                 const std::string& source) {
+    BlockTable t = empty(blocks);
+    const size_t numBlocks = static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2];
+    if (dense.size() != numBlocks)
+        throw InputError(source + ": block flag count does not match the grid size");
+    const size_t numTiles = t.tilePage.size();
+    // Per tile: 0 all outside, 1 all inside, 2 its own page (a surface block, an invalid flag or
+    // both signs); blocks past the grid's last block count as outside.
+    std::vector<uint8_t> kind(numTiles);
+    tbb::parallel_for(size_t(0), numTiles, [&](size_t tile) {
+        const int ti = static_cast<int>(tile % t.tiles[0]),
+                  tj = static_cast<int>(tile / t.tiles[0] % t.tiles[1]),
+                  tk = static_cast<int>(tile / (static_cast<size_t>(t.tiles[0]) * t.tiles[1]));
+        bool anyOut = false, anyIn = false, other = false;
+        forEachBlockOfTile(blocks, ti, tj, tk, [&](int bi, int bj, int bk) {
+            const uint8_t f = dense[(static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi];
+            anyOut |= f == kOutside;
+            anyIn |= f == kInside;
+            other |= f > kInside;
+        });
+        kind[tile] = (other || (anyOut && anyIn)) ? 2 : anyIn ? 1 : 0;
+    });
+    int32_t next = kFirstOwnPage;
+    for (size_t tile = 0; tile < numTiles; ++tile)
+        t.tilePage[tile] = kind[tile] == 2 ? next++ : kind[tile];
+    t.flags.resize(static_cast<size_t>(next) * kPageEntries, kOutside);
+    const std::vector<int> own = t.ownTiles();
+    std::atomic<bool> invalid{false};
+    tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
+        uint8_t* page = t.flags.data() + (p + kFirstOwnPage) * kPageEntries;
+        forEachBlockOfTile(
+            blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2], [&](int bi, int bj, int bk) {
+                const uint8_t f =
+                    dense[(static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi];
+                if (f > kSurface) invalid = true;
+                page[pageLocal(bi, bj, bk)] = f;
+            });
+    });
+    if (invalid) {
+        for (size_t b = 0; b < numBlocks; ++b)
+            if (dense[b] > kSurface)
+                throw InputError(source + ": block " + std::to_string(b) + " has an invalid flag " +
+                                 std::to_string(dense[b]) +
+                                 " (accepted: 0 outside, 1 inside, 2 surface)");
+    }
+    return t;
+}
+
+std::vector<uint8_t> BlockTable::dense() const {
+    std::vector<uint8_t> out(static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2]);
+    tbb::parallel_for(0, blocks[2], [&](int bk) {
+        for (int bj = 0; bj < blocks[1]; ++bj)
+            for (int bi = 0; bi < blocks[0]; ++bi)
+                out[(static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi] =
+                    flags[slot(bi, bj, bk)];
+    });
+    return out;
+}
+
+std::vector<int> BlockTable::ownTiles() const {
+    std::vector<int> out((pages() > kFirstOwnPage ? pages() - kFirstOwnPage : 0) * 3);
+    for (size_t tile = 0; tile < tilePage.size(); ++tile) {
+        const int32_t page = tilePage[tile];
+        if (page < kFirstOwnPage) continue;
+        int* o = out.data() + static_cast<size_t>(page - kFirstOwnPage) * 3;
+        o[0] = static_cast<int>(tile % tiles[0]);
+        o[1] = static_cast<int>(tile / tiles[0] % tiles[1]);
+        o[2] = static_cast<int>(tile / (static_cast<size_t>(tiles[0]) * tiles[1]));
+    }
+    return out;
+}
+
+}  // namespace sdft
