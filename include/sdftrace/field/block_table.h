@@ -65,8 +65,15 @@ struct BlockTable {
     // or a flag other than 0, 1, 2.
     static BlockTable fromDense(const int blocks[3], const std::vector<uint8_t>& flags,
                                 const std::string& source);
+    // Own pages whose blocks (those inside the grid) all have one flag, outside or inside, go back
+    // to the constant page; the others are renumbered in tile order.
+    void shareConstantPages();
     // The flat per-block flags again (x fastest): what .sdfg files store.
     std::vector<uint8_t> dense() const;
+    // Per slot: the index of a surface block's samples when the surface blocks are numbered in
+    // flat block order (z, y, x), -1 for the others; `count` the surface blocks (the vector is
+    // empty when they are more than 2^31 - 1).
+    std::vector<int32_t> surfaceIndices(size_t& count) const;
     // Tiles whose page is their own, in page order: (ti, tj, tk) per page from kFirstOwnPage.
     std::vector<int> ownTiles() const;
 };

@@ -60,21 +60,26 @@ openvdb::FloatGrid::Ptr toOpenVdbGrid(const GridView& v) {
                                       for (int i = 0; i <= s.cells[0]; ++i) put(acc, i, j, k);
                           });
     } else {
+        // The surface blocks, tile by tile: only tiles with a page of their own hold any.
         const int B = v.blockSize;
-        tbb::parallel_for(
-            tbb::blocked_range<int>(0, v.blocks[2]), [&](const tbb::blocked_range<int>& r) {
-                openvdb::tree::ValueAccessor<Tree> acc(trees.local());
-                for (int bk = r.begin(); bk != r.end(); ++bk)
-                    for (int bj = 0; bj < v.blocks[1]; ++bj)
-                        for (int bi = 0; bi < v.blocks[0]; ++bi) {
-                            if (v.blockData[v.blockSlot(bi, bj, bk)] < 0) continue;
-                            for (int k = bk * B; k <= std::min((bk + 1) * B, s.cells[2]); ++k)
-                                for (int j = bj * B; j <= std::min((bj + 1) * B, s.cells[1]); ++j)
-                                    for (int i = bi * B; i <= std::min((bi + 1) * B, s.cells[0]);
-                                         ++i)
-                                        put(acc, i, j, k);
-                        }
-            });
+        const size_t tiles = static_cast<size_t>(v.tiles[0]) * v.tiles[1] * v.tiles[2];
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles, 64), [&](const auto& r) {
+            openvdb::tree::ValueAccessor<Tree> acc(trees.local());
+            for (size_t tile = r.begin(); tile != r.end(); ++tile) {
+                if (v.tilePage[tile] < kFirstOwnPage) continue;
+                const int t[3] = {
+                    static_cast<int>(tile % v.tiles[0]),
+                    static_cast<int>(tile / v.tiles[0] % v.tiles[1]),
+                    static_cast<int>(tile / (static_cast<size_t>(v.tiles[0]) * v.tiles[1]))};
+                forEachBlockOfTile(v.blocks, t[0], t[1], t[2], [&](int bi, int bj, int bk) {
+                    if (v.blockData[v.blockSlot(bi, bj, bk)] < 0) return;
+                    for (int k = bk * B; k <= std::min((bk + 1) * B, s.cells[2]); ++k)
+                        for (int j = bj * B; j <= std::min((bj + 1) * B, s.cells[1]); ++j)
+                            for (int i = bi * B; i <= std::min((bi + 1) * B, s.cells[0]); ++i)
+                                put(acc, i, j, k);
+                });
+            }
+        });
     }
     for (Tree& t : trees) out->tree().merge(t, openvdb::MERGE_ACTIVE_STATES);
     openvdb::tools::signedFloodFill(out->tree());

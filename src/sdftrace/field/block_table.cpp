@@ -6,6 +6,7 @@
 #include <atomic>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/field/grid.h"
 
 namespace sdft {
@@ -82,6 +83,44 @@ BlockTable BlockTable::fromDense(const int blocks[3], const std::vector<uint8_t>
     return t;
 }
 
+void BlockTable::shareConstantPages() {
+    const std::vector<int> own = ownTiles();
+    const size_t n = own.size() / 3;
+    std::vector<int32_t> becomes(n);  // kOutsidePage, kInsidePage or kFirstOwnPage (kept)
+    tbb::parallel_for(size_t(0), n, [&](size_t p) {
+        const uint8_t* page = flags.data() + (p + kFirstOwnPage) * kPageEntries;
+        bool anyOut = false, anyIn = false, other = false;
+        forEachBlockOfTile(blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
+                           [&](int bi, int bj, int bk) {
+                               const uint8_t f = page[pageLocal(bi, bj, bk)];
+                               anyOut |= f == kOutside;
+                               anyIn |= f == kInside;
+                               other |= f > kInside;
+                           });
+        becomes[p] = (other || (anyOut && anyIn)) ? kFirstOwnPage
+                     : anyIn                      ? kInsidePage
+                                                  : kOutsidePage;
+    });
+    int32_t next = kFirstOwnPage;
+    for (size_t p = 0; p < n; ++p) {
+        const size_t tile =
+            (static_cast<size_t>(own[3 * p + 2]) * tiles[1] + own[3 * p + 1]) * tiles[0] +
+            own[3 * p];
+        if (becomes[p] != kFirstOwnPage) {
+            tilePage[tile] = becomes[p];
+            continue;
+        }
+        // Pages only move down, in order: a copy never overwrites a page still to be read.
+        if (static_cast<size_t>(next) != p + kFirstOwnPage)
+            std::copy_n(
+                flags.begin() + static_cast<std::ptrdiff_t>((p + kFirstOwnPage) * kPageEntries),
+                kPageEntries, flags.begin() + static_cast<std::ptrdiff_t>(next) * kPageEntries);
+        tilePage[tile] = next++;
+    }
+    flags.resize(static_cast<size_t>(next) * kPageEntries);
+    flags.shrink_to_fit();
+}
+
 std::vector<uint8_t> BlockTable::dense() const {
     std::vector<uint8_t> out(static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2]);
     tbb::parallel_for(0, blocks[2], [&](int bk) {
@@ -91,6 +130,48 @@ std::vector<uint8_t> BlockTable::dense() const {
                     flags[slot(bi, bj, bk)];
     });
     return out;
+}
+
+std::vector<int32_t> BlockTable::surfaceIndices(size_t& count) const {
+    // Per row of blocks, the own tiles of its row of tiles (in page order, which is tile order)
+    // left to right; rows counted per z slab in parallel, then numbered from each slab's start.
+    const std::vector<int> own = ownTiles();
+    const size_t tileRows = static_cast<size_t>(tiles[1]) * tiles[2];
+    std::vector<size_t> rowStart(tileRows + 1, 0);  // own pages before each row of tiles
+    for (size_t p = 0; p * 3 < own.size(); ++p)
+        ++rowStart[static_cast<size_t>(own[3 * p + 2]) * tiles[1] + own[3 * p + 1] + 1];
+    for (size_t r = 0; r < tileRows; ++r) rowStart[r + 1] += rowStart[r];
+    const int nz = blocks[2], ny = blocks[1], nx = blocks[0];
+    auto forSlab = [&](int bk, auto&& visit) {
+        for (int bj = 0; bj < ny; ++bj) {
+            const size_t row =
+                static_cast<size_t>(bk >> kTileShift) * tiles[1] + (bj >> kTileShift);
+            for (size_t p = rowStart[row]; p < rowStart[row + 1]; ++p) {
+                const int ti = own[3 * p];
+                const size_t page = (p + kFirstOwnPage) * kPageEntries;
+                for (int bi = ti * kTileBlocks; bi < std::min(nx, (ti + 1) * kTileBlocks); ++bi) {
+                    const size_t slot = page + pageLocal(bi, bj, bk);
+                    if (flags[slot] == kSurface) visit(slot);
+                }
+            }
+        }
+    };
+    std::vector<size_t> slabStart(static_cast<size_t>(nz) + 1, 0);
+    tbb::parallel_for(0, nz, [&](int bk) {
+        size_t n = 0;
+        forSlab(bk, [&](size_t) { ++n; });
+        slabStart[static_cast<size_t>(bk) + 1] = n;
+    });
+    for (int bk = 0; bk < nz; ++bk) slabStart[bk + 1] += slabStart[bk];
+    count = slabStart[static_cast<size_t>(nz)];
+    if (count > static_cast<size_t>(INT32_MAX)) return {};
+    std::vector<int32_t> index;
+    assignHuge(index, flags.size(), int32_t{-1});
+    tbb::parallel_for(0, nz, [&](int bk) {
+        auto next = static_cast<int32_t>(slabStart[static_cast<size_t>(bk)]);
+        forSlab(bk, [&](size_t slot) { index[slot] = next++; });
+    });
+    return index;
 }
 
 std::vector<int> BlockTable::ownTiles() const {

@@ -119,59 +119,25 @@ Grid Grid::sparseFromTable(const GridShape& shape, int B, float background, Bloc
         }
     }
     SDFT_CHECK(table.flags.size() == static_cast<size_t>(nextPage) * kPageEntries);
-    g.m_ownTiles = table.ownTiles();
-    g.m_tilePage = std::move(table.tilePage);
-    g.m_flags = std::move(table.flags);
-    for (size_t slot = 0; slot < g.m_flags.size(); ++slot)
-        if (g.m_flags[slot] > static_cast<uint8_t>(BlockFlag::Surface))
+    for (size_t slot = 0; slot < table.flags.size(); ++slot)
+        if (table.flags[slot] > static_cast<uint8_t>(BlockFlag::Surface))
             throw InputError(source + ": a block has an invalid flag " +
-                             std::to_string(g.m_flags[slot]) +
+                             std::to_string(table.flags[slot]) +
                              " (accepted: 0 outside, 1 inside, 2 surface)");
-    // The surface blocks' sample indices in flat block order (z, y, x): per row of blocks, the
-    // own tiles of its row of tiles (in page order, which is tile order) left to right.
     const size_t perBlock = static_cast<size_t>(B + 1) * (B + 1) * (B + 1);
-    assignHuge(g.m_blockData, g.m_flags.size(), int32_t{-1});
-    const size_t tileRows = static_cast<size_t>(g.m_tiles[1]) * g.m_tiles[2];
-    std::vector<size_t> rowStart(tileRows + 1, 0);  // own pages before each row of tiles
-    for (size_t p = 0; p * 3 < g.m_ownTiles.size(); ++p)
-        ++rowStart[static_cast<size_t>(g.m_ownTiles[3 * p + 2]) * g.m_tiles[1] +
-                   g.m_ownTiles[3 * p + 1] + 1];
-    for (size_t r = 0; r < tileRows; ++r) rowStart[r + 1] += rowStart[r];
-    const int nz = g.m_blocks[2], ny = g.m_blocks[1], nx = g.m_blocks[0];
-    auto forSlab = [&](int bk, auto&& visit) {
-        for (int bj = 0; bj < ny; ++bj) {
-            const size_t row =
-                static_cast<size_t>(bk >> kTileShift) * g.m_tiles[1] + (bj >> kTileShift);
-            for (size_t p = rowStart[row]; p < rowStart[row + 1]; ++p) {
-                const int ti = g.m_ownTiles[3 * p];
-                const size_t page = (p + kFirstOwnPage) * kPageEntries;
-                for (int bi = ti * kTileBlocks; bi < std::min(nx, (ti + 1) * kTileBlocks); ++bi) {
-                    const size_t slot = page + pageLocal(bi, bj, bk);
-                    if (g.m_flags[slot] == static_cast<uint8_t>(BlockFlag::Surface)) visit(slot);
-                }
-            }
-        }
-    };
-    std::vector<size_t> slabStart(static_cast<size_t>(nz) + 1, 0);
-    tbb::parallel_for(0, nz, [&](int bk) {
-        size_t n = 0;
-        forSlab(bk, [&](size_t) { ++n; });
-        slabStart[static_cast<size_t>(bk) + 1] = n;
-    });
-    for (int bk = 0; bk < nz; ++bk) slabStart[bk + 1] += slabStart[bk];
-    const size_t surface = slabStart[static_cast<size_t>(nz)];
+    size_t surface = 0;
+    g.m_blockData = table.surfaceIndices(surface);
     if (surface > static_cast<size_t>(INT32_MAX))
         throw InputError(source + ": " + std::to_string(surface) +
                          " surface blocks (at most 2^31 - 1 are accepted)");
+    g.m_ownTiles = table.ownTiles();
+    g.m_tilePage = std::move(table.tilePage);
+    g.m_flags = std::move(table.flags);
     if (blockSamples.size() != surface * perBlock) {
         throw InputError(source + ": " + std::to_string(surface) + " surface blocks need " +
                          std::to_string(surface * perBlock) + " samples, the file has " +
                          std::to_string(blockSamples.size()));
     }
-    tbb::parallel_for(0, nz, [&](int bk) {
-        auto next = static_cast<int32_t>(slabStart[static_cast<size_t>(bk)]);
-        forSlab(bk, [&](size_t slot) { g.m_blockData[slot] = next++; });
-    });
     g.m_blockSamples = std::move(blockSamples);
     g.computeCellMasksAndLipschitz();
     return g;

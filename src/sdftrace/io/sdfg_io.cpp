@@ -223,6 +223,14 @@ void saveCompressed(const Grid& grid, const std::string& path, int level) {
 }  // namespace
 
 void saveSdfg(const Grid& grid, const std::string& path, const SdfgWriteOptions& options) {
+    // Versions 1-3 store one flag per block of the bounding box (the grid keeps them paged, see
+    // block_table.h): checked before that array is made.
+    if (grid.kind() == GridKind::Sparse) {
+        const GridView v = grid.view();
+        checkMemoryBudget(static_cast<double>(v.blocks[0]) * v.blocks[1] * v.blocks[2], path,
+                          "the flat block flags the .sdfg format stores",
+                          "save the grid as .vdb, which stores its tiles sparsely");
+    }
     if (options.compress)
         saveCompressed(grid, path, options.level);
     else

@@ -83,29 +83,36 @@ class TreeToGrid {
         const float h = m_shape.voxelSize;
         m_bandVoxels = std::max(o.minBandVoxels, std::fabs(m_t.background) / h * 0.999f);
         m_band = m_bandVoxels * h;
-        for (int a = 0; a < 3; ++a) m_blocks[a] = (m_shape.cells[a] + m_B - 1) / m_B;
-        m_numBlocks = static_cast<size_t>(m_blocks[0]) * m_blocks[1] * m_blocks[2];
+        for (int a = 0; a < 3; ++a) {
+            m_blocks[a] = (m_shape.cells[a] + m_B - 1) / m_B;
+            m_tiles[a] = (m_blocks[a] + kTileBlocks - 1) >> kTileShift;
+        }
+        m_numTiles = static_cast<size_t>(m_tiles[0]) * m_tiles[1] * m_tiles[2];
+        // The tile table (page, skip distance, kind while building) and the surface blocks.
         checkMemoryBudget(
-            static_cast<double>(m_numBlocks) * 5 +
+            static_cast<double>(m_numTiles) * 6 +
                 static_cast<double>(m_t.leaves.size()) * 8 * m_V * m_V * m_V * sizeof(float),
-            path, "the sparse grid's block tables and surface blocks",
+            path, "the sparse grid's tile table and surface blocks",
             "resample the level set coarser");
-        indexRegions();
+        indexUnits();
     }
 
     Grid build() {
-        std::vector<uint8_t> flags(m_numBlocks);
-        std::vector<size_t> slabSurface(m_blocks[2]);
         computeLeafBits();
-        const size_t surface = flagBlocks(flags, slabSurface);
-
-        checkMemoryBudget(
-            m_numBlocks * 5.0 + m_V * m_V * m_V * sizeof(float) * static_cast<double>(surface),
-            m_path, "the samples of " + std::to_string(surface) + " blocks near its surface",
-            "resample the level set coarser");
-        std::vector<float> samples = sampleSurfaceBlocks(flags, slabSurface, surface);
-        return Grid::sparseFromBuffers(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
-                                       std::move(flags), std::move(samples), m_path);
+        BlockTable table = buildTable();
+        size_t surface = 0;
+        const std::vector<int32_t> index = table.surfaceIndices(surface);
+        checkMemoryBudget(static_cast<double>(table.flags.size()) * 6 +
+                              m_V * m_V * m_V * sizeof(float) * static_cast<double>(surface),
+                          m_path,
+                          "the samples of " + std::to_string(surface) + " blocks near its surface",
+                          "resample the level set coarser");
+        if (index.empty() && surface > 0)
+            throw InputError(m_path + ": " + std::to_string(surface) +
+                             " surface blocks (at most 2^31 - 1 are accepted)");
+        std::vector<float> samples = sampleSurfaceBlocks(table, index, surface);
+        return Grid::sparseFromTable(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
+                                     std::move(table), std::move(samples), m_path);
     }
 
   private:
@@ -124,113 +131,137 @@ class TreeToGrid {
         m_gridName = g.name;
     }
 
-    // The active region in 8^3-voxel regions on the VDB leaf grid: per region its leaf (or -1)
-    // and otherwise its tile value, so that a sample is two array reads, not a tree descent.
-    void indexRegions() {
+    // The active region in units of a lower internal node (128^3 voxels): per unit its lower node
+    // (or -1) and otherwise its constant value (an upper node's tile, a root tile or the
+    // background), so that an 8^3 region is found by two array reads, not a tree descent, and
+    // the index follows the tree's nodes, not the bounding box's voxels.
+    void indexUnits() {
         for (int a = 0; a < 3; ++a) {
-            m_r0[a] = m_lo[a] >> 3;
-            m_rn[a] = (m_hi[a] >> 3) - m_r0[a] + 1;
+            m_u0[a] = m_lo[a] >> kUnitLog2;
+            m_un[a] = (m_hi[a] >> kUnitLog2) - m_u0[a] + 1;
         }
-        const size_t numRegions = static_cast<size_t>(m_rn[0]) * m_rn[1] * m_rn[2];
-        checkMemoryBudget(
-            static_cast<double>(numRegions) * 8, m_path,
-            "an index of the active region's " + std::to_string(numRegions) + " leaf-sized regions",
-            "resample the level set coarser");
-        m_regionLeaf.assign(numRegions, -1);
-        m_regionValue.resize(numRegions);
-        tbb::parallel_for(0, m_rn[2], [&](int rz) {
-            for (int ry = 0; ry < m_rn[1]; ++ry)
-                for (int rx = 0; rx < m_rn[0]; ++rx) {
-                    const int32_t x = (m_r0[0] + rx) * 8, y = (m_r0[1] + ry) * 8,
-                                  z = (m_r0[2] + rz) * 8;
-                    m_regionValue[regionOf(x, y, z)] = m_t.value(x, y, z);
-                }
-        });
-        for (size_t i = 0; i < m_t.leaves.size(); ++i) {
-            const auto& o = m_t.leaves[i].origin;
+        const size_t numUnits = static_cast<size_t>(m_un[0]) * m_un[1] * m_un[2];
+        m_unitLower.assign(numUnits, -1);
+        m_unitValue.assign(numUnits, 0.0f);
+        for (size_t i = 0; i < m_t.lower.size(); ++i) {
+            const auto& o = m_t.lower[i].origin;
             bool inside = true;
-            for (int a = 0; a < 3; ++a)
-                inside = inside && o[a] >= m_r0[a] * 8 && o[a] < (m_r0[a] + m_rn[a]) * 8;
-            if (inside) m_regionLeaf[regionOf(o[0], o[1], o[2])] = static_cast<int32_t>(i);
+            for (int a = 0; a < 3; ++a) {
+                const int32_t u = (o[a] >> kUnitLog2) - m_u0[a];
+                inside = inside && u >= 0 && u < m_un[a];
+            }
+            if (inside) m_unitLower[unitOf(o[0], o[1], o[2])] = static_cast<int32_t>(i);
         }
-    }
-
-    size_t regionOf(int32_t x, int32_t y, int32_t z) const {
-        return (static_cast<size_t>((z >> 3) - m_r0[2]) * m_rn[1] + ((y >> 3) - m_r0[1])) *
-                   m_rn[0] +
-               ((x >> 3) - m_r0[0]);
-    }
-
-    // Vertex (i, j, k), clamped to the grid as GridView::vertex clamps, is voxel lo + (i, j, k).
-    std::array<int32_t, 3> voxel(int i, int j, int k) const {
-        return {m_lo[0] + std::min(i, m_shape.cells[0]), m_lo[1] + std::min(j, m_shape.cells[1]),
-                m_lo[2] + std::min(k, m_shape.cells[2])};
-    }
-
-    float value(int i, int j, int k) const {
-        const auto [x, y, z] = voxel(i, j, k);
-        const size_t r = regionOf(x, y, z);
-        const int32_t leaf = m_regionLeaf[r];
-        return leaf < 0 ? m_regionValue[r]
-                        : m_t.leaves[leaf].values[((x & 7) << 6) | ((y & 7) << 3) | (z & 7)];
-    }
-
-    size_t blockIndex(int bi, int bj, int bk) const {
-        return (static_cast<size_t>(bk) * m_blocks[1] + bj) * m_blocks[0] + bi;
-    }
-
-    // Pass 1: every block's flag. Blocks whose corners are far from a leaf, far from the surface
-    // and of one sign take it from there; the others (candidates) are classified by their
-    // samples' sign and band bits (classify), without gathering them. Returns the number of
-    // surface blocks, per z-slab in `slabSurface`. Tiles near zero or a band wider than the level
-    // set's can make far more surface blocks than the leaves suggest, so the caller checks their
-    // samples against the budget before any is gathered.
-    size_t flagBlocks(std::vector<uint8_t>& flags, std::vector<size_t>& slabSurface) const {
-        // Block corners are shared by 8 blocks: each lattice vertex (a multiple of B) looked up
-        // once, as bits: 1 its region holds a leaf, 2 negative, 4 within the band.
-        const int lx = m_blocks[0] + 1, ly = m_blocks[1] + 1, lz = m_blocks[2] + 1;
-        std::vector<uint8_t> corner(static_cast<size_t>(lx) * ly * lz);
-        tbb::parallel_for(0, lz, [&](int ck) {
-            for (int cj = 0; cj < ly; ++cj)
-                for (int ci = 0; ci < lx; ++ci) {
-                    const int i = ci * m_B, j = cj * m_B, k = ck * m_B;
-                    const auto [x, y, z] = voxel(i, j, k);
-                    const float v = value(i, j, k);
-                    corner[(static_cast<size_t>(ck) * ly + cj) * lx + ci] =
-                        static_cast<uint8_t>((m_regionLeaf[regionOf(x, y, z)] >= 0 ? 1 : 0) |
-                                             (v < 0 ? 2 : 0) | (std::fabs(v) < m_band ? 4 : 0));
-                }
+        tbb::parallel_for(size_t(0), numUnits, [&](size_t u) {
+            if (m_unitLower[u] >= 0) return;
+            const int32_t x = (m_u0[0] + static_cast<int32_t>(u % m_un[0])) << kUnitLog2;
+            const int32_t y = (m_u0[1] + static_cast<int32_t>(u / m_un[0] % m_un[1])) << kUnitLog2;
+            const int32_t z =
+                (m_u0[2] + static_cast<int32_t>(u / (static_cast<size_t>(m_un[0]) * m_un[1])))
+                << kUnitLog2;
+            m_unitValue[u] = m_t.value(x, y, z);
         });
-        std::atomic<size_t> surface{0};
-        tbb::parallel_for(0, m_blocks[2], [&](int bk) {
-            size_t count = 0;
-            for (int bj = 0; bj < m_blocks[1]; ++bj)
-                for (int bi = 0; bi < m_blocks[0]; ++bi) {
-                    uint8_t any = 0, all = 0xff;
-                    for (int c = 0; c < 8; ++c) {
-                        const uint8_t bits =
-                            corner[(static_cast<size_t>(bk + (c >> 2)) * ly + bj + (c >> 1 & 1)) *
-                                       lx +
-                                   bi + (c & 1)];
-                        any |= bits;
-                        all &= bits;
-                    }
-                    const bool touches = any & 1, anyNeg = any & 2, anyPos = !(all & 2),
-                               near = any & 4;
-                    uint8_t& flag = flags[blockIndex(bi, bj, bk)];
-                    if (touches || near || (anyNeg && anyPos)) {
-                        const int b[3] = {bi, bj, bk};
-                        flag = classify(b);
-                        count += flag == static_cast<uint8_t>(BlockFlag::Surface);
-                    } else {
-                        flag =
-                            static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
-                    }
-                }
-            slabSurface[bk] = count;
-            surface += count;
+    }
+
+    size_t unitOf(int32_t x, int32_t y, int32_t z) const {
+        return (static_cast<size_t>((z >> kUnitLog2) - m_u0[2]) * m_un[1] +
+                ((y >> kUnitLog2) - m_u0[1])) *
+                   m_un[0] +
+               ((x >> kUnitLog2) - m_u0[0]);
+    }
+
+    // The 8^3 region holding voxel (x, y, z) of the active region: its leaf, or -1 and its
+    // constant value.
+    int32_t regionAt(int32_t x, int32_t y, int32_t z, float& value) const {
+        const size_t u = unitOf(x, y, z);
+        const int32_t n = m_unitLower[u];
+        if (n < 0) {
+            value = m_unitValue[u];
+            return -1;
+        }
+        const vdb::Internal& lower = m_t.lower[static_cast<size_t>(n)];
+        const int slot = (((x >> 3) & 15) << 8) | (((y >> 3) & 15) << 4) | ((z >> 3) & 15);
+        const int32_t leaf = lower.children[static_cast<size_t>(slot)];
+        if (leaf < 0) value = lower.values[static_cast<size_t>(slot)];
+        return leaf;
+    }
+
+    // Pass 1: the two-level flag table. A tile of 8^3 blocks whose vertices read no leaf and no
+    // value within the band, all of one sign, is constant (pages 0 and 1); every block of the
+    // other tiles is classified by its samples' sign and band bits (classify), without gathering
+    // them. Pages whose blocks all come out of one flag are then shared too, so the table is the
+    // one BlockTable::fromDense makes of the same flags. Nothing is sized by the bounding box
+    // but the tile table.
+    BlockTable buildTable() const {
+        BlockTable t = BlockTable::empty(m_blocks);
+        std::vector<uint8_t> kind(m_numTiles);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, m_numTiles, 256), [&](const auto& range) {
+            for (size_t tile = range.begin(); tile != range.end(); ++tile) {
+                const int c[3] = {
+                    static_cast<int>(tile % m_tiles[0]),
+                    static_cast<int>(tile / m_tiles[0] % m_tiles[1]),
+                    static_cast<int>(tile / (static_cast<size_t>(m_tiles[0]) * m_tiles[1]))};
+                kind[tile] = tileKind(c);
+            }
         });
-        return surface.load();
+        int32_t next = kFirstOwnPage;
+        for (size_t tile = 0; tile < m_numTiles; ++tile)
+            t.tilePage[tile] = kind[tile] == 2 ? next++ : kind[tile];
+        t.flags.resize(static_cast<size_t>(next) * kPageEntries,
+                       static_cast<uint8_t>(BlockFlag::Outside));
+        const std::vector<int> own = t.ownTiles();
+        tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
+            uint8_t* page = t.flags.data() + (p + kFirstOwnPage) * kPageEntries;
+            forEachBlockOfTile(m_blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
+                               [&](int bi, int bj, int bk) {
+                                   const int b[3] = {bi, bj, bk};
+                                   page[pageLocal(bi, bj, bk)] = classify(b);
+                               });
+        });
+        t.shareConstantPages();
+        return t;
+    }
+
+    // 0 (outside) or 1 (inside) for a tile whose blocks all take that flag without a look at
+    // their samples, else 2. Its vertices span at most two units per axis; in a unit without a
+    // lower node the value is constant, in one with a node the 8^3 regions are its slots.
+    uint8_t tileKind(const int tile[3]) const {
+        int32_t v0[3], v1[3];
+        for (int a = 0; a < 3; ++a) {
+            const int span = kTileBlocks * m_B;
+            v0[a] = m_lo[a] + std::min(tile[a] * span, m_shape.cells[a]);
+            v1[a] = m_lo[a] + std::min((tile[a] + 1) * span, m_shape.cells[a]);
+        }
+        bool anyNeg = false, anyPos = false;
+        auto take = [&](float v) {
+            anyNeg |= v < 0;
+            anyPos |= !(v < 0);
+            return std::fabs(v) < m_band;
+        };
+        for (int32_t uz = v0[2] >> kUnitLog2; uz <= v1[2] >> kUnitLog2; ++uz)
+            for (int32_t uy = v0[1] >> kUnitLog2; uy <= v1[1] >> kUnitLog2; ++uy)
+                for (int32_t ux = v0[0] >> kUnitLog2; ux <= v1[0] >> kUnitLog2; ++ux) {
+                    const int32_t o[3] = {ux << kUnitLog2, uy << kUnitLog2, uz << kUnitLog2};
+                    const size_t u = unitOf(o[0], o[1], o[2]);
+                    const int32_t n = m_unitLower[u];
+                    if (n < 0) {
+                        if (take(m_unitValue[u])) return 2;
+                        continue;
+                    }
+                    const vdb::Internal& lower = m_t.lower[static_cast<size_t>(n)];
+                    int s0[3], s1[3];  // the slots the box covers in this node
+                    for (int a = 0; a < 3; ++a) {
+                        s0[a] = (std::max(v0[a], o[a]) - o[a]) >> 3;
+                        s1[a] = (std::min(v1[a], o[a] + (1 << kUnitLog2) - 1) - o[a]) >> 3;
+                    }
+                    for (int sx = s0[0]; sx <= s1[0]; ++sx)
+                        for (int sy = s0[1]; sy <= s1[1]; ++sy)
+                            for (int sz = s0[2]; sz <= s1[2]; ++sz) {
+                                const size_t slot = static_cast<size_t>(sx << 8 | sy << 4 | sz);
+                                if (lower.children[slot] >= 0 || take(lower.values[slot])) return 2;
+                            }
+                }
+        return anyNeg && anyPos ? 2 : anyNeg ? 1 : 0;
     }
 
     // Per leaf, one bit per voxel (word x, bit y << 3 | z, as the leaf stores them): negative,
@@ -292,11 +323,10 @@ class TreeToGrid {
         for (int c = 0; c < 8; ++c) {
             const int rx = c & 1, ry = c >> 1 & 1, rz = c >> 2;
             if (lo[0][rx] > hi[0][rx] || lo[1][ry] > hi[1][ry] || lo[2][rz] > hi[2][rz]) continue;
-            const size_t r =
-                regionOf((first[0] + rx) * 8, (first[1] + ry) * 8, (first[2] + rz) * 8);
-            const int32_t leaf = m_regionLeaf[r];
+            float v = 0;
+            const int32_t leaf =
+                regionAt((first[0] + rx) * 8, (first[1] + ry) * 8, (first[2] + rz) * 8, v);
             if (leaf < 0) {
-                const float v = m_regionValue[r];
                 anyNeg |= v < 0;
                 anyPos |= !(v < 0);
                 near |= std::fabs(v) < m_band;
@@ -358,18 +388,14 @@ class TreeToGrid {
             const int32_t x = (first[0] + (c & 1)) * 8, y = (first[1] + (c >> 1 & 1)) * 8,
                           z = (first[2] + (c >> 2)) * 8;
             // Regions past the active region are never read (the vertices clamp).
-            if ((x >> 3) - m_r0[0] >= m_rn[0] || (y >> 3) - m_r0[1] >= m_rn[1] ||
-                (z >> 3) - m_r0[2] >= m_rn[2]) {
+            if (x > m_hi[0] || y > m_hi[1] || z > m_hi[2]) {
                 source[c] = nullptr;
                 continue;
             }
-            const size_t r = regionOf(x, y, z);
-            const int32_t leaf = m_regionLeaf[r];
-            if (leaf >= 0) {
-                source[c] = m_t.leaves[leaf].values.data();
-                continue;
-            }
-            source[c] = scratch.region(m_regionValue[r]);
+            float v = 0;
+            const int32_t leaf = regionAt(x, y, z, v);
+            source[c] =
+                leaf >= 0 ? m_t.leaves[static_cast<size_t>(leaf)].values.data() : scratch.region(v);
         }
         // x splits between the two regions at most once per row, at the same place in every row.
         int split = 0;
@@ -387,34 +413,32 @@ class TreeToGrid {
             }
     }
 
-    // Pass 2: the surface blocks' samples, in block order, clamped to the band; each z-slab of
-    // blocks writes from where its first surface block goes.
-    std::vector<float> sampleSurfaceBlocks(const std::vector<uint8_t>& flags,
-                                           const std::vector<size_t>& slabSurface,
+    // Pass 2: the surface blocks' samples, clamped to the band, each where its index (flat block
+    // order) puts it; own pages in parallel.
+    std::vector<float> sampleSurfaceBlocks(const BlockTable& table,
+                                           const std::vector<int32_t>& index,
                                            size_t surface) const {
         const int V = m_V;
         const size_t perBlock = static_cast<size_t>(V) * V * V;
-        std::vector<size_t> slabStart(m_blocks[2] + 1, 0);
-        for (int bk = 0; bk < m_blocks[2]; ++bk)
-            slabStart[bk + 1] = slabStart[bk] + slabSurface[bk];
         std::vector<float> samples;
         samples.reserve(surface * perBlock);
         adviseHugePages(samples.data(), surface * perBlock * sizeof(float));
         samples.resize(surface * perBlock);
         const float band = m_band;
-        tbb::parallel_for(0, m_blocks[2], [&](int bk) {
-            float* block = samples.data() + slabStart[bk] * perBlock;
+        const std::vector<int> own = table.ownTiles();
+        tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
             GatherScratch scratch;
-            for (int bj = 0; bj < m_blocks[1]; ++bj)
-                for (int bi = 0; bi < m_blocks[0]; ++bi) {
-                    if (flags[blockIndex(bi, bj, bk)] != static_cast<uint8_t>(BlockFlag::Surface))
-                        continue;
+            const size_t base = (p + kFirstOwnPage) * kPageEntries;
+            forEachBlockOfTile(
+                m_blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2], [&](int bi, int bj, int bk) {
+                    const int32_t at = index[base + pageLocal(bi, bj, bk)];
+                    if (at < 0) return;
+                    float* block = samples.data() + static_cast<size_t>(at) * perBlock;
                     const int b[3] = {bi, bj, bk};
                     gatherBlock(b, block, scratch);
                     for (size_t n = 0; n < perBlock; ++n)
                         block[n] = std::min(std::max(block[n], -band), band);
-                    block += perBlock;
-                }
+                });
         });
         return samples;
     }
@@ -425,11 +449,12 @@ class TreeToGrid {
     std::array<int32_t, 3> m_lo{}, m_hi{};
     GridShape m_shape;
     float m_bandVoxels = 0, m_band = 0;
-    int m_blocks[3] = {0, 0, 0};
-    size_t m_numBlocks = 0;
-    int32_t m_r0[3] = {0, 0, 0}, m_rn[3] = {0, 0, 0};
-    std::vector<int32_t> m_regionLeaf;
-    std::vector<float> m_regionValue;
+    static constexpr int kUnitLog2 = 7;  // a lower internal node: 128 voxels
+    int m_blocks[3] = {0, 0, 0}, m_tiles[3] = {0, 0, 0};
+    size_t m_numTiles = 0;
+    int32_t m_u0[3] = {0, 0, 0}, m_un[3] = {0, 0, 0};
+    std::vector<int32_t> m_unitLower;
+    std::vector<float> m_unitValue;
     std::vector<LeafBits> m_leafBits;
     std::string m_gridName;
 };

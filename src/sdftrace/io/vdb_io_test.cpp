@@ -13,6 +13,7 @@
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/io/grid_file.h"
+#include "sdftrace/trace/grid_tracer.h"
 #include "test_files.h"
 #include "vdb_reader.h"
 
@@ -80,6 +81,62 @@ TEST(Vdb, ImportsALevelSetMadeByOpenVdb) {
     EXPECT_GT(in, 0u);
     EXPECT_GT(surf, 0u);
     std::filesystem::remove(path);
+}
+
+// A level set 8192 voxels across with a small surface (two spheres of radius 12 voxels at
+// opposite corners) imports: the importer reads leaves and tiles, the grid pages its tables by
+// tiles (block_table.h), so memory follows the surface, never the 8192^3 box. Every voxel the
+// level set holds in its band comes back exactly, and rays from afar find both spheres.
+TEST(Vdb, ImportsALevelSet8192VoxelsAcross) {
+    openvdb::initialize();
+    const openvdb::Vec3f centres[2] = {{20, 20, 20}, {8170, 8170, 8170}};
+    auto grid =
+        openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(12.0f, centres[0], 1.0f, 3.0f);
+    auto second =
+        openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(12.0f, centres[1], 1.0f, 3.0f);
+    grid->tree().merge(second->tree());
+    const std::string path = tempPath("far-apart.vdb");
+    openvdb::io::File(path).write({grid});
+    const Grid g = loadVdb(path);
+    std::filesystem::remove(path);
+    const GridView v = g.view();
+    for (int a = 0; a < 3; ++a) EXPECT_GE(v.shape.cells[a], 8170);
+    // 256^3 tiles of 5 bytes and a few dozen pages: well under 200 MiB, where flat block tables
+    // of 2048^3 blocks took 43 GiB.
+    EXPECT_LT(g.memoryBytes(), size_t{200} << 20);
+    size_t in, out, surf;
+    g.blockCounts(in, out, surf);
+    EXPECT_GT(surf, 0u);
+    EXPECT_GT(in, 0u);
+    EXPECT_EQ(in + out + surf, static_cast<size_t>(v.blocks[0]) * v.blocks[1] * v.blocks[2]);
+    const float band = g.background() + v.shape.voxelSize;
+    auto acc = grid->getConstAccessor();
+    int compared = 0;
+    for (const auto& c : centres)
+        for (int z = -16; z <= 16; ++z)
+            for (int y = -16; y <= 16; ++y)
+                for (int x = -16; x <= 16; ++x) {
+                    const openvdb::Coord ijk(static_cast<int>(c.x()) + x,
+                                             static_cast<int>(c.y()) + y,
+                                             static_cast<int>(c.z()) + z);
+                    const float expected = acc.getValue(ijk);
+                    if (!(std::fabs(expected) < band)) continue;
+                    const Vec3 p(static_cast<float>(ijk.x()), static_cast<float>(ijk.y()),
+                                 static_cast<float>(ijk.z()));
+                    ASSERT_EQ(v.interpolate(p), expected) << ijk;
+                    ++compared;
+                }
+    EXPECT_GT(compared, 10000);
+    testing::Rng rng(3);
+    for (int n = 0; n < 200; ++n) {
+        const Vec3 centre(centres[n % 2].x(), centres[n % 2].y(), centres[n % 2].z());
+        const Vec3 from = Vec3(4096.0f) + rng.direction() * 8000.0f;
+        const Vec3 to = centre + rng.inCube(6.0f);
+        const GridTraceResult r =
+            traceGridRay(v, Ray{from, normalize(to - from)}, 0, 1e6f, GridTraceOptions{});
+        ASSERT_TRUE(r.hit) << n;
+        EXPECT_NEAR(length(Ray{from, normalize(to - from)}.at(r.t) - centre), 12.0f, 0.5f);
+    }
 }
 
 TEST(Vdb, RejectsUnusableFiles) {
