@@ -250,14 +250,14 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                                                        float out[4][4][4]) const {
     const int n[3] = {shape.cells[0], shape.cells[1], shape.cells[2]};
     const int start[3] = {i - 1, j - 1, k - 1};
-    // Per axis and offset: the clamped vertex's part of the flat index (dense), or of its tile's
-    // index, of its block's index in the tile's page and of its index inside that block's
-    // (B+1)^3 samples (sparse; the block of the cell below the vertex, as in vertex()).
-    size_t tilePart[3][4], localPart[3][4], samplePart[3][4];
+    // Per axis and offset: the clamped vertex's part of the flat index (dense), or its tile's
+    // coordinate, its block's part of the index in the tile's page and its part of the index
+    // inside that block's (B+1)^3 samples (sparse; the block of the cell below the vertex, as in
+    // vertex()).
+    int tileOf[3][4];
+    size_t localPart[3][4], samplePart[3][4];
     const int sh = blockShift();
     const size_t sy = static_cast<size_t>(blockSize) + 1, sz = sy * sy, perBlock = sz * sy;
-    const size_t tileStride[3] = {1, static_cast<size_t>(tiles[0]),
-                                  static_cast<size_t>(tiles[0]) * tiles[1]};
     const size_t vertexStride[3] = {1, static_cast<size_t>(n[0]) + 1,
                                     (static_cast<size_t>(n[0]) + 1) * (n[1] + 1)};
     const size_t localStride[3] = {1, sy, sz};
@@ -270,7 +270,7 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
             }
             const int c = v < n[a] ? v : n[a] - 1;
             const int b = c >> sh;
-            tilePart[a][d] = static_cast<size_t>(b >> kTileShift) * tileStride[a];
+            tileOf[a][d] = b >> kTileShift;
             localPart[a][d] = static_cast<size_t>(b & (kTileBlocks - 1)) << (kTileShift * a);
             samplePart[a][d] = static_cast<size_t>(v - (b << sh)) * localStride[a];
         }
@@ -287,19 +287,36 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                 samples[samplePart[0][e[0]] + samplePart[1][e[1]] + samplePart[2][e[2]]];
         return;
     }
+    // Most stencils lie in one tile (one page for all 32 entries); the others look up each
+    // entry's tile.
+    auto fill = [&](auto pageOf) {
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
 #pragma GCC unroll 32
 #endif
-    for (const auto& e : kEntries) {
-        const size_t b = static_cast<size_t>(
-                             tilePage[tilePart[0][e[0]] + tilePart[1][e[1]] + tilePart[2][e[2]]]) *
-                             kPageEntries +
-                         localPart[0][e[0]] + localPart[1][e[1]] + localPart[2][e[2]];
-        const int32_t data = blockData[b];
-        out[e[2]][e[1]][e[0]] = data >= 0 ? blockSamples[data * perBlock + samplePart[0][e[0]] +
-                                                         samplePart[1][e[1]] + samplePart[2][e[2]]]
-                                : flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background
-                                                                                      : background;
+        for (const auto& e : kEntries) {
+            const size_t b =
+                pageOf(e) + localPart[0][e[0]] + localPart[1][e[1]] + localPart[2][e[2]];
+            const int32_t data = blockData[b];
+            out[e[2]][e[1]][e[0]] =
+                data >= 0 ? blockSamples[data * perBlock + samplePart[0][e[0]] +
+                                         samplePart[1][e[1]] + samplePart[2][e[2]]]
+                : flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background
+                                                                      : background;
+        }
+    };
+    auto pageAt = [&](int x, int y, int z) {
+        return static_cast<size_t>(
+                   tilePage[(static_cast<size_t>(tileOf[2][z]) * tiles[1] + tileOf[1][y]) *
+                                tiles[0] +
+                            tileOf[0][x]]) *
+               kPageEntries;
+    };
+    if (tileOf[0][0] == tileOf[0][3] && tileOf[1][0] == tileOf[1][3] &&
+        tileOf[2][0] == tileOf[2][3]) {
+        const size_t page = pageAt(0, 0, 0);
+        fill([page](const int(&)[3]) { return page; });
+    } else {
+        fill([&](const int(&e)[3]) { return pageAt(e[0], e[1], e[2]); });
     }
 }
 

@@ -186,6 +186,46 @@ class TreeToGrid {
         return leaf;
     }
 
+    // The 8^3 regions the vertices of one tile's blocks read (and one more per axis), looked up
+    // once per tile: classify and gatherBlock read up to 8 regions per block.
+    struct TileRegions {
+        static constexpr int kMax = 11;  // a tile's vertices span at most 64 + 1 voxels
+        int32_t first[3] = {0, 0, 0};    // region coordinate (voxel >> 3) of entry 0
+        int n[3] = {0, 0, 0};
+        int32_t leaf[kMax * kMax * kMax];
+        float value[kMax * kMax * kMax];
+        // Region (rx, ry, rz) (voxel >> 3): its leaf, or -1 and its value.
+        int32_t at(int32_t rx, int32_t ry, int32_t rz, float& v) const {
+            const int i = ((rz - first[2]) * n[1] + (ry - first[1])) * n[0] + (rx - first[0]);
+            v = value[i];
+            return leaf[i];
+        }
+    };
+
+    void tileRegions(const int tile[3], TileRegions& tr) const {
+        for (int a = 0; a < 3; ++a) {
+            const int span = kTileBlocks * m_B;
+            const int32_t v0 = m_lo[a] + std::min(tile[a] * span, m_shape.cells[a]);
+            const int32_t v1 = m_lo[a] + std::min((tile[a] + 1) * span, m_shape.cells[a]);
+            tr.first[a] = v0 >> 3;
+            tr.n[a] = (v1 >> 3) - tr.first[a] + 2;
+        }
+        for (int z = 0; z < tr.n[2]; ++z)
+            for (int y = 0; y < tr.n[1]; ++y)
+                for (int x = 0; x < tr.n[0]; ++x) {
+                    const int i = (z * tr.n[1] + y) * tr.n[0] + x;
+                    const int32_t o[3] = {(tr.first[0] + x) * 8, (tr.first[1] + y) * 8,
+                                          (tr.first[2] + z) * 8};
+                    // Past the active region: never read (the vertices clamp).
+                    if (o[0] > m_hi[0] || o[1] > m_hi[1] || o[2] > m_hi[2]) {
+                        tr.leaf[i] = -1;
+                        tr.value[i] = 0;
+                        continue;
+                    }
+                    tr.leaf[i] = regionAt(o[0], o[1], o[2], tr.value[i]);
+                }
+    }
+
     // Pass 1: the two-level flag table. A tile of 8^3 blocks whose vertices read no leaf and no
     // value within the band, all of one sign, is constant (pages 0 and 1); every block of the
     // other tiles is classified by its samples' sign and band bits (classify), without gathering
@@ -212,10 +252,12 @@ class TreeToGrid {
         const std::vector<int> own = t.ownTiles();
         tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
             uint8_t* page = t.flags.data() + (p + kFirstOwnPage) * kPageEntries;
+            TileRegions tr;
+            tileRegions(&own[3 * p], tr);
             forEachBlockOfTile(m_blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
                                [&](int bi, int bj, int bk) {
                                    const int b[3] = {bi, bj, bk};
-                                   page[pageLocal(bi, bj, bk)] = classify(b);
+                                   page[pageLocal(bi, bj, bk)] = classify(b, tr);
                                });
         });
         t.shareConstantPages();
@@ -306,7 +348,7 @@ class TreeToGrid {
     // within the band or their signs differ (as Grid::sparseFromDense decides), else inside or
     // outside by their sign. Its vertices per axis span at most two 8-voxel regions, a box in
     // each.
-    uint8_t classify(const int b[3]) const {
+    uint8_t classify(const int b[3], const TileRegions& tr) const {
         int first[3], lo[3][2], hi[3][2];
         for (int a = 0; a < 3; ++a) {
             first[a] = (m_lo[a] + b[a] * m_B) >> 3;
@@ -324,8 +366,7 @@ class TreeToGrid {
             const int rx = c & 1, ry = c >> 1 & 1, rz = c >> 2;
             if (lo[0][rx] > hi[0][rx] || lo[1][ry] > hi[1][ry] || lo[2][rz] > hi[2][rz]) continue;
             float v = 0;
-            const int32_t leaf =
-                regionAt((first[0] + rx) * 8, (first[1] + ry) * 8, (first[2] + rz) * 8, v);
+            const int32_t leaf = tr.at(first[0] + rx, first[1] + ry, first[2] + rz, v);
             if (leaf < 0) {
                 anyNeg |= v < 0;
                 anyPos |= !(v < 0);
@@ -370,7 +411,8 @@ class TreeToGrid {
     // Block b's (B+1)^3 samples into `out`, x fastest. Its V vertices per axis span at most two
     // 8-voxel regions: per axis, each vertex's region (0 or 1 from the first) and its offset inside
     // the leaf; per region of the 2x2x2, the leaf's values or a tile value repeated.
-    void gatherBlock(const int b[3], float* out, GatherScratch& scratch) const {
+    void gatherBlock(const int b[3], float* out, GatherScratch& scratch,
+                     const TileRegions& tr) const {
         const int V = m_V;
         int region[3][9], offset[3][9];  // V <= 9
         int first[3];
@@ -393,7 +435,7 @@ class TreeToGrid {
                 continue;
             }
             float v = 0;
-            const int32_t leaf = regionAt(x, y, z, v);
+            const int32_t leaf = tr.at(x >> 3, y >> 3, z >> 3, v);
             source[c] =
                 leaf >= 0 ? m_t.leaves[static_cast<size_t>(leaf)].values.data() : scratch.region(v);
         }
@@ -428,6 +470,8 @@ class TreeToGrid {
         const std::vector<int> own = table.ownTiles();
         tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
             GatherScratch scratch;
+            TileRegions tr;
+            tileRegions(&own[3 * p], tr);
             const size_t base = (p + kFirstOwnPage) * kPageEntries;
             forEachBlockOfTile(
                 m_blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2], [&](int bi, int bj, int bk) {
@@ -435,7 +479,7 @@ class TreeToGrid {
                     if (at < 0) return;
                     float* block = samples.data() + static_cast<size_t>(at) * perBlock;
                     const int b[3] = {bi, bj, bk};
-                    gatherBlock(b, block, scratch);
+                    gatherBlock(b, block, scratch, tr);
                     for (size_t n = 0; n < perBlock; ++n)
                         block[n] = std::min(std::max(block[n], -band), band);
                 });

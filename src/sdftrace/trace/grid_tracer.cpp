@@ -213,8 +213,8 @@ bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const i
 // The inner loop over the cells of one block on [tEnter, tExit]; true with tHit on a hit. A
 // masked sparse block goes to walkMaskedCells; here dense grids and walks without masks, which
 // test each cell's corner signs.
-bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float tEnter, float tExit,
-                   const GridTraceOptions& o, GridTraceResult& res, float& tHit) {
+bool traverseBlock(const GridView& g, const Setup& s, const int block[3], size_t slot, float tEnter,
+                   float tExit, const GridTraceOptions& o, GridTraceResult& res, float& tHit) {
     int lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
         lo[a] = block[a] * s.B;
@@ -224,7 +224,7 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
     const float* samples = nullptr;
     const size_t sy = s.B + 1, sz = sy * sy;
     if (g.kind == GridKind::Sparse) {
-        size_t data = static_cast<size_t>(g.blockData[g.blockSlot(block[0], block[1], block[2])]);
+        size_t data = static_cast<size_t>(g.blockData[slot]);
         samples = g.blockSamples + data * sz * sy;
         if (o.bitMasks)
             return walkMaskedCells(g, s, lo, hi, g.cellMasks + data * g.wordsPerMask(), samples,
@@ -263,6 +263,10 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], float 
 void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTraceOptions& o,
                     GridTraceResult& res) {
     const float B = static_cast<float>(s.B);
+    // The current tile's skip distance and page, looked up when the walk enters another tile.
+    int tile[3] = {-1, -1, -1};
+    int tileSkip = 0;
+    size_t page = 0;
     for (;;) {
         res.traversalSteps++;
         float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
@@ -271,25 +275,31 @@ void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTra
         // holds a sign-changing cell, so the ray continues where it leaves that cube of blocks
         // (tiles); only cells that are never tested are skipped, so the hits are the plain
         // traversal's.
-        int r = 0, scale = 1;  // cube radius and its unit, in blocks
+        int r = 0, shift = 0;  // cube radius and log2 of its unit, in blocks
         if (g.kind == GridKind::Dense) {
             float tHit;
-            if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
+            if (traverseBlock(g, s, blocks.idx, 0, tEnter, tExit, o, res, tHit)) {
                 res.hit = true;
                 res.t = tHit;
                 return;
             }
         } else {
-            const size_t tile = g.tileIndex(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
-            if (g.tileSkip && g.tileSkip[tile] > 0) {
-                r = g.tileSkip[tile] - 1;
-                scale = kTileBlocks;
+            const int t[3] = {blocks.idx[0] >> kTileShift, blocks.idx[1] >> kTileShift,
+                              blocks.idx[2] >> kTileShift};
+            if (t[0] != tile[0] || t[1] != tile[1] || t[2] != tile[2]) {
+                const size_t at = g.tileIndex(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
+                tileSkip = g.tileSkip ? g.tileSkip[at] : 0;
+                page = static_cast<size_t>(g.tilePage[at]) * kPageEntries;
+                tile[0] = t[0], tile[1] = t[1], tile[2] = t[2];
+            }
+            if (tileSkip > 0) {
+                r = tileSkip - 1;
+                shift = kTileShift;
             } else {
-                const size_t b = static_cast<size_t>(g.tilePage[tile]) * kPageEntries +
-                                 pageLocal(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
+                const size_t b = page + pageLocal(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
                 if (g.mayHoldHit(b)) {
                     float tHit;
-                    if (traverseBlock(g, s, blocks.idx, tEnter, tExit, o, res, tHit)) {
+                    if (traverseBlock(g, s, blocks.idx, b, tEnter, tExit, o, res, tHit)) {
                         res.hit = true;
                         res.t = tHit;
                         return;
@@ -299,11 +309,11 @@ void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTra
                 }
             }
         }
-        if (r > 0 || scale > 1) {
-            const float unit = B * static_cast<float>(scale);
+        if (r > 0 || shift > 0) {
+            const float unit = B * static_cast<float>(1 << shift);
             float tCube = kInfinity;
             for (int a = 0; a < 3; ++a) {
-                const int c = blocks.idx[a] / scale;  // block or tile index (non-negative)
+                const int c = blocks.idx[a] >> shift;  // block or tile index
                 if (s.r.d[a] > 0)
                     tCube = std::min(tCube, ((c + r + 1) * unit - s.r.o[a]) * s.invD[a]);
                 else if (s.r.d[a] < 0)
