@@ -312,16 +312,30 @@ void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTra
         if (r > 0 || shift > 0) {
             const float unit = B * static_cast<float>(1 << shift);
             float tCube = kInfinity;
+            int c[3];  // the cube's centre block or tile
             for (int a = 0; a < 3; ++a) {
-                const int c = blocks.idx[a] >> shift;  // block or tile index
+                c[a] = blocks.idx[a] >> shift;
                 if (s.r.d[a] > 0)
-                    tCube = std::min(tCube, ((c + r + 1) * unit - s.r.o[a]) * s.invD[a]);
+                    tCube = std::min(tCube, ((c[a] + r + 1) * unit - s.r.o[a]) * s.invD[a]);
                 else if (s.r.d[a] < 0)
-                    tCube = std::min(tCube, ((c - r) * unit - s.r.o[a]) * s.invD[a]);
+                    tCube = std::min(tCube, ((c[a] - r) * unit - s.r.o[a]) * s.invD[a]);
             }
             if (tCube >= s.t1) return;
             if (tCube > tExit) {
                 blocks.init(s.r.o, s.r.d, s.invD, tCube, B, s.blockLo, s.blockHi);
+                // Rounding can put the point at tCube back inside the cube (then the same cube
+                // would be skipped to the same point forever): step out of it block by block
+                // (it holds no sign-changing cell).
+                auto inCube = [&] {
+                    for (int a = 0; a < 3; ++a) {
+                        const int d = (blocks.idx[a] >> shift) - c[a];
+                        if (d < -r || d > r) return false;
+                    }
+                    return true;
+                };
+                while (inCube())
+                    if (!blocks.advance()) return;
+                if (blocks.t >= s.t1) return;
                 continue;
             }
         }
