@@ -40,27 +40,12 @@ BlockTable BlockTable::fromDense(const int blocks[3], const std::vector<uint8_t>
     const size_t numBlocks = static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2];
     if (dense.size() != numBlocks)
         throw InputError(source + ": block flag count does not match the grid size");
+    // Every tile on a page of its own first (a copy of the flags, as large as `dense`), then the
+    // tiles of one flag back on the constant pages.
     const size_t numTiles = t.tilePage.size();
-    // Per tile: 0 all outside, 1 all inside, 2 its own page (a surface block, an invalid flag or
-    // both signs); blocks past the grid's last block count as outside.
-    std::vector<uint8_t> kind(numTiles);
-    tbb::parallel_for(size_t(0), numTiles, [&](size_t tile) {
-        const int ti = static_cast<int>(tile % t.tiles[0]),
-                  tj = static_cast<int>(tile / t.tiles[0] % t.tiles[1]),
-                  tk = static_cast<int>(tile / (static_cast<size_t>(t.tiles[0]) * t.tiles[1]));
-        bool anyOut = false, anyIn = false, other = false;
-        forEachBlockOfTile(blocks, ti, tj, tk, [&](int bi, int bj, int bk) {
-            const uint8_t f = dense[(static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi];
-            anyOut |= f == kOutside;
-            anyIn |= f == kInside;
-            other |= f > kInside;
-        });
-        kind[tile] = (other || (anyOut && anyIn)) ? 2 : anyIn ? 1 : 0;
-    });
-    int32_t next = kFirstOwnPage;
     for (size_t tile = 0; tile < numTiles; ++tile)
-        t.tilePage[tile] = kind[tile] == 2 ? next++ : kind[tile];
-    t.flags.resize(static_cast<size_t>(next) * kPageEntries, kOutside);
+        t.tilePage[tile] = kFirstOwnPage + static_cast<int32_t>(tile);
+    t.flags.resize((kFirstOwnPage + numTiles) * kPageEntries, kOutside);
     const std::vector<int> own = t.ownTiles();
     std::atomic<bool> invalid{false};
     tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
@@ -80,6 +65,7 @@ BlockTable BlockTable::fromDense(const int blocks[3], const std::vector<uint8_t>
                                  std::to_string(dense[b]) +
                                  " (accepted: 0 outside, 1 inside, 2 surface)");
     }
+    t.shareConstantPages();
     return t;
 }
 

@@ -145,6 +145,7 @@ Grid Grid::sparseFromTable(const GridShape& shape, int B, float background, Bloc
 
 std::vector<uint8_t> Grid::denseFlags() const {
     SDFT_CHECK(m_kind == GridKind::Sparse);
+    // The table's own expansion, on a copy of the tables (far smaller than the flat result).
     BlockTable t;
     for (int a = 0; a < 3; ++a) {
         t.blocks[a] = m_blocks[a];
@@ -537,6 +538,50 @@ void chebyshevTransform(std::vector<uint16_t>& d, int nx, int ny, int nz, uint16
 }
 }  // namespace
 
+namespace {
+// The Chebyshev distance (0 to 8) from each block of the centre tile of a 3^3-tile window to the
+// window's set blocks (bit x of row win[z][y]) into out[local], by dilating the bits one block at a
+// time; blocks farther than 8 keep their entry.
+constexpr int kWindow = 3 * kTileBlocks;
+void centreTileDistances(uint32_t (&win)[kWindow][kWindow], uint8_t* out) {
+    constexpr int W = kWindow;
+    constexpr uint32_t kRow = (1u << W) - 1;
+    auto record = [&](int r, const uint32_t(&now)[W][W], const uint32_t(&before)[W][W]) {
+        for (int z = 0; z < kTileBlocks; ++z)
+            for (int y = 0; y < kTileBlocks; ++y) {
+                const uint32_t fresh = (now[z + kTileBlocks][y + kTileBlocks] &
+                                        ~before[z + kTileBlocks][y + kTileBlocks]) >>
+                                       kTileBlocks;
+                for (uint32_t bits = fresh & 0xffu; bits; bits &= bits - 1)
+                    out[(z * kTileBlocks + y) * kTileBlocks + std::countr_zero(bits)] =
+                        static_cast<uint8_t>(r);
+            }
+    };
+    uint32_t none[W][W] = {};
+    record(0, win, none);
+    uint32_t prev[W][W];
+    for (int r = 1; r <= kTileBlocks; ++r) {
+        std::memcpy(prev, win, sizeof win);
+        uint32_t tmp[W][W];
+        for (int z = 0; z < W; ++z)
+            for (int y = 0; y < W; ++y) {
+                const uint32_t m = prev[z][y];
+                tmp[z][y] = (m | m << 1 | m >> 1) & kRow;
+            }
+        uint32_t tmp2[W][W];
+        for (int z = 0; z < W; ++z)
+            for (int y = 0; y < W; ++y)
+                tmp2[z][y] =
+                    tmp[z][y] | (y > 0 ? tmp[z][y - 1] : 0) | (y + 1 < W ? tmp[z][y + 1] : 0);
+        for (int z = 0; z < W; ++z)
+            for (int y = 0; y < W; ++y)
+                win[z][y] =
+                    tmp2[z][y] | (z > 0 ? tmp2[z - 1][y] : 0) | (z + 1 < W ? tmp2[z + 1][y] : 0);
+        record(r, win, prev);
+    }
+}
+}  // namespace
+
 // Empty-space skipping for the block DDA (not in the papers: Cohen & Sheffer's proximity clouds on
 // Jamriška's block level, §4.1), on both levels of the table. Sources are the blocks holding a
 // sign-changing cell: surface blocks of a narrow band whose cells all keep one sign (about half
@@ -589,7 +634,7 @@ void Grid::computeBlockSkip() {
         uint8_t* out = m_blockSkip.data() + (p + kFirstOwnPage) * kPageEntries;
         std::fill(out, out + kPageEntries, static_cast<uint8_t>(kFarBlocks));
         // The window: 3 x 3 x 3 tiles, bit x of row (y, z) = block x of the window.
-        constexpr int W = 3 * kTileBlocks;
+        constexpr int W = kWindow;
         uint32_t win[W][W] = {};
         bool any = false;
         for (int dz = -1; dz <= 1; ++dz)
@@ -612,41 +657,7 @@ void Grid::computeBlockSkip() {
                                 bits << ((dx + 1) * kTileBlocks);
                         }
                 }
-        if (!any) return;
-        constexpr uint32_t kRow = (1u << W) - 1;
-        auto record = [&](int r, const uint32_t(&now)[W][W], const uint32_t(&before)[W][W]) {
-            for (int z = 0; z < kTileBlocks; ++z)
-                for (int y = 0; y < kTileBlocks; ++y) {
-                    const uint32_t fresh = (now[z + kTileBlocks][y + kTileBlocks] &
-                                            ~before[z + kTileBlocks][y + kTileBlocks]) >>
-                                           kTileBlocks;
-                    for (uint32_t bits = fresh & 0xffu; bits; bits &= bits - 1)
-                        out[(z * kTileBlocks + y) * kTileBlocks + std::countr_zero(bits)] =
-                            static_cast<uint8_t>(r);
-                }
-        };
-        uint32_t none[W][W] = {};
-        record(0, win, none);
-        uint32_t prev[W][W];
-        for (int r = 1; r <= kTileBlocks; ++r) {
-            std::memcpy(prev, win, sizeof win);
-            uint32_t tmp[W][W];
-            for (int z = 0; z < W; ++z)
-                for (int y = 0; y < W; ++y) {
-                    const uint32_t m = prev[z][y];
-                    tmp[z][y] = (m | m << 1 | m >> 1) & kRow;
-                }
-            uint32_t tmp2[W][W];
-            for (int z = 0; z < W; ++z)
-                for (int y = 0; y < W; ++y)
-                    tmp2[z][y] =
-                        tmp[z][y] | (y > 0 ? tmp[z][y - 1] : 0) | (y + 1 < W ? tmp[z][y + 1] : 0);
-            for (int z = 0; z < W; ++z)
-                for (int y = 0; y < W; ++y)
-                    win[z][y] = tmp2[z][y] | (z > 0 ? tmp2[z - 1][y] : 0) |
-                                (z + 1 < W ? tmp2[z + 1][y] : 0);
-            record(r, win, prev);
-        }
+        if (any) centreTileDistances(win, out);
     });
 }
 

@@ -258,86 +258,73 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], size_t
     }
 }
 
-// The outer loop (§4.1): blocks along the ray from `blocks` on; inside and outside blocks are
-// skipped, surface blocks walked cell by cell. Fills res.hit and res.t on a hit.
+// Empty-space skipping (not in the papers: Cohen & Sheffer's proximity clouds on Jamriška's block
+// level, §4.1): no block (tile) within r of the walk's current one holds a sign-changing cell, so
+// the walk may restart where the ray leaves that cube of blocks (tiles, shift = kTileShift); only
+// cells that are never tested are skipped, so the hits are the plain traversal's.
+enum class Skip { LeftGrid, Restarted, CubeEndsHere };
+Skip skipCube(const Setup& s, Dda& blocks, int r, int shift, float tExit) {
+    const float unit = static_cast<float>(s.B) * static_cast<float>(1 << shift);
+    float tCube = kInfinity;
+    int c[3];  // the cube's centre block or tile
+    for (int a = 0; a < 3; ++a) {
+        c[a] = blocks.idx[a] >> shift;
+        if (s.r.d[a] > 0)
+            tCube = std::min(tCube, ((c[a] + r + 1) * unit - s.r.o[a]) * s.invD[a]);
+        else if (s.r.d[a] < 0)
+            tCube = std::min(tCube, ((c[a] - r) * unit - s.r.o[a]) * s.invD[a]);
+    }
+    if (tCube >= s.t1) return Skip::LeftGrid;
+    if (tCube <= tExit) return Skip::CubeEndsHere;
+    blocks.init(s.r.o, s.r.d, s.invD, tCube, static_cast<float>(s.B), s.blockLo, s.blockHi);
+    // Rounding can put the point at tCube back inside the cube (leaving through an edge, two
+    // faces' crossings round apart), and the same cube would be skipped to the same point
+    // forever: step out of it block by block (it holds no sign-changing cell).
+    auto inCube = [&] {
+        for (int a = 0; a < 3; ++a) {
+            const int d = (blocks.idx[a] >> shift) - c[a];
+            if (d < -r || d > r) return false;
+        }
+        return true;
+    };
+    while (inCube())
+        if (!blocks.advance()) return Skip::LeftGrid;
+    return blocks.t < s.t1 ? Skip::Restarted : Skip::LeftGrid;
+}
+
+// The outer loop (§4.1): blocks along the ray from `blocks` on; blocks without a sign-changing
+// cell are skipped (by whole cubes where the skip tables allow), the others walked cell by cell.
+// Fills res.hit and res.t on a hit.
 void traverseBlocks(const GridView& g, const Setup& s, Dda blocks, const GridTraceOptions& o,
                     GridTraceResult& res) {
-    const float B = static_cast<float>(s.B);
-    // The current tile's skip distance and page, looked up when the walk enters another tile.
-    int tile[3] = {-1, -1, -1};
-    int tileSkip = 0;
-    size_t page = 0;
     for (;;) {
         res.traversalSteps++;
-        float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
-        // Empty-space skipping (not in the papers: Cohen & Sheffer's proximity clouds on
-        // Jamriška's block level, §4.1): no block within r of this one (a tile: no tile within r)
-        // holds a sign-changing cell, so the ray continues where it leaves that cube of blocks
-        // (tiles); only cells that are never tested are skipped, so the hits are the plain
-        // traversal's.
-        int r = 0, shift = 0;  // cube radius and log2 of its unit, in blocks
-        if (g.kind == GridKind::Dense) {
-            float tHit;
-            if (traverseBlock(g, s, blocks.idx, 0, tEnter, tExit, o, res, tHit)) {
-                res.hit = true;
-                res.t = tHit;
-                return;
-            }
-        } else {
-            const int t[3] = {blocks.idx[0] >> kTileShift, blocks.idx[1] >> kTileShift,
-                              blocks.idx[2] >> kTileShift};
-            if (t[0] != tile[0] || t[1] != tile[1] || t[2] != tile[2]) {
-                const size_t at = g.tileIndex(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
-                tileSkip = g.tileSkip ? g.tileSkip[at] : 0;
-                page = static_cast<size_t>(g.tilePage[at]) * kPageEntries;
-                tile[0] = t[0], tile[1] = t[1], tile[2] = t[2];
-            }
-            if (tileSkip > 0) {
-                r = tileSkip - 1;
+        const float tEnter = blocks.t, tExit = std::min(blocks.exit(), s.t1);
+        size_t slot = 0;       // the block's entry in the paged tables (sparse)
+        int r = 0, shift = 0;  // a cube to skip: radius and log2 of its unit, in blocks
+        bool walk = g.kind == GridKind::Dense;
+        if (!walk) {
+            const size_t tile = g.tileIndex(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
+            if (g.tileSkip && g.tileSkip[tile] > 0) {
+                r = g.tileSkip[tile] - 1;
                 shift = kTileShift;
             } else {
-                const size_t b = page + pageLocal(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
-                if (g.mayHoldHit(b)) {
-                    float tHit;
-                    if (traverseBlock(g, s, blocks.idx, b, tEnter, tExit, o, res, tHit)) {
-                        res.hit = true;
-                        res.t = tHit;
-                        return;
-                    }
-                } else if (g.blockSkip && g.blockSkip[b] > 1) {
-                    r = g.blockSkip[b] - 1;
-                }
+                slot = static_cast<size_t>(g.tilePage[tile]) * kPageEntries +
+                       pageLocal(blocks.idx[0], blocks.idx[1], blocks.idx[2]);
+                walk = g.mayHoldHit(slot);
+                if (!walk && g.blockSkip) r = g.blockSkip[slot] - 1;
             }
         }
+        float tHit;
+        if (walk && traverseBlock(g, s, blocks.idx, slot, tEnter, tExit, o, res, tHit)) {
+            res.hit = true;
+            res.t = tHit;
+            return;
+        }
         if (r > 0 || shift > 0) {
-            const float unit = B * static_cast<float>(1 << shift);
-            float tCube = kInfinity;
-            int c[3];  // the cube's centre block or tile
-            for (int a = 0; a < 3; ++a) {
-                c[a] = blocks.idx[a] >> shift;
-                if (s.r.d[a] > 0)
-                    tCube = std::min(tCube, ((c[a] + r + 1) * unit - s.r.o[a]) * s.invD[a]);
-                else if (s.r.d[a] < 0)
-                    tCube = std::min(tCube, ((c[a] - r) * unit - s.r.o[a]) * s.invD[a]);
-            }
-            if (tCube >= s.t1) return;
-            if (tCube > tExit) {
-                blocks.init(s.r.o, s.r.d, s.invD, tCube, B, s.blockLo, s.blockHi);
-                // Rounding can put the point at tCube back inside the cube (then the same cube
-                // would be skipped to the same point forever): step out of it block by block
-                // (it holds no sign-changing cell).
-                auto inCube = [&] {
-                    for (int a = 0; a < 3; ++a) {
-                        const int d = (blocks.idx[a] >> shift) - c[a];
-                        if (d < -r || d > r) return false;
-                    }
-                    return true;
-                };
-                while (inCube())
-                    if (!blocks.advance()) return;
-                if (blocks.t >= s.t1) return;
-                continue;
-            }
+            const Skip skip = skipCube(s, blocks, r, shift, tExit);
+            if (skip == Skip::LeftGrid) return;
+            if (skip == Skip::Restarted) continue;
         }
         if (tExit >= s.t1 || !blocks.advance()) return;
     }
