@@ -31,10 +31,15 @@ enum class Crossing { None, Enter, Leave, Undecided };
 // `eps` (a length) is the tolerance below which an end on the plane, a segment along the plane or
 // a hit near an edge (1e-5 in barycentric terms) is undecided: the caller then evaluates the
 // winding number instead of trusting a count.
+// Whether the segment's bounds, grown by eps, miss the box [lo, hi].
+inline bool segmentMissesBox(Vec3 p, Vec3 q, Vec3 lo, Vec3 hi, float eps) {
+    return lo.x > std::fmax(p.x, q.x) + eps || lo.y > std::fmax(p.y, q.y) + eps ||
+           lo.z > std::fmax(p.z, q.z) + eps || hi.x < std::fmin(p.x, q.x) - eps ||
+           hi.y < std::fmin(p.y, q.y) - eps || hi.z < std::fmin(p.z, q.z) - eps;
+}
+
 inline Crossing segmentCrossing(Vec3 p, Vec3 q, const CrossingTriangle& t, float eps) {
-    if (t.area2 == 0 || t.lo.x > std::fmax(p.x, q.x) + eps || t.lo.y > std::fmax(p.y, q.y) + eps ||
-        t.lo.z > std::fmax(p.z, q.z) + eps || t.hi.x < std::fmin(p.x, q.x) - eps ||
-        t.hi.y < std::fmin(p.y, q.y) - eps || t.hi.z < std::fmin(p.z, q.z) - eps)
+    if (t.area2 == 0 || segmentMissesBox(p, q, t.lo, t.hi, eps))
         return Crossing::None;  // a zero-area triangle has no side to cross
     float dp = dot(p - t.a, t.normal), dq = dot(q - t.a, t.normal);
     if ((dp > eps && dq > eps) || (dp < -eps && dq < -eps)) return Crossing::None;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cmath>
+#include <map>
 #include <vector>
 
 #include "sdftrace/bake/triangle_mesh.h"
@@ -64,7 +65,8 @@ class WindingNumber {
         int left = -1, right = -1;
         int first = 0, count = 0;  // leaf: triangles [first, first + count) of m_order
     };
-    int build(int first, int count);
+    static int subtreeSize(int count, std::map<int, int>& sizes);
+    void build(int first, int count, int index, const std::map<int, int>& sizes);
 
     const TriangleMesh& m_mesh;
     double m_beta;

@@ -33,6 +33,7 @@ bool parseClosestPoints(const std::string& name, ClosestPoints& out) {
 std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, SignMethod sign,
                                     int threads, ExactBakeStats* stats, bool progress,
                                     ClosestPoints closest) {
+    ThreadArena arena(threads);  // first: the sampler's winding-number tree builds on its threads
     RowSampler sampler(bvh.mesh(), &bvh, s, sign);
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
     std::vector<float> out;
@@ -42,7 +43,6 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& s, Sign
     ClosestPointTransformStats ts;
     std::vector<BakeStage> stages;
     StageClock phases(stages);
-    ThreadArena arena(threads);
     if (transform) {
         Progress bar("sdftrace bake: closest point transform", static_cast<uint64_t>(vy) + vz,
                      progress && stderrIsTerminal());

@@ -17,11 +17,19 @@ namespace sdft::detail {
 class RowSampler {
   public:
     // `bvh` (closest points, parity) may be null for the narrow band's winding-number signs.
+    // With `deferSigns` the winding-number tree is built by prepareSigns(), so that it does not
+    // take memory while the distances are found.
     RowSampler(const TriangleMesh& mesh, const MeshBvh* bvh, const GridShape& shape,
-               SignMethod sign)
-        : m_bvh(bvh), m_shape(shape), m_film(std::make_unique<ClosingFilm>(mesh)) {
+               SignMethod sign, bool deferSigns = false)
+        : m_bvh(bvh),
+          m_shape(shape),
+          m_useWinding(sign == SignMethod::WindingNumber),
+          m_film(std::make_unique<ClosingFilm>(mesh)) {
         m_watertight = m_film->empty();
-        if (sign == SignMethod::WindingNumber)
+        if (!deferSigns) prepareSigns();
+    }
+    void prepareSigns() {
+        if (m_useWinding && !m_winding)
             m_winding = std::make_unique<WindingNumber>(m_film->closedMesh());
     }
 
@@ -30,9 +38,14 @@ class RowSampler {
     }
 
     bool watertight() const { return m_watertight; }
+    // Frees the films and the winding-number tree once no sign is left to decide.
+    void releaseSigns() {
+        m_winding.reset();
+        m_film.reset();
+    }
     // With SignMethod::WindingNumber: signs follow the integer winding number of the mesh closed
     // by its films (closing_film.h), carried between neighbours.
-    bool hasWinding() const { return m_winding != nullptr; }
+    bool hasWinding() const { return m_useWinding; }
 
     // The winding numbers carried from sample to sample (closing_film.h): W of the mesh closed
     // by its films, exact; the mesh's own, w_M = W - w_F, within `error`.
@@ -179,6 +192,7 @@ class RowSampler {
   private:
     const MeshBvh* m_bvh;
     const GridShape& m_shape;
+    bool m_useWinding;
     bool m_watertight = false;
     std::unique_ptr<ClosingFilm> m_film;
     std::unique_ptr<WindingNumber> m_winding;

@@ -9,7 +9,12 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <memory>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "exact_sampler.h"
 #include "sdftrace/bake/closest_point.h"
@@ -89,6 +94,8 @@ class NarrowBandBake {
     void forOwnersNearPlane(size_t t, const VertexRange& r, float grow, F&& f) const;
     void markCandidates();
     size_t ownerDistances(int oi, int oj, int ok, std::vector<std::pair<float, uint32_t>>& order);
+    void nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], const int hi[3], int i0, int j0,
+                           int k0, float* out) const;
     bool crossings(Vec3 a, Vec3 b, size_t o, int& delta) const;
     void ownerGradients();
     struct SlabSigns;
@@ -102,6 +109,7 @@ class NarrowBandBake {
     const bool m_progress;
     std::vector<BakeStage> m_stages;
     StageClock m_phases;
+    ThreadArena m_arena;
     // Parity signs cast rays; the winding number needs no BVH of the mesh.
     std::unique_ptr<MeshBvh> m_bvh;
     RowSampler m_sampler;
@@ -109,24 +117,22 @@ class NarrowBandBake {
     int m_nv[3], m_nb[3], m_no[3];
     size_t m_numBlocks, m_numOwners;
     size_t m_perOwner;
-    ThreadArena m_arena;
     std::atomic<size_t> m_queries{0}, m_signs{0}, m_filmSums{0};
 
-    OwnerLists m_band;                       // lists grown by the band (scatter)
-    OwnerLists m_near;                       // grown by a voxel (crossing tests)
-    std::vector<uint8_t> m_flags;            // BlockFlag per block
-    std::vector<uint8_t> m_candidate;        // may hold surface: an owner lists a triangle
-    std::vector<uint8_t> m_keep;             // surface blocks
-    std::vector<int32_t> m_slot;             // per owner: its slot in m_owned, -1 if not needed
-    std::vector<uint8_t> m_rowNeeded;        // per row of owners: any needed
-    int32_t m_owners = 0;                    // needed owners
-    std::unique_ptr<float[]> m_owned;        // per needed owner, B^3 samples
-    std::vector<uint8_t> m_nearBits;         // per owner: blocks it gives a sample within the band
-    std::vector<uint8_t> m_heldBy;           // per owner: surface blocks that hold its vertices
-    std::vector<CrossingTriangle> m_planes;  // the triangles for crossing tests
-    std::vector<float> m_gradient;           // per owner: the winding number's gradient bound
-    std::vector<int32_t> m_cornerWinding;    // per owner: W at its first vertex
-    std::vector<size_t> m_kept;              // surface block indices, in order
+    OwnerLists m_band;                     // lists grown by the band (scatter)
+    OwnerLists m_near;                     // grown by a voxel (crossing tests)
+    std::vector<uint8_t> m_flags;          // BlockFlag per block
+    std::vector<uint8_t> m_candidate;      // may hold surface: an owner lists a triangle
+    std::vector<uint8_t> m_keep;           // surface blocks
+    std::vector<int32_t> m_slot;           // per owner: its slot in m_owned, -1 if not needed
+    std::vector<uint8_t> m_rowNeeded;      // per row of owners: any needed
+    int32_t m_owners = 0;                  // needed owners
+    std::unique_ptr<float[]> m_owned;      // per needed owner, B^3 samples
+    std::vector<uint8_t> m_nearBits;       // per owner: blocks it gives a sample within the band
+    std::vector<uint8_t> m_heldBy;         // per owner: surface blocks that hold its vertices
+    std::vector<float> m_gradient;         // per owner: the winding number's gradient bound
+    std::vector<int32_t> m_cornerWinding;  // per owner: W at its first vertex
+    std::vector<size_t> m_kept;            // surface block indices, in order
 };
 
 NarrowBandBake::NarrowBandBake(const TriangleMesh& mesh, const GridShape& s, int B,
@@ -141,11 +147,11 @@ NarrowBandBake::NarrowBandBake(const TriangleMesh& mesh, const GridShape& s, int
       m_reach(bandVoxels * s.voxelSize),
       m_progress(progress),
       m_phases(m_stages),
+      m_arena(threads),
       m_bvh(sign == SignMethod::RayParity ? std::make_unique<MeshBvh>(mesh) : nullptr),
-      m_sampler(mesh, m_bvh.get(), s, sign),
+      m_sampler(mesh, m_bvh.get(), s, sign, /*deferSigns=*/true),
       m_watertight(m_sampler.watertight()),
-      m_integerWinding(m_sampler.hasWinding()),
-      m_arena(threads) {
+      m_integerWinding(m_sampler.hasWinding()) {
     // B is 4 or 8: shifts and masks instead of divisions in the per-vertex index arithmetic.
     SDFT_CHECK(B == 4 || B == 8);
     SDFT_CHECK(bandVoxels >= 2);
@@ -165,11 +171,15 @@ Grid NarrowBandBake::run(ExactBakeStats* stats) {
     m_phases.mark("scatter");
     distances();
     m_phases.mark("distances");
+    m_band = OwnerLists();  // each phase frees what no later one reads: the peak is lower
     surfaceBlocks();
     m_phases.mark("surface blocks");
     signs();
     m_phases.mark("signs");
     otherBlocks();
+    m_near = OwnerLists();
+    m_gradient = std::vector<float>();
+    m_sampler.releaseSigns();
     return gather(stats);
 }
 
@@ -337,27 +347,14 @@ size_t NarrowBandBake::ownerDistances(int oi, int oj, int ok,
     }
     std::sort(order.begin(), order.end());
     for (const auto& [key, t] : order) {
-        const VertexRange& r = m_band.ranges[t];
         const auto& tri = mesh.triangles[t];
-        Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
-        Vec3 nrm = cross(b - a, c - a);
-        float invN2 = 1.0f / std::fmax(dot(nrm, nrm), 1e-37f);
-        Vec3 centre = (a + b + c) / 3.0f;
-        float radius = std::sqrt(
-            std::fmax(dot(a - centre, a - centre),
-                      std::fmax(dot(b - centre, b - centre), dot(c - centre, c - centre))));
-        for (int k = std::max(k0, r.lo[2]); k <= std::min(k0 + B - 1, r.hi[2]); ++k)
-            for (int j = std::max(j0, r.lo[1]); j <= std::min(j0 + B - 1, r.hi[1]); ++j)
-                for (int i = std::max(i0, r.lo[0]); i <= std::min(i0 + B - 1, r.hi[0]); ++i) {
-                    Vec3 p = m_sampler.position(i, j, k);
-                    float& best = out[((k - k0) * B + (j - j0)) * B + (i - i0)];
-                    float plane = dot(p - a, nrm);
-                    if (plane * plane * invN2 * 0.9999f > best * best) continue;
-                    float reachOut = best + radius;
-                    if (dot(p - centre, p - centre) * 0.9999f > reachOut * reachOut) continue;
-                    float d = length(p - closestPointOnTriangle(p, a, b, c));
-                    if (d < best) best = d;
-                }
+        const Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]],
+                   c = mesh.positions[tri[2]];
+        const VertexRange& r = m_band.ranges[t];
+        const int lo[3] = {std::max(i0, r.lo[0]), std::max(j0, r.lo[1]), std::max(k0, r.lo[2])};
+        const int hi[3] = {std::min(i0 + B - 1, r.hi[0]), std::min(j0 + B - 1, r.hi[1]),
+                           std::min(k0 + B - 1, r.hi[2])};
+        nearestToTriangle(a, b, c, lo, hi, i0, j0, k0, out);
     }
     // Which blocks this owner gives a sample within the band: bit d of nearBits for block
     // (oi, oj, ok) - d's offsets, through the vertices on the faces those blocks share with it
@@ -373,6 +370,87 @@ size_t NarrowBandBake::ownerDistances(int oi, int oj, int ok,
                 }
     m_nearBits[sl] = bits;
     return found;
+}
+
+// Lowers the best distances of the owner's vertices in [lo, hi] (out: the owner's B^3 samples,
+// (i0, j0, k0) its first vertex) to the triangle abc's. Two conservative tests skip a vertex
+// before the exact closest point (they carry a 1e-4 margin, so the result is the same whether
+// they are computed in vectors or one by one): its distance to the triangle's plane, and to the
+// triangle's bounding sphere.
+void NarrowBandBake::nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], const int hi[3],
+                                       int i0, int j0, int k0, float* out) const {
+    const int B = m_B;
+    const Vec3 nrm = cross(b - a, c - a);
+    const float invN2 = 1.0f / std::fmax(dot(nrm, nrm), 1e-37f);
+    const Vec3 centre = (a + b + c) / 3.0f;
+    const float radius =
+        std::sqrt(std::fmax(dot(a - centre, a - centre),
+                            std::fmax(dot(b - centre, b - centre), dot(c - centre, c - centre))));
+    auto exact = [&](int i, int j, int k) {
+        const Vec3 p = m_sampler.position(i, j, k);
+        float& best = out[((k - k0) * B + (j - j0)) * B + (i - i0)];
+        const float d = length(p - closestPointOnTriangle(p, a, b, c));
+        if (d < best) best = d;
+    };
+#if defined(__SSE2__)
+    // A row of 4 vertices along x is one vector (B = 8: two); both tests on all four, then the
+    // exact distance for those that pass.
+    const Vec3 origin = m_sampler.position(0, 0, 0);
+    const float h = m_h;
+    const __m128 lane = _mm_setr_ps(0, 1, 2, 3);
+    for (int c0 = i0; c0 < i0 + B; c0 += 4) {
+        if (c0 + 3 < lo[0] || c0 > hi[0]) continue;
+        const __m128 fi = _mm_add_ps(_mm_set1_ps(static_cast<float>(c0)), lane);
+        const __m128 valid = _mm_and_ps(_mm_cmpge_ps(fi, _mm_set1_ps(static_cast<float>(lo[0]))),
+                                        _mm_cmple_ps(fi, _mm_set1_ps(static_cast<float>(hi[0]))));
+        const __m128 x = _mm_add_ps(_mm_set1_ps(origin.x), _mm_mul_ps(fi, _mm_set1_ps(h)));
+        const __m128 planeX = _mm_mul_ps(_mm_sub_ps(x, _mm_set1_ps(a.x)), _mm_set1_ps(nrm.x));
+        const __m128 dcx = _mm_sub_ps(x, _mm_set1_ps(centre.x));
+        const __m128 dcx2 = _mm_mul_ps(dcx, dcx);
+        const __m128 planeScale = _mm_set1_ps(invN2 * 0.9999f);
+        for (int k = lo[2]; k <= hi[2]; ++k) {
+            const float z = origin.z + static_cast<float>(k) * h;
+            for (int j = lo[1]; j <= hi[1]; ++j) {
+                const float y = origin.y + static_cast<float>(j) * h;
+                float* row = out + ((k - k0) * B + (j - j0)) * B + (c0 - i0);
+                const __m128 best = _mm_loadu_ps(row);
+                const __m128 plane =
+                    _mm_add_ps(planeX, _mm_set1_ps((y - a.y) * nrm.y + (z - a.z) * nrm.z));
+                const __m128 farPlane = _mm_cmpgt_ps(
+                    _mm_mul_ps(_mm_mul_ps(plane, plane), planeScale), _mm_mul_ps(best, best));
+                const float dy = y - centre.y, dz = z - centre.z;
+                const __m128 d2 = _mm_add_ps(dcx2, _mm_set1_ps(dy * dy + dz * dz));
+                const __m128 h2 = _mm_mul_ps(_mm_mul_ps(plane, plane), _mm_set1_ps(invN2));
+                const __m128 tol = _mm_add_ps(_mm_mul_ps(d2, _mm_set1_ps(4e-5f)),
+                                              _mm_set1_ps(4e-5f * radius * radius));
+                const __m128 rho =
+                    _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(_mm_sub_ps(d2, h2), tol), _mm_setzero_ps()));
+                const __m128 e =
+                    _mm_max_ps(_mm_sub_ps(rho, _mm_set1_ps(radius * 1.0001f)), _mm_setzero_ps());
+                const __m128 farDisk = _mm_cmpgt_ps(
+                    _mm_sub_ps(_mm_add_ps(h2, _mm_mul_ps(e, e)), tol), _mm_mul_ps(best, best));
+                const __m128 farSphere = farDisk;
+                int m = _mm_movemask_ps(_mm_andnot_ps(_mm_or_ps(farPlane, farSphere), valid));
+                while (m) {
+                    exact(c0 + std::countr_zero(static_cast<unsigned>(m)), j, k);
+                    m &= m - 1;
+                }
+            }
+        }
+    }
+#else
+    for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+            for (int i = lo[0]; i <= hi[0]; ++i) {
+                const Vec3 p = m_sampler.position(i, j, k);
+                const float best = out[((k - k0) * B + (j - j0)) * B + (i - i0)];
+                const float plane = dot(p - a, nrm);
+                if (plane * plane * invN2 * 0.9999f > best * best) continue;
+                const float reachOut = best + radius;
+                if (dot(p - centre, p - centre) * 0.9999f > reachOut * reachOut) continue;
+                exact(i, j, k);
+            }
+#endif
 }
 
 // 4. Surface blocks: a (clamped, unsigned) sample within the band. A sign change needs the surface
@@ -418,24 +496,25 @@ void NarrowBandBake::surfaceBlocks() {
                 }
         });
     });
-    // The mesh's triangles prepared for crossing tests.
-    m_planes.resize(m_integerWinding ? m_mesh.triangles.size() : 0);
-    for (size_t t = 0; t < m_planes.size(); ++t) {
-        const auto& tri = m_mesh.triangles[t];
-        m_planes[t] = {m_mesh.positions[tri[0]], m_mesh.positions[tri[1]],
-                       m_mesh.positions[tri[2]]};
-    }
     // Triangles meeting a segment of length h that ends at a vertex come within h of it: the
     // crossing tests read lists grown by one voxel only.
-    if (m_integerWinding) m_near = binTriangles(1.01f * m_h);
+    if (m_integerWinding) {
+        m_near = binTriangles(1.01f * m_h);
+        m_near.ranges = std::vector<VertexRange>();
+    }
 }
 
 // The signed crossings of segment ab with the mesh's triangles listed near owner o; false when
-// one is too close to call.
+// one is too close to call. The triangles' planes are not stored (a million-triangle mesh's take
+// 80 MB at the bake's peak): those whose bounds meet the segment are prepared here.
 bool NarrowBandBake::crossings(Vec3 a, Vec3 b, size_t o, int& delta) const {
     const float eps = 1e-5f * m_h;
+    const auto& pos = m_mesh.positions;
     for (uint32_t n = m_near.start[o]; n < m_near.start[o + 1]; ++n) {
-        Crossing c = segmentCrossing(a, b, m_planes[m_near.items[n]], eps);
+        const auto& tri = m_mesh.triangles[m_near.items[n]];
+        const Vec3 ta = pos[tri[0]], tb = pos[tri[1]], tc = pos[tri[2]];
+        if (segmentMissesBox(a, b, min(ta, min(tb, tc)), max(ta, max(tb, tc)), eps)) continue;
+        Crossing c = segmentCrossing(a, b, CrossingTriangle(ta, tb, tc), eps);
         if (c == Crossing::Undecided) return false;
         delta += c == Crossing::Enter ? 1 : c == Crossing::Leave ? -1 : 0;
     }
@@ -488,6 +567,7 @@ void NarrowBandBake::signs() {
             m_integerWinding ? std::make_unique_for_overwrite<Carried[]>(layer) : nullptr,
             m_integerWinding ? std::make_unique_for_overwrite<Carried[]>(layer) : nullptr};
     });
+    m_arena.execute([&] { m_sampler.prepareSigns(); });
     m_cornerWinding.assign(m_integerWinding ? m_owners : 0, 0);
     ownerGradients();
     m_arena.execute([&] {
@@ -711,6 +791,7 @@ Grid NarrowBandBake::gather(ExactBakeStats* stats) {
                 }
         });
     });
+    m_owned.reset();
     m_phases.mark("other blocks and gather");
     report(stats, m_queries, m_signs, m_filmSums);
     if (stats) stats->surfaceBlocks = m_kept.size();

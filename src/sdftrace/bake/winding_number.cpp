@@ -1,5 +1,7 @@
 #include "sdftrace/bake/winding_number.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -11,6 +13,7 @@ namespace sdft {
 namespace {
 constexpr double kFourPi = 12.566370614359172;
 constexpr int kLeafSize = 8;
+constexpr int kParallelBuild = 16384;  // triangles below which a subtree builds in one task
 
 }  // namespace
 
@@ -41,8 +44,16 @@ inline float solidAngleFloat(Vec3 p, const float* t) {
 WindingNumber::WindingNumber(const TriangleMesh& mesh, double beta) : m_mesh(mesh), m_beta(beta) {
     m_order.resize(mesh.triangles.size());
     std::iota(m_order.begin(), m_order.end(), 0);
-    m_nodes.reserve(2 * mesh.triangles.size() / kLeafSize + 2);
-    if (!mesh.triangles.empty()) build(0, static_cast<int>(mesh.triangles.size()));
+    if (!mesh.triangles.empty()) {
+        // The tree's shape follows from the triangle count alone (median splits), so each
+        // subtree's nodes have known indices (depth first, left before right) and the two halves
+        // of a node build in parallel into the same array as a sequential build would.
+        const int n = static_cast<int>(mesh.triangles.size());
+        std::map<int, int> sizes;
+        subtreeSize(n, sizes);
+        m_nodes.resize(sizes.at(n));
+        build(0, n, 0, sizes);
+    }
     // Leaves read their triangles' corners from one contiguous array, in tree order.
     m_corners.reserve(9 * m_order.size());
     for (int t : m_order)
@@ -52,9 +63,16 @@ WindingNumber::WindingNumber(const TriangleMesh& mesh, double beta) : m_mesh(mes
         }
 }
 
-int WindingNumber::build(int first, int count) {
-    int index = static_cast<int>(m_nodes.size());
-    m_nodes.push_back(Node{});
+int WindingNumber::subtreeSize(int count, std::map<int, int>& sizes) {
+    if (auto it = sizes.find(count); it != sizes.end()) return it->second;
+    int nodes = 1;
+    if (count > kLeafSize)
+        nodes += subtreeSize(count / 2, sizes) + subtreeSize(count - count / 2, sizes);
+    sizes[count] = nodes;
+    return nodes;
+}
+
+void WindingNumber::build(int first, int count, int index, const std::map<int, int>& sizes) {
     Node n;
     n.first = first;
     n.count = count;
@@ -77,14 +95,16 @@ int WindingNumber::build(int first, int count) {
     n.hi = b.hi;
     n.cx = cx, n.cy = cy, n.cz = cz;
     n.nx = nx, n.ny = ny, n.nz = nz;
-    n.radius = 0;
+    // One square root for the largest squared distance: the root is monotone, so this is the
+    // largest of the roots exactly.
+    double radius2 = 0;
     for (int i = first; i < first + count; ++i)
         for (uint32_t v : m_mesh.triangles[m_order[i]]) {
             Vec3 p = m_mesh.positions[v];
-            n.radius =
-                std::max(n.radius, std::sqrt((p.x - cx) * (p.x - cx) + (p.y - cy) * (p.y - cy) +
-                                             (p.z - cz) * (p.z - cz)));
+            radius2 = std::max(radius2, (p.x - cx) * (p.x - cx) + (p.y - cy) * (p.y - cy) +
+                                            (p.z - cz) * (p.z - cz));
         }
+    n.radius = std::sqrt(radius2);
     if (count > kLeafSize) {
         // Median split of the centroids along the longest axis.
         Vec3 e = centroids.extent();
@@ -98,11 +118,16 @@ int WindingNumber::build(int first, int count) {
         std::nth_element(m_order.begin() + first, m_order.begin() + mid,
                          m_order.begin() + first + count,
                          [&](int a, int c) { return key(a) < key(c); });
-        n.left = build(first, mid - first);
-        n.right = build(mid, first + count - mid);
+        n.left = index + 1;
+        n.right = index + 1 + sizes.at(mid - first);
+        auto left = [&] { build(first, mid - first, n.left, sizes); };
+        auto right = [&] { build(mid, first + count - mid, n.right, sizes); };
+        if (count > kParallelBuild)
+            tbb::parallel_invoke(left, right);
+        else
+            left(), right();
     }
     m_nodes[index] = n;
-    return index;
 }
 
 double WindingNumber::exact(Vec3 p) const {
