@@ -10,6 +10,7 @@
 #include <array>
 #include <atomic>
 #include <bit>
+#include <cstring>
 #include <memory>
 
 #if defined(__SSE2__)
@@ -80,10 +81,6 @@ class NarrowBandBake {
         return m_slot[ownerIndex(i >> m_shift, j >> m_shift, k >> m_shift)] * m_perOwner +
                (static_cast<size_t>(k & m_mask) * m_B + (j & m_mask)) * m_B + (i & m_mask);
     }
-    bool listed(int oi, int oj, int ok) const {
-        const size_t o = ownerIndex(oi, oj, ok);
-        return m_band.start[o + 1] > m_band.start[o];
-    }
     // Whether the vertex at local (li, lj, lk) of owner slot `sl` is held by a surface block.
     bool needed(int32_t sl, int li, int lj, int lk) const {
         return (m_heldBy[sl] & subsetMask(li, lj, lk)) != 0;
@@ -93,6 +90,7 @@ class NarrowBandBake {
     template <class F>
     void forOwnersNearPlane(size_t t, const VertexRange& r, float grow, F&& f) const;
     void markCandidates();
+    void dilateOwners(std::vector<uint8_t>& v, int dir) const;
     size_t ownerDistances(int oi, int oj, int ok, std::vector<std::pair<float, uint32_t>>& order);
     void nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], const int hi[3], int i0, int j0,
                            int k0, float* out) const;
@@ -106,6 +104,7 @@ class NarrowBandBake {
     const GridShape& m_s;
     const int m_B, m_shift, m_mask;
     const float m_bandVoxels, m_h, m_reach;
+    float m_slack = 0;  // absolute rounding allowance of the distance bounds (nearestToTriangle)
     const bool m_progress;
     std::vector<BakeStage> m_stages;
     StageClock m_phases;
@@ -163,6 +162,12 @@ NarrowBandBake::NarrowBandBake(const TriangleMesh& mesh, const GridShape& s, int
     m_numBlocks = static_cast<size_t>(m_nb[0]) * m_nb[1] * m_nb[2];
     m_numOwners = static_cast<size_t>(m_no[0]) * m_no[1] * m_no[2];
     m_perOwner = static_cast<size_t>(B) * B * B;
+    float scale = 0;
+    for (int a = 0; a < 3; ++a)
+        scale = std::max(scale, std::fabs(s.origin[a]) + std::fabs(s.origin[a] + s.cells[a] * m_h));
+    for (const Vec3& p : mesh.positions)
+        scale = std::max(scale, std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))));
+    m_slack = 1e-6f * scale;
 }
 
 Grid NarrowBandBake::run(ExactBakeStats* stats) {
@@ -231,18 +236,21 @@ OwnerLists NarrowBandBake::binTriangles(float grow) {
     });
     for (size_t o = 0; o < m_numOwners; ++o) l.start[o + 1] += l.start[o];
     assignHuge(l.items, l.start[m_numOwners], 0u);
-    std::vector<uint32_t> fill(l.start.begin(), l.start.end() - 1);
     m_arena.execute([&] {
         tbb::parallel_for(size_t(0), mesh.triangles.size(), [&](size_t t) {
             const VertexRange& r = l.ranges[t];
             if (r.empty()) return;
             forOwnersNearPlane(t, r, grow, [&](size_t o) {
                 uint32_t at =
-                    std::atomic_ref<uint32_t>(fill[o]).fetch_add(1, std::memory_order_relaxed);
+                    std::atomic_ref<uint32_t>(l.start[o]).fetch_add(1, std::memory_order_relaxed);
                 l.items[at] = static_cast<uint32_t>(t);
             });
         });
     });
+    // The starts served as cursors and now hold the ends, that is the next list's start: one
+    // place back (no copy of the starts, 240 MB at 2048 cells).
+    std::memmove(l.start.data() + 1, l.start.data(), m_numOwners * sizeof(uint32_t));
+    l.start[0] = 0;
     return l;
 }
 
@@ -266,31 +274,36 @@ void NarrowBandBake::markCandidates() {
     assignHuge(m_candidate, m_numBlocks, uint8_t{0});
     assignHuge(m_slot, m_numOwners, -1);
     m_rowNeeded.assign(static_cast<size_t>(no[1]) * no[2], 0);
+    // Both relations are 2x2x2 box dilations over the owner lattice (blocks index a part of it),
+    // done one axis at a time in one byte per owner.
+    std::vector<uint8_t> mark;
+    assignHuge(mark, m_numOwners, uint8_t{0});
     m_arena.execute([&] {
+        tbb::parallel_for(size_t(0), m_numOwners,
+                          [&](size_t o) { mark[o] = m_band.start[o + 1] > m_band.start[o]; });
+        dilateOwners(mark, +1);
         tbb::parallel_for(0, nb[2], [&](int bk) {
             for (int bj = 0; bj < nb[1]; ++bj)
-                for (int bi = 0; bi < nb[0]; ++bi) {
-                    bool any = false;
-                    for (int d = 0; d < 8 && !any; ++d) {
-                        int oi = bi + (d & 1), oj = bj + ((d >> 1) & 1), ok = bk + (d >> 2);
-                        any = oi < no[0] && oj < no[1] && ok < no[2] && listed(oi, oj, ok);
-                    }
-                    m_candidate[blockIndex(bi, bj, bk)] = any;
-                }
+                std::copy_n(&mark[ownerIndex(0, bj, bk)], nb[0],
+                            &m_candidate[blockIndex(0, bj, bk)]);
         });
         // An owner is needed by the candidates among the (up to 8) blocks that use its vertices.
         tbb::parallel_for(0, no[2], [&](int ok) {
             for (int oj = 0; oj < no[1]; ++oj) {
-                bool row = false;
+                uint8_t* row = &mark[ownerIndex(0, oj, ok)];
+                std::fill_n(row, no[0], uint8_t{0});
+                if (oj < nb[1] && ok < nb[2])
+                    std::copy_n(&m_candidate[blockIndex(0, oj, ok)], nb[0], row);
+            }
+        });
+        dilateOwners(mark, -1);
+        tbb::parallel_for(0, no[2], [&](int ok) {
+            for (int oj = 0; oj < no[1]; ++oj) {
+                const size_t first = ownerIndex(0, oj, ok);
+                uint8_t row = 0;
                 for (int oi = 0; oi < no[0]; ++oi) {
-                    bool any = false;
-                    for (int d = 0; d < 8 && !any; ++d) {
-                        int bi = oi - (d & 1), bj = oj - ((d >> 1) & 1), bk = ok - (d >> 2);
-                        any = bi >= 0 && bj >= 0 && bk >= 0 && bi < nb[0] && bj < nb[1] &&
-                              bk < nb[2] && m_candidate[blockIndex(bi, bj, bk)];
-                    }
-                    if (any) m_slot[ownerIndex(oi, oj, ok)] = 0;
-                    row |= any;
+                    if (mark[first + oi]) m_slot[first + oi] = 0;
+                    row |= mark[first + oi];
                 }
                 m_rowNeeded[static_cast<size_t>(ok) * no[1] + oj] = row;
             }
@@ -302,6 +315,38 @@ void NarrowBandBake::markCandidates() {
     const size_t ownedCount = static_cast<size_t>(m_owners) * m_perOwner;
     m_owned = std::make_unique_for_overwrite<float[]>(ownedCount);
     adviseHugePages(m_owned.get(), ownedCount * sizeof(float));
+}
+
+// In place over the owner lattice, one axis after the other: v[o] |= v[o + dir] along x, y and
+// z (dir = +1 or -1), so that v[o] ends as the OR over the 2x2x2 box from o towards dir.
+void NarrowBandBake::dilateOwners(std::vector<uint8_t>& v, int dir) const {
+    const int* no = m_no;
+    const size_t sy = static_cast<size_t>(no[0]), sz = sy * no[1];
+    // Each pass reads the neighbour before it is changed: ascending for +1, descending for -1.
+    auto orRows = [&](uint8_t* to, const uint8_t* from, size_t n) {
+        for (size_t i = 0; i < n; ++i) to[i] |= from[i];
+    };
+    tbb::parallel_for(0, no[1] * no[2], [&](int row) {
+        uint8_t* r = v.data() + static_cast<size_t>(row) * sy;
+        if (dir > 0)
+            for (int i = 0; i + 1 < no[0]; ++i) r[i] |= r[i + 1];
+        else
+            for (int i = no[0] - 1; i > 0; --i) r[i] |= r[i - 1];
+    });
+    tbb::parallel_for(0, no[2], [&](int ok) {
+        uint8_t* slab = v.data() + ok * sz;
+        if (dir > 0)
+            for (int j = 0; j + 1 < no[1]; ++j) orRows(slab + j * sy, slab + (j + 1) * sy, sy);
+        else
+            for (int j = no[1] - 1; j > 0; --j) orRows(slab + j * sy, slab + (j - 1) * sy, sy);
+    });
+    tbb::parallel_for(0, no[1], [&](int oj) {
+        uint8_t* col = v.data() + oj * sy;
+        if (dir > 0)
+            for (int k = 0; k + 1 < no[2]; ++k) orRows(col + k * sz, col + (k + 1) * sz, sy);
+        else
+            for (int k = no[2] - 1; k > 0; --k) orRows(col + k * sz, col + (k - 1) * sz, sy);
+    });
 }
 
 // 3. Distances, one task per row of owners.
@@ -373,10 +418,12 @@ size_t NarrowBandBake::ownerDistances(int oi, int oj, int ok,
 }
 
 // Lowers the best distances of the owner's vertices in [lo, hi] (out: the owner's B^3 samples,
-// (i0, j0, k0) its first vertex) to the triangle abc's. Two conservative tests skip a vertex
-// before the exact closest point (they carry a 1e-4 margin, so the result is the same whether
-// they are computed in vectors or one by one): its distance to the triangle's plane, and to the
-// triangle's bounding sphere.
+// (i0, j0, k0) its first vertex) to the triangle abc's. Two lower bounds skip a vertex before the
+// exact closest point: its distance to the triangle's plane, and to the disk in that plane that
+// holds the triangle (centred on its centroid). Both are conservative: they give up a relative
+// 1e-4 and an absolute m_slack, the rounding of coordinates far larger than the distances (at
+// 2048 cells a vertex 0.4 voxels from the surface is 4e-4 from it at coordinates near 1, where
+// float spacing is 1e-7), so no triangle that could lower a best is skipped.
 void NarrowBandBake::nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], const int hi[3],
                                        int i0, int j0, int k0, float* out) const {
     const int B = m_B;
@@ -392,12 +439,13 @@ void NarrowBandBake::nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], 
         const float d = length(p - closestPointOnTriangle(p, a, b, c));
         if (d < best) best = d;
     };
+    const float slack = m_slack, r1 = radius * 1.0001f;
 #if defined(__SSE2__)
-    // A row of 4 vertices along x is one vector (B = 8: two); both tests on all four, then the
+    // A row of 4 vertices along x is one vector (B = 8: two); both bounds on all four, then the
     // exact distance for those that pass.
     const Vec3 origin = m_sampler.position(0, 0, 0);
     const float h = m_h;
-    const __m128 lane = _mm_setr_ps(0, 1, 2, 3);
+    const __m128 lane = _mm_setr_ps(0, 1, 2, 3), zero = _mm_setzero_ps();
     for (int c0 = i0; c0 < i0 + B; c0 += 4) {
         if (c0 + 3 < lo[0] || c0 > hi[0]) continue;
         const __m128 fi = _mm_add_ps(_mm_set1_ps(static_cast<float>(c0)), lane);
@@ -407,30 +455,27 @@ void NarrowBandBake::nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], 
         const __m128 planeX = _mm_mul_ps(_mm_sub_ps(x, _mm_set1_ps(a.x)), _mm_set1_ps(nrm.x));
         const __m128 dcx = _mm_sub_ps(x, _mm_set1_ps(centre.x));
         const __m128 dcx2 = _mm_mul_ps(dcx, dcx);
-        const __m128 planeScale = _mm_set1_ps(invN2 * 0.9999f);
         for (int k = lo[2]; k <= hi[2]; ++k) {
             const float z = origin.z + static_cast<float>(k) * h;
             for (int j = lo[1]; j <= hi[1]; ++j) {
                 const float y = origin.y + static_cast<float>(j) * h;
                 float* row = out + ((k - k0) * B + (j - j0)) * B + (c0 - i0);
-                const __m128 best = _mm_loadu_ps(row);
+                const __m128 reach = _mm_add_ps(_mm_loadu_ps(row), _mm_set1_ps(slack));
+                const __m128 reach2 = _mm_mul_ps(reach, reach);
                 const __m128 plane =
                     _mm_add_ps(planeX, _mm_set1_ps((y - a.y) * nrm.y + (z - a.z) * nrm.z));
-                const __m128 farPlane = _mm_cmpgt_ps(
-                    _mm_mul_ps(_mm_mul_ps(plane, plane), planeScale), _mm_mul_ps(best, best));
+                const __m128 h2 = _mm_mul_ps(_mm_mul_ps(plane, plane), _mm_set1_ps(invN2));
+                const __m128 farPlane = _mm_cmpgt_ps(_mm_mul_ps(h2, _mm_set1_ps(0.9999f)), reach2);
                 const float dy = y - centre.y, dz = z - centre.z;
                 const __m128 d2 = _mm_add_ps(dcx2, _mm_set1_ps(dy * dy + dz * dz));
-                const __m128 h2 = _mm_mul_ps(_mm_mul_ps(plane, plane), _mm_set1_ps(invN2));
                 const __m128 tol = _mm_add_ps(_mm_mul_ps(d2, _mm_set1_ps(4e-5f)),
                                               _mm_set1_ps(4e-5f * radius * radius));
                 const __m128 rho =
-                    _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(_mm_sub_ps(d2, h2), tol), _mm_setzero_ps()));
-                const __m128 e =
-                    _mm_max_ps(_mm_sub_ps(rho, _mm_set1_ps(radius * 1.0001f)), _mm_setzero_ps());
-                const __m128 farDisk = _mm_cmpgt_ps(
-                    _mm_sub_ps(_mm_add_ps(h2, _mm_mul_ps(e, e)), tol), _mm_mul_ps(best, best));
-                const __m128 farSphere = farDisk;
-                int m = _mm_movemask_ps(_mm_andnot_ps(_mm_or_ps(farPlane, farSphere), valid));
+                    _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(_mm_sub_ps(d2, h2), tol), zero));
+                const __m128 e = _mm_max_ps(_mm_sub_ps(rho, _mm_set1_ps(r1)), zero);
+                const __m128 farDisk =
+                    _mm_cmpgt_ps(_mm_sub_ps(_mm_add_ps(h2, _mm_mul_ps(e, e)), tol), reach2);
+                int m = _mm_movemask_ps(_mm_andnot_ps(_mm_or_ps(farPlane, farDisk), valid));
                 while (m) {
                     exact(c0 + std::countr_zero(static_cast<unsigned>(m)), j, k);
                     m &= m - 1;
@@ -443,11 +488,13 @@ void NarrowBandBake::nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], 
         for (int j = lo[1]; j <= hi[1]; ++j)
             for (int i = lo[0]; i <= hi[0]; ++i) {
                 const Vec3 p = m_sampler.position(i, j, k);
-                const float best = out[((k - k0) * B + (j - j0)) * B + (i - i0)];
-                const float plane = dot(p - a, nrm);
-                if (plane * plane * invN2 * 0.9999f > best * best) continue;
-                const float reachOut = best + radius;
-                if (dot(p - centre, p - centre) * 0.9999f > reachOut * reachOut) continue;
+                const float reach = out[((k - k0) * B + (j - j0)) * B + (i - i0)] + slack;
+                const float plane = dot(p - a, nrm), h2 = plane * plane * invN2;
+                if (h2 * 0.9999f > reach * reach) continue;
+                const float d2 = dot(p - centre, p - centre);
+                const float tol = 4e-5f * d2 + 4e-5f * radius * radius;
+                const float e = std::max(std::sqrt(std::max(d2 - h2 - tol, 0.0f)) - r1, 0.0f);
+                if (h2 + e * e - tol > reach * reach) continue;
                 exact(i, j, k);
             }
 #endif
@@ -568,6 +615,7 @@ void NarrowBandBake::signs() {
             m_integerWinding ? std::make_unique_for_overwrite<Carried[]>(layer) : nullptr};
     });
     m_arena.execute([&] { m_sampler.prepareSigns(); });
+    m_phases.mark("winding tree");
     m_cornerWinding.assign(m_integerWinding ? m_owners : 0, 0);
     ownerGradients();
     m_arena.execute([&] {
