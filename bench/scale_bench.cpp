@@ -2,10 +2,13 @@
 // each mesh becomes a level set by OpenVDB's meshToLevelSet (band 3) written to a .vdb file, as a
 // user's level set would arrive; then, for three cameras (framed automatically, a close-up that
 // fills the frame, a grazing view skimming the top of the object) and two image sizes:
-//  - render phase: `sdftrace render file.vdb --no-shadows` as a process (the time its summary line
-//    gives) against OpenVDB's LevelSetRayIntersector with its normal and a headlight (what a
-//    minimal OpenVDB program does) and Embree's rtcIntersect1 on the source triangles with the
-//    geometric normal and the same headlight, both in this process on the same threads;
+//  - render phase: `sdftrace render file.vdb --no-shadows --grid-normals analytic` as a process
+//    (the time its summary line gives) against OpenVDB's LevelSetRayIntersector with its normal
+//    and a headlight (what a minimal OpenVDB program does) and Embree's rtcIntersect1 on the
+//    source triangles with the geometric normal and the same headlight, both in this process on
+//    the same threads. Both grid renderers then take the gradient of the trilinear interpolant in
+//    the hit's cell as the normal (OpenVDB: BoxStencil::gradient); sdftrace's default, smooth
+//    normals from interpolated central differences (32 samples), is timed too (column "smooth");
 //  - whole process: the sdftrace process's wall time (PNG written) against the minimal OpenVDB
 //    program bench/openvdb_render.cpp as a process (reads the file, renders as above, writes a
 //    PPM);
@@ -316,19 +319,20 @@ void runMesh(const std::string& path, const Options& o) {
         double(vdb->memUsage()) / grid.memoryBytes());
     std::printf(
         "| camera | size | sdftrace render | OpenVDB render | ratio | Embree | vs Embree | "
-        "sdftrace process | OpenVDB program | ratio | hits | hit mismatches | DDA steps / tests "
-        "per pixel |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+        "smooth | ratio | sdftrace process | OpenVDB program | ratio | hits | hit mismatches | "
+        "DDA steps / tests per pixel |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::fflush(stdout);
 
     const EmbreeScene embree(mesh);
     for (int size : o.sizes)
         for (const auto& [camName, cd] : cameras(grid, size)) {
-            const std::string cmd =
+            const std::string smoothCmd =
                 std::string(SDFT_CLI_PATH) + " render " + vdbPath + " --no-shadows -q --threads " +
                 std::to_string(o.threads) + " --width " + std::to_string(size) + " --height " +
                 std::to_string(size) + " --eye " + vec(cd.eye) + " --target " + vec(cd.target) +
                 " --up " + vec(cd.up) + " --fov " + fmt("%.9g", cd.fovDeg);
+            const std::string cmd = smoothCmd + " --grid-normals analytic";
             const std::string vdbCmd = std::string(SDFT_OPENVDB_RENDER_PATH) + " " + vdbPath + " " +
                                        vec(cd.eye) + " " + vec(cd.target) + " " + vec(cd.up) + " " +
                                        fmt("%.9g", cd.fovDeg) + " " + std::to_string(size) + " " +
@@ -336,7 +340,7 @@ void runMesh(const std::string& path, const Options& o) {
                                        " /tmp/sdftrace-scale-bench.ppm";
             if (o.commands)
                 std::fprintf(stderr, "%s %d²: %s\n", camName.c_str(), size, cmd.c_str());
-            std::vector<double> phase, wall, vdbRender, vdbWhole, embreeMs;
+            std::vector<double> phase, smoothPhase, wall, vdbRender, vdbWhole, embreeMs;
             float travSteps = 0, isectTests = 0, hitPercent = 0;
             std::vector<float> image;
             std::vector<uint8_t> vdbMask;
@@ -356,6 +360,10 @@ void runMesh(const std::string& path, const Options& o) {
                                 "DDA: %f traversal steps and %f intersection tests", &travSteps,
                                 &isectTests);
                 wall.push_back(w);
+                const std::string smoothErr =
+                    runProcess(smoothCmd + " -o /tmp/sdftrace-scale-bench.png", w);
+                smoothPhase.push_back(
+                    1000.0 * std::atof(smoothErr.c_str() + smoothErr.find(" in ") + 4));
                 double vw = 0;
                 runProcess(vdbCmd, vw);
                 vdbWhole.push_back(vw);
@@ -373,12 +381,12 @@ void runMesh(const std::string& path, const Options& o) {
             const long bad = mismatches(
                 hitsFromDepthPfm("/tmp/sdftrace-scale-depth.pfm", size, size), vdbMask, size, size);
             const double p = median(phase), vr = median(vdbRender), e = median(embreeMs),
-                         pw = median(wall), vw = median(vdbWhole);
+                         pw = median(wall), vw = median(vdbWhole), ps = median(smoothPhase);
             std::printf(
-                "| %s | %d² | %.1f ms | %.1f ms | %.2fx | %.1f ms | %.2fx | %.0f ms | %.0f ms | "
-                "%.2fx | %.0f%% | %ld | %.1f / %.2f |\n",
-                camName.c_str(), size, p, vr, vr / p, e, p / e, pw, vw, vw / pw, hitPercent, bad,
-                travSteps, isectTests);
+                "| %s | %d² | %.1f ms | %.1f ms | %.2fx | %.1f ms | %.2fx | %.1f ms | %.2fx | "
+                "%.0f ms | %.0f ms | %.2fx | %.0f%% | %ld | %.1f / %.2f |\n",
+                camName.c_str(), size, p, vr, vr / p, e, p / e, ps, vr / ps, pw, vw, vw / pw,
+                hitPercent, bad, travSteps, isectTests);
             std::fflush(stdout);
         }
     if (!o.keep) std::remove(vdbPath.c_str());
