@@ -362,8 +362,8 @@ void runMesh(const std::string& path, const Options& o) {
                 wall.push_back(w);
                 const std::string smoothErr =
                     runProcess(smoothCmd + " -o /tmp/sdftrace-scale-bench.png", w);
-                smoothPhase.push_back(
-                    1000.0 * std::atof(smoothErr.c_str() + smoothErr.find(" in ") + 4));
+                smoothPhase.push_back(1000.0 *
+                                      std::atof(smoothErr.c_str() + smoothErr.find(" in ") + 4));
                 double vw = 0;
                 runProcess(vdbCmd, vw);
                 vdbWhole.push_back(vw);
