@@ -13,12 +13,16 @@ namespace sdft {
 // Version 1: distances only. Version 2 appends texture coordinates (Liktor 2008, §5.5.2); it is
 // written only for grids that carry them. Version 3 holds the same sections compressed: chunks of
 // byte-shuffled floats compressed by zstd independently (written and read in parallel, each with
-// its own checksum). All three are read.
-constexpr uint32_t kSdfgVersion = 3;
+// its own checksum). Version 4 (written by default) stores a sparse grid's flags as its two-level
+// table (block_table.h: one byte per tile of 8^3 blocks, then the flags of the tiles that vary)
+// instead of one byte per block of the bounding box, so that grids 8192 cells across save and load
+// in memory that follows their surface. All four are read.
+constexpr uint32_t kSdfgVersion = 4;
 
 struct SdfgWriteOptions {
-    bool compress = true;  // version 3; false: version 1 or 2, the raw buffers
+    bool compress = true;  // version 4 (or `version`); false: version 1 or 2, the raw buffers
     int level = 3;         // zstd level (1 fastest .. 19 smallest)
+    uint32_t version = 4;  // compressed: 4, or 3 (flat block flags) for readers of that version
 };
 
 // Atomic (temporary name + rename).

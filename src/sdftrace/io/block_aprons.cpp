@@ -34,7 +34,6 @@ struct Layout {
           words((apron + 63) / 64) {
         for (int a = 0; a < 3; ++a) blocks[a] = (s.cells[a] + B - 1) / B;
     }
-    size_t numBlocks() const { return static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2]; }
     void coords(size_t b, int c[3]) const {
         c[0] = static_cast<int>(b % blocks[0]);
         c[1] = static_cast<int>(b / blocks[0] % blocks[1]);
@@ -129,26 +128,32 @@ SplitBlocks splitBlocks(const Grid& grid) {
     return out;
 }
 
-std::vector<float> joinBlocks(const GridShape& shape, int blockSize,
-                              const std::vector<uint8_t>& flags, const SplitBlocks& split,
-                              const std::string& source) {
+std::vector<float> joinBlocks(const GridShape& shape, int blockSize, const BlockTable& table,
+                              const SplitBlocks& split, const std::string& source) {
     const Layout L(shape, blockSize);
     const auto aprons = apronPositions(L.B);
     auto corrupt = [&](const std::string& what) {
         return InputError(source + ": corrupt compressed .sdfg: " + what);
     };
-    if (flags.size() != L.numBlocks()) throw corrupt("block flag count");
-    std::vector<int64_t> surfaceOf(flags.size(), -1);
-    std::vector<size_t> blockOf;
-    for (size_t b = 0; b < flags.size(); ++b)
-        if (flags[b] == static_cast<uint8_t>(BlockFlag::Surface)) {
-            surfaceOf[b] = static_cast<int64_t>(blockOf.size());
-            blockOf.push_back(b);
-        }
-    const size_t surface = blockOf.size();
+    for (int a = 0; a < 3; ++a)
+        if (table.blocks[a] != L.blocks[a]) throw corrupt("block table size");
+    // Per slot the surface index (flat block order), and per surface block its coordinates.
+    size_t surface = 0;
+    const std::vector<int32_t> surfaceOf = table.surfaceIndices(surface);
+    if (surfaceOf.empty() && surface > 0) throw corrupt("more than 2^31 - 1 surface blocks");
     if (split.own.size() != surface * L.own || split.masks.size() != surface * L.words)
         throw corrupt("the flags name " + std::to_string(surface) +
                       " surface blocks; the samples and masks do not");
+    std::vector<std::array<int, 3>> blockOf(surface);
+    const std::vector<int> own = table.ownTiles();
+    tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
+        const size_t page = (p + kFirstOwnPage) * kPageEntries;
+        forEachBlockOfTile(L.blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
+                           [&](int bi, int bj, int bk) {
+                               const int32_t n = surfaceOf[page + pageLocal(bi, bj, bk)];
+                               if (n >= 0) blockOf[static_cast<size_t>(n)] = {bi, bj, bk};
+                           });
+    });
     std::vector<size_t> start(surface + 1, 0);
     for (size_t s = 0; s < surface; ++s) {
         size_t kept = 0;
@@ -173,8 +178,7 @@ std::vector<float> joinBlocks(const GridShape& shape, int blockSize,
             for (int j = 0; j < L.B; ++j)
                 for (int i = 0; i < L.B; ++i)
                     dst[(k * L.V + j) * L.V + i] = own[(k * L.B + j) * L.B + i];
-        int c[3];
-        L.coords(blockOf[s], c);
+        const int* c = blockOf[s].data();
         // The 7 neighbours' own samples (null: past the grid or without samples).
         const float* neighbour[8] = {nullptr};
         for (int code = 1; code < 8; ++code) {
@@ -185,8 +189,7 @@ std::vector<float> joinBlocks(const GridShape& shape, int blockSize,
                 inside = inside && o[a] < L.blocks[a];
             }
             if (!inside) continue;
-            const int64_t n =
-                surfaceOf[(static_cast<size_t>(o[2]) * L.blocks[1] + o[1]) * L.blocks[0] + o[0]];
+            const int32_t n = surfaceOf[table.slot(o[0], o[1], o[2])];
             if (n >= 0) neighbour[code] = split.own.data() + static_cast<size_t>(n) * L.own;
         }
         const uint64_t* mask = split.masks.data() + s * L.words;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "sdftrace/field/block_table.h"
 #include "sdftrace/field/grid.h"
 
 namespace sdft {
@@ -25,11 +26,11 @@ int apronWords(int blockSize);
 
 SplitBlocks splitBlocks(const Grid& grid);
 
-// The surface blocks' (B+1)^3 samples again. Throws InputError naming `source` when the masks,
-// the explicit samples and the flags do not fit together (an implicit apron whose owner is not a
-// surface block, a wrong count).
-std::vector<float> joinBlocks(const GridShape& shape, int blockSize,
-                              const std::vector<uint8_t>& flags, const SplitBlocks& split,
-                              const std::string& source);
+// The surface blocks' (B+1)^3 samples again, the blocks numbered in flat block order (z, y, x)
+// as in the grid. Throws InputError naming `source` when the masks, the explicit samples and the
+// flags do not fit together (an implicit apron whose owner is not a surface block, a wrong count).
+// Nothing is sized by the grid's bounding box but what `table` holds (its tiles).
+std::vector<float> joinBlocks(const GridShape& shape, int blockSize, const BlockTable& table,
+                              const SplitBlocks& split, const std::string& source);
 
 }  // namespace sdft

@@ -119,9 +119,18 @@ struct CompressedHeader {
 };
 static_assert(sizeof(CompressedHeader) == 32);
 
-// The sections of the uncompressed payload, in file order. Dense: samples. Sparse: block flags,
-// the surface blocks' own samples, their apron masks, the explicit apron samples
-// (block_aprons.h). Then texture coordinates, if any, per stored sample. Floats are byte-shuffled
+// Version 4 follows it with the number of own pages of the block table (sparse; 0 when dense),
+// which sizes the section of their flags.
+struct TableHeader {
+    uint64_t ownPages;
+};
+static_assert(sizeof(TableHeader) == 8);
+
+// The sections of the uncompressed payload, in file order. Dense: samples. Sparse: the block
+// flags (version 3: one byte per block of the box; version 4: one byte per tile, 0 outside, 1
+// inside, 2 own page, then the own pages' 512 flags each in tile order), the surface blocks' own
+// samples, their apron masks, the explicit apron samples (block_aprons.h). Then texture
+// coordinates, if any, per stored sample. Floats are byte-shuffled
 // before compression (the four bytes of each float in four planes: sign and exponent bytes
 // repeat, and compress far better).
 struct Section {
@@ -162,17 +171,30 @@ void unshuffleFloats(const char* in, char* out, uint64_t bytes) {
         for (int b = 0; b < 4; ++b) out[4 * i + b] = in[b * n + i];
 }
 
-void saveCompressed(const Grid& grid, const std::string& path, int level) {
+void saveCompressed(const Grid& grid, const std::string& path, int level, uint32_t version) {
     std::vector<Section> sections;
     SplitBlocks split;
-    std::vector<uint8_t> flags;
+    std::vector<uint8_t> flags, tileKinds;
+    TableHeader th{0};
     if (grid.kind() == GridKind::Dense) {
         sections.push_back(section(grid.samples(), true));
     } else {
         split = splitBlocks(grid);
-        flags = grid.denseFlags();
-        sections = {section(flags, false), section(split.own, true), section(split.masks, false),
-                    section(split.explicitly, true)};
+        if (version == 3) {
+            flags = grid.denseFlags();
+            sections = {section(flags, false)};
+        } else {
+            tileKinds.resize(grid.tilePage().size());
+            for (size_t t = 0; t < tileKinds.size(); ++t)
+                tileKinds[t] = static_cast<uint8_t>(std::min(grid.tilePage()[t], kFirstOwnPage));
+            const std::vector<uint8_t>& slots = grid.flags();
+            th.ownPages = slots.size() / kPageEntries - kFirstOwnPage;
+            sections = {section(tileKinds, false),
+                        {reinterpret_cast<const char*>(slots.data()) + kFirstOwnPage * kPageEntries,
+                         th.ownPages * kPageEntries, false}};
+        }
+        sections.insert(sections.end(), {section(split.own, true), section(split.masks, false),
+                                         section(split.explicitly, true)});
     }
     if (!grid.texcoords().empty()) sections.push_back(section(grid.texcoords(), true));
     std::vector<uint64_t> sectionBytes;
@@ -201,7 +223,7 @@ void saveCompressed(const Grid& grid, const std::string& path, int level) {
         out.resize(n);
     });
 
-    Header h = headerOf(grid, 3);
+    Header h = headerOf(grid, version);
     CompressedHeader ch{};
     ch.texKind = grid.texcoords().empty() ? 0 : static_cast<uint32_t>(grid.texcoordKind());
     ch.chunkBytes = kChunkBytes;
@@ -210,12 +232,15 @@ void saveCompressed(const Grid& grid, const std::string& path, int level) {
     ch.chunkCount = chunks.size();
     std::vector<uint64_t> table;
     for (const auto& p : packed) table.push_back(p.size());
-    h.payloadBytes = sizeof ch + table.size() * sizeof(uint64_t);
+    const size_t thBytes = version >= 4 ? sizeof th : 0;
+    h.payloadBytes = sizeof ch + thBytes + table.size() * sizeof(uint64_t);
     for (uint64_t n : table) h.payloadBytes += n;
-    h.checksum = fnv1a64(table.data(), table.size() * sizeof(uint64_t), fnv1a64(&ch, sizeof ch));
+    h.checksum = fnv1a64(table.data(), table.size() * sizeof(uint64_t),
+                         fnv1a64(&th, thBytes, fnv1a64(&ch, sizeof ch)));
     AtomicOutput out(path);
     out.write(&h, sizeof h);
     out.write(&ch, sizeof ch);
+    out.write(&th, thBytes);
     out.write(table.data(), table.size() * sizeof(uint64_t));
     for (const auto& p : packed) out.write(p.data(), p.size());
     out.commit();
@@ -223,16 +248,18 @@ void saveCompressed(const Grid& grid, const std::string& path, int level) {
 }  // namespace
 
 void saveSdfg(const Grid& grid, const std::string& path, const SdfgWriteOptions& options) {
+    SDFT_CHECK(options.version == 3 || options.version == 4);
     // Versions 1-3 store one flag per block of the bounding box (the grid keeps them paged, see
     // block_table.h): checked before that array is made.
-    if (grid.kind() == GridKind::Sparse) {
+    const bool flatFlags = !options.compress || options.version == 3;
+    if (grid.kind() == GridKind::Sparse && flatFlags) {
         const GridView v = grid.view();
         checkMemoryBudget(static_cast<double>(v.blocks[0]) * v.blocks[1] * v.blocks[2], path,
-                          "the flat block flags the .sdfg format stores",
-                          "save the grid as .vdb, which stores its tiles sparsely");
+                          "the flat block flags of .sdfg versions 1-3",
+                          "save it compressed (version 4 stores the block table by tiles)");
     }
     if (options.compress)
-        saveCompressed(grid, path, options.level);
+        saveCompressed(grid, path, options.level, options.version);
     else
         saveRaw(grid, path);
 }
@@ -342,8 +369,8 @@ using CorruptError = std::function<InputError(const std::string&)>;
 // A version-3 file's section sizes (section order as in sectionsOf), from its headers; every count
 // checked against the grid before anything is allocated from it.
 std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
-                                         const CompressedHeader& ch, const std::string& path,
-                                         const CorruptError& corrupt) {
+                                         const CompressedHeader& ch, const TableHeader& th,
+                                         const std::string& path, const CorruptError& corrupt) {
     if (ch.chunkBytes < 4096 || ch.chunkBytes > (1u << 28) || ch.chunkBytes % 4 != 0)
         throw corrupt("chunk size " + std::to_string(ch.chunkBytes));
     if (ch.texKind > static_cast<uint32_t>(TexcoordKind::Cylinder))
@@ -352,6 +379,7 @@ std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
     if (static_cast<GridKind>(h.kind) == GridKind::Dense) {
         if (ch.sampleCount != s.vertexCount()) throw corrupt("sample count");
         if (ch.apronCount != 0) throw corrupt("apron sample count");
+        if (th.ownPages != 0) throw corrupt("own page count");
         sections = {ch.sampleCount * sizeof(float)};
     } else {
         const uint64_t numBlocks = sparseBlockCount(h, s, path);
@@ -361,8 +389,20 @@ std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
             throw corrupt("sample count does not fit the block layout");
         const uint64_t surface = ch.sampleCount / perBlock;
         if (ch.apronCount > surface * apronSize(B)) throw corrupt("apron sample count");
-        sections = {numBlocks, surface * B * B * B * sizeof(float),
-                    surface * apronWords(B) * sizeof(uint64_t), ch.apronCount * sizeof(float)};
+        if (h.version >= 4) {
+            uint64_t tiles = 1;
+            for (int a = 0; a < 3; ++a)
+                tiles *= ((s.cells[a] + B - 1) / B + kTileBlocks - 1) / kTileBlocks;
+            if (th.ownPages > tiles) throw corrupt("own page count");
+            if (surface > th.ownPages * kPageEntries)
+                throw corrupt("sample count does not fit the block table");
+            sections = {tiles, th.ownPages * kPageEntries};
+        } else {
+            sections = {numBlocks};
+        }
+        sections.insert(sections.end(), {surface * B * B * B * sizeof(float),
+                                         surface * apronWords(B) * sizeof(uint64_t),
+                                         ch.apronCount * sizeof(float)});
     }
     if (ch.texKind) sections.push_back(3 * ch.sampleCount * sizeof(float));
     return sections;
@@ -371,16 +411,17 @@ std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
 // Where each chunk starts in the file: the chunk table read, checked against the header's checksum
 // and the file's size.
 std::vector<uint64_t> chunkStarts(const MappedFile& file, const Header& h,
-                                  const CompressedHeader& ch, std::vector<uint64_t>& table,
-                                  const CorruptError& corrupt) {
+                                  const CompressedHeader& ch, const TableHeader& th, size_t thBytes,
+                                  std::vector<uint64_t>& table, const CorruptError& corrupt) {
     const uint64_t fileBytes = file.size();
     table.resize(ch.chunkCount);
-    std::memcpy(table.data(), file.data() + sizeof h + sizeof ch, table.size() * sizeof(uint64_t));
-    if (fnv1a64(table.data(), table.size() * sizeof(uint64_t), fnv1a64(&ch, sizeof ch)) !=
-        h.checksum)
+    const uint64_t tableAt = sizeof h + sizeof ch + thBytes;
+    std::memcpy(table.data(), file.data() + tableAt, table.size() * sizeof(uint64_t));
+    if (fnv1a64(table.data(), table.size() * sizeof(uint64_t),
+                fnv1a64(&th, thBytes, fnv1a64(&ch, sizeof ch))) != h.checksum)
         throw corrupt("table checksum mismatch");
     std::vector<uint64_t> start(table.size());
-    uint64_t at = sizeof h + sizeof ch + table.size() * sizeof(uint64_t);
+    uint64_t at = tableAt + table.size() * sizeof(uint64_t);
     for (size_t c = 0; c < table.size(); ++c) {
         if (table[c] > fileBytes - at)
             throw corrupt("chunk " + std::to_string(c) + " past the end");
@@ -391,8 +432,45 @@ std::vector<uint64_t> chunkStarts(const MappedFile& file, const Header& h,
     return start;
 }
 
-// Checks a version-3 file's tables against the header and the file, then decompresses its chunks
-// in parallel straight into the grid's buffers.
+// A version-4 file's block table: per tile 0 (outside), 1 (inside) or 2 (its own page, the pages
+// in tile order), and the own pages' flags.
+BlockTable tableOf(const int blocks[3], const std::vector<uint8_t>& tileKinds,
+                   std::vector<uint8_t> ownFlags, const CorruptError& corrupt) {
+    BlockTable t = BlockTable::empty(blocks);
+    if (tileKinds.size() != t.tilePage.size()) throw corrupt("tile count");
+    int32_t next = kFirstOwnPage;
+    for (size_t tile = 0; tile < tileKinds.size(); ++tile) {
+        if (tileKinds[tile] > kFirstOwnPage)
+            throw corrupt("tile " + std::to_string(tile) + " has kind " +
+                          std::to_string(tileKinds[tile]) +
+                          " (accepted: 0 outside, 1 inside, 2 own page)");
+        t.tilePage[tile] = tileKinds[tile] < kFirstOwnPage ? tileKinds[tile] : next++;
+    }
+    if (static_cast<size_t>(next - kFirstOwnPage) * kPageEntries != ownFlags.size())
+        throw corrupt("the tiles name " + std::to_string(next - kFirstOwnPage) +
+                      " own pages; the flags do not");
+    t.flags.insert(t.flags.end(), ownFlags.begin(), ownFlags.end());
+    // Entries of blocks past the grid's last ones (tiles on its upper faces) mean nothing: outside.
+    const std::vector<int> own = t.ownTiles();
+    for (size_t p = 0; p * 3 < own.size(); ++p) {
+        const int tile[3] = {own[3 * p], own[3 * p + 1], own[3 * p + 2]};
+        if ((tile[0] + 1) * kTileBlocks <= blocks[0] && (tile[1] + 1) * kTileBlocks <= blocks[1] &&
+            (tile[2] + 1) * kTileBlocks <= blocks[2])
+            continue;
+        uint8_t* page = t.flags.data() + (p + kFirstOwnPage) * kPageEntries;
+        for (int l = 0; l < kPageEntries; ++l) {
+            const int b[3] = {tile[0] * kTileBlocks + (l & (kTileBlocks - 1)),
+                              tile[1] * kTileBlocks + ((l >> kTileShift) & (kTileBlocks - 1)),
+                              tile[2] * kTileBlocks + (l >> (2 * kTileShift))};
+            if (b[0] >= blocks[0] || b[1] >= blocks[1] || b[2] >= blocks[2])
+                page[l] = static_cast<uint8_t>(BlockFlag::Outside);
+        }
+    }
+    return t;
+}
+
+// Checks a version-3 or -4 file's tables against the header and the file, then decompresses its
+// chunks in parallel straight into the grid's buffers.
 Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
                     const std::string& path) {
     const uint64_t fileBytes = file.size();
@@ -402,9 +480,12 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
     if (h.payloadBytes != fileBytes - sizeof h)
         throw corrupt("the header's payload size does not match the file size");
     CompressedHeader ch{};
-    if (fileBytes - sizeof h < sizeof ch) throw corrupt("truncated section header");
+    TableHeader th{0};
+    const size_t thBytes = h.version >= 4 ? sizeof th : 0;
+    if (fileBytes - sizeof h < sizeof ch + thBytes) throw corrupt("truncated section header");
     std::memcpy(&ch, file.data() + sizeof h, sizeof ch);
-    const std::vector<uint64_t> sectionBytes = compressedSections(h, s, ch, path, corrupt);
+    std::memcpy(&th, file.data() + sizeof h + sizeof ch, thBytes);
+    const std::vector<uint64_t> sectionBytes = compressedSections(h, s, ch, th, path, corrupt);
     // The chunk count follows from the sections; checked (and the table against the file) before
     // anything is allocated from these numbers.
     uint64_t total = 0, expectedChunks = 0;
@@ -413,18 +494,18 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
         expectedChunks += (b + ch.chunkBytes - 1) / ch.chunkBytes;
     }
     if (ch.chunkCount != expectedChunks) throw corrupt("chunk count");
-    if (ch.chunkCount > (fileBytes - sizeof h - sizeof ch) / sizeof(uint64_t))
+    if (ch.chunkCount > (fileBytes - sizeof h - sizeof ch - thBytes) / sizeof(uint64_t))
         throw corrupt("truncated chunk table");
     checkMemoryBudget(2.0 * static_cast<double>(total), path,
                       "the grid's samples and the structures built from them",
                       "convert or bake it at a lower resolution");
     const std::vector<Chunk> chunks = chunksOf(sectionBytes, ch.chunkBytes);
     std::vector<uint64_t> table;
-    const std::vector<uint64_t> start = chunkStarts(file, h, ch, table, corrupt);
+    const std::vector<uint64_t> start = chunkStarts(file, h, ch, th, thBytes, table, corrupt);
 
     // The sections' destinations, in file order.
     const GridKind kind = static_cast<GridKind>(h.kind);
-    std::vector<uint8_t> flags;
+    std::vector<uint8_t> flags, tileKinds;
     std::vector<float> samples, texcoords;
     SplitBlocks split;
     std::vector<char*> dest;
@@ -437,6 +518,7 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
     if (kind == GridKind::Dense) {
         into(samples, true);
     } else {
+        if (h.version >= 4) into(tileKinds, false);
         into(flags, false);
         into(split.own, true);
         into(split.masks, false);
@@ -454,16 +536,22 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
                           (ZSTD_isError(got) ? ZSTD_getErrorName(got) : "wrong size") + ")");
         if (floats[k.section]) unshuffleFloats(shuffled.data(), out, k.bytes);
     });
+    BlockTable blockTable;
     if (kind == GridKind::Sparse) {
-        samples = joinBlocks(s, static_cast<int>(h.blockSize), flags, split, path);
+        const int B = static_cast<int>(h.blockSize);
+        const int blocks[3] = {(s.cells[0] + B - 1) / B, (s.cells[1] + B - 1) / B,
+                               (s.cells[2] + B - 1) / B};
+        blockTable = h.version >= 4 ? tableOf(blocks, tileKinds, std::move(flags), corrupt)
+                                    : BlockTable::fromDense(blocks, flags, path);
+        samples = joinBlocks(s, B, blockTable, split, path);
         split = {};
     }
     for (float v : samples)
         if (!std::isfinite(v)) throw corrupt("non-finite sample");
     Grid grid = kind == GridKind::Dense
                     ? Grid::dense(s, std::move(samples))
-                    : Grid::sparseFromBuffers(s, static_cast<int>(h.blockSize), h.background,
-                                              std::move(flags), std::move(samples), path);
+                    : Grid::sparseFromTable(s, static_cast<int>(h.blockSize), h.background,
+                                            std::move(blockTable), std::move(samples), path);
     if (ch.texKind)
         grid.setTexcoords(static_cast<TexcoordKind>(ch.texKind), std::move(texcoords), path);
     return grid;
@@ -476,7 +564,7 @@ Grid loadSdfg(const std::string& path) {
     const uint64_t fileBytes = file.size();
     const Header h = readHeader(file, path);
     const GridShape s = shapeOf(h, path);
-    if (h.version == 3) return loadCompressed(file, h, s, path);
+    if (h.version >= 3) return loadCompressed(file, h, s, path);
     const PayloadLayout l = layoutOf(h, s, path, fileBytes);
 
     uint64_t pos = sizeof h;

@@ -35,15 +35,17 @@ void writeAll(const std::string& path, const std::string& bytes) {
     std::ofstream(path, std::ios::binary) << bytes;
 }
 
-TEST(Sdfg, RoundTripIsExactForBothLayoutsCompressedOrNot) {
-    for (bool compress : {true, false})
+// Versions 4 (the default: the block table by tiles), 3 (flat block flags, compressed) and 1
+// (raw) give back the same grid.
+TEST(Sdfg, RoundTripIsExactForBothLayoutsInEveryVersion) {
+    for (uint32_t written : {4u, 3u, 1u})
         for (GridKind kind : {GridKind::Dense, GridKind::Sparse}) {
             Grid g = makeGrid(kind);
             std::string path = tempPath("rt.sdfg");
-            saveSdfg(g, path, {.compress = compress});
+            saveSdfg(g, path, {.compress = written != 1, .version = written == 3 ? 3u : 4u});
             uint32_t version = 0;
             std::memcpy(&version, readAll(path).data() + 4, 4);
-            EXPECT_EQ(version, compress ? 3u : 1u);
+            EXPECT_EQ(version, written);
             Grid back = loadSdfg(path);
             EXPECT_EQ(back.kind(), kind);
             EXPECT_EQ(back.samples(), g.samples());
@@ -69,12 +71,14 @@ TEST(Sdfg, TextureCoordinatesRoundTripAsVersionTwo) {
         std::vector<float> tex(3 * g.storedSamples());
         for (size_t i = 0; i < tex.size(); ++i) tex[i] = 0.001f * static_cast<float>(i % 997);
         g.setTexcoords(TexcoordKind::Cylinder, tex, "test");
-        // Compressed (version 3) with texture coordinates.
-        saveSdfg(g, path);
-        Grid packed = loadSdfg(path);
-        EXPECT_EQ(packed.texcoordKind(), TexcoordKind::Cylinder);
-        EXPECT_EQ(packed.texcoords(), tex);
-        EXPECT_EQ(packed.blockSamples(), g.blockSamples());
+        // Compressed (versions 4 and 3) with texture coordinates.
+        for (uint32_t v : {4u, 3u}) {
+            saveSdfg(g, path, {.version = v});
+            Grid packed = loadSdfg(path);
+            EXPECT_EQ(packed.texcoordKind(), TexcoordKind::Cylinder);
+            EXPECT_EQ(packed.texcoords(), tex);
+            EXPECT_EQ(packed.blockSamples(), g.blockSamples());
+        }
         saveSdfg(g, path, raw);
         std::memcpy(&version, readAll(path).data() + 4, 4);
         EXPECT_EQ(version, 2u);
@@ -142,36 +146,47 @@ TEST(Sdfg, RejectsBadFilesBeforeAllocating) {
     expectRejected(block, "block size 5");
 }
 
-// Version 3: every table and chunk is checked against the header, the file and its checksums.
+// Versions 3 and 4: every table and chunk is checked against the header, the file and its
+// checksums.
 TEST(Sdfg, RejectsBadCompressedFiles) {
-    std::string path = tempPath("good3.sdfg");
-    saveSdfg(makeGrid(GridKind::Sparse), path);
-    std::string good = readAll(path);
-    std::filesystem::remove(path);
-    ASSERT_GT(good.size(), 64u + 32u + 8u);
+    for (uint32_t version : {3u, 4u}) {
+        std::string path = tempPath("good3.sdfg");
+        saveSdfg(makeGrid(GridKind::Sparse), path, {.version = version});
+        std::string good = readAll(path);
+        std::filesystem::remove(path);
+        const size_t table = 64 + 32 + (version == 4 ? 8 : 0);  // the chunk table's offset
+        ASSERT_GT(good.size(), table + 8);
 
-    expectRejected(good.substr(0, 40), "truncated");
-    expectRejected(good.substr(0, good.size() - 10), "payload size");
-    expectRejected(good + "xx", "payload size");
-    std::string chunk = good;
-    chunk[good.size() - 6] ^= 0x55;
-    expectRejected(chunk, "chunk 3 (");  // the explicit aprons (flags, own samples, masks first)
-    std::string table = good;
-    table[64 + 32] ^= 0x01;
-    expectRejected(table, "table checksum");
-    std::string chunkSize = good;
-    uint32_t odd = 4097;
-    std::memcpy(&chunkSize[64 + 4], &odd, 4);
-    expectRejected(chunkSize, "chunk size");
-    // Absurd cells: the chunk count no longer follows, rejected before any allocation.
-    std::string absurd = good;
-    int32_t huge = 30000;
-    for (int a = 0; a < 3; ++a) std::memcpy(&absurd[12 + 4 * a], &huge, 4);
-    expectRejected(absurd, "chunk count");
-    std::string count = good;
-    uint64_t many = uint64_t{1} << 40;
-    std::memcpy(&count[64 + 24], &many, 8);
-    expectRejected(count, "chunk count");
+        expectRejected(good.substr(0, 40), "truncated");
+        expectRejected(good.substr(0, good.size() - 10), "payload size");
+        expectRejected(good + "xx", "payload size");
+        std::string chunk = good;
+        chunk[good.size() - 6] ^= 0x55;
+        // The explicit aprons: after the flags (version 4: tile kinds and own pages), the own
+        // samples and the masks.
+        expectRejected(chunk, version == 4 ? "chunk 4 (" : "chunk 3 (");
+        std::string badTable = good;
+        badTable[table] ^= 0x01;
+        expectRejected(badTable, "table checksum");
+        std::string chunkSize = good;
+        uint32_t odd = 4097;
+        std::memcpy(&chunkSize[64 + 4], &odd, 4);
+        expectRejected(chunkSize, "chunk size");
+        // Absurd cells: the chunk count no longer follows, rejected before any allocation.
+        std::string absurd = good;
+        int32_t huge = 30000;
+        for (int a = 0; a < 3; ++a) std::memcpy(&absurd[12 + 4 * a], &huge, 4);
+        expectRejected(absurd, "chunk count");
+        std::string count = good;
+        uint64_t many = uint64_t{1} << 40;
+        std::memcpy(&count[64 + 24], &many, 8);
+        expectRejected(count, "chunk count");
+        if (version == 4) {
+            std::string pages = good;
+            std::memcpy(&pages[64 + 32], &many, 8);
+            expectRejected(pages, "own page count");
+        }
+    }
 }
 
 TEST(Sdfg, FailedSaveLeavesNoFile) {
