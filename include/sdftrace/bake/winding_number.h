@@ -61,17 +61,20 @@ class WindingNumber {
         Vec3 lo, hi;        // bounds of the triangles' vertices
         double cx, cy, cz;  // area-weighted centroid
         double nx, ny, nz;  // sum of area-weighted normals (the dipole)
-        double radius;      // max distance from the centroid to a vertex
+        double area;        // of its triangles
+        double radius;      // bounds the distance from the centroid to a vertex
         int left = -1, right = -1;
         int first = 0, count = 0;  // leaf: triangles [first, first + count) of m_order
     };
     static int subtreeSize(int count, std::map<int, int>& sizes);
     void build(int first, int count, int index, const std::map<int, int>& sizes);
+    double exactRadius(int first, int count, double cx, double cy, double cz) const;
 
     const TriangleMesh& m_mesh;
     double m_beta;
     std::vector<Node> m_nodes;
     std::vector<int> m_order;
+    std::vector<Vec3> m_sums;      // while building: per triangle, the sum of its corners
     std::vector<float> m_corners;  // 9 per triangle, in m_order
 };
 

@@ -1,5 +1,6 @@
 #include "sdftrace/bake/winding_number.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -42,25 +43,37 @@ inline float solidAngleFloat(Vec3 p, const float* t) {
 }  // namespace
 
 WindingNumber::WindingNumber(const TriangleMesh& mesh, double beta) : m_mesh(mesh), m_beta(beta) {
-    m_order.resize(mesh.triangles.size());
-    std::iota(m_order.begin(), m_order.end(), 0);
-    if (!mesh.triangles.empty()) {
-        // The tree's shape follows from the triangle count alone (median splits), so each
+    const size_t count = mesh.triangles.size();
+    m_order.resize(count);
+    if (count > 0) {
+        // Per triangle the sum of its corners (3x its centroid): the splits' key, read from one
+        // array instead of through the mesh's indices.
+        m_sums.resize(count);
+        tbb::parallel_for(size_t(0), count, [&](size_t t) {
+            const auto& tri = mesh.triangles[t];
+            m_sums[t] = mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]];
+        });
+        std::iota(m_order.begin(), m_order.end(), 0);
+        // The tree's shape follows from the triangle count alone (halves of the order), so each
         // subtree's nodes have known indices (depth first, left before right) and the two halves
-        // of a node build in parallel into the same array as a sequential build would.
-        const int n = static_cast<int>(mesh.triangles.size());
+        // of a node build in parallel.
+        const int n = static_cast<int>(count);
         std::map<int, int> sizes;
         subtreeSize(n, sizes);
         m_nodes.resize(sizes.at(n));
         build(0, n, 0, sizes);
+        m_sums = std::vector<Vec3>();
     }
     // Leaves read their triangles' corners from one contiguous array, in tree order.
-    m_corners.reserve(9 * m_order.size());
-    for (int t : m_order)
-        for (uint32_t v : mesh.triangles[t]) {
-            Vec3 q = mesh.positions[v];
-            m_corners.insert(m_corners.end(), {q.x, q.y, q.z});
+    m_corners.resize(9 * count);
+    tbb::parallel_for(size_t(0), count, [&](size_t i) {
+        const auto& tri = mesh.triangles[m_order[i]];
+        for (int v = 0; v < 3; ++v) {
+            const Vec3 q = mesh.positions[tri[v]];
+            m_corners[9 * i + 3 * v] = q.x, m_corners[9 * i + 3 * v + 1] = q.y,
+                                  m_corners[9 * i + 3 * v + 2] = q.z;
         }
+    });
 }
 
 int WindingNumber::subtreeSize(int count, std::map<int, int>& sizes) {
@@ -72,52 +85,22 @@ int WindingNumber::subtreeSize(int count, std::map<int, int>& sizes) {
     return nodes;
 }
 
+// Leaves sum their triangles' moments; an inner node adds its children's (area, area-weighted
+// centroid, dipole, bounds) and bounds its radius by theirs, so every triangle is read once.
 void WindingNumber::build(int first, int count, int index, const std::map<int, int>& sizes) {
     Node n;
     n.first = first;
     n.count = count;
-    Bounds3 b, centroids;
-    double area = 0, cx = 0, cy = 0, cz = 0, nx = 0, ny = 0, nz = 0;
-    for (int i = first; i < first + count; ++i) {
-        const auto& t = m_mesh.triangles[m_order[i]];
-        Vec3 p0 = m_mesh.positions[t[0]], p1 = m_mesh.positions[t[1]], p2 = m_mesh.positions[t[2]];
-        for (Vec3 v : {p0, p1, p2}) b.include(v);
-        Vec3 c = (p0 + p1 + p2) / 3.0f;
-        centroids.include(c);
-        Vec3d cr = cross(difference(p1, p0), difference(p2, p0));  // 2 * area * unit normal
-        double a = 0.5 * norm(cr);
-        area += a;
-        cx += a * c.x, cy += a * c.y, cz += a * c.z;
-        nx += 0.5 * cr.x, ny += 0.5 * cr.y, nz += 0.5 * cr.z;
-    }
-    if (area > 0) cx /= area, cy /= area, cz /= area;
-    n.lo = b.lo;
-    n.hi = b.hi;
-    n.cx = cx, n.cy = cy, n.cz = cz;
-    n.nx = nx, n.ny = ny, n.nz = nz;
-    // One square root for the largest squared distance: the root is monotone, so this is the
-    // largest of the roots exactly.
-    double radius2 = 0;
-    for (int i = first; i < first + count; ++i)
-        for (uint32_t v : m_mesh.triangles[m_order[i]]) {
-            Vec3 p = m_mesh.positions[v];
-            radius2 = std::max(radius2, (p.x - cx) * (p.x - cx) + (p.y - cy) * (p.y - cy) +
-                                            (p.z - cz) * (p.z - cz));
-        }
-    n.radius = std::sqrt(radius2);
     if (count > kLeafSize) {
-        // Median split of the centroids along the longest axis.
-        Vec3 e = centroids.extent();
-        int axis = e.x > e.y ? (e.x > e.z ? 0 : 2) : (e.y > e.z ? 1 : 2);
-        int mid = first + count / 2;
-        auto key = [&](int t) {
-            const auto& tri = m_mesh.triangles[t];
-            return m_mesh.positions[tri[0]][axis] + m_mesh.positions[tri[1]][axis] +
-                   m_mesh.positions[tri[2]][axis];
-        };
+        // Median split of the centroids along the longest axis (Barill et al. 2018).
+        Bounds3 centroids;
+        for (int i = first; i < first + count; ++i) centroids.include(m_sums[m_order[i]]);
+        const Vec3 e = centroids.extent();
+        const int axis = e.x > e.y ? (e.x > e.z ? 0 : 2) : (e.y > e.z ? 1 : 2);
+        const int mid = first + count / 2;
         std::nth_element(m_order.begin() + first, m_order.begin() + mid,
                          m_order.begin() + first + count,
-                         [&](int a, int c) { return key(a) < key(c); });
+                         [&](int a, int c) { return m_sums[a][axis] < m_sums[c][axis]; });
         n.left = index + 1;
         n.right = index + 1 + sizes.at(mid - first);
         auto left = [&] { build(first, mid - first, n.left, sizes); };
@@ -126,8 +109,70 @@ void WindingNumber::build(int first, int count, int index, const std::map<int, i
             tbb::parallel_invoke(left, right);
         else
             left(), right();
+        const Node &l = m_nodes[n.left], &r = m_nodes[n.right];
+        n.lo = min(l.lo, r.lo);
+        n.hi = max(l.hi, r.hi);
+        n.area = l.area + r.area;
+        if (n.area > 0) {
+            n.cx = (l.area * l.cx + r.area * r.cx) / n.area;
+            n.cy = (l.area * l.cy + r.area * r.cy) / n.area;
+            n.cz = (l.area * l.cz + r.area * r.cz) / n.area;
+        } else {
+            n.cx = 0.5 * (l.cx + r.cx), n.cy = 0.5 * (l.cy + r.cy), n.cz = 0.5 * (l.cz + r.cz);
+        }
+        n.nx = l.nx + r.nx, n.ny = l.ny + r.ny, n.nz = l.nz + r.nz;
+        auto reach = [&](const Node& c) {
+            const double dx = c.cx - n.cx, dy = c.cy - n.cy, dz = c.cz - n.cz;
+            return std::sqrt(dx * dx + dy * dy + dz * dz) + c.radius;
+        };
+        // The tighter of: the children's spheres, and the farthest corner of the node's box.
+        const double fx = std::max(n.cx - n.lo.x, n.hi.x - n.cx),
+                     fy = std::max(n.cy - n.lo.y, n.hi.y - n.cy),
+                     fz = std::max(n.cz - n.lo.z, n.hi.z - n.cz);
+        n.radius = std::min(std::max(reach(l), reach(r)), std::sqrt(fx * fx + fy * fy + fz * fz));
+        m_nodes[index] = n;
+        return;
     }
+    Bounds3 b;
+    double area = 0, cx = 0, cy = 0, cz = 0, nx = 0, ny = 0, nz = 0;
+    Vec3 mean(0.0f);
+    for (int i = first; i < first + count; ++i) {
+        const auto& t = m_mesh.triangles[m_order[i]];
+        Vec3 p0 = m_mesh.positions[t[0]], p1 = m_mesh.positions[t[1]], p2 = m_mesh.positions[t[2]];
+        for (Vec3 v : {p0, p1, p2}) b.include(v);
+        Vec3 c = (p0 + p1 + p2) / 3.0f;
+        mean += c;
+        Vec3d cr = cross(difference(p1, p0), difference(p2, p0));  // 2 * area * unit normal
+        double a = 0.5 * norm(cr);
+        area += a;
+        cx += a * c.x, cy += a * c.y, cz += a * c.z;
+        nx += 0.5 * cr.x, ny += 0.5 * cr.y, nz += 0.5 * cr.z;
+    }
+    if (area > 0) {
+        cx /= area, cy /= area, cz /= area;
+    } else {
+        cx = mean.x / count, cy = mean.y / count, cz = mean.z / count;  // no area: their mean
+    }
+    n.lo = b.lo;
+    n.hi = b.hi;
+    n.area = area;
+    n.cx = cx, n.cy = cy, n.cz = cz;
+    n.nx = nx, n.ny = ny, n.nz = nz;
+    n.radius = exactRadius(first, count, cx, cy, cz);
     m_nodes[index] = n;
+}
+
+// The largest distance from (cx, cy, cz) to a vertex of triangles [first, first + count): one
+// square root for the largest squared distance (the root is monotone).
+double WindingNumber::exactRadius(int first, int count, double cx, double cy, double cz) const {
+    double radius2 = 0;
+    for (int i = first; i < first + count; ++i)
+        for (uint32_t v : m_mesh.triangles[m_order[i]]) {
+            Vec3 p = m_mesh.positions[v];
+            radius2 = std::max(radius2, (p.x - cx) * (p.x - cx) + (p.y - cy) * (p.y - cy) +
+                                            (p.z - cz) * (p.z - cz));
+        }
+    return std::sqrt(radius2);
 }
 
 double WindingNumber::exact(Vec3 p) const {
