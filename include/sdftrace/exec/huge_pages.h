@@ -12,6 +12,10 @@ namespace sdft {
 // a no-op where unsupported.
 void adviseHugePages(void* data, size_t bytes);
 
+// Gives the whole pages inside [data, data + bytes) back to the system (they read as zeros if
+// touched again); a no-op where unsupported.
+void releasePages(void* data, size_t bytes);
+
 // v = n copies of value, allocated first, advised, then written (std::vector touches its memory
 // when it fills it, so the advice must come between).
 template <class T>

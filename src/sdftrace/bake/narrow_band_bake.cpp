@@ -90,6 +90,7 @@ class NarrowBandBake {
     template <class F>
     void forOwnersNearPlane(size_t t, const VertexRange& r, float grow, F&& f) const;
     void markCandidates();
+    void dropUnheldOwners();
     void dilateOwners(std::vector<uint8_t>& v, int dir) const;
     size_t ownerDistances(int oi, int oj, int ok, std::vector<std::pair<float, uint32_t>>& order);
     void nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], const int hi[3], int i0, int j0,
@@ -543,12 +544,42 @@ void NarrowBandBake::surfaceBlocks() {
                 }
         });
     });
+    dropUnheldOwners();
     // Triangles meeting a segment of length h that ends at a vertex come within h of it: the
     // crossing tests read lists grown by one voxel only.
     if (m_integerWinding) {
         m_near = binTriangles(1.01f * m_h);
         m_near.ranges = std::vector<VertexRange>();
     }
+}
+
+// Owners that no surface block holds are not read again (their vertices are neither signed nor
+// gathered; the sign walks treat them as owners without samples): the others slide down in order,
+// their slots renumbered, and the freed tail of the samples goes back to the system (a quarter to
+// a third of the owners, 200 MB at 2048 cells on the rock).
+void NarrowBandBake::dropUnheldOwners() {
+    std::vector<int32_t> renumbered(static_cast<size_t>(m_owners), -1);
+    int32_t kept = 0;
+    for (int32_t sl = 0; sl < m_owners; ++sl)
+        if (m_heldBy[sl]) renumbered[sl] = kept++;
+    m_nearBits = std::vector<uint8_t>();
+    if (kept == m_owners) return;
+    // In order: a slot only moves down, onto one already moved or dropped.
+    for (int32_t sl = 0; sl < m_owners; ++sl) {
+        const int32_t to = renumbered[sl];
+        if (to < 0 || to == sl) continue;
+        std::memcpy(m_owned.get() + to * m_perOwner, m_owned.get() + sl * m_perOwner,
+                    m_perOwner * sizeof(float));
+        m_heldBy[to] = m_heldBy[sl];
+    }
+    m_arena.execute([&] {
+        tbb::parallel_for(size_t(0), m_numOwners, [&](size_t o) {
+            if (m_slot[o] >= 0) m_slot[o] = renumbered[m_slot[o]];
+        });
+    });
+    m_heldBy.resize(kept);
+    releasePages(m_owned.get() + kept * m_perOwner, (m_owners - kept) * m_perOwner * sizeof(float));
+    m_owners = kept;
 }
 
 // The signed crossings of segment ab with the mesh's triangles listed near owner o; false when

@@ -6,12 +6,29 @@
 
 namespace sdft {
 
+namespace {
+
+// madvise over the `align`-aligned interior of [data, data + bytes).
+[[maybe_unused]] void adviseInterior(void* data, size_t bytes, uintptr_t align, int advice) {
+    const uintptr_t begin = (reinterpret_cast<uintptr_t>(data) + align - 1) & ~(align - 1);
+    const uintptr_t end = (reinterpret_cast<uintptr_t>(data) + bytes) & ~(align - 1);
+    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, advice);
+}
+
+}  // namespace
+
 void adviseHugePages(void* data, size_t bytes) {
 #ifdef MADV_HUGEPAGE
-    constexpr uintptr_t kHuge = uintptr_t{2} << 20;
-    uintptr_t begin = (reinterpret_cast<uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
-    uintptr_t end = (reinterpret_cast<uintptr_t>(data) + bytes) & ~(kHuge - 1);
-    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+    adviseInterior(data, bytes, uintptr_t{2} << 20, MADV_HUGEPAGE);
+#else
+    (void)data;
+    (void)bytes;
+#endif
+}
+
+void releasePages(void* data, size_t bytes) {
+#ifdef MADV_DONTNEED
+    adviseInterior(data, bytes, 4096, MADV_DONTNEED);
 #else
     (void)data;
     (void)bytes;
