@@ -123,7 +123,7 @@ class NarrowBandBake {
     OwnerLists m_near;                     // grown by a voxel (crossing tests)
     std::vector<uint8_t> m_flags;          // BlockFlag per block
     std::vector<uint8_t> m_candidate;      // may hold surface: an owner lists a triangle
-    std::vector<uint8_t> m_keep;           // surface blocks
+    std::vector<uint8_t> m_keep;           // surface blocks (the candidates' array, then)
     std::vector<int32_t> m_slot;           // per owner: its slot in m_owned, -1 if not needed
     std::vector<uint8_t> m_rowNeeded;      // per row of owners: any needed
     int32_t m_owners = 0;                  // needed owners
@@ -507,7 +507,7 @@ void NarrowBandBake::nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], 
 void NarrowBandBake::surfaceBlocks() {
     const int* nb = m_nb;
     const int* no = m_no;
-    assignHuge(m_keep, m_numBlocks, uint8_t{0});
+    m_keep = std::move(m_candidate);  // a candidate stays when it is a surface block
     // Per owner: bit d set when block (oi, oj, ok) - d's offsets is a surface block. A vertex is
     // needed (signed one by one) when a surface block holds it.
     m_heldBy.assign(m_owners, 0);
@@ -517,7 +517,7 @@ void NarrowBandBake::surfaceBlocks() {
             for (int bj = 0; bj < nb[1]; ++bj)
                 for (int bi = 0; bi < nb[0]; ++bi) {
                     const size_t b = blockIndex(bi, bj, bk);
-                    if (!m_candidate[b]) continue;
+                    if (!m_keep[b]) continue;
                     bool near = false;
                     for (int d = 0; d < 8 && !near; ++d) {
                         int oi = bi + (d & 1), oj = bj + ((d >> 1) & 1), ok = bk + (d >> 2);
@@ -849,6 +849,7 @@ Grid NarrowBandBake::gather(ExactBakeStats* stats) {
     const size_t perBlock = static_cast<size_t>(V) * V * V;
     for (size_t b = 0; b < m_numBlocks; ++b)
         if (m_keep[b]) m_kept.push_back(b);
+    m_keep = std::vector<uint8_t>();
     std::vector<float> blockSamples;
     assignHuge(blockSamples, m_kept.size() * perBlock, 0.0f);
     m_arena.execute([&] {
