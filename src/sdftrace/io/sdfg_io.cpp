@@ -105,11 +105,11 @@ void saveRaw(const Grid& grid, const std::string& path) {
     out.commit();
 }
 
-// ---- version 3: compressed sections ----
+// ---- versions 3 and 4: compressed sections ----
 
 constexpr uint32_t kChunkBytes = 1u << 22;  // uncompressed bytes per chunk (4 MiB)
 
-// After the 64-byte header of a version-3 file.
+// After the 64-byte header of a version-3 or -4 file.
 struct CompressedHeader {
     uint32_t texKind;      // 0: no texture coordinates; else TexcoordKind
     uint32_t chunkBytes;   // uncompressed bytes per chunk (the last of a section may be shorter)
@@ -366,7 +366,7 @@ namespace {
 
 using CorruptError = std::function<InputError(const std::string&)>;
 
-// A version-3 file's section sizes (section order as in sectionsOf), from its headers; every count
+// A version-3 or -4 file's section sizes (in file order), from its headers; every count
 // checked against the grid before anything is allocated from it.
 std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
                                          const CompressedHeader& ch, const TableHeader& th,
