@@ -67,14 +67,19 @@ class WindingNumber {
         int first = 0, count = 0;  // leaf: triangles [first, first + count) of m_order
     };
     static int subtreeSize(int count, std::map<int, int>& sizes);
-    void build(int first, int count, int index, const std::map<int, int>& sizes);
+    // What the build reads: nodes per subtree size, and per triangle the sum of its corners (the
+    // median split's key, 3x its centroid).
+    struct BuildInput {
+        const std::map<int, int>& sizes;
+        const std::vector<Vec3>& sums;
+    };
+    void build(int first, int count, int index, const BuildInput& in);
     double exactRadius(int first, int count, double cx, double cy, double cz) const;
 
     const TriangleMesh& m_mesh;
     double m_beta;
     std::vector<Node> m_nodes;
     std::vector<int> m_order;
-    std::vector<Vec3> m_sums;      // while building: per triangle, the sum of its corners
     std::vector<float> m_corners;  // 9 per triangle, in m_order
 };
 

@@ -323,31 +323,21 @@ void NarrowBandBake::markCandidates() {
 void NarrowBandBake::dilateOwners(std::vector<uint8_t>& v, int dir) const {
     const int* no = m_no;
     const size_t sy = static_cast<size_t>(no[0]), sz = sy * no[1];
-    // Each pass reads the neighbour before it is changed: ascending for +1, descending for -1.
-    auto orRows = [&](uint8_t* to, const uint8_t* from, size_t n) {
-        for (size_t i = 0; i < n; ++i) to[i] |= from[i];
+    // base[i * stride + w] |= base[(i + dir) * stride + w] for w < width, over i in the order that
+    // reads each neighbour before it changes (ascending for +1, descending for -1).
+    auto orAlong = [dir](uint8_t* base, int n, size_t stride, size_t width) {
+        for (int step = 0; step + 1 < n; ++step) {
+            const size_t i = static_cast<size_t>(dir > 0 ? step : n - 1 - step);
+            uint8_t* to = base + i * stride;
+            const uint8_t* from = to + dir * static_cast<std::ptrdiff_t>(stride);
+            for (size_t w = 0; w < width; ++w) to[w] |= from[w];
+        }
     };
     tbb::parallel_for(0, no[1] * no[2], [&](int row) {
-        uint8_t* r = v.data() + static_cast<size_t>(row) * sy;
-        if (dir > 0)
-            for (int i = 0; i + 1 < no[0]; ++i) r[i] |= r[i + 1];
-        else
-            for (int i = no[0] - 1; i > 0; --i) r[i] |= r[i - 1];
+        orAlong(v.data() + static_cast<size_t>(row) * sy, no[0], 1, 1);
     });
-    tbb::parallel_for(0, no[2], [&](int ok) {
-        uint8_t* slab = v.data() + ok * sz;
-        if (dir > 0)
-            for (int j = 0; j + 1 < no[1]; ++j) orRows(slab + j * sy, slab + (j + 1) * sy, sy);
-        else
-            for (int j = no[1] - 1; j > 0; --j) orRows(slab + j * sy, slab + (j - 1) * sy, sy);
-    });
-    tbb::parallel_for(0, no[1], [&](int oj) {
-        uint8_t* col = v.data() + oj * sy;
-        if (dir > 0)
-            for (int k = 0; k + 1 < no[2]; ++k) orRows(col + k * sz, col + (k + 1) * sz, sy);
-        else
-            for (int k = no[2] - 1; k > 0; --k) orRows(col + k * sz, col + (k - 1) * sz, sy);
-    });
+    tbb::parallel_for(0, no[2], [&](int ok) { orAlong(v.data() + ok * sz, no[1], sy, sy); });
+    tbb::parallel_for(0, no[1], [&](int oj) { orAlong(v.data() + oj * sy, no[2], sz, sy); });
 }
 
 // 3. Distances, one task per row of owners.

@@ -48,10 +48,10 @@ WindingNumber::WindingNumber(const TriangleMesh& mesh, double beta) : m_mesh(mes
     if (count > 0) {
         // Per triangle the sum of its corners (3x its centroid): the splits' key, read from one
         // array instead of through the mesh's indices.
-        m_sums.resize(count);
+        std::vector<Vec3> sums(count);
         tbb::parallel_for(size_t(0), count, [&](size_t t) {
             const auto& tri = mesh.triangles[t];
-            m_sums[t] = mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]];
+            sums[t] = mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]];
         });
         std::iota(m_order.begin(), m_order.end(), 0);
         // The tree's shape follows from the triangle count alone (halves of the order), so each
@@ -61,8 +61,7 @@ WindingNumber::WindingNumber(const TriangleMesh& mesh, double beta) : m_mesh(mes
         std::map<int, int> sizes;
         subtreeSize(n, sizes);
         m_nodes.resize(sizes.at(n));
-        build(0, n, 0, sizes);
-        m_sums = std::vector<Vec3>();
+        build(0, n, 0, {sizes, sums});
     }
     // Leaves read their triangles' corners from one contiguous array, in tree order.
     m_corners.resize(9 * count);
@@ -87,24 +86,24 @@ int WindingNumber::subtreeSize(int count, std::map<int, int>& sizes) {
 
 // Leaves sum their triangles' moments; an inner node adds its children's (area, area-weighted
 // centroid, dipole, bounds) and bounds its radius by theirs, so every triangle is read once.
-void WindingNumber::build(int first, int count, int index, const std::map<int, int>& sizes) {
+void WindingNumber::build(int first, int count, int index, const BuildInput& in) {
     Node n;
     n.first = first;
     n.count = count;
     if (count > kLeafSize) {
         // Median split of the centroids along the longest axis (Barill et al. 2018).
         Bounds3 centroids;
-        for (int i = first; i < first + count; ++i) centroids.include(m_sums[m_order[i]]);
+        for (int i = first; i < first + count; ++i) centroids.include(in.sums[m_order[i]]);
         const Vec3 e = centroids.extent();
         const int axis = e.x > e.y ? (e.x > e.z ? 0 : 2) : (e.y > e.z ? 1 : 2);
         const int mid = first + count / 2;
         std::nth_element(m_order.begin() + first, m_order.begin() + mid,
                          m_order.begin() + first + count,
-                         [&](int a, int c) { return m_sums[a][axis] < m_sums[c][axis]; });
+                         [&](int a, int c) { return in.sums[a][axis] < in.sums[c][axis]; });
         n.left = index + 1;
-        n.right = index + 1 + sizes.at(mid - first);
-        auto left = [&] { build(first, mid - first, n.left, sizes); };
-        auto right = [&] { build(mid, first + count - mid, n.right, sizes); };
+        n.right = index + 1 + in.sizes.at(mid - first);
+        auto left = [&] { build(first, mid - first, n.left, in); };
+        auto right = [&] { build(mid, first + count - mid, n.right, in); };
         if (count > kParallelBuild)
             tbb::parallel_invoke(left, right);
         else

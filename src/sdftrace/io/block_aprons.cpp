@@ -58,6 +58,23 @@ struct Layout {
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
+// Per surface block (numbered by `surfaceOf`, per slot), its block coordinates.
+std::vector<std::array<int, 3>> surfaceBlockCoords(const BlockTable& table,
+                                                   const std::vector<int32_t>& surfaceOf,
+                                                   size_t surface) {
+    std::vector<std::array<int, 3>> blockOf(surface);
+    const std::vector<int> own = table.ownTiles();
+    tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
+        const size_t page = (p + kFirstOwnPage) * kPageEntries;
+        forEachBlockOfTile(table.blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
+                           [&](int bi, int bj, int bk) {
+                               const int32_t n = surfaceOf[page + pageLocal(bi, bj, bk)];
+                               if (n >= 0) blockOf[static_cast<size_t>(n)] = {bi, bj, bk};
+                           });
+    });
+    return blockOf;
+}
+
 }  // namespace
 
 int apronSize(int B) { return (B + 1) * (B + 1) * (B + 1) - B * B * B; }
@@ -144,16 +161,7 @@ std::vector<float> joinBlocks(const GridShape& shape, int blockSize, const Block
     if (split.own.size() != surface * L.own || split.masks.size() != surface * L.words)
         throw corrupt("the flags name " + std::to_string(surface) +
                       " surface blocks; the samples and masks do not");
-    std::vector<std::array<int, 3>> blockOf(surface);
-    const std::vector<int> own = table.ownTiles();
-    tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
-        const size_t page = (p + kFirstOwnPage) * kPageEntries;
-        forEachBlockOfTile(L.blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
-                           [&](int bi, int bj, int bk) {
-                               const int32_t n = surfaceOf[page + pageLocal(bi, bj, bk)];
-                               if (n >= 0) blockOf[static_cast<size_t>(n)] = {bi, bj, bk};
-                           });
-    });
+    const std::vector<std::array<int, 3>> blockOf = surfaceBlockCoords(table, surfaceOf, surface);
     std::vector<size_t> start(surface + 1, 0);
     for (size_t s = 0; s < surface; ++s) {
         size_t kept = 0;

@@ -432,6 +432,25 @@ std::vector<uint64_t> chunkStarts(const MappedFile& file, const Header& h,
     return start;
 }
 
+// Every chunk decompressed in parallel to its section `dest[section]` (floats unshuffled), each
+// checked against its size and zstd's checksum.
+void decompressChunks(const MappedFile& file, const std::vector<Chunk>& chunks,
+                      const std::vector<uint64_t>& start, const std::vector<uint64_t>& table,
+                      const std::vector<char*>& dest, const std::vector<bool>& floats,
+                      const CorruptError& corrupt) {
+    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
+        const Chunk& k = chunks[c];
+        char* out = dest[k.section] + k.offset;
+        std::vector<char> shuffled(floats[k.section] ? k.bytes : 0);
+        char* target = floats[k.section] ? shuffled.data() : out;
+        const size_t got = ZSTD_decompress(target, k.bytes, file.data() + start[c], table[c]);
+        if (ZSTD_isError(got) || got != k.bytes)
+            throw corrupt("chunk " + std::to_string(c) + " (" +
+                          (ZSTD_isError(got) ? ZSTD_getErrorName(got) : "wrong size") + ")");
+        if (floats[k.section]) unshuffleFloats(shuffled.data(), out, k.bytes);
+    });
+}
+
 // A version-4 file's block table: per tile 0 (outside), 1 (inside) or 2 (its own page, the pages
 // in tile order), and the own pages' flags.
 BlockTable tableOf(const int blocks[3], const std::vector<uint8_t>& tileKinds,
@@ -525,17 +544,7 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
         into(split.explicitly, true);
     }
     if (ch.texKind) into(texcoords, true);
-    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
-        const Chunk& k = chunks[c];
-        char* out = dest[k.section] + k.offset;
-        std::vector<char> shuffled(floats[k.section] ? k.bytes : 0);
-        char* target = floats[k.section] ? shuffled.data() : out;
-        const size_t got = ZSTD_decompress(target, k.bytes, file.data() + start[c], table[c]);
-        if (ZSTD_isError(got) || got != k.bytes)
-            throw corrupt("chunk " + std::to_string(c) + " (" +
-                          (ZSTD_isError(got) ? ZSTD_getErrorName(got) : "wrong size") + ")");
-        if (floats[k.section]) unshuffleFloats(shuffled.data(), out, k.bytes);
-    });
+    decompressChunks(file, chunks, start, table, dest, floats, corrupt);
     BlockTable blockTable;
     if (kind == GridKind::Sparse) {
         const int B = static_cast<int>(h.blockSize);
