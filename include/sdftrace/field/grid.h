@@ -3,13 +3,22 @@
 // view:
 //  - dense: every vertex stored;
 //  - sparse block grid: a coarse grid of blocks of B^3 cells (B = 4 or 8), each flagged inside,
-//    outside or surface; only surface blocks store their (B+1)^3 vertex samples (Jamriška §3), with
-//    a bit mask of the cells that contain the surface (§4.1). The per-block tables are paged by
-//    tiles of 8^3 blocks (block_table.h), so that they follow the surface, not the bounding box.
+//    outside or surface; only surface blocks store samples, with a bit mask of the cells that
+//    contain the surface (§4.1). Jamriška §3 keeps each block's (B+1)^3 vertices; here a block
+//    stores the B^3 vertices it owns (local coordinates 0..B-1) and reads its cells' far vertices
+//    (a local coordinate == B: its "apron") from the blocks that own them through a table of 8
+//    sample-block indices per surface block (itself, +x, +y, +xy, +z, +xz, +yz, +xyz), as an
+//    OpenVDB leaf holds 8^3 voxels and no more: 1.95x fewer samples at B = 4 (decision 10). A
+//    neighbour without samples points to a shared constant sample block, one per value; where a
+//    neighbour's samples differ from the apron a block was built with, it points to a private
+//    copy, so every cell reads exactly the corners it was built with. The per-block tables are
+//    paged by tiles of 8^3 blocks (block_table.h), so that they follow the surface, not the
+//    bounding box.
 // Buffers are flat (std::vector) and the view holds plain pointers, so a device upload is one copy
 // per buffer (docs/design.md; NanoVDB's handle + flat layout).
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -52,9 +61,15 @@ struct GridView {
     int tiles[3] = {0, 0, 0};           // tiles of 8^3 blocks (block_table.h)
     const int32_t* tilePage = nullptr;  // per tile: its page of per-block entries
     // Per block slot (blockSlot()):
-    const uint8_t* flags = nullptr;       // BlockFlag
-    const int32_t* blockData = nullptr;   // index of the block's (B+1)^3 samples, -1 if none
-    const float* blockSamples = nullptr;  // surface blocks' samples, x fastest inside a block
+    const uint8_t* flags = nullptr;      // BlockFlag
+    const int32_t* blockData = nullptr;  // index of the block's B^3 own samples, -1 if none
+    // Sample blocks of B^3 samples each, x fastest inside a block: the surface blocks' own (index
+    // = blockData), then the shared constant and private apron blocks the neighbour table names.
+    const float* blockSamples = nullptr;
+    // Per surface block (by its blockData index), 8 sample-block indices: entry
+    // (x == B) + 2 (y == B) + 4 (z == B) holds local vertex (x, y, z), x, y, z in 0..B, at
+    // (x mod B, y mod B, z mod B); entry 0 is the block itself.
+    const int32_t* blockNeighbors = nullptr;
     const uint64_t* cellMasks = nullptr;  // per surface block: B^3 bits, (B^3 + 63) / 64 words
     // Per block slot: its Chebyshev distance d (in blocks) to the nearest block with a
     // sign-changing cell (a set bit in its cell mask), 0 for those, exact up to 8 (larger
@@ -87,6 +102,44 @@ struct GridView {
                pageLocal(bi, bj, bk);
     }
 
+    // Index into blockSamples of local vertex (x, y, z), each in 0..B, of surface block `data`.
+    SDFT_HOST_DEVICE size_t blockSampleIndex(int32_t data, int x, int y, int z) const {
+        const int sh = blockShift(), m = blockSize - 1;
+        const int code = (x >> sh) | (y >> sh) << 1 | (z >> sh) << 2;
+        const size_t from =
+            static_cast<size_t>(blockNeighbors[static_cast<size_t>(data) * 8 + code]);
+        return (from << (3 * sh)) + ((static_cast<size_t>(z & m) << sh | (y & m)) << sh | (x & m));
+    }
+    // Indices into blockSamples of the 8 corners of local cell (x, y, z), each in 0..B-1, of
+    // surface block `data` (idx[di + 2 dj + 4 dk]): per axis the corner's offset inside its block
+    // and, for the cells below the block's far faces, the neighbour entry. No branches: most
+    // cells of a B = 4 block touch a far face.
+    SDFT_HOST_DEVICE void blockCornerIndices(int32_t data, int x, int y, int z,
+                                             size_t idx[8]) const {
+        const int sh = blockShift(), m = blockSize - 1;
+        const int32_t* nb = blockNeighbors + static_cast<size_t>(data) * 8;
+        const int cx = x == m, cy = (y == m) << 1, cz = (z == m) << 2;
+        const size_t x0 = static_cast<size_t>(x), x1 = static_cast<size_t>((x + 1) & m);
+        const size_t y0 = static_cast<size_t>(y) << sh, y1 = static_cast<size_t>((y + 1) & m) << sh;
+        const size_t z0 = static_cast<size_t>(z) << (2 * sh), z1 = static_cast<size_t>((z + 1) & m)
+                                                                   << (2 * sh);
+        auto base = [&](int code) { return static_cast<size_t>(nb[code]) << (3 * sh); };
+        const size_t self = static_cast<size_t>(data) << (3 * sh);
+        idx[0] = self + z0 + y0 + x0;
+        idx[1] = base(cx) + z0 + y0 + x1;
+        idx[2] = base(cy) + z0 + y1 + x0;
+        idx[3] = base(cx | cy) + z0 + y1 + x1;
+        idx[4] = base(cz) + z1 + y0 + x0;
+        idx[5] = base(cx | cz) + z1 + y0 + x1;
+        idx[6] = base(cy | cz) + z1 + y1 + x0;
+        idx[7] = base(cx | cy | cz) + z1 + y1 + x1;
+    }
+    // The 8 corner samples of local cell (x, y, z) of surface block `data` (c[di + 2 dj + 4 dk]).
+    SDFT_HOST_DEVICE void blockCellCorners(int32_t data, int x, int y, int z, float c[8]) const {
+        size_t idx[8];
+        blockCornerIndices(data, x, y, z, idx);
+        for (int n = 0; n < 8; ++n) c[n] = blockSamples[idx[n]];
+    }
     // Sample at integer vertex (i, j, k), clamped to the grid.
     SDFT_HOST_DEVICE float vertex(int i, int j, int k) const;
     // The vertices that central differences at the 8 corners of cell (i, j, k) read, each
@@ -162,19 +215,39 @@ class Grid {
     const std::vector<int32_t>& blockData() const { return m_blockData; }
     const std::vector<int32_t>& tilePage() const { return m_tilePage; }
     const std::vector<uint8_t>& tileSkip() const { return m_tileSkip; }
+    // Sample blocks (GridView::blockSamples): the surface blocks' B^3 own samples first.
     const std::vector<float>& blockSamples() const { return m_blockSamples; }
+    // Per surface block, 8 sample-block indices (GridView::blockNeighbors).
+    const std::vector<int32_t>& blockNeighbors() const { return m_blockNeighbors; }
+    size_t surfaceBlockCount() const { return m_surfaceBlocks; }
+    // The surface blocks' (B+1)^3 vertex samples each (x fastest, blocks in blockData order), as
+    // Jamriška §3 stores them: what .sdfg files hold. The texture coordinates likewise (3 floats
+    // per vertex), empty when the grid has none.
+    std::vector<float> expandedBlockSamples() const;  // empty for dense grids
+    std::vector<float> expandedTexcoords() const;
+    // Writes surface block `data`'s (B+1)^3 samples (x fastest) into out.
+    void expandBlock(int32_t data, float* out) const;
     const std::vector<uint64_t>& cellMasks() const { return m_cellMasks; }
     const std::vector<uint8_t>& blockSkip() const { return m_blockSkip; }
     // Texture coordinates beside the distances (GridView::texcoords); empty when none.
     const std::vector<float>& texcoords() const { return m_texcoords; }
     TexcoordKind texcoordKind() const { return m_texcoordKind; }
-    // Number of stored samples (dense: vertices; sparse: surface-block samples).
+    // Number of stored samples (dense: vertices; sparse: every sample block's).
     size_t storedSamples() const {
         return m_kind == GridKind::Dense ? m_samples.size() : m_blockSamples.size();
     }
     // Attaches 3 floats per stored sample; throws InputError naming `source` on a size mismatch or
     // non-finite values.
     void setTexcoords(TexcoordKind kind, std::vector<float> texcoords, const std::string& source);
+    // The same from 3 floats per (B+1)^3 vertex of each surface block (expandedTexcoords(), as
+    // files store them; sparse only): each stored sample takes its owner's vector.
+    void setExpandedTexcoords(TexcoordKind kind, const std::vector<float>& texcoords,
+                              const std::string& source);
+    // Per stored sample: the surface block (blockData index) and local vertex (x, y, z in 0..B)
+    // it was taken from, x + (B+1) (y + (B+1) z); -1 for the shared constant blocks' samples.
+    // Sparse only; the positions the texture-coordinate bake traces from.
+    void forEachStoredSample(
+        const std::function<void(size_t sample, int32_t block, int x, int y, int z)>& f) const;
 
     // Rebuilds a sparse grid from its stored buffers (file loading): flat per-block flags (x
     // fastest) and the surface blocks' samples in that order; recomputes the cell masks and the
@@ -195,9 +268,9 @@ class Grid {
                            bool parallel = true) const;
 
   private:
-    void computeLipschitz();              // dense
-    void computeCellMasksAndLipschitz();  // sparse
-    void computeBlockSkip();              // sparse, from the flags
+    friend class SparseGridBuilder;  // fills the sparse layout (sparse_grid_builder.h)
+    void computeLipschitz();         // dense
+    void computeBlockSkip();         // sparse, from the flags and cell masks
 
     GridKind m_kind = GridKind::Dense;
     GridShape m_shape;
@@ -213,6 +286,12 @@ class Grid {
     std::vector<uint8_t> m_flags;
     std::vector<int32_t> m_blockData;
     std::vector<float> m_blockSamples;
+    std::vector<int32_t> m_blockNeighbors;
+    size_t m_surfaceBlocks = 0;
+    // Per sample block past the surface blocks: the surface block and neighbour entry it serves
+    // (a private apron block), or -1 (a shared constant block).
+    std::vector<int32_t> m_apronFrom;
+    std::vector<uint8_t> m_apronCode;
     std::vector<uint64_t> m_cellMasks;
     std::vector<uint8_t> m_blockSkip;
     std::vector<float> m_texcoords;
@@ -254,13 +333,13 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
     // coordinate, its block's part of the index in the tile's page and its part of the index
     // inside that block's (B+1)^3 samples (sparse; the block of the cell below the vertex, as in
     // vertex()).
-    int tileOf[3][4];
+    // In a sparse block the vertex's local coordinate is 0..B: B (the apron) adds its axis's bit
+    // to the neighbour entry (codePart) and reads the neighbour's local 0.
+    int tileOf[3][4], codePart[3][4];
     size_t localPart[3][4], samplePart[3][4];
     const int sh = blockShift();
-    const size_t sy = static_cast<size_t>(blockSize) + 1, sz = sy * sy, perBlock = sz * sy;
     const size_t vertexStride[3] = {1, static_cast<size_t>(n[0]) + 1,
                                     (static_cast<size_t>(n[0]) + 1) * (n[1] + 1)};
-    const size_t localStride[3] = {1, sy, sz};
     for (int a = 0; a < 3; ++a)
         for (int d = 0; d < 4; ++d) {
             const int v = clampi(start[a] + d, 0, n[a]);
@@ -270,9 +349,11 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
             }
             const int c = v < n[a] ? v : n[a] - 1;
             const int b = c >> sh;
+            const int local = v - (b << sh);
             tileOf[a][d] = b >> kTileShift;
             localPart[a][d] = static_cast<size_t>(b & (kTileBlocks - 1)) << (kTileShift * a);
-            samplePart[a][d] = static_cast<size_t>(v - (b << sh)) * localStride[a];
+            codePart[a][d] = (local >> sh) << a;
+            samplePart[a][d] = static_cast<size_t>(local & (blockSize - 1)) << (sh * a);
         }
     // The 32 entries: rows (y, z) both in {1, 2} with x = 0..3, rows with one of them in {0, 3}
     // with x = 1, 2.
@@ -297,11 +378,16 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
             const size_t b =
                 pageOf(e) + localPart[0][e[0]] + localPart[1][e[1]] + localPart[2][e[2]];
             const int32_t data = blockData[b];
-            out[e[2]][e[1]][e[0]] =
-                data >= 0 ? blockSamples[data * perBlock + samplePart[0][e[0]] +
-                                         samplePart[1][e[1]] + samplePart[2][e[2]]]
-                : flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background
-                                                                      : background;
+            if (data < 0) {
+                out[e[2]][e[1]][e[0]] =
+                    flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
+                continue;
+            }
+            const size_t from = static_cast<size_t>(
+                blockNeighbors[static_cast<size_t>(data) * 8 + codePart[0][e[0]] +
+                               codePart[1][e[1]] + codePart[2][e[2]]]);
+            out[e[2]][e[1]][e[0]] = blockSamples[(from << (3 * sh)) + samplePart[0][e[0]] +
+                                                 samplePart[1][e[1]] + samplePart[2][e[2]]];
         }
     };
     auto pageAt = [&](int x, int y, int z) {
@@ -328,8 +414,8 @@ SDFT_HOST_DEVICE inline float GridView::constantBlockValue(int i, int j, int k) 
 }
 
 SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[8]) const {
-    // Jamriška §3: each surface block stores the (B+1)^3 vertices of its own cells; other blocks
-    // are constant at +-background by their flag.
+    // Jamriška §3: a surface block's cells read its own samples and its neighbours' (the apron);
+    // other blocks are constant at +-background by their flag.
     size_t idx[8];
     if (!cornerIndices(i, j, k, idx)) {
         const float v = constantBlockValue(i, j, k);
@@ -376,15 +462,12 @@ SDFT_HOST_DEVICE inline bool GridView::cornerIndices(int i, int j, int k, size_t
         sz = sy * (shape.cells[1] + 1);
         base = k * sz + j * sy + i;
     } else {
-        const int B = blockSize;
         const int sh = blockShift();
         int bi = i >> sh, bj = j >> sh, bk = k >> sh;
         int32_t data = blockData[blockSlot(bi, bj, bk)];
         if (data < 0) return false;
-        sy = B + 1;
-        sz = sy * (B + 1);
-        base = static_cast<size_t>(data) * sz * (B + 1) + (k - bk * B) * sz + (j - bj * B) * sy +
-               (i - bi * B);
+        blockCornerIndices(data, i - (bi << sh), j - (bj << sh), k - (bk << sh), idx);
+        return true;
     }
     idx[0] = base, idx[1] = base + 1, idx[2] = base + sy, idx[3] = base + sy + 1;
     idx[4] = base + sz, idx[5] = base + sz + 1, idx[6] = base + sz + sy;

@@ -25,6 +25,7 @@
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/exec/thread_arena.h"
+#include "sdftrace/field/sparse_grid_builder.h"
 
 namespace sdft {
 
@@ -836,18 +837,20 @@ void NarrowBandBake::signBlockRow(int row, size_t& evaluated, size_t& refreshed)
 // The surface blocks' samples copied out of the owners, and the sparse grid.
 Grid NarrowBandBake::gather(ExactBakeStats* stats) {
     const int B = m_B, V = B + 1;
-    const size_t perBlock = static_cast<size_t>(V) * V * V;
     for (size_t b = 0; b < m_numBlocks; ++b)
         if (m_keep[b]) m_kept.push_back(b);
     m_keep = std::vector<uint8_t>();
-    std::vector<float> blockSamples;
-    assignHuge(blockSamples, m_kept.size() * perBlock, 0.0f);
+    // Straight into the grid's compact layout (the owners' samples are one value per vertex).
+    SparseGridBuilder builder(m_s, B, (m_bandVoxels - 1) * m_h,
+                              BlockTable::fromDense(m_nb, m_flags, "exact bake"), "exact bake");
+    m_flags = std::vector<uint8_t>();
     m_arena.execute([&] {
         tbb::parallel_for(size_t(0), m_kept.size(), [&](size_t n) {
             size_t b = m_kept[n];
             int bi = static_cast<int>(b % m_nb[0]), bj = static_cast<int>((b / m_nb[0]) % m_nb[1]),
                 bk = static_cast<int>(b / (static_cast<size_t>(m_nb[0]) * m_nb[1]));
-            float* out = blockSamples.data() + n * perBlock;
+            float block[9 * 9 * 9];  // (B+1)^3, B <= 8
+            float* out = block;
             for (int k = 0; k < V; ++k)
                 for (int j = 0; j < V; ++j) {
                     // The first B vertices of a row lie in one owner (unless clamped at the end).
@@ -859,6 +862,7 @@ Grid NarrowBandBake::gather(ExactBakeStats* stats) {
                     for (; i < V; ++i)
                         *out++ = m_owned[localIndex(bi * B + i, bj * B + j, bk * B + k)];
                 }
+            builder.addBlock(bi, bj, bk, block);
         });
     });
     m_owned.reset();
@@ -866,10 +870,7 @@ Grid NarrowBandBake::gather(ExactBakeStats* stats) {
     report(stats, m_queries, m_signs, m_filmSums);
     if (stats) stats->surfaceBlocks = m_kept.size();
     Grid grid;
-    m_arena.execute([&] {
-        grid = Grid::sparseFromBuffers(m_s, B, (m_bandVoxels - 1) * m_h, std::move(m_flags),
-                                       std::move(blockSamples), "exact bake");
-    });
+    m_arena.execute([&] { grid = builder.finish(); });
     m_phases.mark("grid");  // cell masks and the Lipschitz bound
     if (stats) stats->phases = std::move(m_stages);
     return grid;

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "sdftrace/exec/thread_arena.h"
@@ -88,7 +89,9 @@ Bounds3 crossingBounds(const Grid& grid) {
             [&](int bi, int bj, int bk, size_t slot) {
                 const int32_t data = view.blockData[slot];
                 if (data < 0) return;
-                edges(grid.blockSamples().data() + static_cast<size_t>(data) * V * V * V, V, V, V,
+                float samples[9 * 9 * 9];  // (B+1)^3, B <= 8
+                grid.expandBlock(data, samples);
+                edges(samples, V, V, V,
                       shape.origin + Vec3(bi * B, bj * B, bk * B) * shape.voxelSize);
             },
             false);
@@ -237,20 +240,18 @@ void forEachStoredSample(const Grid& grid, F&& f) {
         });
         return;
     }
-    const GridView view = grid.view();
-    const int B = grid.blockSize(), V = B + 1;
+    // Each stored sample at the vertex it was taken from (the shared constant blocks' samples
+    // have none and keep zero vectors: no cell that changes sign reads them).
+    std::vector<std::array<int, 3>> blockOf(grid.surfaceBlockCount());
     grid.forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
-        const int32_t data = view.blockData[slot];
-        if (data < 0) return;
-        const size_t base = static_cast<size_t>(data) * V * V * V;
-        for (int lk = 0; lk < V; ++lk)
-            for (int lj = 0; lj < V; ++lj)
-                for (int li = 0; li < V; ++li) {
-                    const size_t idx = base + (static_cast<size_t>(lk) * V + lj) * V + li;
-                    const Vec3 x =
-                        shape.origin + Vec3(bi * B + li, bj * B + lj, bk * B + lk) * voxel;
-                    f(x, grid.blockSamples()[idx], idx);
-                }
+        const int32_t data = grid.blockData()[slot];
+        if (data >= 0) blockOf[static_cast<size_t>(data)] = {bi, bj, bk};
+    });
+    const int B = grid.blockSize();
+    grid.forEachStoredSample([&](size_t idx, int32_t block, int x, int y, int z) {
+        const auto& b = blockOf[static_cast<size_t>(block)];
+        const Vec3 p = shape.origin + Vec3(b[0] * B + x, b[1] * B + y, b[2] * B + z) * voxel;
+        f(p, grid.blockSamples()[idx], idx);
     });
 }
 

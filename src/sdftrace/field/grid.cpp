@@ -8,15 +8,21 @@
 #include <cmath>
 #include <cstring>
 
+#include "block_apron_layout.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/field/sparse_grid_builder.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
 namespace sdft {
+
+namespace {
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+}  // namespace
 
 Grid Grid::dense(const GridShape& shape, std::vector<float> samples) {
     SDFT_CHECK(samples.size() == shape.vertexCount());
@@ -98,49 +104,124 @@ Grid Grid::sparseFromBuffers(const GridShape& shape, int B, float background,
 
 Grid Grid::sparseFromTable(const GridShape& shape, int B, float background, BlockTable table,
                            std::vector<float> blockSamples, const std::string& source) {
-    Grid g;
-    g.m_kind = GridKind::Sparse;
-    g.m_shape = shape;
-    SDFT_CHECK(B == 4 || B == 8);  // GridView::blockShift
-    g.m_blockSize = B;
-    g.m_background = background;
-    for (int a = 0; a < 3; ++a) {
-        g.m_blocks[a] = (shape.cells[a] + B - 1) / B;
-        SDFT_CHECK(table.blocks[a] == g.m_blocks[a]);
-        g.m_tiles[a] = table.tiles[a];
-    }
-    // Own pages are numbered in tile order (the flat sample order below relies on it).
-    int32_t nextPage = kFirstOwnPage;
-    for (int32_t page : table.tilePage) {
-        SDFT_CHECK(page >= kOutsidePage && page <= nextPage);
-        if (page >= kFirstOwnPage) {
-            SDFT_CHECK(page == nextPage);
-            ++nextPage;
-        }
-    }
-    SDFT_CHECK(table.flags.size() == static_cast<size_t>(nextPage) * kPageEntries);
-    for (size_t slot = 0; slot < table.flags.size(); ++slot)
-        if (table.flags[slot] > static_cast<uint8_t>(BlockFlag::Surface))
-            throw InputError(source + ": a block has an invalid flag " +
-                             std::to_string(table.flags[slot]) +
-                             " (accepted: 0 outside, 1 inside, 2 surface)");
-    const size_t perBlock = static_cast<size_t>(B + 1) * (B + 1) * (B + 1);
-    size_t surface = 0;
-    g.m_blockData = table.surfaceIndices(surface);
-    if (surface > static_cast<size_t>(INT32_MAX))
-        throw InputError(source + ": " + std::to_string(surface) +
-                         " surface blocks (at most 2^31 - 1 are accepted)");
-    g.m_ownTiles = table.ownTiles();
-    g.m_tilePage = std::move(table.tilePage);
-    g.m_flags = std::move(table.flags);
-    if (blockSamples.size() != surface * perBlock) {
+    SparseGridBuilder builder(shape, B, background, std::move(table), source);
+    const size_t surface = builder.surfaceBlocks();
+    const int V = B + 1;
+    const size_t per = static_cast<size_t>(V) * V * V;
+    if (blockSamples.size() != surface * per) {
         throw InputError(source + ": " + std::to_string(surface) + " surface blocks need " +
-                         std::to_string(surface * perBlock) + " samples, the file has " +
+                         std::to_string(surface * per) + " samples, the file has " +
                          std::to_string(blockSamples.size()));
     }
-    g.m_blockSamples = std::move(blockSamples);
-    g.computeCellMasksAndLipschitz();
-    return g;
+    // Samples from a file or a caller may disagree with their owners where two blocks share a
+    // vertex: those entries stay private to the block (every cell reads what it was given).
+    const ApronLayout L(B);
+    const std::vector<int32_t>& data = builder.blockData();
+    const GridView& tables = builder.tableView();
+    builder.forEachSurfaceBlock([&](int bi, int bj, int bk, int32_t d) {
+        const float* mine = blockSamples.data() + static_cast<size_t>(d) * per;
+        const int b[3] = {bi, bj, bk};
+        uint8_t privateEntries = 0;
+        for (int code = 1; code < 8; ++code) {
+            int o[3];
+            const int32_t od = neighbourBlock(b, code, tables.blocks, o)
+                                   ? data[tables.blockSlot(o[0], o[1], o[2])]
+                                   : -1;
+            if (od < 0) continue;
+            const float* theirs = blockSamples.data() + static_cast<size_t>(od) * per;
+            for (const auto& v : L.byCode[code])
+                if (!sameBits(mine[v.expanded], theirs[v.ownerExpanded])) {
+                    privateEntries |= static_cast<uint8_t>(1u << code);
+                    break;
+                }
+        }
+        builder.addBlock(bi, bj, bk, mine, privateEntries);
+    });
+    blockSamples = std::vector<float>();
+    return builder.finish();
+}
+
+void Grid::expandBlock(int32_t data, float* out) const {
+    const GridView v = view();
+    const int B = m_blockSize, V = B + 1;
+    for (int z = 0; z <= B; ++z)
+        for (int y = 0; y <= B; ++y)
+            for (int x = 0; x <= B; ++x)
+                out[(z * V + y) * V + x] = m_blockSamples[v.blockSampleIndex(data, x, y, z)];
+}
+
+std::vector<float> Grid::expandedBlockSamples() const {
+    if (m_kind != GridKind::Sparse) return {};
+    const size_t per = static_cast<size_t>(m_blockSize + 1) * (m_blockSize + 1) * (m_blockSize + 1);
+    std::vector<float> out(m_surfaceBlocks * per);
+    tbb::parallel_for(size_t(0), m_surfaceBlocks, [&](size_t s) {
+        expandBlock(static_cast<int32_t>(s), out.data() + s * per);
+    });
+    return out;
+}
+
+std::vector<float> Grid::expandedTexcoords() const {
+    if (m_texcoords.empty()) return {};
+    if (m_kind == GridKind::Dense) return m_texcoords;
+    const GridView v = view();
+    const int B = m_blockSize, V = B + 1;
+    const size_t per = static_cast<size_t>(V) * V * V;
+    std::vector<float> out(3 * m_surfaceBlocks * per);
+    tbb::parallel_for(size_t(0), m_surfaceBlocks, [&](size_t s) {
+        float* dst = out.data() + 3 * s * per;
+        for (int z = 0; z <= B; ++z)
+            for (int y = 0; y <= B; ++y)
+                for (int x = 0; x <= B; ++x) {
+                    const size_t from = 3 * v.blockSampleIndex(static_cast<int32_t>(s), x, y, z);
+                    float* d = dst + 3 * static_cast<size_t>((z * V + y) * V + x);
+                    d[0] = m_texcoords[from], d[1] = m_texcoords[from + 1],
+                    d[2] = m_texcoords[from + 2];
+                }
+    });
+    return out;
+}
+
+void Grid::forEachStoredSample(const std::function<void(size_t, int32_t, int, int, int)>& f) const {
+    SDFT_CHECK(m_kind == GridKind::Sparse);
+    const int B = m_blockSize;
+    const size_t own = static_cast<size_t>(B) * B * B;
+    tbb::parallel_for(size_t(0), m_surfaceBlocks, [&](size_t s) {
+        for (int z = 0; z < B; ++z)
+            for (int y = 0; y < B; ++y)
+                for (int x = 0; x < B; ++x)
+                    f(s * own + static_cast<size_t>((z * B + y) * B + x), static_cast<int32_t>(s),
+                      x, y, z);
+    });
+    const ApronLayout L(B);
+    tbb::parallel_for(size_t(0), m_apronFrom.size(), [&](size_t e) {
+        const int32_t s = m_apronFrom[e];
+        if (s < 0) return;  // a shared constant block: no vertex of its own
+        const size_t base = (m_surfaceBlocks + e) * own;
+        for (const auto& v : L.byCode[m_apronCode[e]])
+            f(base + static_cast<size_t>(v.ownerOwn), s, v.x, v.y, v.z);
+    });
+}
+
+void Grid::setExpandedTexcoords(TexcoordKind kind, const std::vector<float>& texcoords,
+                                const std::string& source) {
+    if (m_kind == GridKind::Dense || kind == TexcoordKind::None) {
+        setTexcoords(kind, texcoords, source);
+        return;
+    }
+    const int V = m_blockSize + 1;
+    const size_t per = static_cast<size_t>(V) * V * V;
+    if (texcoords.size() != 3 * m_surfaceBlocks * per) {
+        throw InputError(source + ": " + std::to_string(texcoords.size()) +
+                         " texture-coordinate values for " + std::to_string(m_surfaceBlocks * per) +
+                         " samples; expected 3 per sample");
+    }
+    std::vector<float> compact(3 * storedSamples(), 0.0f);
+    forEachStoredSample([&](size_t sample, int32_t block, int x, int y, int z) {
+        const float* t = texcoords.data() + 3 * (static_cast<size_t>(block) * per +
+                                                 static_cast<size_t>((z * V + y) * V + x));
+        compact[3 * sample] = t[0], compact[3 * sample + 1] = t[1], compact[3 * sample + 2] = t[2];
+    });
+    setTexcoords(kind, std::move(compact), source);
 }
 
 std::vector<uint8_t> Grid::denseFlags() const {
@@ -188,6 +269,7 @@ GridView Grid::view() const {
     v.flags = m_flags.data();
     v.blockData = m_blockData.data();
     v.blockSamples = m_blockSamples.data();
+    v.blockNeighbors = m_blockNeighbors.data();
     v.cellMasks = m_cellMasks.data();
     v.blockSkip = m_blockSkip.empty() ? nullptr : m_blockSkip.data();
     v.background = m_background;
@@ -212,6 +294,22 @@ void Grid::setTexcoords(TexcoordKind kind, std::vector<float> texcoords,
     }
     for (float t : texcoords)
         if (!std::isfinite(t)) throw InputError(source + ": non-finite texture coordinate");
+    if (m_kind == GridKind::Sparse) {
+        // Samples no cell reads as a vertex of its own (the shared constant blocks, the unread
+        // part of private apron blocks) carry zero vectors, as loaded files give them.
+        const int B = m_blockSize;
+        const size_t own = static_cast<size_t>(B) * B * B;
+        const ApronLayout L(B);
+        for (size_t e = 0; e < m_apronFrom.size(); ++e) {
+            float* t = texcoords.data() + 3 * (m_surfaceBlocks + e) * own;
+            std::vector<float> keep(3 * own, 0.0f);
+            if (m_apronFrom[e] >= 0)
+                for (const auto& v : L.byCode[m_apronCode[e]])
+                    for (int c = 0; c < 3; ++c)
+                        keep[3 * static_cast<size_t>(v.ownerOwn) + c] = t[3 * v.ownerOwn + c];
+            std::copy(keep.begin(), keep.end(), t);
+        }
+    }
     m_texcoords = std::move(texcoords);
     m_texcoordKind = kind;
 }
@@ -281,7 +379,8 @@ Bounds3 Grid::surfaceBounds() const {
 size_t Grid::memoryBytes() const {
     return m_samples.size() * sizeof(float) + m_flags.size() +
            m_blockData.size() * sizeof(int32_t) + m_blockSamples.size() * sizeof(float) +
-           m_cellMasks.size() * sizeof(uint64_t) + m_blockSkip.size() +
+           m_blockNeighbors.size() * sizeof(int32_t) + m_apronFrom.size() * sizeof(int32_t) +
+           m_apronCode.size() + m_cellMasks.size() * sizeof(uint64_t) + m_blockSkip.size() +
            m_tilePage.size() * sizeof(int32_t) + m_tileSkip.size() +
            m_ownTiles.size() * sizeof(int);
 }
@@ -315,11 +414,6 @@ void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
         false);
 }
 
-// Jamriška §4.1: one bit per cell of each surface block, set when the signs of its 8 corner samples
-// differ (the cell contains the surface). Recomputed whenever the block's samples change.
-// One pass over the surface blocks' cells (sparse grids only): the cell masks (cells with a
-// sign change), and the Lipschitz bound of the trilinear reconstruction, the max over cells of
-// cellGradientBound2 (the interpolant is continuous across faces within a block).
 namespace {
 // The squared bound of the trilinear interpolant's gradient in a cell, times h^2: its derivative
 // along x is a bilinear blend of the cell's 4 x-edge differences, so |df/dx| <= max |edge
@@ -334,133 +428,6 @@ float cellGradientBound2(const float c[8]) {
     return gx * gx + gy * gy + gz * gz;
 }
 
-// One surface block's cell masks (set into `mask`) and the largest cellGradientBound2 over its
-// first ni x nj x nk cells. The same values as cell by cell, computed once per vertex and edge
-// rather than once per cell corner (each edge is shared by four cells), in fixed-size rows the
-// compiler vectorizes.
-// The cells of a row of a block that change sign, one bit per cell (the first ni), from the
-// negative-vertex bits of the row's 4 corner rows of vertices: some corner of cell i (bits i and
-// i + 1) is negative and not all are.
-inline uint32_t rowSignChanges(uint32_t a, uint32_t b, uint32_t c, uint32_t d, int ni) {
-    const uint32_t any = a | b | c | d, all = a & b & c & d;
-    return ((any | any >> 1) & ~(all & all >> 1)) & ((1u << ni) - 1);
-}
-
-template <int B>
-float blockMasksAndBoundB(const float* s, int ni, int nj, int nk, uint64_t* mask) {
-    constexpr int V = B + 1, sy = V, sz = V * V;
-    // Edge differences, in straight rows (the compiler vectorizes each).
-    float ex[V][V][B], ey[V][B][V], ez[B][V][V];
-    for (int k = 0; k < V; ++k)
-        for (int j = 0; j < V; ++j) {
-            const float* r = s + k * sz + j * sy;
-            for (int i = 0; i < B; ++i) ex[k][j][i] = std::fabs(r[i + 1] - r[i]);
-            if (j < B)
-                for (int i = 0; i < V; ++i) ey[k][j][i] = std::fabs(r[i + sy] - r[i]);
-            if (k < B)
-                for (int i = 0; i < V; ++i) ez[k][j][i] = std::fabs(r[i + sz] - r[i]);
-        }
-    // Vertex signs, one bit per x along each (j, k) row.
-    uint32_t negative[V][V];
-    for (int k = 0; k < V; ++k)
-        for (int j = 0; j < V; ++j) {
-            const float* r = s + k * sz + j * sy;
-            uint32_t bits = 0;
-            for (int i = 0; i < V; ++i) bits |= static_cast<uint32_t>(r[i] < 0) << i;
-            negative[k][j] = bits;
-        }
-    // Cells past ni (a block cut by the grid's face) count for neither.
-    float keep[B];
-    for (int i = 0; i < B; ++i) keep[i] = i < ni ? 1.0f : 0.0f;
-    float worst = 0;
-    for (int k = 0; k < nk; ++k)
-        for (int j = 0; j < nj; ++j) {
-            // cellGradientBound2 of each cell of the row: its 4 x-, y- and z-edges' largest.
-            float rowWorst = 0;
-            for (int i = 0; i < B; ++i) {
-                const float gx = std::max(std::max(ex[k][j][i], ex[k][j + 1][i]),
-                                          std::max(ex[k + 1][j][i], ex[k + 1][j + 1][i]));
-                const float gy = std::max(std::max(ey[k][j][i], ey[k][j][i + 1]),
-                                          std::max(ey[k + 1][j][i], ey[k + 1][j][i + 1]));
-                const float gz = std::max(std::max(ez[k][j][i], ez[k][j][i + 1]),
-                                          std::max(ez[k][j + 1][i], ez[k][j + 1][i + 1]));
-                rowWorst = std::max(rowWorst, (gx * gx + gy * gy + gz * gz) * keep[i]);
-            }
-            worst = std::max(worst, rowWorst);
-            const uint32_t change = rowSignChanges(negative[k][j], negative[k][j + 1],
-                                                   negative[k + 1][j], negative[k + 1][j + 1], ni);
-            const int bit = (k * B + j) * B;
-            mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
-        }
-    return worst;
-}
-
-#if defined(__SSE2__)
-// blockMasksAndBoundB<4> in SSE2 (the x86-64 baseline): a row of 4 cells is one vector. The same
-// operations in the same order, so the same values.
-float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask) {
-    constexpr int V = 5, sy = V, sz = V * V;
-    const __m128 sign = _mm_set1_ps(-0.0f);
-    auto absDiff = [&](const float* a, const float* b) {
-        return _mm_andnot_ps(sign, _mm_sub_ps(_mm_loadu_ps(a), _mm_loadu_ps(b)));
-    };
-    // Edge differences: x-edges 4 per row; y- and z-edges 5 per row (padded for loads at +1).
-    alignas(16) float ex[V][V][4];
-    float ey[V][4][8], ez[4][V][8];
-    uint32_t negative[V][V];
-    for (int k = 0; k < V; ++k)
-        for (int j = 0; j < V; ++j) {
-            const float* r = s + k * sz + j * sy;
-            _mm_store_ps(ex[k][j], absDiff(r + 1, r));
-            if (j < 4) {
-                _mm_storeu_ps(ey[k][j], absDiff(r + sy, r));
-                ey[k][j][4] = std::fabs(r[sy + 4] - r[4]);
-            }
-            if (k < 4) {
-                _mm_storeu_ps(ez[k][j], absDiff(r + sz, r));
-                ez[k][j][4] = std::fabs(r[sz + 4] - r[4]);
-            }
-            negative[k][j] = static_cast<uint32_t>(
-                                 _mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(r), _mm_setzero_ps()))) |
-                             static_cast<uint32_t>(r[4] < 0) << 4;
-        }
-    // Lanes of cells past ni (a block cut by the grid's face) count for nothing.
-    const __m128 keep = _mm_castsi128_ps(
-        _mm_set_epi32(ni > 3 ? -1 : 0, ni > 2 ? -1 : 0, ni > 1 ? -1 : 0, ni > 0 ? -1 : 0));
-    __m128 worst = _mm_setzero_ps();
-    for (int k = 0; k < nk; ++k)
-        for (int j = 0; j < nj; ++j) {
-            const __m128 gx =
-                _mm_max_ps(_mm_max_ps(_mm_load_ps(ex[k][j]), _mm_load_ps(ex[k][j + 1])),
-                           _mm_max_ps(_mm_load_ps(ex[k + 1][j]), _mm_load_ps(ex[k + 1][j + 1])));
-            const __m128 gy =
-                _mm_max_ps(_mm_max_ps(_mm_loadu_ps(ey[k][j]), _mm_loadu_ps(ey[k][j] + 1)),
-                           _mm_max_ps(_mm_loadu_ps(ey[k + 1][j]), _mm_loadu_ps(ey[k + 1][j] + 1)));
-            const __m128 gz =
-                _mm_max_ps(_mm_max_ps(_mm_loadu_ps(ez[k][j]), _mm_loadu_ps(ez[k][j] + 1)),
-                           _mm_max_ps(_mm_loadu_ps(ez[k][j + 1]), _mm_loadu_ps(ez[k][j + 1] + 1)));
-            const __m128 bound =
-                _mm_add_ps(_mm_add_ps(_mm_mul_ps(gx, gx), _mm_mul_ps(gy, gy)), _mm_mul_ps(gz, gz));
-            worst = _mm_max_ps(worst, _mm_and_ps(bound, keep));
-            const uint32_t change = rowSignChanges(negative[k][j], negative[k][j + 1],
-                                                   negative[k + 1][j], negative[k + 1][j + 1], ni);
-            const int bit = (k * 4 + j) * 4;
-            mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
-        }
-    alignas(16) float lanes[4];
-    _mm_store_ps(lanes, worst);
-    return std::max(std::max(lanes[0], lanes[1]), std::max(lanes[2], lanes[3]));
-}
-#else
-float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask) {
-    return blockMasksAndBoundB<4>(s, ni, nj, nk, mask);
-}
-#endif
-
-float blockMasksAndBound(const float* s, int B, int ni, int nj, int nk, uint64_t* mask) {
-    return B == 8 ? blockMasksAndBoundB<8>(s, ni, nj, nk, mask)
-                  : blockMasksAndBound4(s, ni, nj, nk, mask);
-}
 }  // namespace
 
 // Dense grids: the same Lipschitz bound over every cell (no masks: the DDA tracer reads sparse
@@ -473,30 +440,6 @@ void Grid::computeLipschitz() {
     });
     float worst = worstPerThread.combine([](float a, float b) { return std::max(a, b); });
     m_lipschitz = std::max(1.0f, std::sqrt(worst) / m_shape.voxelSize);
-}
-
-void Grid::computeCellMasksAndLipschitz() {
-    const int B = m_blockSize;
-    const int words = (B * B * B + 63) / 64;
-    const size_t sy = B + 1, sz = sy * (B + 1), perBlock = sz * (B + 1);
-    const size_t surfaceBlocks = m_blockSamples.size() / perBlock;
-    assignHuge(m_cellMasks, surfaceBlocks * words, uint64_t{0});
-    tbb::combinable<float> worstPerThread([] { return 0.0f; });  // of gx^2 + gy^2 + gz^2
-    forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
-        const int32_t data = m_blockData[slot];
-        if (data < 0) return;
-        const int ni = std::min(B, m_shape.cells[0] - bi * B),
-                  nj = std::min(B, m_shape.cells[1] - bj * B),
-                  nk = std::min(B, m_shape.cells[2] - bk * B);
-        const float* base = m_blockSamples.data() + static_cast<size_t>(data) * perBlock;
-        uint64_t* mask = m_cellMasks.data() + static_cast<size_t>(data) * words;
-        float& w = worstPerThread.local();
-        w = std::max(w, blockMasksAndBound(base, B, ni, nj, nk, mask));
-    });
-    const float worst = worstPerThread.combine([](float a, float b) { return std::max(a, b); });
-    // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
-    m_lipschitz = std::max(1.0f, std::sqrt(worst) / m_shape.voxelSize);
-    computeBlockSkip();
 }
 
 namespace {

@@ -78,6 +78,65 @@ TEST(Grid, SparseMatchesDenseInsideTheBandAndKeepsTheSignElsewhere) {
     }
 }
 
+// Decision 10: a surface block stores its B^3 own samples and reads its apron through the
+// neighbour table; every cell must read exactly the (B+1)^3 vertices the block was built with,
+// also where an apron disagrees with its owner (a private block) and at grid faces that cut a
+// block (61 cells) or end on one (64 cells).
+TEST(Grid, CompactBlocksGiveEveryCellTheCornersItWasBuiltWith) {
+    for (int B : {4, 8})
+        for (int res : {61, 64}) {
+            const Sampled s = sampleTorusAndBox(res, B);
+            const Grid& g = s.sparse;
+            const int V = B + 1;
+            const size_t per = static_cast<size_t>(V) * V * V, own = static_cast<size_t>(B) * B * B;
+            // Consistent aprons: the owner's samples or one clamped value; a few constant blocks.
+            EXPECT_LE(g.blockSamples().size(), (g.surfaceBlockCount() + 4) * own)
+                << B << " " << res;
+            std::vector<float> built = g.expandedBlockSamples();
+            ASSERT_EQ(built.size(), g.surfaceBlockCount() * per);
+            // Every 7th block's far corner and one vertex of its +x face made to disagree with
+            // their owners (private apron blocks, or constants of another value).
+            for (size_t b = 0; b < g.surfaceBlockCount(); b += 7) {
+                built[b * per + per - 1] += 1e-3f;
+                built[b * per + static_cast<size_t>(B)] += 1e-3f;
+            }
+            const Grid changed = Grid::sparseFromBuffers(g.shape(), B, g.background(),
+                                                         g.denseFlags(), built, "test");
+            EXPECT_EQ(changed.expandedBlockSamples(), built) << B << " " << res;
+            EXPECT_GT(changed.blockSamples().size(), g.blockSamples().size());
+            // Each cell of each surface block, read through the view, against the built vertices.
+            const GridView v = changed.view();
+            size_t cells = 0;
+            changed.forEachPagedBlock(
+                [&](int bi, int bj, int bk, size_t slot) {
+                    const int32_t data = v.blockData[slot];
+                    if (data < 0) return;
+                    const float* e = built.data() + static_cast<size_t>(data) * per;
+                    for (int z = 0; z < B; ++z)
+                        for (int y = 0; y < B; ++y)
+                            for (int x = 0; x < B; ++x) {
+                                const int i = bi * B + x, j = bj * B + y, k = bk * B + z;
+                                if (i >= g.shape().cells[0] || j >= g.shape().cells[1] ||
+                                    k >= g.shape().cells[2])
+                                    continue;
+                                float c[8], d[8];
+                                v.cellCorners(i, j, k, c);
+                                v.blockCellCorners(data, x, y, z, d);
+                                for (int n = 0; n < 8; ++n) {
+                                    const float want =
+                                        e[((z + (n >> 2)) * V + y + ((n >> 1) & 1)) * V + x +
+                                          (n & 1)];
+                                    ASSERT_EQ(c[n], want) << i << " " << j << " " << k << " " << n;
+                                    ASSERT_EQ(d[n], want) << i << " " << j << " " << k << " " << n;
+                                }
+                                ++cells;
+                            }
+                },
+                false);
+            EXPECT_GT(cells, 1000u);
+        }
+}
+
 TEST(Grid, CellMasksMarkExactlyTheCellsWithASignChange) {
     for (int blockSize : {4, 8}) {
         // 45 cells: the last blocks are cut by the grid's faces.

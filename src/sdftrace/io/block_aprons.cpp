@@ -6,6 +6,7 @@
 #include <bit>
 #include <cstring>
 
+#include "../field/block_apron_layout.h"
 #include "sdftrace/core/error.h"
 
 namespace sdft {
@@ -84,8 +85,8 @@ SplitBlocks splitBlocks(const Grid& grid) {
     const Layout L(grid.shape(), grid.blockSize());
     const auto aprons = apronPositions(L.B);
     const GridView view = grid.view();
-    const std::vector<float>& samples = grid.blockSamples();
-    const size_t surface = samples.size() / L.per;
+    const std::vector<float>& samples = grid.blockSamples();  // B^3 own samples per block first
+    const size_t surface = grid.surfaceBlockCount();
     std::vector<size_t> blockOf(surface);  // surface index -> flat block index
     grid.forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
         const int32_t data = view.blockData[slot];
@@ -104,13 +105,11 @@ SplitBlocks splitBlocks(const Grid& grid) {
     out.masks.assign(surface * L.words, 0);
     std::vector<uint32_t> kept(surface);
     // Pass 1: own samples and masks; pass 2 (after the prefix sums) the explicit samples.
+    std::copy(samples.begin(), samples.begin() + static_cast<ptrdiff_t>(surface * L.own),
+              out.own.begin());
     tbb::parallel_for(size_t(0), surface, [&](size_t s) {
-        const float* src = samples.data() + s * L.per;
-        float* own = out.own.data() + s * L.own;
-        for (int k = 0; k < L.B; ++k)
-            for (int j = 0; j < L.B; ++j)
-                for (int i = 0; i < L.B; ++i)
-                    own[(k * L.B + j) * L.B + i] = src[(k * L.V + j) * L.V + i];
+        float src[9 * 9 * 9];  // (B+1)^3, B <= 8
+        grid.expandBlock(static_cast<int32_t>(s), src);
         int c[3];
         L.coords(blockOf[s], c);
         uint64_t* mask = out.masks.data() + s * L.words;
@@ -119,10 +118,9 @@ SplitBlocks splitBlocks(const Grid& grid) {
             const float v = src[(p[2] * L.V + p[1]) * L.V + p[0]];
             size_t o = 0;
             int32_t owner = -1;
-            const bool implicit =
-                L.owner(c, p, o) && (owner = dataOf(o)) >= 0 &&
-                sameBits(v, samples[static_cast<size_t>(owner) * L.per +
-                                    (((p[2] % L.B) * L.V + p[1] % L.B) * L.V + p[0] % L.B)]);
+            const bool implicit = L.owner(c, p, o) && (owner = dataOf(o)) >= 0 &&
+                                  sameBits(v, samples[static_cast<size_t>(owner) * L.own +
+                                                      static_cast<size_t>(L.ownIndex(p))]);
             if (!implicit) {
                 mask[a / 64] |= uint64_t{1} << (a % 64);
                 ++kept[s];
@@ -133,7 +131,8 @@ SplitBlocks splitBlocks(const Grid& grid) {
     for (size_t s = 0; s < surface; ++s) start[s + 1] = start[s] + kept[s];
     out.explicitly.resize(start[surface]);
     tbb::parallel_for(size_t(0), surface, [&](size_t s) {
-        const float* src = samples.data() + s * L.per;
+        float src[9 * 9 * 9];  // (B+1)^3, B <= 8
+        grid.expandBlock(static_cast<int32_t>(s), src);
         const uint64_t* mask = out.masks.data() + s * L.words;
         size_t n = start[s];
         for (int a = 0; a < L.apron; ++a)
@@ -191,12 +190,7 @@ std::vector<float> joinBlocks(const GridShape& shape, int blockSize, const Block
         const float* neighbour[8] = {nullptr};
         for (int code = 1; code < 8; ++code) {
             int o[3];
-            bool inside = true;
-            for (int a = 0; a < 3; ++a) {
-                o[a] = c[a] + ((code >> a) & 1);
-                inside = inside && o[a] < L.blocks[a];
-            }
-            if (!inside) continue;
+            if (!neighbourBlock(c, code, L.blocks, o)) continue;
             const int32_t n = surfaceOf[table.slot(o[0], o[1], o[2])];
             if (n >= 0) neighbour[code] = split.own.data() + static_cast<size_t>(n) * L.own;
         }

@@ -32,18 +32,18 @@ TEST(BlockAprons, SplitAndJoinGiveTheSameSamples) {
     for (int B : {4, 8}) {
         const Grid g = sphereGrid(B);
         const SplitBlocks split = splitBlocks(g);
-        const size_t surface = g.blockSamples().size() / ((B + 1) * (B + 1) * (B + 1));
+        const size_t surface = g.surfaceBlockCount();
         EXPECT_EQ(split.own.size(), surface * B * B * B);
         // Most aprons are shared with a surface neighbour: far fewer kept than stored.
         EXPECT_LT(split.explicitly.size(), surface * apronSize(B) / 2) << B;
-        EXPECT_EQ(joinBlocks(g.shape(), B, tableOf(g), split, "t"), g.blockSamples()) << B;
+        EXPECT_EQ(joinBlocks(g.shape(), B, tableOf(g), split, "t"), g.expandedBlockSamples()) << B;
     }
 }
 
 TEST(BlockAprons, ApronsThatDisagreeWithTheirOwnerAreKept) {
     const Grid g = sphereGrid(4);
     // Perturb every block's last sample (its +x+y+z corner, owned by a neighbour).
-    std::vector<float> samples = g.blockSamples();
+    std::vector<float> samples = g.expandedBlockSamples();
     for (size_t i = 124; i < samples.size(); i += 125) samples[i] += 1e-3f;
     const Grid changed =
         Grid::sparseFromBuffers(g.shape(), 4, g.background(), g.denseFlags(), samples, "t");

@@ -74,19 +74,23 @@ void saveRaw(const Grid& grid, const std::string& path) {
     uint64_t sum = 0xcbf29ce484222325ull;
     const std::vector<uint8_t> flags =
         grid.kind() == GridKind::Sparse ? grid.denseFlags() : std::vector<uint8_t>();
+    // Versions 1 and 2 store each surface block's (B+1)^3 vertices.
+    const std::vector<float> blockSamples =
+        grid.kind() == GridKind::Sparse ? grid.expandedBlockSamples() : std::vector<float>();
+    const std::vector<float> texcoords = grid.expandedTexcoords();
     if (grid.kind() == GridKind::Dense) {
         h.payloadBytes = grid.samples().size() * sizeof(float);
         sum = fnv1a64(grid.samples().data(), h.payloadBytes, sum);
     } else {
-        h.payloadBytes = flags.size() + grid.blockSamples().size() * sizeof(float);
+        h.payloadBytes = flags.size() + blockSamples.size() * sizeof(float);
         sum = fnv1a64(flags.data(), flags.size(), sum);
-        sum = fnv1a64(grid.blockSamples().data(), grid.blockSamples().size() * sizeof(float), sum);
+        sum = fnv1a64(blockSamples.data(), blockSamples.size() * sizeof(float), sum);
     }
     const uint32_t texHeader[2] = {static_cast<uint32_t>(grid.texcoordKind()), 0};
     if (tex) {
-        h.payloadBytes += sizeof texHeader + grid.texcoords().size() * sizeof(float);
+        h.payloadBytes += sizeof texHeader + texcoords.size() * sizeof(float);
         sum = fnv1a64(texHeader, sizeof texHeader, sum);
-        sum = fnv1a64(grid.texcoords().data(), grid.texcoords().size() * sizeof(float), sum);
+        sum = fnv1a64(texcoords.data(), texcoords.size() * sizeof(float), sum);
     }
     h.checksum = sum;
 
@@ -96,11 +100,11 @@ void saveRaw(const Grid& grid, const std::string& path) {
         out.write(grid.samples().data(), grid.samples().size() * sizeof(float));
     } else {
         out.write(flags.data(), flags.size());
-        out.write(grid.blockSamples().data(), grid.blockSamples().size() * sizeof(float));
+        out.write(blockSamples.data(), blockSamples.size() * sizeof(float));
     }
     if (tex) {
         out.write(texHeader, sizeof texHeader);
-        out.write(grid.texcoords().data(), grid.texcoords().size() * sizeof(float));
+        out.write(texcoords.data(), texcoords.size() * sizeof(float));
     }
     out.commit();
 }
@@ -196,7 +200,8 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
         sections.insert(sections.end(), {section(split.own, true), section(split.masks, false),
                                          section(split.explicitly, true)});
     }
-    if (!grid.texcoords().empty()) sections.push_back(section(grid.texcoords(), true));
+    const std::vector<float> texcoords = grid.expandedTexcoords();  // per (B+1)^3 vertex
+    if (!texcoords.empty()) sections.push_back(section(texcoords, true));
     std::vector<uint64_t> sectionBytes;
     for (const Section& s : sections) sectionBytes.push_back(s.bytes);
     const std::vector<Chunk> chunks = chunksOf(sectionBytes, kChunkBytes);
@@ -227,7 +232,10 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
     CompressedHeader ch{};
     ch.texKind = grid.texcoords().empty() ? 0 : static_cast<uint32_t>(grid.texcoordKind());
     ch.chunkBytes = kChunkBytes;
-    ch.sampleCount = grid.storedSamples();
+    ch.sampleCount = grid.kind() == GridKind::Dense
+                         ? grid.storedSamples()
+                         : grid.surfaceBlockCount() * (grid.blockSize() + 1) *
+                               (grid.blockSize() + 1) * (grid.blockSize() + 1);
     ch.apronCount = split.explicitly.size();
     ch.chunkCount = chunks.size();
     std::vector<uint64_t> table;
@@ -562,7 +570,7 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
                     : Grid::sparseFromTable(s, static_cast<int>(h.blockSize), h.background,
                                             std::move(blockTable), std::move(samples), path);
     if (ch.texKind)
-        grid.setTexcoords(static_cast<TexcoordKind>(ch.texKind), std::move(texcoords), path);
+        grid.setExpandedTexcoords(static_cast<TexcoordKind>(ch.texKind), texcoords, path);
     return grid;
 }
 
@@ -618,7 +626,7 @@ Grid loadSdfg(const std::string& path) {
                     : Grid::sparseFromBuffers(s, static_cast<int>(h.blockSize), h.background,
                                               std::move(flags), std::move(samples), path);
     if (l.texcoords)
-        grid.setTexcoords(static_cast<TexcoordKind>(texHeader[0]), std::move(texcoords), path);
+        grid.setExpandedTexcoords(static_cast<TexcoordKind>(texHeader[0]), texcoords, path);
     return grid;
 }
 

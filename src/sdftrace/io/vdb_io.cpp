@@ -14,6 +14,7 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/field/sparse_grid_builder.h"
 #include "sdftrace/io/atomic_file.h"
 #include "vdb_reader.h"
 
@@ -103,16 +104,19 @@ class TreeToGrid {
         size_t surface = 0;
         const std::vector<int32_t> index = table.surfaceIndices(surface);
         checkMemoryBudget(static_cast<double>(table.flags.size()) * 6 +
-                              m_V * m_V * m_V * sizeof(float) * static_cast<double>(surface),
+                              (m_B * m_B * m_B * sizeof(float) + 8 * sizeof(int32_t)) *
+                                  static_cast<double>(surface),
                           m_path,
                           "the samples of " + std::to_string(surface) + " blocks near its surface",
                           "resample the level set coarser");
         if (index.empty() && surface > 0)
             throw InputError(m_path + ": " + std::to_string(surface) +
                              " surface blocks (at most 2^31 - 1 are accepted)");
-        std::vector<float> samples = sampleSurfaceBlocks(table, index, surface);
-        return Grid::sparseFromTable(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
-                                     std::move(table), std::move(samples), m_path);
+        const std::vector<int> own = table.ownTiles();
+        SparseGridBuilder builder(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
+                                  std::move(table), m_path);
+        sampleSurfaceBlocks(own, index, builder);
+        return builder.finish();
     }
 
   private:
@@ -455,36 +459,33 @@ class TreeToGrid {
             }
     }
 
-    // Pass 2: the surface blocks' samples, clamped to the band, each where its index (flat block
-    // order) puts it; own pages in parallel.
-    std::vector<float> sampleSurfaceBlocks(const BlockTable& table,
-                                           const std::vector<int32_t>& index,
-                                           size_t surface) const {
+    // Pass 2: the surface blocks' samples, clamped to the band, into the grid's builder (every
+    // vertex's value comes from the tree, so blocks that share one agree); own pages in parallel.
+    void sampleSurfaceBlocks(const std::vector<int>& own, const std::vector<int32_t>& index,
+                             SparseGridBuilder& builder) const {
         const int V = m_V;
         const size_t perBlock = static_cast<size_t>(V) * V * V;
-        std::vector<float> samples;
-        samples.reserve(surface * perBlock);
-        adviseHugePages(samples.data(), surface * perBlock * sizeof(float));
-        samples.resize(surface * perBlock);
         const float band = m_band;
-        const std::vector<int> own = table.ownTiles();
         tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
             GatherScratch scratch;
             TileRegions tr;
             tileRegions(&own[3 * p], tr);
             const size_t base = (p + kFirstOwnPage) * kPageEntries;
-            forEachBlockOfTile(
-                m_blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2], [&](int bi, int bj, int bk) {
-                    const int32_t at = index[base + pageLocal(bi, bj, bk)];
-                    if (at < 0) return;
-                    float* block = samples.data() + static_cast<size_t>(at) * perBlock;
-                    const int b[3] = {bi, bj, bk};
-                    gatherBlock(b, block, scratch, tr);
-                    for (size_t n = 0; n < perBlock; ++n)
-                        block[n] = std::min(std::max(block[n], -band), band);
-                });
+            float block[9 * 9 * 9];  // (B+1)^3, B <= 8
+            forEachBlockOfTile(m_blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
+                               [&](int bi, int bj, int bk) {
+                                   const int32_t at = index[base + pageLocal(bi, bj, bk)];
+                                   if (at < 0) return;
+                                   const int b[3] = {bi, bj, bk};
+                                   gatherBlock(b, block, scratch, tr);
+#pragma omp simd
+                                   for (size_t n = 0; n < perBlock; ++n) {
+                                       const float v = block[n];
+                                       block[n] = v < -band ? -band : (v > band ? band : v);
+                                   }
+                                   builder.addBlock(bi, bj, bk, block);
+                               });
         });
-        return samples;
     }
 
     const vdb::Tree& m_t;

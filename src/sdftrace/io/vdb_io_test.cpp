@@ -147,7 +147,7 @@ TEST(Vdb, ImportsALevelSet8192VoxelsAcross) {
     EXPECT_EQ(back.tilePage(), g.tilePage());
     EXPECT_EQ(back.flags(), g.flags());
     EXPECT_EQ(back.blockData(), g.blockData());
-    EXPECT_EQ(back.blockSamples(), g.blockSamples());
+    EXPECT_EQ(back.expandedBlockSamples(), g.expandedBlockSamples());
     EXPECT_EQ(back.cellMasks(), g.cellMasks());
     EXPECT_EQ(back.tileSkip(), g.tileSkip());
     EXPECT_EQ(back.blockSkip(), g.blockSkip());
@@ -225,7 +225,7 @@ void expectSameGrid(const Grid& a, const Grid& b, const std::string& what) {
     EXPECT_EQ(a.shape().voxelSize, b.shape().voxelSize) << what;
     EXPECT_EQ(a.background(), b.background()) << what;
     EXPECT_EQ(a.flags(), b.flags()) << what;
-    EXPECT_EQ(a.blockSamples(), b.blockSamples()) << what;
+    EXPECT_EQ(a.expandedBlockSamples(), b.expandedBlockSamples()) << what;
 }
 
 // Level sets and a fog-like grid, written by OpenVDB with every compression it has, in full and

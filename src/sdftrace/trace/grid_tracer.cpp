@@ -154,10 +154,9 @@ BlockFlag blockFlag(const GridView& g, const int b[3]) {
 // bit and sample offset stepped along with the cell. The same cells, boundaries and tests as the
 // Dda (the same expressions and tie-breaking), so the same hits and t.
 bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const int hi[3],
-                     const uint64_t* mask, const float* samples, float tEnter, float tExit,
+                     const uint64_t* mask, int32_t data, float tEnter, float tExit,
                      const GridTraceOptions& o, GridTraceResult& res, float& tHit) {
     const int B = s.B;
-    const int sy = B + 1, sz = sy * sy;
     Dda start;
     start.init(s.r.o, s.r.d, s.invD, tEnter, 1.0f, lo, hi);
     int ix = start.idx[0], iy = start.idx[1], iz = start.idx[2];
@@ -165,8 +164,8 @@ bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const i
     float tx = start.tNext[0], ty = start.tNext[1], tz = start.tNext[2];
     const float ox = s.r.o[0], oy = s.r.o[1], oz = s.r.o[2];
     const float vx = s.invD[0], vy = s.invD[1], vz = s.invD[2];
+    // The cell's bit is also its first corner's index among the block's B^3 own samples.
     int bit = ((iz - lo[2]) * B + (iy - lo[1])) * B + (ix - lo[0]);
-    int sample = (iz - lo[2]) * sz + (iy - lo[1]) * sy + (ix - lo[0]);
     float t = tEnter;
     int steps = 0;
     bool hit = false;
@@ -174,9 +173,8 @@ bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const i
         ++steps;
         const float tOut = std::min(std::min({tx, ty, tz}), tExit);
         if ((mask[bit >> 6] >> (bit & 63)) & 1) {
-            const float* q = samples + sample;
-            const float c[8] = {q[0],  q[1],      q[sy],      q[sy + 1],
-                                q[sz], q[sz + 1], q[sz + sy], q[sz + sy + 1]};
+            float c[8];
+            g.blockCellCorners(data, ix - lo[0], iy - lo[1], iz - lo[2], c);
             if (intersectCell(g, s.r, ix, iy, iz, c, t, tOut, s.sign, o, res, tHit)) {
                 hit = true;
                 break;
@@ -188,21 +186,18 @@ bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const i
             ix += sx0;
             if (ix < lo[0] || ix > hi[0]) break;
             bit += sx0;
-            sample += sx0;
             tx = ((ix + (sx0 > 0)) * 1.0f - ox) * vx;
         } else if (!(tx < ty) && ty < tz) {
             t = ty;
             iy += sy0;
             if (iy < lo[1] || iy > hi[1]) break;
             bit += sy0 * B;
-            sample += sy0 * sy;
             ty = ((iy + (sy0 > 0)) * 1.0f - oy) * vy;
         } else {
             t = tz;
             iz += sz0;
             if (iz < lo[2] || iz > hi[2]) break;
             bit += sz0 * B * B;
-            sample += sz0 * sz;
             tz = ((iz + (sz0 > 0)) * 1.0f - oz) * vz;
         }
     }
@@ -220,14 +215,13 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], size_t
         lo[a] = block[a] * s.B;
         hi[a] = std::min(lo[a] + s.B, g.shape.cells[a]) - 1;
     }
-    // The block's (B+1)^3 vertex samples and mask, looked up once (§4.1).
-    const float* samples = nullptr;
-    const size_t sy = s.B + 1, sz = sy * sy;
+    // The block's samples and mask, looked up once (§4.1).
+    int32_t data = -1;
     if (g.kind == GridKind::Sparse) {
-        size_t data = static_cast<size_t>(g.blockData[slot]);
-        samples = g.blockSamples + data * sz * sy;
+        data = g.blockData[slot];
         if (o.bitMasks)
-            return walkMaskedCells(g, s, lo, hi, g.cellMasks + data * g.wordsPerMask(), samples,
+            return walkMaskedCells(g, s, lo, hi,
+                                   g.cellMasks + static_cast<size_t>(data) * g.wordsPerMask(), data,
                                    tEnter, tExit, o, res, tHit);
     }
     Dda cells;
@@ -238,11 +232,9 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], size_t
         ++steps;
         float tIn = cells.t, tOut = std::min(cells.exit(), tExit);
         float c[8];
-        if (samples) {
-            const float* q = samples + (cells.idx[2] - lo[2]) * sz + (cells.idx[1] - lo[1]) * sy +
-                             (cells.idx[0] - lo[0]);
-            c[0] = q[0], c[1] = q[1], c[2] = q[sy], c[3] = q[sy + 1];
-            c[4] = q[sz], c[5] = q[sz + 1], c[6] = q[sz + sy], c[7] = q[sz + sy + 1];
+        if (data >= 0) {
+            g.blockCellCorners(data, cells.idx[0] - lo[0], cells.idx[1] - lo[1],
+                               cells.idx[2] - lo[2], c);
         } else {
             g.cellCorners(cells.idx[0], cells.idx[1], cells.idx[2], c);
         }

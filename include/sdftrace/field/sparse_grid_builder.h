@@ -1,0 +1,66 @@
+// Builds a sparse block grid (grid.h) block by block from each surface block's (B+1)^3 vertex
+// samples (Jamriška §3), straight into the compact layout of decision 10: the block's B^3 own
+// samples, its cell masks (§4.1) and Lipschitz bound, and its neighbour entries. No buffer of
+// (B+1)^3 samples per block is ever held, so the importers and bakers that feed it peak at the
+// grid's own size.
+#pragma once
+
+#include <tbb/combinable.h>
+#include <tbb/enumerable_thread_specific.h>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sdftrace/field/block_table.h"
+#include "sdftrace/field/grid.h"
+
+namespace sdft {
+
+class SparseGridBuilder {
+  public:
+    // Validates the table (throws InputError naming `source`) and numbers its surface blocks in
+    // flat block order (z, y, x).
+    SparseGridBuilder(const GridShape& shape, int blockSize, float background, BlockTable table,
+                      const std::string& source);
+
+    size_t surfaceBlocks() const { return m_grid.m_surfaceBlocks; }
+    // Per slot (GridView::blockSlot) the surface block's index, -1 for none.
+    const std::vector<int32_t>& blockData() const { return m_grid.m_blockData; }
+    // The table's view (tiles, pages, blockSlot), for looking up blocks while building.
+    const GridView& tableView() const { return m_view; }
+    // Calls f(bi, bj, bk, index) for every surface block, tiles in parallel.
+    template <class F>
+    void forEachSurfaceBlock(F&& f) const {
+        m_grid.forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
+            const int32_t data = m_grid.m_blockData[slot];
+            if (data >= 0) f(bi, bj, bk, data);
+        });
+    }
+
+    // Adds surface block (bi, bj, bk) from its (B+1)^3 vertex samples, x fastest; safe to call
+    // concurrently for distinct blocks. A vertex that two surface blocks share must have the same
+    // value in both, bit for bit, except in the neighbour entries set in `privateEntries` (bit c:
+    // entry c), which keep this block's samples of them in a private sample block.
+    void addBlock(int bi, int bj, int bk, const float* samples, uint8_t privateEntries = 0);
+
+    // The grid, once every surface block has been added: the shared constant and private blocks
+    // appended and numbered in block order (the same grid for the same input), the Lipschitz
+    // bound and the empty-space skip tables.
+    Grid finish();
+
+  private:
+    struct Private {
+        int32_t data;
+        int code;
+        std::vector<float> own;  // B^3, the entry's vertices at their owner-local places
+    };
+    Grid m_grid;
+    GridView m_view;  // of m_grid's tables (its buffers are not moved until finish)
+    std::vector<uint32_t> m_constantBits;  // per surface block and entry: the constant's bits
+    tbb::combinable<float> m_worst;        // of the cells' squared gradient bounds (times h^2)
+    tbb::enumerable_thread_specific<std::vector<Private>> m_privates;
+};
+
+}  // namespace sdft

@@ -1,0 +1,330 @@
+#include "sdftrace/field/sparse_grid_builder.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "block_apron_layout.h"
+#include "sdftrace/core/error.h"
+#include "sdftrace/core/macros.h"
+#include "sdftrace/exec/huge_pages.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace sdft {
+
+// Jamriška §4.1: one bit per cell of each surface block, set when the signs of its 8 corner samples
+// differ (the cell contains the surface). Recomputed whenever the block's samples change.
+// One pass over the surface blocks' cells (sparse grids only): the cell masks (cells with a
+// sign change), and the Lipschitz bound of the trilinear reconstruction, the max over cells of
+// cellGradientBound2 (the interpolant is continuous across faces within a block).
+namespace {
+// One surface block's cell masks (set into `mask`) and the largest cellGradientBound2 over its
+// first ni x nj x nk cells. The same values as cell by cell, computed once per vertex and edge
+// rather than once per cell corner (each edge is shared by four cells), in fixed-size rows the
+// compiler vectorizes.
+// The cells of a row of a block that change sign, one bit per cell (the first ni), from the
+// negative-vertex bits of the row's 4 corner rows of vertices: some corner of cell i (bits i and
+// i + 1) is negative and not all are.
+inline uint32_t rowSignChanges(uint32_t a, uint32_t b, uint32_t c, uint32_t d, int ni) {
+    const uint32_t any = a | b | c | d, all = a & b & c & d;
+    return ((any | any >> 1) & ~(all & all >> 1)) & ((1u << ni) - 1);
+}
+
+template <int B>
+float blockMasksAndBoundB(const float* s, int ni, int nj, int nk, uint64_t* mask) {
+    constexpr int V = B + 1, sy = V, sz = V * V;
+    // Edge differences, in straight rows (the compiler vectorizes each).
+    float ex[V][V][B], ey[V][B][V], ez[B][V][V];
+    for (int k = 0; k < V; ++k)
+        for (int j = 0; j < V; ++j) {
+            const float* r = s + k * sz + j * sy;
+            for (int i = 0; i < B; ++i) ex[k][j][i] = std::fabs(r[i + 1] - r[i]);
+            if (j < B)
+                for (int i = 0; i < V; ++i) ey[k][j][i] = std::fabs(r[i + sy] - r[i]);
+            if (k < B)
+                for (int i = 0; i < V; ++i) ez[k][j][i] = std::fabs(r[i + sz] - r[i]);
+        }
+    // Vertex signs, one bit per x along each (j, k) row.
+    uint32_t negative[V][V];
+    for (int k = 0; k < V; ++k)
+        for (int j = 0; j < V; ++j) {
+            const float* r = s + k * sz + j * sy;
+            uint32_t bits = 0;
+            for (int i = 0; i < V; ++i) bits |= static_cast<uint32_t>(r[i] < 0) << i;
+            negative[k][j] = bits;
+        }
+    // Cells past ni (a block cut by the grid's face) count for neither.
+    float keep[B];
+    for (int i = 0; i < B; ++i) keep[i] = i < ni ? 1.0f : 0.0f;
+    float worst = 0;
+    for (int k = 0; k < nk; ++k)
+        for (int j = 0; j < nj; ++j) {
+            // cellGradientBound2 of each cell of the row: its 4 x-, y- and z-edges' largest.
+            float rowWorst = 0;
+            for (int i = 0; i < B; ++i) {
+                const float gx = std::max(std::max(ex[k][j][i], ex[k][j + 1][i]),
+                                          std::max(ex[k + 1][j][i], ex[k + 1][j + 1][i]));
+                const float gy = std::max(std::max(ey[k][j][i], ey[k][j][i + 1]),
+                                          std::max(ey[k + 1][j][i], ey[k + 1][j][i + 1]));
+                const float gz = std::max(std::max(ez[k][j][i], ez[k][j][i + 1]),
+                                          std::max(ez[k][j + 1][i], ez[k][j + 1][i + 1]));
+                rowWorst = std::max(rowWorst, (gx * gx + gy * gy + gz * gz) * keep[i]);
+            }
+            worst = std::max(worst, rowWorst);
+            const uint32_t change = rowSignChanges(negative[k][j], negative[k][j + 1],
+                                                   negative[k + 1][j], negative[k + 1][j + 1], ni);
+            const int bit = (k * B + j) * B;
+            mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
+        }
+    return worst;
+}
+
+#if defined(__SSE2__)
+// blockMasksAndBoundB<4> in SSE2 (the x86-64 baseline): a row of 4 cells is one vector. The same
+// operations in the same order, so the same values.
+float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask) {
+    constexpr int V = 5, sy = V, sz = V * V;
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    auto absDiff = [&](const float* a, const float* b) {
+        return _mm_andnot_ps(sign, _mm_sub_ps(_mm_loadu_ps(a), _mm_loadu_ps(b)));
+    };
+    // Edge differences: x-edges 4 per row; y- and z-edges 5 per row (padded for loads at +1).
+    alignas(16) float ex[V][V][4];
+    float ey[V][4][8], ez[4][V][8];
+    uint32_t negative[V][V];
+    for (int k = 0; k < V; ++k)
+        for (int j = 0; j < V; ++j) {
+            const float* r = s + k * sz + j * sy;
+            _mm_store_ps(ex[k][j], absDiff(r + 1, r));
+            if (j < 4) {
+                _mm_storeu_ps(ey[k][j], absDiff(r + sy, r));
+                ey[k][j][4] = std::fabs(r[sy + 4] - r[4]);
+            }
+            if (k < 4) {
+                _mm_storeu_ps(ez[k][j], absDiff(r + sz, r));
+                ez[k][j][4] = std::fabs(r[sz + 4] - r[4]);
+            }
+            negative[k][j] = static_cast<uint32_t>(
+                                 _mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(r), _mm_setzero_ps()))) |
+                             static_cast<uint32_t>(r[4] < 0) << 4;
+        }
+    // Lanes of cells past ni (a block cut by the grid's face) count for nothing.
+    const __m128 keep = _mm_castsi128_ps(
+        _mm_set_epi32(ni > 3 ? -1 : 0, ni > 2 ? -1 : 0, ni > 1 ? -1 : 0, ni > 0 ? -1 : 0));
+    __m128 worst = _mm_setzero_ps();
+    for (int k = 0; k < nk; ++k)
+        for (int j = 0; j < nj; ++j) {
+            const __m128 gx =
+                _mm_max_ps(_mm_max_ps(_mm_load_ps(ex[k][j]), _mm_load_ps(ex[k][j + 1])),
+                           _mm_max_ps(_mm_load_ps(ex[k + 1][j]), _mm_load_ps(ex[k + 1][j + 1])));
+            const __m128 gy =
+                _mm_max_ps(_mm_max_ps(_mm_loadu_ps(ey[k][j]), _mm_loadu_ps(ey[k][j] + 1)),
+                           _mm_max_ps(_mm_loadu_ps(ey[k + 1][j]), _mm_loadu_ps(ey[k + 1][j] + 1)));
+            const __m128 gz =
+                _mm_max_ps(_mm_max_ps(_mm_loadu_ps(ez[k][j]), _mm_loadu_ps(ez[k][j] + 1)),
+                           _mm_max_ps(_mm_loadu_ps(ez[k][j + 1]), _mm_loadu_ps(ez[k][j + 1] + 1)));
+            const __m128 bound =
+                _mm_add_ps(_mm_add_ps(_mm_mul_ps(gx, gx), _mm_mul_ps(gy, gy)), _mm_mul_ps(gz, gz));
+            worst = _mm_max_ps(worst, _mm_and_ps(bound, keep));
+            const uint32_t change = rowSignChanges(negative[k][j], negative[k][j + 1],
+                                                   negative[k + 1][j], negative[k + 1][j + 1], ni);
+            const int bit = (k * 4 + j) * 4;
+            mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
+        }
+    alignas(16) float lanes[4];
+    _mm_store_ps(lanes, worst);
+    return std::max(std::max(lanes[0], lanes[1]), std::max(lanes[2], lanes[3]));
+}
+#else
+float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask) {
+    return blockMasksAndBoundB<4>(s, ni, nj, nk, mask);
+}
+#endif
+
+float blockMasksAndBound(const float* s, int B, int ni, int nj, int nk, uint64_t* mask) {
+    return B == 8 ? blockMasksAndBoundB<8>(s, ni, nj, nk, mask)
+                  : blockMasksAndBound4(s, ni, nj, nk, mask);
+}
+}  // namespace
+
+namespace {
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+uint32_t bitsOf(float a) {
+    uint32_t u;
+    std::memcpy(&u, &a, sizeof u);
+    return u;
+}
+constexpr int32_t kConstant = -2, kPrivate = -3;
+// A block's B^3 own samples (local coordinates 0..B-1) out of its (B+1)^3, row by row.
+template <int B>
+void copyOwn(const float* expanded, float* own) {
+    constexpr int V = B + 1;
+    for (int z = 0; z < B; ++z)
+        for (int y = 0; y < B; ++y)
+            std::memcpy(own + (z * B + y) * B, expanded + (z * V + y) * V, B * sizeof(float));
+}
+}  // namespace
+
+SparseGridBuilder::SparseGridBuilder(const GridShape& shape, int B, float background,
+                                     BlockTable table, const std::string& source)
+    : m_worst([] { return 0.0f; }) {
+    Grid& g = m_grid;
+    g.m_kind = GridKind::Sparse;
+    g.m_shape = shape;
+    SDFT_CHECK(B == 4 || B == 8);  // GridView::blockShift
+    g.m_blockSize = B;
+    g.m_background = background;
+    for (int a = 0; a < 3; ++a) {
+        g.m_blocks[a] = (shape.cells[a] + B - 1) / B;
+        SDFT_CHECK(table.blocks[a] == g.m_blocks[a]);
+        g.m_tiles[a] = table.tiles[a];
+    }
+    // Own pages are numbered in tile order (the flat sample order below relies on it).
+    int32_t nextPage = kFirstOwnPage;
+    for (int32_t page : table.tilePage) {
+        SDFT_CHECK(page >= kOutsidePage && page <= nextPage);
+        if (page >= kFirstOwnPage) {
+            SDFT_CHECK(page == nextPage);
+            ++nextPage;
+        }
+    }
+    SDFT_CHECK(table.flags.size() == static_cast<size_t>(nextPage) * kPageEntries);
+    for (size_t slot = 0; slot < table.flags.size(); ++slot)
+        if (table.flags[slot] > static_cast<uint8_t>(BlockFlag::Surface))
+            throw InputError(source + ": a block has an invalid flag " +
+                             std::to_string(table.flags[slot]) +
+                             " (accepted: 0 outside, 1 inside, 2 surface)");
+    size_t surface = 0;
+    g.m_blockData = table.surfaceIndices(surface);
+    if (surface > static_cast<size_t>(INT32_MAX))
+        throw InputError(source + ": " + std::to_string(surface) +
+                         " surface blocks (at most 2^31 - 1 are accepted)");
+    g.m_ownTiles = table.ownTiles();
+    g.m_tilePage = std::move(table.tilePage);
+    g.m_flags = std::move(table.flags);
+    g.m_surfaceBlocks = surface;
+    const size_t own = static_cast<size_t>(B) * B * B;
+    assignHuge(g.m_blockSamples, surface * own, 0.0f);
+    assignHuge(g.m_cellMasks, surface * static_cast<size_t>((B * B * B + 63) / 64), uint64_t{0});
+    g.m_blockNeighbors.assign(surface * 8, -1);  // entry 0 set when the block is added
+    m_constantBits.assign(surface * 8, 0);
+    m_view = g.view();
+}
+
+// Decision 10: the block's own samples and masks, and per far neighbour entry the owner's
+// samples (a surface block: the same values), else a shared constant where the block's
+// vertices there are one value, else a private copy of them.
+void SparseGridBuilder::addBlock(int bi, int bj, int bk, const float* samples,
+                                 uint8_t privateEntries) {
+    Grid& g = m_grid;
+    const int B = g.m_blockSize;
+    const GridView& view = m_view;
+    const int32_t data = g.m_blockData[view.blockSlot(bi, bj, bk)];
+    SDFT_CHECK(data >= 0);
+    const size_t own = static_cast<size_t>(B) * B * B;
+    const int ni = std::min(B, g.m_shape.cells[0] - bi * B),
+              nj = std::min(B, g.m_shape.cells[1] - bj * B),
+              nk = std::min(B, g.m_shape.cells[2] - bk * B);
+    uint64_t* mask = g.m_cellMasks.data() + static_cast<size_t>(data) * view.wordsPerMask();
+    float& worst = m_worst.local();
+    worst = std::max(worst, blockMasksAndBound(samples, B, ni, nj, nk, mask));
+    float* dst = g.m_blockSamples.data() + static_cast<size_t>(data) * own;
+    if (B == 4)
+        copyOwn<4>(samples, dst);
+    else
+        copyOwn<8>(samples, dst);
+    static const ApronLayout layouts[2] = {ApronLayout(4), ApronLayout(8)};
+    const ApronLayout& L = layouts[B == 8];
+    int32_t* nb = g.m_blockNeighbors.data() + static_cast<size_t>(data) * 8;
+    nb[0] = data;
+    const int b[3] = {bi, bj, bk};
+    for (int code = 1; code < 8; ++code) {
+        const auto& vs = L.byCode[code];
+        if (!((privateEntries >> code) & 1)) {
+            int o[3];
+            const int32_t od = neighbourBlock(b, code, g.m_blocks, o)
+                                   ? g.m_blockData[view.blockSlot(o[0], o[1], o[2])]
+                                   : -1;
+            if (od >= 0) {
+                nb[code] = od;
+                continue;
+            }
+            const float first = samples[vs[0].expanded];
+            bool uniform = true;
+            for (const auto& v : vs) uniform = uniform && sameBits(samples[v.expanded], first);
+            if (uniform) {
+                nb[code] = kConstant;
+                m_constantBits[static_cast<size_t>(data) * 8 + static_cast<size_t>(code)] =
+                    bitsOf(first);
+                continue;
+            }
+        }
+        nb[code] = kPrivate;
+        Private p{data, code, std::vector<float>(own, 0.0f)};
+        for (const auto& v : vs) p.own[static_cast<size_t>(v.ownerOwn)] = samples[v.expanded];
+        m_privates.local().push_back(std::move(p));
+    }
+}
+
+Grid SparseGridBuilder::finish() {
+    Grid& g = m_grid;
+    const int B = g.m_blockSize;
+    const size_t own = static_cast<size_t>(B) * B * B, S = g.m_surfaceBlocks;
+    std::vector<Private> privates;
+    for (auto& list : m_privates)
+        for (auto& p : list) privates.push_back(std::move(p));
+    std::sort(privates.begin(), privates.end(), [](const Private& a, const Private& b) {
+        return a.data != b.data ? a.data < b.data : a.code < b.code;
+    });
+    // The extra sample blocks, numbered in block and entry order.
+    std::vector<std::pair<uint32_t, int32_t>> constants;  // value bits, sample block
+    g.m_apronFrom.clear();
+    g.m_apronCode.clear();
+    size_t nextPrivate = 0;
+    int32_t next = static_cast<int32_t>(S);
+    for (size_t s = 0; s < S; ++s) {
+        SDFT_CHECK(g.m_blockNeighbors[s * 8] == static_cast<int32_t>(s));  // every block added
+        for (int code = 1; code < 8; ++code) {
+            int32_t& nb = g.m_blockNeighbors[s * 8 + static_cast<size_t>(code)];
+            if (nb >= 0) continue;
+            if (nb == kConstant) {
+                const uint32_t bits = m_constantBits[s * 8 + static_cast<size_t>(code)];
+                auto it = std::find_if(constants.begin(), constants.end(),
+                                       [&](const auto& c) { return c.first == bits; });
+                if (it != constants.end()) {
+                    nb = it->second;
+                    continue;
+                }
+                float value;
+                std::memcpy(&value, &bits, sizeof value);
+                constants.push_back({bits, next});
+                g.m_blockSamples.insert(g.m_blockSamples.end(), own, value);
+                g.m_apronFrom.push_back(-1);
+                g.m_apronCode.push_back(0);
+            } else {
+                SDFT_CHECK(nextPrivate < privates.size());
+                const Private& p = privates[nextPrivate++];
+                SDFT_CHECK(p.data == static_cast<int32_t>(s) && p.code == code);
+                g.m_blockSamples.insert(g.m_blockSamples.end(), p.own.begin(), p.own.end());
+                g.m_apronFrom.push_back(static_cast<int32_t>(s));
+                g.m_apronCode.push_back(static_cast<uint8_t>(code));
+            }
+            if (next == INT32_MAX)
+                throw InputError("sparse grid: more than 2^31 - 1 sample blocks");
+            nb = next++;
+        }
+    }
+    m_constantBits = std::vector<uint32_t>();
+    const float worst = m_worst.combine([](float a, float b) { return std::max(a, b); });
+    // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
+    g.m_lipschitz = std::max(1.0f, std::sqrt(worst) / g.m_shape.voxelSize);
+    g.computeBlockSkip();
+    return std::move(g);
+}
+
+}  // namespace sdft
