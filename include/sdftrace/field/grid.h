@@ -135,11 +135,7 @@ struct GridView {
         idx[7] = base(cx | cy | cz) + z1 + y1 + x1;
     }
     // The 8 corner samples of local cell (x, y, z) of surface block `data` (c[di + 2 dj + 4 dk]).
-    SDFT_HOST_DEVICE void blockCellCorners(int32_t data, int x, int y, int z, float c[8]) const {
-        size_t idx[8];
-        blockCornerIndices(data, x, y, z, idx);
-        for (int n = 0; n < 8; ++n) c[n] = blockSamples[idx[n]];
-    }
+    SDFT_HOST_DEVICE void blockCellCorners(int32_t data, int x, int y, int z, float c[8]) const;
     // Sample at integer vertex (i, j, k), clamped to the grid.
     SDFT_HOST_DEVICE float vertex(int i, int j, int k) const;
     // The vertices that central differences at the 8 corners of cell (i, j, k) read, each
@@ -311,6 +307,44 @@ SDFT_HOST_DEVICE inline int clampi(int v, int lo, int hi) {
     return v < lo ? lo : (v > hi ? hi : v);
 }
 
+// GridView::blockCellCorners for a block size known at compile time: the cells off the block's
+// far faces (27 of 64 at B = 4) read 8 own samples; the others read each far corner from the
+// neighbour entry that holds it.
+template <int B>
+SDFT_HOST_DEVICE inline void blockCellCornersOf(const float* blockSamples,
+                                                const int32_t* blockNeighbors, int32_t data, int x,
+                                                int y, int z, float c[8]) {
+    constexpr int m = B - 1, own = B * B * B;
+    const float* self = blockSamples + static_cast<size_t>(data) * own;
+    if (((x + 1) | (y + 1) | (z + 1)) < B) {
+        const float* q = self + (z * B + y) * B + x;
+        c[0] = q[0], c[1] = q[1], c[2] = q[B], c[3] = q[B + 1];
+        c[4] = q[B * B], c[5] = q[B * B + 1], c[6] = q[B * B + B], c[7] = q[B * B + B + 1];
+        return;
+    }
+    const int32_t* nb = blockNeighbors + static_cast<size_t>(data) * 8;
+    const int cx = x == m, cy = (y == m) << 1, cz = (z == m) << 2;
+    const int x1 = (x + 1) & m, y0 = y * B, y1 = ((y + 1) & m) * B, z0 = z * B * B,
+              z1 = ((z + 1) & m) * B * B;
+    auto at = [&](int code) { return blockSamples + static_cast<size_t>(nb[code]) * own; };
+    c[0] = self[z0 + y0 + x];
+    c[1] = at(cx)[z0 + y0 + x1];
+    c[2] = at(cy)[z0 + y1 + x];
+    c[3] = at(cx | cy)[z0 + y1 + x1];
+    c[4] = at(cz)[z1 + y0 + x];
+    c[5] = at(cx | cz)[z1 + y0 + x1];
+    c[6] = at(cy | cz)[z1 + y1 + x];
+    c[7] = at(cx | cy | cz)[z1 + y1 + x1];
+}
+
+SDFT_HOST_DEVICE inline void GridView::blockCellCorners(int32_t data, int x, int y, int z,
+                                                        float c[8]) const {
+    if (blockSize == 8)
+        blockCellCornersOf<8>(blockSamples, blockNeighbors, data, x, y, z, c);
+    else
+        blockCellCornersOf<4>(blockSamples, blockNeighbors, data, x, y, z, c);
+}
+
 SDFT_HOST_DEVICE inline float GridView::vertex(int i, int j, int k) const {
     int nx = shape.cells[0], ny = shape.cells[1], nz = shape.cells[2];
     i = clampi(i, 0, nx);
@@ -416,6 +450,15 @@ SDFT_HOST_DEVICE inline float GridView::constantBlockValue(int i, int j, int k) 
 SDFT_HOST_DEVICE inline void GridView::cellCorners(int i, int j, int k, float c[8]) const {
     // Jamriška §3: a surface block's cells read its own samples and its neighbours' (the apron);
     // other blocks are constant at +-background by their flag.
+    if (kind == GridKind::Sparse) {
+        const int sh = blockShift();
+        const int bi = i >> sh, bj = j >> sh, bk = k >> sh;
+        const int32_t data = blockData[blockSlot(bi, bj, bk)];
+        if (data >= 0) {
+            blockCellCorners(data, i - (bi << sh), j - (bj << sh), k - (bk << sh), c);
+            return;
+        }
+    }
     size_t idx[8];
     if (!cornerIndices(i, j, k, idx)) {
         const float v = constantBlockValue(i, j, k);

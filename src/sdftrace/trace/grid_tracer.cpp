@@ -153,10 +153,13 @@ BlockFlag blockFlag(const GridView& g, const int b[3]) {
 // case): the Dda's start, then its state in scalars so that it stays in registers, and the mask
 // bit and sample offset stepped along with the cell. The same cells, boundaries and tests as the
 // Dda (the same expressions and tie-breaking), so the same hits and t.
+// B is a template parameter: the mask and sample steps and the corner reads are constants.
+template <int B>
 bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const int hi[3],
                      const uint64_t* mask, int32_t data, float tEnter, float tExit,
                      const GridTraceOptions& o, GridTraceResult& res, float& tHit) {
-    const int B = s.B;
+    const float* blockSamples = g.blockSamples;
+    const int32_t* blockNeighbors = g.blockNeighbors;
     Dda start;
     start.init(s.r.o, s.r.d, s.invD, tEnter, 1.0f, lo, hi);
     int ix = start.idx[0], iy = start.idx[1], iz = start.idx[2];
@@ -174,7 +177,8 @@ bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const i
         const float tOut = std::min(std::min({tx, ty, tz}), tExit);
         if ((mask[bit >> 6] >> (bit & 63)) & 1) {
             float c[8];
-            g.blockCellCorners(data, ix - lo[0], iy - lo[1], iz - lo[2], c);
+            blockCellCornersOf<B>(blockSamples, blockNeighbors, data, ix - lo[0], iy - lo[1],
+                                  iz - lo[2], c);
             if (intersectCell(g, s.r, ix, iy, iz, c, t, tOut, s.sign, o, res, tHit)) {
                 hit = true;
                 break;
@@ -219,10 +223,12 @@ bool traverseBlock(const GridView& g, const Setup& s, const int block[3], size_t
     int32_t data = -1;
     if (g.kind == GridKind::Sparse) {
         data = g.blockData[slot];
-        if (o.bitMasks)
-            return walkMaskedCells(g, s, lo, hi,
-                                   g.cellMasks + static_cast<size_t>(data) * g.wordsPerMask(), data,
-                                   tEnter, tExit, o, res, tHit);
+        if (o.bitMasks) {
+            const uint64_t* mask = g.cellMasks + static_cast<size_t>(data) * g.wordsPerMask();
+            return s.B == 8
+                       ? walkMaskedCells<8>(g, s, lo, hi, mask, data, tEnter, tExit, o, res, tHit)
+                       : walkMaskedCells<4>(g, s, lo, hi, mask, data, tEnter, tExit, o, res, tHit);
+        }
     }
     Dda cells;
     cells.init(s.r.o, s.r.d, s.invD, tEnter, 1.0f, lo, hi);
