@@ -5,7 +5,6 @@
 // grid's own size.
 #pragma once
 
-#include <tbb/combinable.h>
 #include <tbb/enumerable_thread_specific.h>
 
 #include <array>
@@ -59,7 +58,8 @@ class SparseGridBuilder {
     Grid m_grid;
     GridView m_view;  // of m_grid's tables (its buffers are not moved until finish)
     std::vector<uint32_t> m_constantBits;  // per surface block and entry: the constant's bits
-    tbb::combinable<float> m_worst;        // of the cells' squared gradient bounds (times h^2)
+    std::vector<float> m_worst;            // per surface block: its cells' largest squared
+                                           // gradient bound (times h^2)
     tbb::enumerable_thread_specific<std::vector<Private>> m_privates;
 };
 

@@ -171,8 +171,7 @@ void copyOwn(const float* expanded, float* own) {
 }  // namespace
 
 SparseGridBuilder::SparseGridBuilder(const GridShape& shape, int B, float background,
-                                     BlockTable table, const std::string& source)
-    : m_worst([] { return 0.0f; }) {
+                                     BlockTable table, const std::string& source) {
     Grid& g = m_grid;
     g.m_kind = GridKind::Sparse;
     g.m_shape = shape;
@@ -209,10 +208,17 @@ SparseGridBuilder::SparseGridBuilder(const GridShape& shape, int B, float backgr
     g.m_flags = std::move(table.flags);
     g.m_surfaceBlocks = surface;
     const size_t own = static_cast<size_t>(B) * B * B;
-    assignHuge(g.m_blockSamples, surface * own, 0.0f);
+    // Room for the constant and private sample blocks finish() appends (a few per thousand
+    // surface blocks), so that appending them moves nothing.
+    const size_t room = (surface + surface / 64 + 16) * own;
+    std::vector<float>().swap(g.m_blockSamples);
+    g.m_blockSamples.reserve(room);
+    adviseHugePages(g.m_blockSamples.data(), room * sizeof(float));
+    g.m_blockSamples.assign(surface * own, 0.0f);
     assignHuge(g.m_cellMasks, surface * static_cast<size_t>((B * B * B + 63) / 64), uint64_t{0});
     g.m_blockNeighbors.assign(surface * 8, -1);  // entry 0 set when the block is added
     m_constantBits.assign(surface * 8, 0);
+    m_worst.assign(surface, 0.0f);
     m_view = g.view();
 }
 
@@ -231,8 +237,7 @@ void SparseGridBuilder::addBlock(int bi, int bj, int bk, const float* samples,
               nj = std::min(B, g.m_shape.cells[1] - bj * B),
               nk = std::min(B, g.m_shape.cells[2] - bk * B);
     uint64_t* mask = g.m_cellMasks.data() + static_cast<size_t>(data) * view.wordsPerMask();
-    float& worst = m_worst.local();
-    worst = std::max(worst, blockMasksAndBound(samples, B, ni, nj, nk, mask));
+    m_worst[static_cast<size_t>(data)] = blockMasksAndBound(samples, B, ni, nj, nk, mask);
     float* dst = g.m_blockSamples.data() + static_cast<size_t>(data) * own;
     if (B == 4)
         copyOwn<4>(samples, dst);
@@ -320,7 +325,9 @@ Grid SparseGridBuilder::finish() {
         }
     }
     m_constantBits = std::vector<uint32_t>();
-    const float worst = m_worst.combine([](float a, float b) { return std::max(a, b); });
+    float worst = 0;
+    for (float w : m_worst) worst = std::max(worst, w);
+    m_worst = std::vector<float>();
     // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
     g.m_lipschitz = std::max(1.0f, std::sqrt(worst) / g.m_shape.voxelSize);
     g.computeBlockSkip();
