@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "sdftrace/field/block_table.h"
@@ -365,11 +366,9 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
     const int start[3] = {i - 1, j - 1, k - 1};
     // Per axis and offset: the clamped vertex's part of the flat index (dense), or its tile's
     // coordinate, its block's part of the index in the tile's page and its part of the index
-    // inside that block's (B+1)^3 samples (sparse; the block of the cell below the vertex, as in
+    // among that block's B^3 own samples (sparse; the block of the cell below the vertex, as in
     // vertex()).
-    // In a sparse block the vertex's local coordinate is 0..B: B (the apron) adds its axis's bit
-    // to the neighbour entry (codePart) and reads the neighbour's local 0.
-    int tileOf[3][4], codePart[3][4];
+    int tileOf[3][4];
     size_t localPart[3][4], samplePart[3][4];
     const int sh = blockShift();
     const size_t vertexStride[3] = {1, static_cast<size_t>(n[0]) + 1,
@@ -381,13 +380,10 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                 samplePart[a][d] = v * vertexStride[a];
                 continue;
             }
-            const int c = v < n[a] ? v : n[a] - 1;
-            const int b = c >> sh;
-            const int local = v - (b << sh);
+            const int b = (v < n[a] ? v : n[a] - 1) >> sh;
             tileOf[a][d] = b >> kTileShift;
             localPart[a][d] = static_cast<size_t>(b & (kTileBlocks - 1)) << (kTileShift * a);
-            codePart[a][d] = (local >> sh) << a;
-            samplePart[a][d] = static_cast<size_t>(local & (blockSize - 1)) << (sh * a);
+            samplePart[a][d] = static_cast<size_t>(v & (blockSize - 1)) << (sh * a);
         }
     // The 32 entries: rows (y, z) both in {1, 2} with x = 0..3, rows with one of them in {0, 3}
     // with x = 1, 2.
@@ -402,9 +398,24 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                 samples[samplePart[0][e[0]] + samplePart[1][e[1]] + samplePart[2][e[2]]];
         return;
     }
+    // A vertex is read through the block of the cell below it, which is its own block (local
+    // coordinate v mod B) except for the last vertex of an axis whose cell count is a multiple
+    // of B: there, and only there, it is the block's apron (local B, the neighbour entry's bit).
+    int codePart[3][4] = {};
+    bool apron = false;
+    if (kind == GridKind::Sparse)
+        for (int a = 0; a < 3; ++a)
+            if ((n[a] & (blockSize - 1)) == 0 && start[a] + 3 >= n[a])
+                for (int d = 0; d < 4; ++d)
+                    if (clampi(start[a] + d, 0, n[a]) == n[a]) {
+                        codePart[a][d] = 1 << a;
+                        apron = true;
+                    }
     // Most stencils lie in one tile (one page for all 32 entries); the others look up each
     // entry's tile.
-    auto fill = [&](auto pageOf) {
+    // Own samples alone (the common case: the same loop as with (B+1)^3 blocks), or through the
+    // neighbour entries at the grid's far faces.
+    auto fill = [&](auto pageOf, auto withApron) {
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
 #pragma GCC unroll 32
 #endif
@@ -412,16 +423,17 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
             const size_t b =
                 pageOf(e) + localPart[0][e[0]] + localPart[1][e[1]] + localPart[2][e[2]];
             const int32_t data = blockData[b];
-            if (data < 0) {
-                out[e[2]][e[1]][e[0]] =
-                    flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background : background;
-                continue;
-            }
-            const size_t from = static_cast<size_t>(
-                blockNeighbors[static_cast<size_t>(data) * 8 + codePart[0][e[0]] +
-                               codePart[1][e[1]] + codePart[2][e[2]]]);
-            out[e[2]][e[1]][e[0]] = blockSamples[(from << (3 * sh)) + samplePart[0][e[0]] +
-                                                 samplePart[1][e[1]] + samplePart[2][e[2]]];
+            size_t from = static_cast<size_t>(data);
+            if constexpr (decltype(withApron)::value)
+                if (data >= 0)
+                    from = static_cast<size_t>(
+                        blockNeighbors[static_cast<size_t>(data) * 8 + codePart[0][e[0]] +
+                                       codePart[1][e[1]] + codePart[2][e[2]]]);
+            out[e[2]][e[1]][e[0]] =
+                data >= 0 ? blockSamples[(from << (3 * sh)) + samplePart[0][e[0]] +
+                                         samplePart[1][e[1]] + samplePart[2][e[2]]]
+                : flags[b] == static_cast<uint8_t>(BlockFlag::Inside) ? -background
+                                                                      : background;
         }
     };
     auto pageAt = [&](int x, int y, int z) {
@@ -431,12 +443,15 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                             tileOf[0][x]]) *
                kPageEntries;
     };
+    auto anyPage = [&](const int(&e)[3]) { return pageAt(e[0], e[1], e[2]); };
     if (tileOf[0][0] == tileOf[0][3] && tileOf[1][0] == tileOf[1][3] &&
-        tileOf[2][0] == tileOf[2][3]) {
+        tileOf[2][0] == tileOf[2][3] && !apron) {
         const size_t page = pageAt(0, 0, 0);
-        fill([page](const int(&)[3]) { return page; });
+        fill([page](const int(&)[3]) { return page; }, std::false_type{});
+    } else if (!apron) {
+        fill(anyPage, std::false_type{});
     } else {
-        fill([&](const int(&e)[3]) { return pageAt(e[0], e[1], e[2]); });
+        fill(anyPage, std::true_type{});
     }
 }
 

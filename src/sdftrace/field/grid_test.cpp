@@ -137,6 +137,48 @@ TEST(Grid, CompactBlocksGiveEveryCellTheCornersItWasBuiltWith) {
         }
 }
 
+// The last vertex of an axis whose cell count is a multiple of B lies past the grid's last block:
+// the blocks at that face read it through their neighbour entries (decision 10). Every vertex
+// and every stencil there must still read the samples the grid was built from.
+TEST(Grid, FarFaceVerticesComeThroughTheNeighbourEntries) {
+    for (int B : {4, 8}) {
+        GridShape shape;
+        shape.cells[0] = 2 * B, shape.cells[1] = 3 * B, shape.cells[2] = B + 3;  // z cuts a block
+        shape.voxelSize = 0.1f;
+        std::vector<float> samples(shape.vertexCount());
+        size_t n = 0;
+        for (int k = 0; k <= shape.cells[2]; ++k)
+            for (int j = 0; j <= shape.cells[1]; ++j)
+                for (int i = 0; i <= shape.cells[0]; ++i)
+                    samples[n++] = 0.1f * (i - 0.3f * j + 0.2f * k - 2.5f);  // varies on every face
+        const Grid g = Grid::sparseFromDense(shape, samples, B, 100);
+        const GridView v = g.view();
+        n = 0;
+        for (int k = 0; k <= shape.cells[2]; ++k)
+            for (int j = 0; j <= shape.cells[1]; ++j)
+                for (int i = 0; i <= shape.cells[0]; ++i)
+                    ASSERT_EQ(v.vertex(i, j, k), samples[n++])
+                        << B << ": " << i << "," << j << "," << k;
+        for (int k = 0; k < shape.cells[2]; ++k)
+            for (int j = 0; j < shape.cells[1]; ++j)
+                for (int i = 0; i < shape.cells[0]; ++i) {
+                    float nb[4][4][4];
+                    v.gradientStencil(i, j, k, nb);
+                    for (int z = 0; z < 4; ++z)
+                        for (int y = 0; y < 4; ++y)
+                            for (int x = 0; x < 4; ++x) {
+                                if ((x == 0 || x == 3) + (y == 0 || y == 3) + (z == 0 || z == 3) >
+                                    1)
+                                    continue;
+                                ASSERT_EQ(nb[z][y][x], v.vertex(i + x - 1, j + y - 1, k + z - 1))
+                                    << B << ": cell " << i << "," << j << "," << k;
+                            }
+                }
+        // The far faces' vertices are not one value: private apron blocks hold them.
+        EXPECT_GT(g.blockSamples().size(), g.surfaceBlockCount() * B * B * B);
+    }
+}
+
 TEST(Grid, CellMasksMarkExactlyTheCellsWithASignChange) {
     for (int blockSize : {4, 8}) {
         // 45 cells: the last blocks are cut by the grid's faces.
