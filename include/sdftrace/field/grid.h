@@ -18,7 +18,6 @@
 // per buffer (docs/design.md; NanoVDB's handle + flat layout).
 #pragma once
 
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -240,9 +239,11 @@ class Grid {
     // files store them; sparse only): each stored sample takes its owner's vector.
     void setExpandedTexcoords(TexcoordKind kind, const std::vector<float>& texcoords,
                               const std::string& source);
-    // Per stored sample: the surface block (blockData index) and local vertex (x, y, z in 0..B)
-    // it was taken from, x + (B+1) (y + (B+1) z); -1 for the shared constant blocks' samples.
-    // Sparse only; the positions the texture-coordinate bake traces from.
+    // Calls f(sample, block, x, y, z) for each stored sample that some cell reads as a vertex:
+    // the surface block (blockData index) and its local vertex (x, y, z in 0..B) it stands for
+    // (own samples, and private apron blocks' apron vertices; shared constant blocks stand for no
+    // vertex of their own and are skipped). Sparse only; in parallel; the positions the
+    // texture-coordinate bake traces from.
     void forEachStoredSample(
         const std::function<void(size_t sample, int32_t block, int x, int y, int z)>& f) const;
 
