@@ -151,9 +151,9 @@ BlockFlag blockFlag(const GridView& g, const int b[3]) {
 
 // traverseBlock's cell walk for a sparse block with its bit mask (Jamriška §4.1, the common
 // case): the Dda's start, then its state in scalars so that it stays in registers, and the mask
-// bit and sample offset stepped along with the cell. The same cells, boundaries and tests as the
-// Dda (the same expressions and tie-breaking), so the same hits and t.
-// B is a template parameter: the mask and sample steps and the corner reads are constants.
+// bit (also the cell's first corner among the block's own samples) stepped along with the cell.
+// The same cells, boundaries and tests as the Dda (the same expressions and tie-breaking), so the
+// same hits and t. B is a template parameter: the bit steps and the corner reads are constants.
 template <int B>
 bool walkMaskedCells(const GridView& g, const Setup& s, const int lo[3], const int hi[3],
                      const uint64_t* mask, int32_t data, float tEnter, float tExit,
