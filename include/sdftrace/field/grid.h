@@ -111,29 +111,9 @@ struct GridView {
         return (from << (3 * sh)) + ((static_cast<size_t>(z & m) << sh | (y & m)) << sh | (x & m));
     }
     // Indices into blockSamples of the 8 corners of local cell (x, y, z), each in 0..B-1, of
-    // surface block `data` (idx[di + 2 dj + 4 dk]): per axis the corner's offset inside its block
-    // and, for the cells below the block's far faces, the neighbour entry. No branches: most
-    // cells of a B = 4 block touch a far face.
+    // surface block `data` (idx[di + 2 dj + 4 dk]; blockCornerIndicesOf).
     SDFT_HOST_DEVICE void blockCornerIndices(int32_t data, int x, int y, int z,
-                                             size_t idx[8]) const {
-        const int sh = blockShift(), m = blockSize - 1;
-        const int32_t* nb = blockNeighbors + static_cast<size_t>(data) * 8;
-        const int cx = x == m, cy = (y == m) << 1, cz = (z == m) << 2;
-        const size_t x0 = static_cast<size_t>(x), x1 = static_cast<size_t>((x + 1) & m);
-        const size_t y0 = static_cast<size_t>(y) << sh, y1 = static_cast<size_t>((y + 1) & m) << sh;
-        const size_t z0 = static_cast<size_t>(z) << (2 * sh), z1 = static_cast<size_t>((z + 1) & m)
-                                                                   << (2 * sh);
-        auto base = [&](int code) { return static_cast<size_t>(nb[code]) << (3 * sh); };
-        const size_t self = static_cast<size_t>(data) << (3 * sh);
-        idx[0] = self + z0 + y0 + x0;
-        idx[1] = base(cx) + z0 + y0 + x1;
-        idx[2] = base(cy) + z0 + y1 + x0;
-        idx[3] = base(cx | cy) + z0 + y1 + x1;
-        idx[4] = base(cz) + z1 + y0 + x0;
-        idx[5] = base(cx | cz) + z1 + y0 + x1;
-        idx[6] = base(cy | cz) + z1 + y1 + x0;
-        idx[7] = base(cx | cy | cz) + z1 + y1 + x1;
-    }
+                                             size_t idx[8]) const;
     // The 8 corner samples of local cell (x, y, z) of surface block `data` (c[di + 2 dj + 4 dk]).
     SDFT_HOST_DEVICE void blockCellCorners(int32_t data, int x, int y, int z, float c[8]) const;
     // Sample at integer vertex (i, j, k), clamped to the grid.
@@ -309,34 +289,54 @@ SDFT_HOST_DEVICE inline int clampi(int v, int lo, int hi) {
     return v < lo ? lo : (v > hi ? hi : v);
 }
 
-// GridView::blockCellCorners for a block size known at compile time: the cells off the block's
-// far faces (27 of 64 at B = 4) read 8 own samples; the others read each far corner from the
-// neighbour entry that holds it.
+// GridView::blockCornerIndices for a block size known at compile time: per axis the corner's
+// offset inside its block and, for the cells below the block's far faces, the neighbour entry
+// that holds it. No branches: most cells of a B = 4 block touch a far face.
 template <int B>
-SDFT_HOST_DEVICE inline void blockCellCornersOf(const float* blockSamples,
-                                                const int32_t* blockNeighbors, int32_t data, int x,
-                                                int y, int z, float c[8]) {
-    constexpr int m = B - 1, own = B * B * B;
-    const float* self = blockSamples + static_cast<size_t>(data) * own;
-    if (((x + 1) | (y + 1) | (z + 1)) < B) {
-        const float* q = self + (z * B + y) * B + x;
-        c[0] = q[0], c[1] = q[1], c[2] = q[B], c[3] = q[B + 1];
-        c[4] = q[B * B], c[5] = q[B * B + 1], c[6] = q[B * B + B], c[7] = q[B * B + B + 1];
-        return;
-    }
+SDFT_HOST_DEVICE inline void blockCornerIndicesOf(const int32_t* blockNeighbors, int32_t data,
+                                                  int x, int y, int z, size_t idx[8]) {
+    constexpr int m = B - 1;
+    constexpr size_t own = B * B * B;
     const int32_t* nb = blockNeighbors + static_cast<size_t>(data) * 8;
     const int cx = x == m, cy = (y == m) << 1, cz = (z == m) << 2;
     const int x1 = (x + 1) & m, y0 = y * B, y1 = ((y + 1) & m) * B, z0 = z * B * B,
               z1 = ((z + 1) & m) * B * B;
-    auto at = [&](int code) { return blockSamples + static_cast<size_t>(nb[code]) * own; };
-    c[0] = self[z0 + y0 + x];
-    c[1] = at(cx)[z0 + y0 + x1];
-    c[2] = at(cy)[z0 + y1 + x];
-    c[3] = at(cx | cy)[z0 + y1 + x1];
-    c[4] = at(cz)[z1 + y0 + x];
-    c[5] = at(cx | cz)[z1 + y0 + x1];
-    c[6] = at(cy | cz)[z1 + y1 + x];
-    c[7] = at(cx | cy | cz)[z1 + y1 + x1];
+    auto at = [&](int code) { return static_cast<size_t>(nb[code]) * own; };
+    idx[0] = static_cast<size_t>(data) * own + z0 + y0 + x;
+    idx[1] = at(cx) + z0 + y0 + x1;
+    idx[2] = at(cy) + z0 + y1 + x;
+    idx[3] = at(cx | cy) + z0 + y1 + x1;
+    idx[4] = at(cz) + z1 + y0 + x;
+    idx[5] = at(cx | cz) + z1 + y0 + x1;
+    idx[6] = at(cy | cz) + z1 + y1 + x;
+    idx[7] = at(cx | cy | cz) + z1 + y1 + x1;
+}
+
+// GridView::blockCellCorners for a block size known at compile time: the cells off the block's
+// far faces (27 of 64 at B = 4) read 8 own samples with constant strides; the others go through
+// the neighbour entries.
+template <int B>
+SDFT_HOST_DEVICE inline void blockCellCornersOf(const float* blockSamples,
+                                                const int32_t* blockNeighbors, int32_t data, int x,
+                                                int y, int z, float c[8]) {
+    if (((x + 1) | (y + 1) | (z + 1)) < B) {
+        const float* q =
+            blockSamples + static_cast<size_t>(data) * (B * B * B) + (z * B + y) * B + x;
+        c[0] = q[0], c[1] = q[1], c[2] = q[B], c[3] = q[B + 1];
+        c[4] = q[B * B], c[5] = q[B * B + 1], c[6] = q[B * B + B], c[7] = q[B * B + B + 1];
+        return;
+    }
+    size_t idx[8];
+    blockCornerIndicesOf<B>(blockNeighbors, data, x, y, z, idx);
+    for (int n = 0; n < 8; ++n) c[n] = blockSamples[idx[n]];
+}
+
+SDFT_HOST_DEVICE inline void GridView::blockCornerIndices(int32_t data, int x, int y, int z,
+                                                          size_t idx[8]) const {
+    if (blockSize == 8)
+        blockCornerIndicesOf<8>(blockNeighbors, data, x, y, z, idx);
+    else
+        blockCornerIndicesOf<4>(blockNeighbors, data, x, y, z, idx);
 }
 
 SDFT_HOST_DEVICE inline void GridView::blockCellCorners(int32_t data, int x, int y, int z,
@@ -359,6 +359,24 @@ SDFT_HOST_DEVICE inline float GridView::vertex(int i, int j, int k) const {
     if (!cornerIndices(ci, cj, ck, idx)) return constantBlockValue(ci, cj, ck);
     const float* s = kind == GridKind::Dense ? samples : blockSamples;
     return s[idx[(i - ci) + 2 * (j - cj) + 4 * (k - ck)]];
+}
+
+// gradientStencil's neighbour entries: a vertex is read through the block of the cell below it,
+// which is its own block (local coordinate v mod B) except for the last vertex of an axis whose
+// cell count is a multiple of B. There, and only there, it lies in the block's apron (local B):
+// code[a][d] gets axis a's entry bit. False when no vertex of the stencil starting at `start`
+// is such a vertex.
+SDFT_HOST_DEVICE inline bool stencilApronCodes(const int n[3], const int start[3], int B,
+                                               int code[3][4]) {
+    bool any = false;
+    for (int a = 0; a < 3; ++a)
+        if ((n[a] & (B - 1)) == 0 && start[a] + 3 >= n[a])
+            for (int d = 0; d < 4; ++d)
+                if (clampi(start[a] + d, 0, n[a]) == n[a]) {
+                    code[a][d] = 1 << a;
+                    any = true;
+                }
+    return any;
 }
 
 SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
@@ -399,23 +417,11 @@ SDFT_HOST_DEVICE inline void GridView::gradientStencil(int i, int j, int k,
                 samples[samplePart[0][e[0]] + samplePart[1][e[1]] + samplePart[2][e[2]]];
         return;
     }
-    // A vertex is read through the block of the cell below it, which is its own block (local
-    // coordinate v mod B) except for the last vertex of an axis whose cell count is a multiple
-    // of B: there, and only there, it is the block's apron (local B, the neighbour entry's bit).
     int codePart[3][4] = {};
-    bool apron = false;
-    if (kind == GridKind::Sparse)
-        for (int a = 0; a < 3; ++a)
-            if ((n[a] & (blockSize - 1)) == 0 && start[a] + 3 >= n[a])
-                for (int d = 0; d < 4; ++d)
-                    if (clampi(start[a] + d, 0, n[a]) == n[a]) {
-                        codePart[a][d] = 1 << a;
-                        apron = true;
-                    }
+    const bool apron = stencilApronCodes(n, start, blockSize, codePart);
     // Most stencils lie in one tile (one page for all 32 entries); the others look up each
-    // entry's tile.
-    // Own samples alone (the common case: the same loop as with (B+1)^3 blocks), or through the
-    // neighbour entries at the grid's far faces.
+    // entry's tile. Own samples alone (the common case: the same loop as with (B+1)^3 blocks), or
+    // through the neighbour entries at the grid's far faces.
     auto fill = [&](auto pageOf, auto withApron) {
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
 #pragma GCC unroll 32

@@ -27,8 +27,11 @@ class SparseGridBuilder {
     size_t surfaceBlocks() const { return m_grid.m_surfaceBlocks; }
     // Per slot (GridView::blockSlot) the surface block's index, -1 for none.
     const std::vector<int32_t>& blockData() const { return m_grid.m_blockData; }
-    // The table's view (tiles, pages, blockSlot), for looking up blocks while building.
-    const GridView& tableView() const { return m_view; }
+    // Tiles whose page is their own, in page order (BlockTable::ownTiles).
+    const std::vector<int>& ownTiles() const { return m_grid.m_ownTiles; }
+    // The surface-block index of block (bi, bj, bk)'s neighbour for entry `code` (the code's
+    // axis bits added), -1 when it has no samples or lies past the grid.
+    int32_t neighbourData(int bi, int bj, int bk, int code) const;
     // Calls f(bi, bj, bk, index) for every surface block, tiles in parallel.
     template <class F>
     void forEachSurfaceBlock(F&& f) const {

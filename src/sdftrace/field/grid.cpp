@@ -11,12 +11,7 @@
 #include "block_apron_layout.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
-#include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/field/sparse_grid_builder.h"
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 namespace sdft {
 
@@ -116,17 +111,11 @@ Grid Grid::sparseFromTable(const GridShape& shape, int B, float background, Bloc
     // Samples from a file or a caller may disagree with their owners where two blocks share a
     // vertex: those entries stay private to the block (every cell reads what it was given).
     const ApronLayout L(B);
-    const std::vector<int32_t>& data = builder.blockData();
-    const GridView& tables = builder.tableView();
     builder.forEachSurfaceBlock([&](int bi, int bj, int bk, int32_t d) {
         const float* mine = blockSamples.data() + static_cast<size_t>(d) * per;
-        const int b[3] = {bi, bj, bk};
         uint8_t privateEntries = 0;
         for (int code = 1; code < 8; ++code) {
-            int o[3];
-            const int32_t od = neighbourBlock(b, code, tables.blocks, o)
-                                   ? data[tables.blockSlot(o[0], o[1], o[2])]
-                                   : -1;
+            const int32_t od = builder.neighbourData(bi, bj, bk, code);
             if (od < 0) continue;
             const float* theirs = blockSamples.data() + static_cast<size_t>(od) * per;
             for (const auto& v : L.byCode[code])
@@ -141,44 +130,45 @@ Grid Grid::sparseFromTable(const GridShape& shape, int B, float background, Bloc
     return builder.finish();
 }
 
-void Grid::expandBlock(int32_t data, float* out) const {
-    const GridView v = view();
-    const int B = m_blockSize, V = B + 1;
+namespace {
+// Surface block `data`'s (B+1)^3 vertices (x fastest) of a per-stored-sample channel of `comps`
+// floats (samples: 1, texture coordinates: 3), through the neighbour entries.
+void expandChannel(const GridView& v, const float* channel, int comps, int32_t data, float* out) {
+    const int B = v.blockSize, V = B + 1;
     for (int z = 0; z <= B; ++z)
         for (int y = 0; y <= B; ++y)
-            for (int x = 0; x <= B; ++x)
-                out[(z * V + y) * V + x] = m_blockSamples[v.blockSampleIndex(data, x, y, z)];
+            for (int x = 0; x <= B; ++x) {
+                const float* from = channel + comps * v.blockSampleIndex(data, x, y, z);
+                std::copy(from, from + comps, out + comps * ((z * V + y) * V + x));
+            }
+}
+
+// The channel expanded for every surface block, in parallel.
+std::vector<float> expandAll(const GridView& v, size_t surfaceBlocks, const float* channel,
+                             int comps) {
+    const size_t per =
+        static_cast<size_t>(comps) * (v.blockSize + 1) * (v.blockSize + 1) * (v.blockSize + 1);
+    std::vector<float> out(surfaceBlocks * per);
+    tbb::parallel_for(size_t(0), surfaceBlocks, [&](size_t s) {
+        expandChannel(v, channel, comps, static_cast<int32_t>(s), out.data() + s * per);
+    });
+    return out;
+}
+}  // namespace
+
+void Grid::expandBlock(int32_t data, float* out) const {
+    expandChannel(view(), m_blockSamples.data(), 1, data, out);
 }
 
 std::vector<float> Grid::expandedBlockSamples() const {
     if (m_kind != GridKind::Sparse) return {};
-    const size_t per = static_cast<size_t>(m_blockSize + 1) * (m_blockSize + 1) * (m_blockSize + 1);
-    std::vector<float> out(m_surfaceBlocks * per);
-    tbb::parallel_for(size_t(0), m_surfaceBlocks, [&](size_t s) {
-        expandBlock(static_cast<int32_t>(s), out.data() + s * per);
-    });
-    return out;
+    return expandAll(view(), m_surfaceBlocks, m_blockSamples.data(), 1);
 }
 
 std::vector<float> Grid::expandedTexcoords() const {
     if (m_texcoords.empty()) return {};
     if (m_kind == GridKind::Dense) return m_texcoords;
-    const GridView v = view();
-    const int B = m_blockSize, V = B + 1;
-    const size_t per = static_cast<size_t>(V) * V * V;
-    std::vector<float> out(3 * m_surfaceBlocks * per);
-    tbb::parallel_for(size_t(0), m_surfaceBlocks, [&](size_t s) {
-        float* dst = out.data() + 3 * s * per;
-        for (int z = 0; z <= B; ++z)
-            for (int y = 0; y <= B; ++y)
-                for (int x = 0; x <= B; ++x) {
-                    const size_t from = 3 * v.blockSampleIndex(static_cast<int32_t>(s), x, y, z);
-                    float* d = dst + 3 * static_cast<size_t>((z * V + y) * V + x);
-                    d[0] = m_texcoords[from], d[1] = m_texcoords[from + 1],
-                    d[2] = m_texcoords[from + 2];
-                }
-    });
-    return out;
+    return expandAll(view(), m_surfaceBlocks, m_texcoords.data(), 3);
 }
 
 void Grid::forEachStoredSample(const std::function<void(size_t, int32_t, int, int, int)>& f) const {
@@ -295,20 +285,14 @@ void Grid::setTexcoords(TexcoordKind kind, std::vector<float> texcoords,
     for (float t : texcoords)
         if (!std::isfinite(t)) throw InputError(source + ": non-finite texture coordinate");
     if (m_kind == GridKind::Sparse) {
-        // Samples no cell reads as a vertex of its own (the shared constant blocks, the unread
-        // part of private apron blocks) carry zero vectors, as loaded files give them.
-        const int B = m_blockSize;
-        const size_t own = static_cast<size_t>(B) * B * B;
-        const ApronLayout L(B);
-        for (size_t e = 0; e < m_apronFrom.size(); ++e) {
-            float* t = texcoords.data() + 3 * (m_surfaceBlocks + e) * own;
-            std::vector<float> keep(3 * own, 0.0f);
-            if (m_apronFrom[e] >= 0)
-                for (const auto& v : L.byCode[m_apronCode[e]])
-                    for (int c = 0; c < 3; ++c)
-                        keep[3 * static_cast<size_t>(v.ownerOwn) + c] = t[3 * v.ownerOwn + c];
-            std::copy(keep.begin(), keep.end(), t);
-        }
+        // Samples that stand for no vertex (the shared constant blocks, the unread part of
+        // private apron blocks) carry zero vectors, as loaded files give them.
+        std::vector<float> kept(texcoords.size(), 0.0f);
+        forEachStoredSample([&](size_t sample, int32_t, int, int, int) {
+            std::copy_n(texcoords.begin() + static_cast<ptrdiff_t>(3 * sample), 3,
+                        kept.begin() + static_cast<ptrdiff_t>(3 * sample));
+        });
+        texcoords = std::move(kept);
     }
     m_texcoords = std::move(texcoords);
     m_texcoordKind = kind;

@@ -222,6 +222,14 @@ SparseGridBuilder::SparseGridBuilder(const GridShape& shape, int B, float backgr
     m_view = g.view();
 }
 
+int32_t SparseGridBuilder::neighbourData(int bi, int bj, int bk, int code) const {
+    const int b[3] = {bi, bj, bk};
+    int o[3];
+    return neighbourBlock(b, code, m_view.blocks, o)
+               ? m_grid.m_blockData[m_view.blockSlot(o[0], o[1], o[2])]
+               : -1;
+}
+
 // Decision 10: the block's own samples and masks, and per far neighbour entry the owner's
 // samples (a surface block: the same values), else a shared constant where the block's
 // vertices there are one value, else a private copy of them.
@@ -247,14 +255,10 @@ void SparseGridBuilder::addBlock(int bi, int bj, int bk, const float* samples,
     const ApronLayout& L = layouts[B == 8];
     int32_t* nb = g.m_blockNeighbors.data() + static_cast<size_t>(data) * 8;
     nb[0] = data;
-    const int b[3] = {bi, bj, bk};
     for (int code = 1; code < 8; ++code) {
         const auto& vs = L.byCode[code];
         if (!((privateEntries >> code) & 1)) {
-            int o[3];
-            const int32_t od = neighbourBlock(b, code, g.m_blocks, o)
-                                   ? g.m_blockData[view.blockSlot(o[0], o[1], o[2])]
-                                   : -1;
+            const int32_t od = neighbourData(bi, bj, bk, code);
             if (od >= 0) {
                 nb[code] = od;
                 continue;

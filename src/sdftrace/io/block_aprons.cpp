@@ -100,6 +100,10 @@ SplitBlocks splitBlocks(const Grid& grid) {
         L.coords(o, c);
         return view.blockData[view.blockSlot(c[0], c[1], c[2])];
     };
+    // Apron vertex p of surface block s, as its cells read it (through the neighbour entries).
+    auto apronSample = [&](size_t s, const std::array<int, 3>& p) {
+        return samples[view.blockSampleIndex(static_cast<int32_t>(s), p[0], p[1], p[2])];
+    };
     SplitBlocks out;
     out.own.resize(surface * L.own);
     out.masks.assign(surface * L.words, 0);
@@ -108,14 +112,12 @@ SplitBlocks splitBlocks(const Grid& grid) {
     std::copy(samples.begin(), samples.begin() + static_cast<ptrdiff_t>(surface * L.own),
               out.own.begin());
     tbb::parallel_for(size_t(0), surface, [&](size_t s) {
-        float src[9 * 9 * 9];  // (B+1)^3, B <= 8
-        grid.expandBlock(static_cast<int32_t>(s), src);
         int c[3];
         L.coords(blockOf[s], c);
         uint64_t* mask = out.masks.data() + s * L.words;
         for (int a = 0; a < L.apron; ++a) {
             const auto& p = aprons[static_cast<size_t>(a)];
-            const float v = src[(p[2] * L.V + p[1]) * L.V + p[0]];
+            const float v = apronSample(s, p);
             size_t o = 0;
             int32_t owner = -1;
             const bool implicit = L.owner(c, p, o) && (owner = dataOf(o)) >= 0 &&
@@ -131,14 +133,12 @@ SplitBlocks splitBlocks(const Grid& grid) {
     for (size_t s = 0; s < surface; ++s) start[s + 1] = start[s] + kept[s];
     out.explicitly.resize(start[surface]);
     tbb::parallel_for(size_t(0), surface, [&](size_t s) {
-        float src[9 * 9 * 9];  // (B+1)^3, B <= 8
-        grid.expandBlock(static_cast<int32_t>(s), src);
         const uint64_t* mask = out.masks.data() + s * L.words;
         size_t n = start[s];
         for (int a = 0; a < L.apron; ++a)
             if ((mask[a / 64] >> (a % 64)) & 1u) {
                 const auto& p = aprons[static_cast<size_t>(a)];
-                out.explicitly[n++] = src[(p[2] * L.V + p[1]) * L.V + p[0]];
+                out.explicitly[n++] = apronSample(s, p);
             }
     });
     return out;

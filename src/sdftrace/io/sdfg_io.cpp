@@ -75,8 +75,7 @@ void saveRaw(const Grid& grid, const std::string& path) {
     const std::vector<uint8_t> flags =
         grid.kind() == GridKind::Sparse ? grid.denseFlags() : std::vector<uint8_t>();
     // Versions 1 and 2 store each surface block's (B+1)^3 vertices.
-    const std::vector<float> blockSamples =
-        grid.kind() == GridKind::Sparse ? grid.expandedBlockSamples() : std::vector<float>();
+    const std::vector<float> blockSamples = grid.expandedBlockSamples();  // empty when dense
     const std::vector<float> texcoords = grid.expandedTexcoords();
     if (grid.kind() == GridKind::Dense) {
         h.payloadBytes = grid.samples().size() * sizeof(float);

@@ -22,6 +22,11 @@ namespace sdft {
 
 namespace {
 
+// A surface block's samples in memory (decision 10): its B^3 own samples and 8 neighbour entries.
+constexpr double kBytesPerSurfaceBlock(int B) {
+    return B * B * B * sizeof(float) + 8 * sizeof(int32_t);
+}
+
 // The active voxels' index bounds (leaves' value masks, active tiles); false if none.
 bool activeBounds(const vdb::Tree& t, std::array<int32_t, 3>& lo, std::array<int32_t, 3>& hi) {
     bool any = false;
@@ -101,21 +106,16 @@ class TreeToGrid {
     Grid build() {
         computeLeafBits();
         BlockTable table = buildTable();
-        size_t surface = 0;
-        const std::vector<int32_t> index = table.surfaceIndices(surface);
+        const size_t surface = table.surfaceBlocks();
         checkMemoryBudget(static_cast<double>(table.flags.size()) * 6 +
-                              (m_B * m_B * m_B * sizeof(float) + 8 * sizeof(int32_t)) *
-                                  static_cast<double>(surface),
+                              static_cast<double>(surface) * kBytesPerSurfaceBlock(m_B),
                           m_path,
                           "the samples of " + std::to_string(surface) + " blocks near its surface",
                           "resample the level set coarser");
-        if (index.empty() && surface > 0)
-            throw InputError(m_path + ": " + std::to_string(surface) +
-                             " surface blocks (at most 2^31 - 1 are accepted)");
-        const std::vector<int> own = table.ownTiles();
+        // The builder numbers the surface blocks (and refuses more than 2^31 - 1).
         SparseGridBuilder builder(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
                                   std::move(table), m_path);
-        sampleSurfaceBlocks(own, index, builder);
+        sampleSurfaceBlocks(builder);
         return builder.finish();
     }
 
@@ -461,8 +461,9 @@ class TreeToGrid {
 
     // Pass 2: the surface blocks' samples, clamped to the band, into the grid's builder (every
     // vertex's value comes from the tree, so blocks that share one agree); own pages in parallel.
-    void sampleSurfaceBlocks(const std::vector<int>& own, const std::vector<int32_t>& index,
-                             SparseGridBuilder& builder) const {
+    void sampleSurfaceBlocks(SparseGridBuilder& builder) const {
+        const std::vector<int>& own = builder.ownTiles();
+        const std::vector<int32_t>& index = builder.blockData();
         const int V = m_V;
         const size_t perBlock = static_cast<size_t>(V) * V * V;
         const float band = m_band;
