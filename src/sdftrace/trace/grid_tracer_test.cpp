@@ -433,6 +433,55 @@ TEST(GridTracer, MinMaxBuffersChangeNoHitAndSaveTraversalSteps) {
     EXPECT_LT(stepsBuffered, stepsPlain);
 }
 
+// Blocks behind the camera or outside its view frustum are never met by a primary ray: they do not
+// disable the bound (a block reaching the camera plane in view still does). Looking away from the
+// surface every range is empty; looking past it from beside it, the pixels off the surface have
+// empty ranges and the others a positive start, and no hit changes.
+TEST(GridTracer, MinMaxBuffersIgnoreBlocksBehindTheCamera) {
+    const Fixture& f = fixture();
+    GridView g = f.sparse->view();
+    GridTraceOptions o;
+    struct View {
+        Vec3 eye, target;
+    };
+    for (const View& v : {View{{0, 0.2f, 2.2f}, {0, 0.2f, 6}},            // looking away
+                          View{{0.2f, 0.2f, 1.6f}, {-1.5f, 0.2f, 1.0f}},  // past the sphere
+                          View{{2.0f, 0.1f, 0.0f}, {2.0f, 0.1f, -3.0f}}}) {
+        CameraDesc d;
+        d.eye = v.eye;
+        d.target = v.target;
+        d.fovDeg = 40;
+        d.width = 64;
+        d.height = 48;
+        Camera cam(d);
+        MinMaxBuffer buf = MinMaxBuffer::build(g, cam, 64);
+        int empty = 0, bounded = 0, hits = 0;
+        for (int y = 0; y < d.height; ++y)
+            for (int x = 0; x < d.width; ++x) {
+                float t0, t1;
+                buf.range(x, y, t0, t1);
+                empty += t0 > t1;
+                bounded += t0 > 0 && t0 <= t1;
+                Ray r = cam.pixelRay(x, y);
+                GridTraceResult plain = traceGridRay(g, r, 0, 100, o);
+                GridTraceResult b =
+                    t0 <= t1 ? traceGridRay(g, r, t0, std::min(t1, 100.0f), o) : GridTraceResult{};
+                ASSERT_EQ(plain.hit, b.hit) << "eye " << v.eye.x << " pixel " << x << "," << y;
+                if (plain.hit) {
+                    ASSERT_NEAR(plain.t, b.t, 1e-4f * plain.t);
+                }
+                hits += plain.hit;
+            }
+        const int pixels = d.width * d.height;
+        if (hits == 0) {
+            EXPECT_EQ(empty, pixels) << "eye " << v.eye.x;  // nothing in view
+        } else {
+            EXPECT_GT(empty, pixels / 10) << "eye " << v.eye.x;
+            EXPECT_GT(bounded, hits / 2) << "eye " << v.eye.x;
+        }
+    }
+}
+
 TEST(GridTracer, AllThreeGradientEstimatorsMatchTheSphereNormal) {
     Tape tape = compileTape(node::sphere(1.0f), {.boundsCulling = false});
     SampleOptions o;

@@ -24,6 +24,13 @@ void splatBlock(const Camera& cam, Vec3 c, float radius, int w, int h, float sca
     const CameraDesc& d = cam.desc();
     const Vec3 rel = c - d.eye;
     const float dist = length(rel), z = dot(rel, cam.forward());
+    const float cx = dot(rel, cam.right()), cy = dot(rel, cam.up());
+    // A primary ray leaves the eye into the view frustum (|x| <= z tx, |y| <= z ty): a sphere
+    // behind the camera plane or outside one of the frustum's four side planes is never met.
+    const float ty = cam.tanHalfFov(), tx = ty * static_cast<float>(d.width) / d.height;
+    if (z + radius < 0 || (std::fabs(cx) - z * tx) > radius * std::sqrt(1 + tx * tx) ||
+        (std::fabs(cy) - z * ty) > radius * std::sqrt(1 + ty * ty))
+        return;
     ++L.squares;
     if (z - radius <= 1e-6f * dist || dist <= radius) {
         L.everything = true;  // the sphere reaches the camera plane: no bound
@@ -32,7 +39,6 @@ void splatBlock(const Camera& cam, Vec3 c, float radius, int w, int h, float sca
     // Centre in image pixels and a conservative half-width per axis. A sphere point q = c + e
     // (|e| <= r) projects to q_x / q_z; |q_x/q_z - c_x/c_z| = |e_x c_z - c_x e_z| / (q_z c_z)
     // <= r (c_z + |c_x|) / ((c_z - r) c_z).
-    const float cx = dot(rel, cam.right()), cy = dot(rel, cam.up());
     float px = 0, py = 0;  // z > r > 0: the centre projects
     cam.project(c, px, py);
     const float pixelsPerUnit = 0.5f * d.height / cam.tanHalfFov();  // image plane to pixels
