@@ -5,6 +5,7 @@
 
 #include "sdftrace/core/macros.h"
 #include "sdftrace/field/grid.h"
+#include "sdftrace/field/grid_distance.h"
 #include "sdftrace/field/noise.h"
 #include "sdftrace/field/operators.h"
 #include "sdftrace/field/primitives.h"
@@ -323,7 +324,7 @@ float evalTree(const Node& n, Vec3 p) {
 #undef SDFT_PRIMITIVE_TREE
         case NodeKind::Grid:
             SDFT_CHECK(n.grid != nullptr);
-            return n.grid->view().sample(p) / n.grid->lipschitz();
+            return gridDistanceBound(n.grid->view(), p);
         case NodeKind::Union: {
             float v = child(0, p);
             for (size_t i = 1; i < n.children.size(); ++i) v = minf(v, child(i, p));

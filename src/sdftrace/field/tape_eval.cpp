@@ -4,6 +4,7 @@
 
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/simd.h"
+#include "sdftrace/field/grid_distance.h"
 #include "sdftrace/field/noise.h"
 #include "sdftrace/field/operators.h"
 #include "sdftrace/field/primitives.h"
@@ -82,7 +83,7 @@ inline bool cullSkips(Vec3 p, float acc, const float* k) {
 }
 
 // A grid's value, normalized by its Lipschitz bound so it is 1-Lipschitz like the primitives.
-inline float gridValue(const GridView& g, Vec3 p) { return g.sample(p) / g.lipschitz; }
+inline float gridValue(const GridView& g, Vec3 p) { return gridDistanceBound(g, p); }
 
 inline float displacement(Vec3 p, const float* k) {
     return k[0] * noise::fbm(p * k[1], static_cast<int>(k[2]), k[3]);
