@@ -1,5 +1,7 @@
 // sdftrace render [scene.json] -o image.png [--aov NAME=PATH]... [camera, tracer, shading flags]
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -16,6 +18,7 @@
 #include "sdftrace/io/mesh_io.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/render/temporal.h"
+#include "sdftrace/scene/animated_scene.h"
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
@@ -48,6 +51,9 @@ struct RenderArgs {
     std::optional<float> taaAlpha;
     float orbit = 0;
     std::string framePattern;
+    std::string time;           // --time T or A:B (scene files with keyframes)
+    std::optional<double> fps;  // --fps (default: the scene's)
+    CLI::Option* outputFlag = nullptr;
     bool quiet = false;
     bool listOptions = false;
 };
@@ -94,7 +100,7 @@ std::string framePath(const std::string& pattern, int k) {
     return buf.data();
 }
 
-void validateFramePattern(const std::string& pattern) {
+void validateFramePattern(const std::string& pattern, const std::string& what = "--frame-pattern") {
     // Exactly one conversion, an integer one: %d with an optional zero-padded width.
     size_t at = pattern.find('%'), count = 0;
     bool ok = true;
@@ -110,17 +116,87 @@ void validateFramePattern(const std::string& pattern) {
         at = pattern.find('%', i + 1);
     }
     if (!ok || count != 1) {
-        throw InputError("--frame-pattern " + pattern +
+        throw InputError(what + " " + pattern +
                          ": expected one frame-number field such as %d or %04d, e.g. out_%04d.png");
     }
-    imageFormatFromPath(framePath(pattern, 0), "--frame-pattern");
-    checkWritablePath(framePath(pattern, 0), "--frame-pattern");
+    imageFormatFromPath(framePath(pattern, 0), what);
+    checkWritablePath(framePath(pattern, 0), what);
 }
 
-// Every output is validated before the (possibly long) render starts; the AOVs to write.
-std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a) {
-    imageFormatFromPath(a.output, "--output");
-    checkWritablePath(a.output, "--output");
+// --time: one instant T, or the frames of [A, B) at --fps (docs/cli.md, "Animation").
+struct TimeSpan {
+    double from = 0, to = 0;
+    bool range = false;  // A:B
+};
+
+TimeSpan parseTimeArg(const std::string& text) {
+    auto number = [&](const std::string& part) {
+        char* end = nullptr;
+        const double v = std::strtod(part.c_str(), &end);
+        if (part.empty() || end != part.c_str() + part.size() || !std::isfinite(v) ||
+            std::fabs(v) > 1e9)
+            throw InputError("--time " + text +
+                             ": expected a time T or a range A:B in seconds (numbers within "
+                             "+-1e9), e.g. --time 1.5 or --time 0:4");
+        return v;
+    };
+    TimeSpan span;
+    const size_t colon = text.find(':');
+    if (colon == std::string::npos) {
+        span.from = span.to = number(text);
+        return span;
+    }
+    span.range = true;
+    span.from = number(text.substr(0, colon));
+    span.to = number(text.substr(colon + 1));
+    if (span.to < span.from)
+        throw InputError("--time " + text + ": the range ends before it starts (expected A <= B)");
+    return span;
+}
+
+// The frames of a range: t_i = A + i / fps while t_i < B (one frame when A = B), numbered from
+// round(A fps) so that a range's frames keep their numbers on the whole timeline.
+struct FrameTimes {
+    long long first = 0;  // the number of frame 0
+    long long count = 1;
+    double from = 0, fps = 30;
+    double at(long long i) const { return from + static_cast<double>(i) / fps; }
+};
+
+FrameTimes frameTimes(const TimeSpan& span, double fps, const std::string& timeText) {
+    FrameTimes f;
+    f.from = span.from;
+    f.fps = fps;
+    f.first = std::llround(span.from * fps);
+    const double n = std::ceil((span.to - span.from) * fps - 1e-9);
+    if (n > 1e6)
+        throw InputError("--time " + timeText + ": " + std::to_string(static_cast<long long>(n)) +
+                         " frames at " + std::to_string(fps) +
+                         " fps; a range renders at most 1000000 frames");
+    f.count = std::max(1LL, static_cast<long long>(n));
+    return f;
+}
+
+// Every output is validated before the (possibly long) render starts; the AOVs to write. A time
+// range writes each frame through --frame-pattern and the --aov paths, each one a pattern.
+std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bool range) {
+    if (range) {
+        if (a.framePattern.empty())
+            throw InputError("--time " + a.time +
+                             ": a time range renders one image per frame; give --frame-pattern, "
+                             "e.g. --frame-pattern frames/%04d.png");
+        if (a.outputFlag && a.outputFlag->count() > 0)
+            throw InputError("--output " + a.output +
+                             ": a time range writes its frames through --frame-pattern (and "
+                             "--aov NAME=PATTERN); --output names a single image");
+        if (a.orbit != 0)
+            throw InputError(
+                "--orbit: cannot be combined with a --time range (keyframe the camera in the "
+                "scene file instead; docs/scene-format.md, \"Animation\")");
+    } else {
+        imageFormatFromPath(a.output, "--output");
+        checkWritablePath(a.output, "--output");
+    }
     if (!a.framePattern.empty()) validateFramePattern(a.framePattern);
     std::vector<std::pair<Aov, std::string>> aovs;
     for (const std::string& spec : a.aovs) {
@@ -134,8 +210,12 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a) {
                 "trav_steps, isect_tests, shadow, ao");
         }
         std::string path = spec.substr(eq + 1);
-        imageFormatFromPath(path, "--aov " + spec.substr(0, eq));
-        checkWritablePath(path, "--aov " + spec.substr(0, eq));
+        if (range) {
+            validateFramePattern(path, "--aov " + spec.substr(0, eq));
+        } else {
+            imageFormatFromPath(path, "--aov " + spec.substr(0, eq));
+            checkWritablePath(path, "--aov " + spec.substr(0, eq));
+        }
         aovs.emplace_back(aov, path);
     }
     return aovs;
@@ -169,7 +249,8 @@ Scene loadInput(const std::string& input, bool progress, bool quiet) {
 }
 
 // One frame, or temporally accumulated frames (--frames, --orbit).
-RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film) {
+RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
+                        const std::string& subFramePattern) {
     const bool progress = !a.quiet && stderrIsTerminal();
     if (a.frames <= 1 && a.orbit == 0) return render(plan, film, progress);
     TemporalOptions t;
@@ -177,9 +258,9 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film)
     t.orbitDegrees = a.orbit;
     if (a.taaAlpha) t.alpha = *a.taaAlpha;
     std::function<void(int, const Film&)> onFrame;
-    if (!a.framePattern.empty()) {
+    if (!subFramePattern.empty()) {
         onFrame = [&](int k, const Film& f) {
-            writeAov(f, Aov::Color, framePath(a.framePattern, k));
+            writeAov(f, Aov::Color, framePath(subFramePattern, k));
         };
     }
     return renderFrames(plan, film, t, onFrame, progress);
@@ -225,15 +306,85 @@ void printSummary(const RenderStats& st, const Film& film, const RenderPlan& pla
         static_cast<unsigned long long>(st.fallbacks), lipschitz, counters.c_str());
 }
 
+// The scene of --time: a scene file, or the demo.
+AnimatedScene loadAnimation(const std::string& input) {
+    return input.empty() ? AnimatedScene::fromText(demoSceneText(), "<demo scene>")
+                         : AnimatedScene::fromFile(input);
+}
+
+// --time A:B: each frame's scene described at its time, its assets from one cache (each distinct
+// one loaded or baked once), rendered and written through the patterns; a line per frame.
+int renderAnimation(const RenderArgs& a, const TimeSpan& span,
+                    const std::vector<std::pair<Aov, std::string>>& aovs) {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    const AnimatedScene anim = loadAnimation(a.scene);
+    const double fps = a.fps ? *a.fps : anim.time().fps;
+    const FrameTimes frames = frameTimes(span, fps, a.time);
+    AssetCache cache;
+    PrepareStats assets;
+    double renderSeconds = 0;
+    unsigned kept = Film::bit(Aov::Color);
+    for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
+    for (long long i = 0; i < frames.count; ++i) {
+        const double t = frames.at(i);
+        const long long number = frames.first + i;
+        Scene scene = anim.describeAt(t);
+        const PrepareStats st =
+            prepareScene(scene, cache, {.progress = !a.quiet && stderrIsTerminal()});
+        assets.loaded += st.loaded;
+        assets.baked += st.baked;
+        assets.cached += st.cached;
+        applyOverrides(a, scene);
+        const RenderPlan plan = planRender(scene);
+        Film film(plan.camera.width, plan.camera.height, kept);
+        const RenderStats rs = renderImage(a, plan, film, "");
+        renderSeconds += rs.seconds;
+        const int k = static_cast<int>(number);
+        writeAov(film, Aov::Color, framePath(a.framePattern, k));
+        for (const auto& [aov, path] : aovs) writeAov(film, aov, framePath(path, k));
+        if (!a.quiet)
+            std::fprintf(stderr,
+                         "sdftrace render: frame %lld of %lld (t = %.4g s) -> %s: %dx%d in %.3f "
+                         "s, %.2f%% hits\n",
+                         i + 1, frames.count, t, framePath(a.framePattern, k).c_str(), film.width,
+                         film.height, rs.seconds,
+                         100.0 * static_cast<double>(rs.hits) /
+                             std::max<double>(1, static_cast<double>(rs.primaryRays)));
+    }
+    const double total = std::chrono::duration<double>(Clock::now() - start).count();
+    std::fprintf(stderr,
+                 "sdftrace render: %lld frames (t = %.4g to %.4g s at %.4g fps) in %.3f s, "
+                 "render %.3f s per frame; assets: %zu loaded, %zu baked, %zu reused\n",
+                 frames.count, frames.at(0), frames.at(frames.count - 1), fps, total,
+                 renderSeconds / static_cast<double>(frames.count), assets.loaded, assets.baked,
+                 assets.cached);
+    return 0;
+}
+
 int runRender(const RenderArgs& a) {
     if (a.listOptions) {
         std::fputs(renderOptionsMarkdown().c_str(), stdout);
         return 0;
     }
-    const auto aovs = validateOutputs(a);
+    const std::optional<TimeSpan> span =
+        a.time.empty() ? std::nullopt : std::optional<TimeSpan>(parseTimeArg(a.time));
+    if (span && (isMeshFile(a.scene) || isGridFile(a.scene)))
+        throw InputError("--time " + a.time + ": " + a.scene +
+                         " is not a scene file; only scene files have keyframes "
+                         "(docs/scene-format.md, \"Animation\")");
+    const auto aovs = validateOutputs(a, span && span->range);
+    if (span && span->range) return renderAnimation(a, *span, aovs);
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
-    Scene scene = loadInput(a.scene, !a.quiet && stderrIsTerminal(), a.quiet);
+    Scene scene;
+    if (span) {
+        const AnimatedScene anim = loadAnimation(a.scene);
+        AssetCache cache;
+        scene = anim.at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
+    } else {
+        scene = loadInput(a.scene, !a.quiet && stderrIsTerminal(), a.quiet);
+    }
     applyOverrides(a, scene);
     const auto t1 = Clock::now();
     const RenderPlan plan = planRender(scene);
@@ -241,7 +392,7 @@ int runRender(const RenderArgs& a) {
     for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
     Film film(plan.camera.width, plan.camera.height, kept);
     const auto t2 = Clock::now();
-    const RenderStats st = renderImage(a, plan, film);
+    const RenderStats st = renderImage(a, plan, film, a.framePattern);
     const auto t3 = Clock::now();
     writeAov(film, Aov::Color, a.output);
     for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
@@ -327,7 +478,19 @@ void addFrameFlags(CLI::App* cmd, RenderArgs& args) {
                      "neighbourhood")
         ->check(CLI::Range(-180.0, 180.0));
     frames->add_option("--frame-pattern", args.framePattern,
-                       "Also write every accumulated frame, e.g. frames/out_%04d.png");
+                       "Also write every accumulated frame, e.g. frames/out_%04d.png; with a "
+                       "--time range, the animation's frames");
+    auto* anim = cmd->add_option_group(
+        "Animation", "Scenes with keyframed values (docs/scene-format.md, \"Animation\")");
+    anim->add_option("--time", args.time,
+                     "Render the instant T (seconds), or the frames of the range A:B at --fps "
+                     "(t = A, A + 1/fps, ... while t < B; written through --frame-pattern and "
+                     "--aov NAME=PATTERN, frame numbers counted from round(A fps))")
+        ->type_name("T|A:B");
+    anim->add_option("--fps", args.fps,
+                     "Frames per second of a --time range (default: the scene's \"animation\" "
+                     "block, else 30)")
+        ->check(CLI::Range(1e-3, 1000.0));
 }
 
 }  // namespace
@@ -340,9 +503,10 @@ void addRenderCommand(CLI::App& app, Action& action) {
     cmd->add_option("scene", args->scene,
                     "Scene file (JSON, see docs/scene-format.md), grid file (.sdfg, .vdb) or mesh, "
                     "framed automatically; default: the demo");
-    cmd->add_option("-o,--output", args->output,
-                    "Output image: .png (tone-mapped sRGB), .exr or .pfm (linear)")
-        ->capture_default_str();
+    args->outputFlag = cmd->add_option("-o,--output", args->output,
+                                       "Output image: .png (tone-mapped sRGB), .exr or .pfm "
+                                       "(linear)")
+                           ->capture_default_str();
     cmd->add_option(
         "--aov", args->aovs,
         "Extra output NAME=PATH, repeatable. NAME: color (linear radiance), depth (t along the "

@@ -40,6 +40,14 @@ struct RepeatCheck {
     std::string where;  // "<scene file>: <JSON path of the repeat>"
 };
 
+// The time span of an animated scene (its "animation" block, docs/scene-format.md "Animation"):
+// without the block, the span of its keyframes at 30 frames per second.
+struct SceneTime {
+    double start = 0, end = 0;  // seconds
+    double fps = 30;
+    bool animated = false;  // the scene has keyframed values
+};
+
 struct Scene {
     NodePtr root;
     std::vector<AssetRequest> assets;  // requests of pending grid nodes (node::gridAsset)
@@ -51,6 +59,7 @@ struct Scene {
     Lighting lighting;
     CameraDesc camera;
     RenderSettings settings;
+    SceneTime time;
 };
 
 }  // namespace sdft

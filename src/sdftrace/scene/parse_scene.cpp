@@ -3,16 +3,15 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include "json_reader.h"
 #include "parse_node.h"
 #include "parse_texture.h"
+#include "scene_json.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/render/film.h"
+#include "sdftrace/scene/animated_scene.h"
 #include "sdftrace/scene/prepare_scene.h"
 #include "sdftrace/scene/render_options.h"
 
@@ -151,11 +150,31 @@ void parseRender(const Reader& r, RenderSettings& s) {
     }
 }
 
+// The "animation" block: {"start": s, "end": e, "fps": f}, every key optional.
+SceneTime parseAnimation(const Reader& r, SceneTime t) {
+    r.requireObject("an animation block {\"start\": s, \"end\": e, \"fps\": f}");
+    r.allowKeys({"start", "end", "fps"});
+    t.start = r.number("start", static_cast<float>(t.start), json_reader::anyFinite,
+                       "a start time in seconds");
+    t.end = r.number("end", static_cast<float>(std::max(t.end, t.start)), json_reader::anyFinite,
+                     "an end time in seconds");
+    if (t.end < t.start) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "the end time %g is before the start time %g", t.end,
+                      t.start);
+        r.failKey("end", buf);
+    }
+    t.fps = r.number(
+        "fps", static_cast<float>(t.fps), [](double v) { return v > 0 && v <= 1000; },
+        "frames per second in (0, 1000]");
+    return t;
+}
+
 Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {
     Reader r(root, source, "");
     r.requireObject("a scene");
     r.allowKeys({"camera", "lights", "ambient", "background", "environment", "textures",
-                 "materials", "objects", "render"});
+                 "materials", "objects", "render", "animation"});
     Scene scene;
     scene.materials.push_back(Material{"default"});
     NodeContext context;
@@ -223,6 +242,46 @@ Scene parseRoot(const Json& root, const std::string& source, const std::string& 
 
 }  // namespace
 
+Json readSceneJson(const std::string& text, const std::string& source) {
+    try {
+        return Json::parse(text);
+    } catch (const Json::exception& e) {
+        // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, ...";
+        // an overflowing number ("1e999") is an out_of_range error of the parser.
+        std::string msg = e.what();
+        auto pos = msg.find("] ");
+        msg = pos == std::string::npos ? msg : msg.substr(pos + 2);
+        if (e.id == 406) msg += " (numbers must be finite)";
+        throw InputError(source + ": malformed JSON: " + msg);
+    }
+}
+
+SceneTime sceneTimeOf(const Json& root, const std::vector<JsonTrack>& tracks,
+                      const std::string& source) {
+    SceneTime t;
+    t.animated = !tracks.empty();
+    if (!tracks.empty()) {
+        t.start = tracks.front().track.firstTime();
+        t.end = tracks.front().track.lastTime();
+        for (const JsonTrack& track : tracks) {
+            t.start = std::min(t.start, track.track.firstTime());
+            t.end = std::max(t.end, track.track.lastTime());
+        }
+    }
+    Reader r(root, source, "");
+    if (r.has("animation")) {
+        SceneTime given = parseAnimation(r.child("animation"), SceneTime{});
+        given.animated = t.animated;
+        if (!r.child("animation").has("end")) given.end = std::max(given.start, t.end);
+        t = given;
+    }
+    return t;
+}
+
+Scene describeSceneJson(const Json& root, const std::string& source, const std::string& baseDir) {
+    return parseRoot(root, source, baseDir);
+}
+
 void validateImageSize(int width, int height, const std::string& what) {
     if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide) {
         throw InputError(what + ": image size " + std::to_string(width) + "x" +
@@ -238,29 +297,14 @@ void validateImageSize(int width, int height, const std::string& what) {
 
 Scene describeSceneText(const std::string& text, const std::string& source,
                         const std::string& baseDir) {
-    Json root;
-    try {
-        root = Json::parse(text);
-    } catch (const Json::exception& e) {
-        // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, ...";
-        // an overflowing number ("1e999") is an out_of_range error of the parser.
-        std::string msg = e.what();
-        auto pos = msg.find("] ");
-        msg = pos == std::string::npos ? msg : msg.substr(pos + 2);
-        if (e.id == 406) msg += " (numbers must be finite)";
-        throw InputError(source + ": malformed JSON: " + msg);
-    }
-    return parseRoot(root, source, baseDir);
+    // A scene with keyframed values is checked at every key and described at its start.
+    const AnimatedScene scene = AnimatedScene::fromText(text, source, baseDir);
+    return scene.describeAt(scene.time().start);
 }
 
 Scene describeSceneFile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in)
-        throw InputError(path + ": cannot open scene file (does it exist and is it readable?)");
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw InputError(path + ": cannot read scene file");
-    return describeSceneText(text.str(), path, std::filesystem::path(path).parent_path().string());
+    const AnimatedScene scene = AnimatedScene::fromFile(path);
+    return scene.describeAt(scene.time().start);
 }
 
 Scene parseSceneText(const std::string& text, const std::string& source,

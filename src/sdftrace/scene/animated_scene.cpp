@@ -1,0 +1,88 @@
+#include "sdftrace/scene/animated_scene.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "scene_json.h"
+
+namespace sdft {
+
+struct AnimatedScene::Impl {
+    nlohmann::json root;
+    std::vector<JsonTrack> tracks;
+    SceneTime time;
+    std::string source, baseDir;
+};
+
+namespace {
+std::string atTime(double t) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, " (at time %g s)", t);
+    return buf;
+}
+}  // namespace
+
+AnimatedScene AnimatedScene::fromText(const std::string& text, const std::string& source,
+                                      const std::string& baseDir) {
+    auto impl = std::make_shared<Impl>();
+    impl->root = readSceneJson(text, source);
+    impl->tracks = findKeyframedValues(impl->root, source);
+    impl->time = sceneTimeOf(impl->root, impl->tracks, source);
+    impl->source = source;
+    impl->baseDir = baseDir;
+    AnimatedScene scene;
+    scene.m_impl = impl;
+    // Checked at the span's ends and at every key (distinct times, in order).
+    std::set<double> times{impl->time.start, impl->time.end};
+    for (const JsonTrack& track : impl->tracks)
+        for (const Keyframe& key : track.track.keys()) times.insert(key.time);
+    for (double t : times) scene.describeAt(t);
+    return scene;
+}
+
+AnimatedScene AnimatedScene::fromFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+        throw InputError(path + ": cannot open scene file (does it exist and is it readable?)");
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw InputError(path + ": cannot read scene file");
+    return fromText(text.str(), path, std::filesystem::path(path).parent_path().string());
+}
+
+const SceneTime& AnimatedScene::time() const { return m_impl->time; }
+
+Scene AnimatedScene::describeAt(double t) const {
+    const Impl& s = *m_impl;
+    if (s.tracks.empty()) {
+        Scene scene = describeSceneJson(s.root, s.source, s.baseDir);
+        scene.time = s.time;
+        return scene;
+    }
+    try {
+        Scene scene = describeSceneJson(valuesAt(s.root, s.tracks, t), s.source, s.baseDir);
+        scene.time = s.time;
+        return scene;
+    } catch (const InputError& e) {
+        throw InputError(e.what() + atTime(t));
+    }
+}
+
+Scene AnimatedScene::at(double t, AssetCache& cache, const PrepareOptions& options) const {
+    Scene scene = describeAt(t);
+    if (m_impl->tracks.empty()) {
+        prepareScene(scene, cache, options);
+        return scene;
+    }
+    try {
+        prepareScene(scene, cache, options);
+    } catch (const InputError& e) {
+        throw InputError(e.what() + atTime(t));
+    }
+    return scene;
+}
+
+}  // namespace sdft

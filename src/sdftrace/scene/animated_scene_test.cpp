@@ -1,0 +1,171 @@
+// Scenes over time (issue 16): keyframed values anywhere a scene takes numbers, the scene of an
+// instant, assets shared across instants, and one clear error for bad keyframes.
+#include "sdftrace/scene/animated_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/field/tape.h"
+#include "sdftrace/scene/parse_scene.h"
+
+namespace sdft {
+namespace {
+
+const std::string kMeshes = std::string(SDFT_SOURCE_DIR) + "/data/meshes/";
+
+float fieldAt(const Scene& s, Vec3 p) {
+    return compileTape(s.root, {.boundsCulling = false}).eval(p);
+}
+
+// A ball moving from x = 0 to x = 2 over two seconds, growing, seen by a camera that rises, lit
+// by a light that swings on a smooth looping path; the ball's rotation angle is keyed by itself.
+const char* kMoving = R"({
+  "camera": {"eye": {"keyframes": [{"time": 0, "value": [0, 1, 6]}, {"time": 2, "value": [0, 3, 6]}]},
+             "target": [1, 0, 0]},
+  "lights": [{"type": "point", "intensity": 10,
+              "position": {"keyframes": [{"time": 0, "value": [4, 4, 0]}, {"time": 1, "value": [0, 4, 4]},
+                                         {"time": 2, "value": [-4, 4, 0]}, {"time": 3, "value": [4, 4, 0]}],
+                           "interpolation": "smooth", "extrapolation": "loop"}}],
+  "objects": [{"type": "sphere",
+               "radius": {"keyframes": [{"time": 0, "value": 0.5}, {"time": 2, "value": 1}]},
+               "rotate": {"axis": [0, 1, 0], "angle": {"keyframes": [{"time": 0, "value": 0},
+                                                                    {"time": 2, "value": 90}]}},
+               "translate": {"keyframes": [{"time": 0, "value": [0, 0, 0]}, {"time": 2, "value": [2, 0, 0]}]}}]
+})";
+
+TEST(AnimatedScene, TheSceneOfAnInstantHasItsKeyframedValues) {
+    const AnimatedScene anim = AnimatedScene::fromText(kMoving, "moving.json");
+    EXPECT_TRUE(anim.time().animated);
+    EXPECT_EQ(anim.time().start, 0);
+    EXPECT_EQ(anim.time().end, 3);  // the keys' span: the light's last key
+    for (double t : {0.0, 0.5, 1.0, 2.0, 2.5}) {
+        const Scene s = anim.describeAt(t);
+        const double u = std::min(t, 2.0) / 2;  // clamped after the last key
+        const Vec3 centre(static_cast<float>(2 * u), 0, 0);
+        const float radius = static_cast<float>(0.5 + 0.5 * u);
+        EXPECT_NEAR(fieldAt(s, centre), -radius, 1e-5f) << t;
+        EXPECT_NEAR(fieldAt(s, centre + Vec3(0, radius, 0)), 0, 1e-5f) << t;
+        EXPECT_NEAR(s.camera.eye.y, 1 + 2 * u, 1e-6) << t;
+        ASSERT_EQ(s.lighting.lights.size(), 1u);
+    }
+    // The light loops every 3 s and passes its keys exactly.
+    EXPECT_NEAR(anim.describeAt(1).lighting.lights[0].position.z, 4, 1e-6);
+    const Vec3 a = anim.describeAt(0.4).lighting.lights[0].position,
+               b = anim.describeAt(3.4).lighting.lights[0].position;
+    EXPECT_NEAR(length(a - b), 0, 1e-5);
+    // A static description of an animated file is its start.
+    const Scene start = describeSceneText(kMoving, "moving.json");
+    EXPECT_NEAR(fieldAt(start, Vec3(0)), -0.5f, 1e-5f);
+    EXPECT_TRUE(start.time.animated);
+}
+
+TEST(AnimatedScene, TheAnimationBlockSetsTheSpanAndRate) {
+    const std::string text = R"({"animation": {"start": 0.5, "end": 4, "fps": 24},
+        "objects": [{"type": "sphere", "radius": 1}]})";
+    const AnimatedScene anim = AnimatedScene::fromText(text, "a.json");
+    EXPECT_FALSE(anim.time().animated);
+    EXPECT_EQ(anim.time().start, 0.5);
+    EXPECT_EQ(anim.time().end, 4);
+    EXPECT_EQ(anim.time().fps, 24);
+}
+
+// A rigid mesh whose transform is keyframed is baked once for every instant; a keyframed bake
+// parameter bakes again where its value changes.
+TEST(AnimatedScene, InstantsShareTheirAssets) {
+    const std::string text = R"({"objects": [
+        {"mesh": ")" + kMeshes +
+                             R"(teapot.obj", "resolution": 16,
+         "translate": {"keyframes": [{"time": 0, "value": [0, 0, 0]}, {"time": 1, "value": [3, 0, 0]}]}},
+        {"mesh": ")" + kMeshes +
+                             R"(teapot.obj", "translate": [0, 5, 0],
+         "resolution": {"keyframes": [{"time": 0, "value": 12}, {"time": 1, "value": 20}],
+                        "interpolation": "step"}}]})";
+    const AnimatedScene anim = AnimatedScene::fromText(text, "m.json");
+    AssetCache cache;
+    size_t baked = 0, cached = 0;
+    for (double t : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+        Scene s = anim.describeAt(t);
+        const PrepareStats st = prepareScene(s, cache);
+        baked += st.baked;
+        cached += st.cached;
+    }
+    EXPECT_EQ(baked, 3u);  // the rigid teapot once, the other at resolution 12, then at 20
+    EXPECT_EQ(cached, 7u);
+}
+
+// Bad keyframes, and values that are out of range at a key, are one-line errors at load time
+// naming the JSON path (and the time, for a value that is bad only at some instant).
+TEST(AnimatedScene, BadKeyframesAreOneClearError) {
+    auto sphere = [](const std::string& radius) {
+        return R"({"objects": [{"type": "sphere", "radius": )" + radius + "}]}";
+    };
+    const struct {
+        std::string text, expected;
+    } cases[] = {
+        {sphere(R"({"keyframes": [{"time": 1, "value": 1}, {"time": 0, "value": 2}]})"),
+         "/objects/0/radius/keyframes/1/time: time 0 is not after the previous key's 1"},
+        {sphere(R"({"keyframes": [{"time": 1, "value": 1}, {"time": 1, "value": 2}]})"),
+         "/objects/0/radius/keyframes/1/time: time 1 is not after the previous key's 1"},
+        {sphere(R"({"keyframes": []})"), "/objects/0/radius/keyframes: expected at least one"},
+        {sphere(R"({"keyframes": [{"time": 0, "value": 1}, {"time": 1, "value": [1, 2]}]})"),
+         "/objects/0/radius/keyframes/1/value: expected a value of the same shape"},
+        {sphere(R"({"keyframes": [{"time": 0, "value": "big"}]})"),
+         "/objects/0/radius/keyframes/0/value: expected a number or an array"},
+        {sphere(R"({"keyframes": [{"time": 0, "value": {"keyframes": []}}]})"),
+         "/objects/0/radius/keyframes/0/value: expected a number or an array"},
+        {sphere(R"({"keyframes": [{"time": 0}]})"),
+         "/objects/0/radius/keyframes/0: missing required key 'value'"},
+        {sphere(R"({"keyframes": [{"time": 0, "value": 1, "ease": 2}]})"),
+         "/objects/0/radius/keyframes/0/ease: unknown key; accepted here: time, value"},
+        {sphere(R"({"keyframes": [{"time": 0, "value": 1}], "interpolation": "cubic"})"),
+         "/objects/0/radius/interpolation: unknown interpolation 'cubic'; accepted: linear, "
+         "smooth, step"},
+        {sphere(R"({"keyframes": [{"time": 0, "value": 1}], "extrapolation": "mirror"})"),
+         "/objects/0/radius/extrapolation: unknown extrapolation 'mirror'; accepted: clamp, loop"},
+        {sphere(R"({"keyframes": 3})"), "/objects/0/radius/keyframes: expected a list"},
+        {sphere(R"({"keyframes": [{"time": 0, "value": 1}, {"time": 2, "value": -1}]})"),
+         "/objects/0/radius: expected a positive radius, got -1 (at time 2 s)"},
+        {R"({"animation": {"start": 2, "end": 1}, "objects": [{"type": "sphere", "radius": 1}]})",
+         "/animation/end: the end time 1 is before the start time 2"},
+        {R"({"animation": {"fps": 0}, "objects": [{"type": "sphere", "radius": 1}]})",
+         "/animation/fps: expected frames per second in (0, 1000]"},
+    };
+    for (const auto& c : cases) {
+        try {
+            AnimatedScene::fromText(c.text, "bad.json");
+            ADD_FAILURE() << "accepted: " << c.text;
+        } catch (const InputError& e) {
+            const std::string msg = e.what();
+            EXPECT_EQ(msg.rfind("bad.json: ", 0), 0u) << msg;
+            EXPECT_NE(msg.find(c.expected), std::string::npos)
+                << msg << "\nexpected: " << c.expected;
+            EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+        }
+        // The static description reports the same problems (at its start time).
+        EXPECT_THROW(describeSceneText(c.text, "bad.json"), InputError) << c.text;
+    }
+}
+
+// A value that is only bad between keys is an error of that instant, naming the time.
+TEST(AnimatedScene, AValueBadOnlyBetweenKeysNamesItsTime) {
+    const std::string text = R"({"camera": {"width": {"keyframes": [{"time": 0, "value": 100},
+        {"time": 1, "value": 201}]}}, "objects": [{"type": "sphere", "radius": 1}]})";
+    const AnimatedScene anim = AnimatedScene::fromText(text, "w.json");
+    EXPECT_EQ(anim.describeAt(0).camera.width, 100);
+    EXPECT_EQ(anim.describeAt(1).camera.width, 201);
+    try {
+        anim.describeAt(0.5);
+        ADD_FAILURE() << "a width of 150.5 accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("w.json: /camera/width: expected an integer"),
+                  std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("(at time 0.5 s)"), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace sdft

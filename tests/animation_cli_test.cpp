@@ -1,0 +1,111 @@
+// Rendering a scene's animation through the CLI (issue 16): --time T renders an instant, --time
+// A:B --fps F the frames of a range through --frame-pattern; bad time flags are one clear line and
+// leave no file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cli_runner.h"
+
+namespace sdft::e2e {
+namespace {
+
+// A ball crossing the view from x = -1 to x = 1 in one second.
+const char* kMovingBall = R"({
+  "camera": {"eye": [0, 0, 5], "target": [0, 0, 0], "width": 40, "height": 24, "fov": 40},
+  "lights": [{"type": "directional", "direction": [-1, -1, -1]}],
+  "objects": [{"type": "sphere", "radius": 0.5,
+               "translate": {"keyframes": [{"time": 0, "value": [-1, 0, 0]},
+                                           {"time": 1, "value": [1, 0, 0]}]}}]
+})";
+
+// Mean column of the pixels a depth image hits.
+double hitColumn(const std::string& pfm) {
+    int w = 0, h = 0, c = 0;
+    const std::vector<float> depth = readPfm(pfm, w, h, c);
+    double sum = 0, n = 0;
+    for (int i = 0; i < w * h; ++i)
+        if (std::isfinite(depth[static_cast<size_t>(i)])) {
+            sum += i % w;
+            ++n;
+        }
+    return n > 0 ? sum / n : -1;
+}
+
+TEST(Animation, ARangeWritesEachFrameThroughThePatterns) {
+    TempDir dir;
+    const std::string scene = dir.write("ball.json", kMovingBall);
+    RunResult r = runCli("render " + scene + " --time 0:1 --fps 4 --frame-pattern " +
+                             dir.file("f_%02d.png") + " --aov depth=" + dir.file("d_%02d.pfm"),
+                         dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    double previous = -1;
+    for (int k = 0; k < 4; ++k) {  // t = 0, 0.25, 0.5, 0.75 (the range's end is not a frame)
+        char name[32];
+        std::snprintf(name, sizeof name, "f_%02d.png", k);
+        EXPECT_TRUE(std::filesystem::exists(dir.file(name))) << name;
+        std::snprintf(name, sizeof name, "d_%02d.pfm", k);
+        const double column = hitColumn(dir.file(name));
+        EXPECT_GT(column, previous + 3) << "frame " << k << ": the ball moves right";
+        previous = column;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("f_04.png")));
+    EXPECT_EQ(dir.count(), 1 + 8);  // the scene, 4 images, 4 depths
+    EXPECT_NE(r.err.find("4 frames (t = 0 to 0.75 s at 4 fps)"), std::string::npos) << r.err;
+
+    // Frames keep their numbers on the timeline; an instant renders what its frame showed.
+    TempDir later;
+    r = runCli(
+        "render " + scene + " --time 0.5:1 --fps 4 -q --frame-pattern " + later.file("f_%02d.png"),
+        later);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(later.file("f_02.png")));
+    EXPECT_TRUE(std::filesystem::exists(later.file("f_03.png")));
+    EXPECT_EQ(later.count(), 2);
+    r = runCli("render " + scene + " --time 0.5 -q -o " + later.file("still.png"), later);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(readFile(later.file("still.png")), readFile(dir.file("f_02.png")));
+}
+
+TEST(Animation, BadTimeFlagsAreOneClearLineAndLeaveNoFile) {
+    TempDir dir;
+    const std::string scene = dir.write("ball.json", kMovingBall);
+    const std::string pattern = " --frame-pattern " + dir.file("f_%02d.png");
+    const struct {
+        std::string args, expected;
+    } cases[] = {
+        {"--time soon" + pattern, "--time soon: expected a time T or a range A:B in seconds"},
+        {"--time 1:" + pattern, "--time 1:: expected a time T or a range A:B"},
+        {"--time 2:1" + pattern, "--time 2:1: the range ends before it starts"},
+        {"--time nan" + pattern, "--time nan: expected a time T or a range A:B"},
+        {"--time 0:1",
+         "--time 0:1: a time range renders one image per frame; give --frame-pattern"},
+        {"--time 0:1 -o " + dir.file("x.png") + pattern,
+         "--output " + dir.file("x.png") + ": a time range writes its frames through"},
+        {"--time 0:1 --aov depth=" + dir.file("d.pfm") + pattern,
+         "--aov depth " + dir.file("d.pfm") + ": expected one frame-number field"},
+        {"--time 0:1 --orbit 2" + pattern, "--orbit: cannot be combined with a --time range"},
+        {"--time 0:100000 --fps 1000" + pattern, "a range renders at most 1000000 frames"},
+        {"--time 0:1 --fps 0" + pattern, "--fps"},
+    };
+    for (const auto& c : cases) {
+        RunResult r = runCli("render " + scene + " -q " + c.args, dir);
+        EXPECT_NE(r.status, 0) << c.args;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << ": " << r.err;
+        EXPECT_NE(r.err.find(c.expected), std::string::npos)
+            << c.args << ": expected '" << c.expected << "' in: " << r.err;
+        EXPECT_EQ(dir.count(), 1) << c.args << ": a file was written";
+    }
+    // A keyframe error names the file and the JSON path.
+    const std::string bad = dir.write("bad.json", R"({"objects": [{"type": "sphere",
+        "radius": {"keyframes": [{"time": 1, "value": 1}, {"time": 0, "value": 2}]}}]})");
+    RunResult r = runCli("render " + bad + " -q --time 0:1" + pattern, dir);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("bad.json: /objects/0/radius/keyframes/1/time: time 0 is not after"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(dir.count(), 2);
+}
+
+}  // namespace
+}  // namespace sdft::e2e
