@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "json_reader.h"
-#include "sdftrace/math/keyframes.h"
+#include "sdftrace/scene/keyframes.h"
 
 namespace sdft {
 

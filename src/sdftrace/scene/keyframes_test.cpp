@@ -1,6 +1,6 @@
 // Keyframe tracks: exact at their keys, continuous between them (smooth ones with a continuous
 // velocity too), held or repeated outside the keyed span.
-#include "sdftrace/math/keyframes.h"
+#include "sdftrace/scene/keyframes.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "sdftrace/math/keyframes.h"
+#include "sdftrace/scene/keyframes.h"
 
 #include <algorithm>
 #include <cmath>
