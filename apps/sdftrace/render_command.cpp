@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <string>
 
 #include "commands.h"
 #include "sdftrace/bake/mesh_bake.h"
@@ -329,9 +330,10 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     for (long long i = 0; i < frames.count; ++i) {
         const double t = frames.at(i);
         const long long number = frames.first + i;
-        Scene scene = anim.describeAt(t);
-        const PrepareStats st =
-            prepareScene(scene, cache, {.progress = !a.quiet && stderrIsTerminal()});
+        AnimatedScene::InstantAssets used;
+        Scene scene = anim.at(t, cache, {.progress = !a.quiet && stderrIsTerminal()}, &used);
+        cache.keepOnly(used.keys);  // what this frame needs stays cached, the rest goes
+        const PrepareStats& st = used.stats;
         assets.loaded += st.loaded;
         assets.baked += st.baked;
         assets.cached += st.cached;

@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "sdftrace/scene/prepare_scene.h"
 #include "sdftrace/scene/scene.h"
@@ -26,7 +27,13 @@ class AnimatedScene {
     const SceneTime& time() const;
     // The scene at time t (seconds), its assets pending (prepareScene) or prepared.
     Scene describeAt(double t) const;
-    Scene at(double t, AssetCache& cache, const PrepareOptions& options = {}) const;
+    // What preparing an instant did: its counts, and the cache keys of the assets it used.
+    struct InstantAssets {
+        PrepareStats stats;
+        std::vector<std::string> keys;
+    };
+    Scene at(double t, AssetCache& cache, const PrepareOptions& options = {},
+             InstantAssets* assets = nullptr) const;
 
   private:
     struct Impl;

@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "sdftrace/field/grid.h"
 #include "sdftrace/scene/scene.h"
@@ -26,6 +27,14 @@ class AssetCache {
         if (!key.empty()) m_grids[key] = std::move(grid);
     }
     size_t size() const { return m_grids.size(); }
+    // Drops every grid whose key is not in `keys` (the frames of an animation keep what the
+    // current frame uses: a mesh sequence's past frames go, a rigid mesh stays).
+    void keepOnly(const std::vector<std::string>& keys) {
+        std::map<std::string, std::shared_ptr<const Grid>> kept;
+        for (const std::string& k : keys)
+            if (auto it = m_grids.find(k); it != m_grids.end()) kept.insert(*it);
+        m_grids.swap(kept);
+    }
 
   private:
     std::map<std::string, std::shared_ptr<const Grid>> m_grids;

@@ -71,15 +71,17 @@ Scene AnimatedScene::describeAt(double t) const {
     }
 }
 
-Scene AnimatedScene::at(double t, AssetCache& cache, const PrepareOptions& options) const {
+Scene AnimatedScene::at(double t, AssetCache& cache, const PrepareOptions& options,
+                        InstantAssets* assets) const {
     Scene scene = describeAt(t);
-    if (m_impl->tracks.empty()) {
-        prepareScene(scene, cache, options);
-        return scene;
-    }
+    InstantAssets local;
+    InstantAssets& out = assets ? *assets : local;
+    out.keys.clear();
+    for (const AssetRequest& q : scene.assets) out.keys.push_back(q.key);
     try {
-        prepareScene(scene, cache, options);
+        out.stats = prepareScene(scene, cache, options);
     } catch (const InputError& e) {
+        if (m_impl->tracks.empty()) throw;
         throw InputError(e.what() + atTime(t));
     }
     return scene;

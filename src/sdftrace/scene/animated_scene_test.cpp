@@ -3,8 +3,11 @@
 #include "sdftrace/scene/animated_scene.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "sdftrace/core/error.h"
@@ -96,6 +99,60 @@ TEST(AnimatedScene, InstantsShareTheirAssets) {
     EXPECT_EQ(cached, 7u);
 }
 
+// A closed cube of side 1 centred at (x, 0, 0), as OBJ text.
+std::string cubeObj(float x) {
+    std::string s;
+    for (int v = 0; v < 8; ++v)
+        s += "v " + std::to_string(x + ((v & 1) ? 0.5f : -0.5f)) + " " +
+             std::to_string((v & 2) ? 0.5f : -0.5f) + " " + std::to_string((v & 4) ? 0.5f : -0.5f) +
+             "\n";
+    // Two triangles per face, wound outwards (vertex v at bits x = 1, y = 2, z = 4; OBJ is
+    // 1-based).
+    for (const char* f : {"1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"}) {
+        int a, b, c, d;
+        std::sscanf(f, "%d %d %d %d", &a, &b, &c, &d);
+        s += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\n";
+        s += "f " + std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
+    }
+    return s;
+}
+
+// A mesh sequence plays one file per frame, its frame number keyframed; past frames leave the
+// cache, and a missing frame is an error of that instant naming the file.
+TEST(AnimatedScene, AMeshSequencePlaysOneFilePerFrame) {
+    namespace fs = std::filesystem;
+    const fs::path dir =
+        fs::temp_directory_path() / ("sdft_sequence_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    for (int k = 0; k < 2; ++k)  // frames 0 and 1; frame 2 is missing
+        std::ofstream(dir / ("cube_" + std::to_string(k) + ".obj")) << cubeObj(3.0f * k);
+    const std::string text = R"({"objects": [{"mesh": "cube_%d.obj", "resolution": 16,
+        "frame": {"keyframes": [{"time": 0, "value": 0}, {"time": 3, "value": 3}]}}]})";
+    const AnimatedScene anim = AnimatedScene::fromText(text, "seq.json", dir.string());
+    AssetCache cache;
+    AnimatedScene::InstantAssets used;
+    const Scene first = anim.at(0.5, cache, {}, &used);  // frame 0
+    EXPECT_LT(fieldAt(first, Vec3(0, 0, 0)), -0.2f);     // 0.5 over the grid's Lipschitz bound
+    EXPECT_GT(fieldAt(first, Vec3(3, 0, 0)), 0.2f);
+    cache.keepOnly(used.keys);
+    const Scene second = anim.at(1.5, cache, {}, &used);  // frame 1
+    EXPECT_EQ(used.stats.baked, 1u);
+    cache.keepOnly(used.keys);
+    EXPECT_EQ(cache.size(), 1u);  // frame 0's grid is gone
+    EXPECT_LT(fieldAt(second, Vec3(3, 0, 0)), -0.2f);
+    EXPECT_GT(fieldAt(second, Vec3(0, 0, 0)), 0.2f);
+    try {
+        anim.at(2.5, cache);
+        ADD_FAILURE() << "a missing frame was accepted";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("cube_2.obj"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("(at time 2.5 s)"), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+    fs::remove_all(dir);
+}
+
 // Bad keyframes, and values that are out of range at a key, are one-line errors at load time
 // naming the JSON path (and the time, for a value that is bad only at some instant).
 TEST(AnimatedScene, BadKeyframesAreOneClearError) {
@@ -132,6 +189,14 @@ TEST(AnimatedScene, BadKeyframesAreOneClearError) {
          "/animation/end: the end time 1 is before the start time 2"},
         {R"({"animation": {"fps": 0}, "objects": [{"type": "sphere", "radius": 1}]})",
          "/animation/fps: expected frames per second in (0, 1000]"},
+        {R"({"objects": [{"mesh": "frames/m_%04d.obj"}]})",
+         "/objects/0/mesh: 'frames/m_%04d.obj' is a file pattern; give \"frame\""},
+        {R"({"objects": [{"mesh": "m_%d_%d.obj", "frame": 2}]})",
+         "/objects/0/mesh: 'm_%d_%d.obj': a mesh sequence's file pattern holds one frame-number"},
+        {R"({"objects": [{"mesh": "m_%s.obj", "frame": 2}]})",
+         "/objects/0/mesh: 'm_%s.obj': a mesh sequence's file pattern holds one"},
+        {R"({"objects": [{"mesh": "m_%d.obj", "frame": -1}]})",
+         "/objects/0/frame: expected a frame number >= 0 (floored), got -1"},
     };
     for (const auto& c : cases) {
         try {

@@ -1,6 +1,8 @@
 #include "parse_node.h"
 
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <vector>
 
@@ -122,8 +124,48 @@ NodePtr requestGridFile(const Reader& r, NodeContext& ctx, const char* jsonKey =
 
 // A mesh file (relative to the scene file) baked to a sparse grid by prepareScene; the same file
 // with the same options is baked once.
+// A mesh sequence's file for frame `frame`: `pattern` holds one integer field (%d, %04d). Empty
+// when the pattern has another number of fields or another kind.
+std::string sequenceFile(const std::string& pattern, long long frame) {
+    size_t fields = 0, conversion = 0;  // the field's 'd'
+    for (size_t at = pattern.find('%'); at != std::string::npos; at = pattern.find('%', at + 1)) {
+        size_t i = at + 1;
+        if (i < pattern.size() && pattern[i] == '%') {
+            at = i;
+            continue;
+        }
+        while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) ++i;
+        if (i >= pattern.size() || pattern[i] != 'd' || i - at > 4) return "";
+        ++fields;
+        conversion = i;
+        at = i;
+    }
+    if (fields != 1) return "";
+    std::string fmt = pattern;
+    fmt.insert(conversion, "ll");
+    std::vector<char> buf(pattern.size() + 32);
+    std::snprintf(buf.data(), buf.size(), fmt.c_str(), frame);
+    return buf.data();
+}
+
 NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
-    const std::string file = r.string("mesh");
+    std::string file = r.string("mesh");
+    // A mesh sequence (issue 16): the file of the frame number `frame` (keyframed to play it).
+    const bool pattern = file.find('%') != std::string::npos;
+    if (r.has("frame") || pattern) {
+        if (!r.has("frame"))
+            r.failKey("mesh", "'" + file +
+                                  "' is a file pattern; give \"frame\" (a frame number, "
+                                  "keyframed to play the sequence) or name one file");
+        const double frame = r.number(
+            "frame", [](double v) { return v >= 0; }, "a frame number >= 0 (floored)");
+        const std::string name = sequenceFile(file, static_cast<long long>(std::floor(frame)));
+        if (name.empty())
+            r.failKey("mesh", "'" + file +
+                                  "': a mesh sequence's file pattern holds one frame-number field "
+                                  "such as %d or %04d, e.g. frames/mesh_%04d.obj");
+        file = name;
+    }
     const std::string path = resolvePath(ctx, file).lexically_normal().string();
     if (!isMeshFile(path)) {
         r.failKey("mesh", "unsupported mesh file '" + file +
@@ -385,8 +427,8 @@ NodePtr parseNode(const Reader& r, NodeContext& ctx) {
     // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact", "sign":
     // "winding", "band": 3}.
     if (!r.has("type") && r.has("mesh")) {
-        r.allowKeys({"mesh", "resolution", "method", "sign", "band", "material", "translate",
-                     "rotate", "scale"});
+        r.allowKeys({"mesh", "frame", "resolution", "method", "sign", "band", "material",
+                     "translate", "rotate", "scale"});
         return finishNode(r, requestMesh(r, ctx), ctx);
     }
     const std::string type = r.string("type");
