@@ -15,11 +15,25 @@
 
 namespace sdft {
 
+// The fine SDF carried from frame to frame for temporal accumulation (RTSDF §2.5.1, eq. 1):
+// f_t = min(alpha f_{t-1} + (1 - alpha) c_t, r_t) where the coarse SDF c_t is within the mask
+// distance d, f_t = c_t beyond it (no ghost can survive there); the magnitudes are accumulated,
+// the front and back hit counts that vote the sign decay by alpha too. Empty before the first
+// frame; bound to one grid shape (a new shape starts afresh).
+struct RtsdfHistory {
+    float alpha = 0.95f;
+    GridShape shape;
+    std::vector<float> fine;         // |f_{t-1}| per vertex, inf where none was refined
+    std::vector<float> front, back;  // decayed hit counts per vertex
+    int frames = 0;                  // frames accumulated
+};
+
 struct RtsdfOptions {
     int rays = 64;         // x, per refined vertex
     float maskVoxels = 3;  // d, in fine voxels
     uint32_t seed = 1;     // of the per-vertex direction sequences (the bake is deterministic)
     SignMethod coarseSign = SignMethod::WindingNumber;
+    RtsdfHistory* history = nullptr;  // temporal accumulation across frames (updated in place)
 };
 
 struct RtsdfStats {

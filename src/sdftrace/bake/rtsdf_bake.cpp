@@ -63,7 +63,22 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
     const float mask = o.maskVoxels * s.voxelSize, tiny = 1e-4f * s.voxelSize;
     std::vector<float> out;
     assignHuge(out, s.vertexCount(), 0.0f);
+    // Eq. 1's previous frame: none on the first frame or after the grid changed shape.
+    RtsdfHistory* h = o.history;
+    const bool carried = h && h->frames > 0 && h->shape.cells[0] == s.cells[0] &&
+                         h->shape.cells[1] == s.cells[1] && h->shape.cells[2] == s.cells[2] &&
+                         h->shape.origin.x == s.origin.x && h->shape.origin.y == s.origin.y &&
+                         h->shape.origin.z == s.origin.z && h->shape.voxelSize == s.voxelSize;
+    if (h && !carried) {
+        h->shape = s;
+        h->fine.assign(s.vertexCount(), INFINITY);
+        h->front.assign(s.vertexCount(), 0.0f);
+        h->back.assign(s.vertexCount(), 0.0f);
+        h->frames = 0;
+    }
     std::atomic<size_t> refined{0}, missed{0};
+    // Each accumulated frame casts new directions.
+    const uint64_t frameSalt = h ? static_cast<uint64_t>(h->frames) * 0x9E3779B97F4A7C15ull : 0;
     ThreadArena arena(threads);
     arena.execute([&] {
         tbb::parallel_for(0, vz, [&](int k) {
@@ -74,9 +89,15 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
                     Vec3 p = s.origin + Vec3(i, j, k) * s.voxelSize;
                     float c = cv.interpolate(p);
                     out[idx] = c;
-                    if (std::fabs(c) > mask) continue;
+                    if (std::fabs(c) > mask) {
+                        if (h) {  // eq. 1, c_t > d: the coarse value, the history forgotten
+                            h->fine[idx] = INFINITY;
+                            h->front[idx] = h->back[idx] = 0;
+                        }
+                        continue;
+                    }
                     ++localRefined;
-                    SplitMix rng{(static_cast<uint64_t>(o.seed) << 40) ^ idx};
+                    SplitMix rng{(static_cast<uint64_t>(o.seed) << 40) ^ idx ^ frameSalt};
                     float best = INFINITY;
                     int front = 0, back = 0;
                     for (int r = 0; r < o.rays; ++r) {
@@ -85,6 +106,27 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
                         if (hit.t == INFINITY) continue;
                         best = std::fmin(best, std::fabs(hit.t));
                         (hit.front ? front : back) += 1;
+                    }
+                    if (h) {
+                        // Eq. 1: the previous magnitude decays towards this frame's coarse
+                        // value, and the rays' minimum replaces it where it is nearer.
+                        const float previous = h->fine[idx];
+                        // Without a previous value (the first frame, or a vertex that just
+                        // entered the mask): the rays alone, or the coarse value if none hit.
+                        float m =
+                            previous == INFINITY
+                                ? (best == INFINITY ? std::fabs(c) : best)
+                                : std::fmin(h->alpha * previous + (1 - h->alpha) * std::fabs(c),
+                                            best);
+                        const float f = h->alpha * h->front[idx] + static_cast<float>(front);
+                        const float b = h->alpha * h->back[idx] + static_cast<float>(back);
+                        h->fine[idx] = m;
+                        h->front[idx] = f;
+                        h->back[idx] = b;
+                        if (best == INFINITY) ++localMissed;
+                        // The sign: the decayed vote, or the coarse sign before any hit.
+                        out[idx] = (f == 0 && b == 0) ? std::copysign(m, c) : (b > f ? -m : m);
+                        continue;
                     }
                     if (best == INFINITY) {
                         ++localMissed;
@@ -96,6 +138,7 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
             missed += localMissed;
         });
     });
+    if (h) ++h->frames;
     if (stats) {
         stats->refined = refined.load();
         stats->rays = stats->refined * o.rays;
