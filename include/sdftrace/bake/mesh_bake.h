@@ -2,6 +2,7 @@
 // files' mesh objects, `sdftrace render mesh.obj`), the grid, and what each stage took.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,9 @@ struct MeshBakeOptions {
     float betaVoxels = 0.5f;  // SignMethod::BetaShell
     RtsdfOptions rtsdf;
     bool progress = false;  // percentages on stderr for the long stages
+    // The grid's region and voxel (default: from the mesh's bounds and `sampling`): frames that
+    // accumulate into one grid keep its shape.
+    std::optional<GridShape> shape;
 };
 
 struct MeshBakeResult {

@@ -30,6 +30,11 @@ struct AssetRequest {
     SampleOptions sampling;  // Subtree
     std::optional<TexcoordOptions> texcoords;  // Subtree: projected (u, v) (Liktor §5.5.2)
     std::string key;  // identical requests (same file and options) share one grid; empty: none
+    // Mesh: regenerated every frame (issue 16): rebaked, or by RTSDF's pipeline with temporal
+    // accumulation (eq. 1, decay `alpha`) whose history the AssetCache keeps under `where`.
+    enum class Dynamic { None, Rebake, Rtsdf };
+    Dynamic dynamic = Dynamic::None;
+    float alpha = 0.95f;
 };
 
 // A check that needs the bounds of pending grids, run once they are loaded: copies of a

@@ -163,7 +163,7 @@ std::vector<float> bakeFromSeeds(const TriangleMesh& mesh, const MeshBakeOptions
 
 MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     const SampleOptions& so = o.sampling;
-    const GridShape shape = gridShapeFor(mesh.bounds(), so);
+    const GridShape shape = o.shape ? *o.shape : gridShapeFor(mesh.bounds(), so);
     MeshBakeResult r;
     StageClock clock(r.stages);
     if (o.method == MeshBakeMethod::Exact) {

@@ -153,6 +153,47 @@ TEST(AnimatedScene, AMeshSequencePlaysOneFilePerFrame) {
     fs::remove_all(dir);
 }
 
+// A deforming mesh regenerated every frame by RTSDF's pipeline (dynamic "rtsdf"): one grid for
+// all frames, accumulated with decay; it follows the mesh when it changes. "rebake" bakes every
+// frame afresh.
+TEST(AnimatedScene, DynamicMeshesAreRegeneratedEveryFrame) {
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("sdft_dynamic_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    std::ofstream(dir / "cube_0.obj") << cubeObj(0);
+    std::ofstream(dir / "cube_1.obj") << cubeObj(0.3f);
+    // Frame 0 until t = 1, frame 1 after.
+    const std::string frame = R"("frame": {"keyframes": [{"time": 0, "value": 0}, {"time": 1,
+        "value": 1}], "interpolation": "step"})";
+    const AnimatedScene rtsdf = AnimatedScene::fromText(
+        R"({"objects": [{"mesh": "cube_%d.obj", "resolution": 32, )" + frame +
+            R"(, "dynamic": {"method": "rtsdf", "rays": 4, "alpha": 0.8}}]})",
+        "dyn.json", dir.string());
+    AssetCache cache;
+    AnimatedScene::InstantAssets used;
+    const Vec3 p(0.7f, 0, 0);  // 0.2 outside the first cube, 0.1 inside the second
+    float before = 0, after = 0;
+    for (int i = 0; i < 40; ++i) {
+        const double t = i < 10 ? 0.05 * i : 1.0 + 0.05 * i;
+        const Scene s = rtsdf.at(t, cache, {}, &used);
+        EXPECT_EQ(used.stats.baked, 1u) << i;  // every frame regenerated, none cached
+        (i < 10 ? before : after) = fieldAt(s, p);
+    }
+    EXPECT_EQ(cache.rtsdfHistory("dyn.json: /objects/0/mesh").frames, 40);
+    EXPECT_GT(before, 0.05f);
+    EXPECT_LT(after, -0.02f);
+    const AnimatedScene rebake =
+        AnimatedScene::fromText(R"({"objects": [{"mesh": "cube_%d.obj", "resolution": 16, )" +
+                                    frame + R"(, "dynamic": {"method": "rebake"}}]})",
+                                "re.json", dir.string());
+    for (double t : {0.0, 0.5, 1.5}) {
+        const Scene s = rebake.at(t, cache, {}, &used);
+        EXPECT_EQ(used.stats.baked, 1u);
+        EXPECT_EQ(fieldAt(s, p) < 0, t > 1);
+    }
+    fs::remove_all(dir);
+}
+
 // Bad keyframes, and values that are out of range at a key, are one-line errors at load time
 // naming the JSON path (and the time, for a value that is bad only at some instant).
 TEST(AnimatedScene, BadKeyframesAreOneClearError) {
@@ -197,6 +238,16 @@ TEST(AnimatedScene, BadKeyframesAreOneClearError) {
          "/objects/0/mesh: 'm_%s.obj': a mesh sequence's file pattern holds one"},
         {R"({"objects": [{"mesh": "m_%d.obj", "frame": -1}]})",
          "/objects/0/frame: expected a frame number >= 0 (floored), got -1"},
+        {R"({"objects": [{"mesh": "m.obj", "dynamic": {"method": "fast"}}]})",
+         "/objects/0/dynamic/method: unknown dynamic method 'fast'; accepted: rtsdf, rebake"},
+        {R"({"objects": [{"mesh": "m.obj", "dynamic": {"method": "rtsdf", "alpha": 1}}]})",
+         "/objects/0/dynamic/alpha: expected a decay factor in [0, 1), got 1"},
+        {R"({"objects": [{"mesh": "m.obj", "dynamic": {"method": "rtsdf", "rays": 0}}]})",
+         "/objects/0/dynamic/rays: expected an integer in [1, 4096], got 0"},
+        {R"({"objects": [{"mesh": "m.obj", "dynamic": {"method": "rebake", "rays": 4}}]})",
+         "/objects/0/dynamic/rays: applies to \"method\": \"rtsdf\" only"},
+        {R"({"objects": [{"mesh": "m.obj", "method": "jfa", "dynamic": {"method": "rtsdf"}}]})",
+         "/objects/0/method: a mesh with \"dynamic\""},
     };
     for (const auto& c : cases) {
         try {

@@ -122,8 +122,6 @@ NodePtr requestGridFile(const Reader& r, NodeContext& ctx, const char* jsonKey =
     return node::gridAsset(addRequest(ctx, std::move(q)));
 }
 
-// A mesh file (relative to the scene file) baked to a sparse grid by prepareScene; the same file
-// with the same options is baked once.
 // A mesh sequence's file for frame `frame`: `pattern` holds one integer field (%d, %04d). Empty
 // when the pattern has another number of fields or another kind.
 std::string sequenceFile(const std::string& pattern, long long frame) {
@@ -148,6 +146,8 @@ std::string sequenceFile(const std::string& pattern, long long frame) {
     return buf.data();
 }
 
+// A mesh file (relative to the scene file) baked to a sparse grid by prepareScene; the same file
+// with the same options is baked once.
 NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
     std::string file = r.string("mesh");
     // A mesh sequence (issue 16): the file of the frame number `frame` (keyframed to play it).
@@ -195,6 +195,36 @@ NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
     q.bake = bake;
     q.key = "mesh|" + path + "|" + method + "|" + sign + "|" + std::to_string(o.resolution) + "|" +
             std::to_string(o.bandVoxels);
+    // Regenerated every frame (issue 16): "rebake" bakes the frame's mesh afresh by its method
+    // (the reference), "rtsdf" runs RTSDF's per-frame pipeline with temporal accumulation.
+    if (r.has("dynamic")) {
+        Reader d = r.child("dynamic");
+        d.requireObject("a dynamic block {\"method\": \"rtsdf\" | \"rebake\", ...}");
+        d.allowKeys({"method", "rays", "alpha", "mask"});
+        const std::string how = d.string("method");
+        if (how == "rtsdf") {
+            if (r.has("method") && method != "rtsdf")
+                r.failKey("method",
+                          "a mesh with \"dynamic\": {\"method\": \"rtsdf\"} is "
+                          "baked by rtsdf every frame; drop \"method\" or use rebake");
+            q.dynamic = AssetRequest::Dynamic::Rtsdf;
+            q.bake.method = MeshBakeMethod::Rtsdf;
+            q.bake.rtsdf.rays = d.integer("rays", 1, 1, 4096);
+            q.alpha = d.number(
+                "alpha", 0.95f, [](double v) { return v >= 0 && v < 1; },
+                "a decay factor in [0, 1)");
+            q.bake.rtsdf.maskVoxels = d.number(
+                "mask", 3.0f, [](double v) { return v > 0 && v <= 64; },
+                "a mask distance in (0, 64] fine voxels");
+        } else if (how == "rebake") {
+            for (const char* k : {"rays", "alpha", "mask"})
+                if (d.has(k)) d.failKey(k, "applies to \"method\": \"rtsdf\" only");
+            q.dynamic = AssetRequest::Dynamic::Rebake;
+        } else {
+            d.failKey("method", "unknown dynamic method '" + how + "'; accepted: rtsdf, rebake");
+        }
+        q.key.clear();  // never served from the cache: baked again every frame
+    }
     return node::gridAsset(addRequest(ctx, std::move(q)));
 }
 
@@ -427,7 +457,7 @@ NodePtr parseNode(const Reader& r, NodeContext& ctx) {
     // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact", "sign":
     // "winding", "band": 3}.
     if (!r.has("type") && r.has("mesh")) {
-        r.allowKeys({"mesh", "frame", "resolution", "method", "sign", "band", "material",
+        r.allowKeys({"mesh", "frame", "dynamic", "resolution", "method", "sign", "band", "material",
                      "translate", "rotate", "scale"});
         return finishNode(r, requestMesh(r, ctx), ctx);
     }

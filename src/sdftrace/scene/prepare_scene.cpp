@@ -74,8 +74,8 @@ Grid sampleSubtree(const AssetRequest& q, const NodePtr& subtree) {
 }
 
 // Loads or bakes one request; file and bake errors get the request's JSON path.
-std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subtree,
-                                      bool progress) {
+std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subtree, bool progress,
+                                      AssetCache& cache) {
     try {
         switch (q.kind) {
             case AssetRequest::Kind::GridFile:
@@ -83,7 +83,21 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
             case AssetRequest::Kind::Mesh: {
                 MeshBakeOptions bake = q.bake;
                 bake.progress = progress;
-                return std::make_shared<const Grid>(bakeMesh(loadMesh(q.path), bake).grid);
+                const TriangleMesh mesh = loadMesh(q.path);
+                if (q.dynamic == AssetRequest::Dynamic::Rtsdf) {
+                    // RTSDF §2.5.1: one grid for all frames, over the first frame's bounds
+                    // widened by a quarter each way so that the mesh may move and deform in it.
+                    RtsdfHistory& h = cache.rtsdfHistory(q.where);
+                    h.alpha = q.alpha;
+                    if (h.frames == 0) {
+                        Bounds3 b = mesh.bounds();
+                        const Vec3 margin = b.extent() * 0.25f;
+                        h.shape = gridShapeFor({b.lo - margin, b.hi + margin}, bake.sampling);
+                    }
+                    bake.shape = h.shape;
+                    bake.rtsdf.history = &h;
+                }
+                return std::make_shared<const Grid>(bakeMesh(mesh, bake).grid);
             }
             case AssetRequest::Kind::Subtree:
                 return std::make_shared<const Grid>(sampleSubtree(q, subtree));
@@ -123,7 +137,7 @@ PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions&
                          describe(q).c_str());
         }
         const NodePtr subtree = q.subtree ? substitute(q.subtree, grids, done) : nullptr;
-        grids[i] = loadAsset(q, subtree, options.progress);
+        grids[i] = loadAsset(q, subtree, options.progress, cache);
         cache.insert(q.key, grids[i]);
         ++(q.kind == AssetRequest::Kind::GridFile ? stats.loaded : stats.baked);
     }
