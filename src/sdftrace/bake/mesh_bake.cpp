@@ -204,7 +204,7 @@ MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     if (std::string problem = meshRangeProblem(mesh); !problem.empty())
         throw InputError("mesh: " + problem);
     {
-        const GridShape shape = gridShapeFor(mesh.bounds(), o.sampling);
+        const GridShape shape = o.shape ? *o.shape : gridShapeFor(mesh.bounds(), o.sampling);
         checkMemoryBudget(
             meshBakeBytes(mesh, shape, o), "resolution " + std::to_string(o.sampling.resolution),
             "the bake's grid, working arrays and BVH at " + std::to_string(shape.cells[0]) + "x" +

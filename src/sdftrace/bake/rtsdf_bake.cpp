@@ -27,6 +27,10 @@ struct SplitMix {
     float uniform() { return static_cast<float>(next() >> 40) * (1.0f / 16777216.0f); }
 };
 
+// The decay of the accumulated front / back votes, which decide a sign only on frames whose own
+// rays all missed: a moving surface flips signs at once, and votes that lag it are wrong.
+constexpr float kVoteDecay = 0.5f;
+
 // A uniform direction on the sphere (Archimedes: z uniform in [-1, 1]).
 Vec3 sphereDirection(SplitMix& rng) {
     float z = 1 - 2 * rng.uniform(), phi = 6.2831853f * rng.uniform();
@@ -112,20 +116,25 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
                         // value, and the rays' minimum replaces it where it is nearer.
                         const float previous = h->fine[idx];
                         // Without a previous value (the first frame, or a vertex that just
-                        // entered the mask): the rays alone, or the coarse value if none hit.
-                        float m =
-                            previous == INFINITY
-                                ? (best == INFINITY ? std::fabs(c) : best)
-                                : std::fmin(h->alpha * previous + (1 - h->alpha) * std::fabs(c),
-                                            best);
-                        const float f = h->alpha * h->front[idx] + static_cast<float>(front);
-                        const float b = h->alpha * h->back[idx] + static_cast<float>(back);
+                        // entered the mask) f_{t-1} is taken as c_t: a single ray's distance
+                        // (often across the object) would otherwise decay away over many frames.
+                        const float prior = previous == INFINITY ? std::fabs(c) : previous;
+                        const float m =
+                            std::fmin(h->alpha * prior + (1 - h->alpha) * std::fabs(c), best);
+                        const float f = kVoteDecay * h->front[idx] + static_cast<float>(front);
+                        const float b = kVoteDecay * h->back[idx] + static_cast<float>(back);
                         h->fine[idx] = m;
                         h->front[idx] = f;
                         h->back[idx] = b;
                         if (best == INFINITY) ++localMissed;
-                        // The sign: the decayed vote, or the coarse sign before any hit.
-                        out[idx] = (f == 0 && b == 0) ? std::copysign(m, c) : (b > f ? -m : m);
+                        // The sign: the coarse SDF's (recomputed every frame, so it never
+                        // lags a moving surface) beyond one coarse voxel of the surface, where
+                        // it is reliable; nearer, the decayed vote (the coarse sign before any
+                        // hit).
+                        const bool near = std::fabs(c) <= 2 * s.voxelSize;
+                        const bool negative = front + back > 0 ? back > front : b > f;
+                        out[idx] =
+                            near && (f > 0 || b > 0) ? (negative ? -m : m) : std::copysign(m, c);
                         continue;
                     }
                     if (best == INFINITY) {
