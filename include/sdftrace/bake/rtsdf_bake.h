@@ -17,9 +17,11 @@ namespace sdft {
 
 // The fine SDF carried from frame to frame for temporal accumulation (RTSDF §2.5.1, eq. 1):
 // f_t = min(alpha f_{t-1} + (1 - alpha) c_t, r_t) where the coarse SDF c_t is within the mask
-// distance d, f_t = c_t beyond it (no ghost can survive there); the magnitudes are accumulated,
-// the front and back hit counts that vote the sign decay by alpha too. Empty before the first
-// frame; bound to one grid shape (a new shape starts afresh).
+// distance d (f_{t-1} taken as c_t where none exists), f_t = c_t beyond it (no ghost can survive
+// there). The sign follows a moving surface at once: the coarse SDF's beyond one coarse voxel of
+// it, nearer the frame's own front / back vote, the accumulated votes (decaying by half each frame)
+// only where the frame's rays all missed. Empty before the first frame; bound to one grid shape (a
+// new shape starts afresh).
 struct RtsdfHistory {
     float alpha = 0.95f;
     GridShape shape;
