@@ -14,6 +14,7 @@ packages=(
     libzstd-dev           # compressed .sdfg files (version 3)
     libassimp-dev         # mesh loading (OBJ, PLY, STL, OFF, glTF)
     libembree-dev         # BVH closest-point queries and ray casts for mesh baking
+    libavcodec-dev libavformat-dev libswscale-dev libavutil-dev  # video output (H.264, FFmpeg)
     libgtest-dev          # tests
     libbenchmark-dev      # bench/
 )

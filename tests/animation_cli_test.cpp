@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "cli_runner.h"
+#include "sdftrace/io/video_writer.h"
 
 namespace sdft::e2e {
 namespace {
@@ -65,6 +66,26 @@ TEST(Animation, ARangeWritesEachFrameThroughThePatterns) {
     r = runCli("render " + scene + " --time 0.5 -q -o " + later.file("still.png"), later);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(readFile(later.file("still.png")), readFile(dir.file("f_02.png")));
+}
+
+TEST(Animation, ARangeCanBeWrittenAsAVideo) {
+    if (!VideoWriter::available()) GTEST_SKIP() << "this build has no FFmpeg";
+    TempDir dir;
+    const std::string scene = dir.write("ball.json", kMovingBall);
+    RunResult r =
+        runCli("render " + scene + " -q --time 0:1 --fps 8 -o " + dir.file("ball.mp4"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const VideoInfo info = probeVideo(dir.file("ball.mp4"));
+    EXPECT_EQ(info.frames, 8);
+    EXPECT_EQ(info.width, 40);
+    EXPECT_EQ(info.height, 24);
+    EXPECT_EQ(info.codec, "h264");
+    EXPECT_EQ(dir.count(), 2);  // the scene and the video, no frame images
+    // A video path needs a range; an image path with a range is refused.
+    r = runCli("render " + scene + " -q --time 0.5 -o " + dir.file("still.mp4"), dir);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("--output"), std::string::npos) << r.err;
+    EXPECT_EQ(dir.count(), 2);
 }
 
 TEST(Animation, BadTimeFlagsAreOneClearLineAndLeaveNoFile) {

@@ -17,6 +17,7 @@
 #include "sdftrace/io/image_io.h"
 #include "sdftrace/io/mesh_file.h"
 #include "sdftrace/io/mesh_io.h"
+#include "sdftrace/io/video_writer.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/render/temporal.h"
 #include "sdftrace/scene/animated_scene.h"
@@ -182,14 +183,20 @@ FrameTimes frameTimes(const TimeSpan& span, double fps, const std::string& timeT
 // range writes each frame through --frame-pattern and the --aov paths, each one a pattern.
 std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bool range) {
     if (range) {
-        if (a.framePattern.empty())
-            throw InputError("--time " + a.time +
-                             ": a time range renders one image per frame; give --frame-pattern, "
-                             "e.g. --frame-pattern frames/%04d.png");
-        if (a.outputFlag && a.outputFlag->count() > 0)
+        const bool video = a.outputFlag && a.outputFlag->count() > 0;
+        if (video && !VideoWriter::isVideoPath(a.output))
             throw InputError("--output " + a.output +
                              ": a time range writes its frames through --frame-pattern (and "
-                             "--aov NAME=PATTERN); --output names a single image");
+                             "--aov NAME=PATTERN) or into a video: --output anim.mp4 (.mkv, .mov)");
+        if (video && !VideoWriter::available())
+            throw InputError("--output " + a.output +
+                             ": this build of sdftrace writes no video (FFmpeg's libraries were "
+                             "not found when it was built); write frames with --frame-pattern");
+        if (video) checkWritablePath(a.output, "--output");
+        if (!video && a.framePattern.empty())
+            throw InputError("--time " + a.time +
+                             ": a time range renders one image per frame; give --frame-pattern, "
+                             "e.g. --frame-pattern frames/%04d.png, or a video: -o anim.mp4");
         if (a.orbit != 0)
             throw InputError(
                 "--orbit: cannot be combined with a --time range (keyframe the camera in the "
@@ -325,6 +332,10 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     AssetCache cache;
     PrepareStats assets;
     double renderSeconds = 0;
+    // -o anim.mp4: the frames encoded in order, the file renamed into place after the last.
+    const bool video = a.outputFlag && a.outputFlag->count() > 0;
+    std::unique_ptr<VideoWriter> writer;
+    int firstWidth = 0, firstHeight = 0;
     unsigned kept = Film::bit(Aov::Color);
     for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
     for (long long i = 0; i < frames.count; ++i) {
@@ -343,17 +354,33 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
         const RenderStats rs = renderImage(a, plan, film, "");
         renderSeconds += rs.seconds;
         const int k = static_cast<int>(number);
-        writeAov(film, Aov::Color, framePath(a.framePattern, k));
+        if (!a.framePattern.empty()) writeAov(film, Aov::Color, framePath(a.framePattern, k));
         for (const auto& [aov, path] : aovs) writeAov(film, aov, framePath(path, k));
+        if (video) {
+            if (!writer) {
+                writer = std::make_unique<VideoWriter>(a.output, film.width, film.height, fps);
+            } else if (film.width != firstWidth || film.height != firstHeight) {
+                throw InputError("--output " + a.output + ": frame " + std::to_string(number) +
+                                 " is " + std::to_string(film.width) + "x" +
+                                 std::to_string(film.height) + ", the video's frames are " +
+                                 std::to_string(firstWidth) + "x" + std::to_string(firstHeight) +
+                                 " (the image size is keyframed)");
+            }
+            firstWidth = film.width;
+            firstHeight = film.height;
+            writer->addFrame(toneMapSrgb(film.color).data());
+        }
         if (!a.quiet)
             std::fprintf(stderr,
                          "sdftrace render: frame %lld of %lld (t = %.4g s) -> %s: %dx%d in %.3f "
                          "s, %.2f%% hits\n",
-                         i + 1, frames.count, t, framePath(a.framePattern, k).c_str(), film.width,
-                         film.height, rs.seconds,
+                         i + 1, frames.count, t,
+                         (a.framePattern.empty() ? a.output : framePath(a.framePattern, k)).c_str(),
+                         film.width, film.height, rs.seconds,
                          100.0 * static_cast<double>(rs.hits) /
                              std::max<double>(1, static_cast<double>(rs.primaryRays)));
     }
+    if (writer) writer->finish();
     const double total = std::chrono::duration<double>(Clock::now() - start).count();
     std::fprintf(stderr,
                  "sdftrace render: %lld frames (t = %.4g to %.4g s at %.4g fps) in %.3f s, "
@@ -487,7 +514,8 @@ void addFrameFlags(CLI::App* cmd, RenderArgs& args) {
     anim->add_option("--time", args.time,
                      "Render the instant T (seconds), or the frames of the range A:B at --fps "
                      "(t = A, A + 1/fps, ... while t < B; written through --frame-pattern and "
-                     "--aov NAME=PATTERN, frame numbers counted from round(A fps))")
+                     "--aov NAME=PATTERN, frame numbers counted from round(A fps), and/or into "
+                     "an H.264 video with -o anim.mp4, .mkv or .mov)")
         ->type_name("T|A:B");
     anim->add_option("--fps", args.fps,
                      "Frames per second of a --time range (default: the scene's \"animation\" "
@@ -507,7 +535,8 @@ void addRenderCommand(CLI::App& app, Action& action) {
                     "framed automatically; default: the demo");
     args->outputFlag = cmd->add_option("-o,--output", args->output,
                                        "Output image: .png (tone-mapped sRGB), .exr or .pfm "
-                                       "(linear)")
+                                       "(linear); with a --time range, a video: .mp4, .mkv, "
+                                       ".mov (H.264)")
                            ->capture_default_str();
     cmd->add_option(
         "--aov", args->aovs,
