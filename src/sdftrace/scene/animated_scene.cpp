@@ -5,6 +5,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "scene_json.h"
 
@@ -35,11 +36,17 @@ AnimatedScene AnimatedScene::fromText(const std::string& text, const std::string
     impl->baseDir = baseDir;
     AnimatedScene scene;
     scene.m_impl = impl;
-    // Checked at the span's ends and at every key (distinct times, in order).
+    // Checked at the span's ends and at every key (distinct times, in order); a scene with more
+    // than kCheckedTimes distinct key times is checked at that many of them, evenly spread, so
+    // that loading stays quick (every frame is checked again when it is rendered).
+    constexpr size_t kCheckedTimes = 256;
     std::set<double> times{impl->time.start, impl->time.end};
     for (const JsonTrack& track : impl->tracks)
         for (const Keyframe& key : track.track.keys()) times.insert(key.time);
-    for (double t : times) scene.describeAt(t);
+    const std::vector<double> all(times.begin(), times.end());
+    const size_t step = (all.size() + kCheckedTimes - 1) / kCheckedTimes;
+    for (size_t i = 0; i < all.size(); i += step) scene.describeAt(all[i]);
+    if ((all.size() - 1) % step != 0) scene.describeAt(all.back());
     return scene;
 }
 

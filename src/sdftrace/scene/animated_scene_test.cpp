@@ -265,6 +265,23 @@ TEST(AnimatedScene, BadKeyframesAreOneClearError) {
     }
 }
 
+// A scene with thousands of keys loads quickly (it is checked at 256 key times and its ends); a
+// value bad at the last key is still caught at load.
+TEST(AnimatedScene, ManyKeysAreCheckedAtASample) {
+    std::string keys;
+    for (int k = 0; k < 3000; ++k)
+        keys += (k ? ", " : "") + std::string("{\"time\": ") + std::to_string(k) +
+                ", \"value\": " + (k == 2999 ? "-1" : "1") + "}";
+    const std::string text =
+        R"({"objects": [{"type": "sphere", "radius": {"keyframes": [)" + keys + "]}}]}";
+    try {
+        AnimatedScene::fromText(text, "many.json");
+        ADD_FAILURE() << "a negative radius at the last key was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("(at time 2999 s)"), std::string::npos) << e.what();
+    }
+}
+
 // A value that is only bad between keys is an error of that instant, naming the time.
 TEST(AnimatedScene, AValueBadOnlyBetweenKeysNamesItsTime) {
     const std::string text = R"({"camera": {"width": {"keyframes": [{"time": 0, "value": 100},
