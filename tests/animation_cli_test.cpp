@@ -88,6 +88,36 @@ TEST(Animation, ARangeCanBeWrittenAsAVideo) {
     EXPECT_EQ(dir.count(), 2);
 }
 
+// bake and mesh take an instant too: a keyframed scene at t gives the same file as the static
+// scene holding its values at t.
+TEST(Animation, BakeAndMeshTakeAnInstant) {
+    TempDir dir;
+    const std::string animated = dir.write("grow.json", R"({"objects": [{"type": "sphere",
+        "radius": {"keyframes": [{"time": 0, "value": 0.5}, {"time": 2, "value": 1.5}]}}]})");
+    const std::string still =
+        dir.write("still.json", R"({"objects": [{"type": "sphere", "radius": 1}]})");
+    for (const char* command : {"bake", "mesh"}) {
+        const std::string ext = std::string(command) == "bake" ? ".sdfg" : ".ply";
+        const std::string a = dir.file(std::string(command) + "_t1" + ext),
+                          b = dir.file(std::string(command) + "_still" + ext);
+        const std::string common = " -q --res 32 --bounds -2,-2,-2,2,2,2";
+        const std::string bounds = std::string(command) == "bake" ? common : " -q --res 32";
+        RunResult r =
+            runCli(std::string(command) + " " + animated + " --time 1" + bounds + " -o " + a, dir);
+        ASSERT_EQ(r.status, 0) << command << ": " << r.err;
+        r = runCli(std::string(command) + " " + still + bounds + " -o " + b, dir);
+        ASSERT_EQ(r.status, 0) << command << ": " << r.err;
+        EXPECT_EQ(readFile(a), readFile(b)) << command;
+        // Bad: an instant of a mesh.
+        r = runCli(std::string(command) + " " + std::string(SDFT_SOURCE_DIR) +
+                       "/data/meshes/teapot.obj --time 1 -q -o " + dir.file("x" + ext),
+                   dir);
+        EXPECT_NE(r.status, 0) << command;
+        EXPECT_NE(r.err.find("--time: "), std::string::npos) << command << ": " << r.err;
+        EXPECT_FALSE(std::filesystem::exists(dir.file("x" + ext)));
+    }
+}
+
 TEST(Animation, BadTimeFlagsAreOneClearLineAndLeaveNoFile) {
     TempDir dir;
     const std::string scene = dir.write("ball.json", kMovingBall);

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "commands.h"
 #include "sdftrace/bake/extract_surface.h"
@@ -24,6 +25,7 @@
 #include "sdftrace/io/mesh_file.h"
 #include "sdftrace/io/mesh_io.h"
 #include "sdftrace/io/mesh_write.h"
+#include "sdftrace/scene/animated_scene.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/prepare_scene.h"
 
@@ -37,7 +39,8 @@ constexpr float kMaxOffsetVoxels = 60;
 
 struct MeshArgs {
     std::string input, output;
-    int resolution = 0;  // 0: the grid's own, or kDefaultRes for scenes and meshes
+    std::optional<double> time;  // --time: the instant of an animated scene
+    int resolution = 0;          // 0: the grid's own, or kDefaultRes for scenes and meshes
     float adaptivity = 0;
     float isovalue = 0;
     int threads = 0;
@@ -89,6 +92,10 @@ Grid sampleField(const NodePtr& root, const Bounds3* regionOrNull, const MeshArg
 }
 
 Grid fieldOf(const MeshArgs& a, bool progress, std::string& how) {
+    if (a.time && (isGridFile(a.input) || isMeshFile(a.input)))
+        throw InputError("--time: " + a.input +
+                         " is not a scene file; --time picks the instant of a scene file with "
+                         "keyframes");
     if (isGridFile(a.input)) {
         Grid g = loadGridFile(a.input);
         if (a.resolution <= 0) {
@@ -117,8 +124,11 @@ Grid fieldOf(const MeshArgs& a, bool progress, std::string& how) {
         how = "baked exactly at " + std::to_string(o.sampling.resolution) + " cells";
         return bakeMesh(mesh, o).grid;
     }
-    Scene scene = describeSceneFile(a.input);
-    prepareScene(scene, PrepareOptions{.progress = progress});
+    AssetCache cache;
+    Scene scene = a.time ? AnimatedScene::fromFile(a.input).at(*a.time, cache,
+                                                               PrepareOptions{.progress = progress})
+                         : describeSceneFile(a.input);
+    if (!a.time) prepareScene(scene, cache, PrepareOptions{.progress = progress});
     how = "sampled at " + std::to_string(a.resolution > 0 ? a.resolution : kDefaultRes) + " cells";
     return sampleField(scene.root, nullptr, a, progress);
 }
@@ -184,6 +194,10 @@ void addMeshCommand(CLI::App& app, Action& action) {
         ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));
+    cmd->add_option("--time", args->time,
+                    "Extract a scene file's surface at this time in seconds (its keyframed "
+                    "values; default: the animation's start)")
+        ->check(CLI::Range(-1e9, 1e9));
     cmd->add_flag("-q,--quiet", args->quiet, "No progress on stderr (the summary line stays)");
     cmd->callback([&action, args] { action = [args] { return runMesh(*args); }; });
 }
