@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/frame_pattern.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/atomic_file.h"
@@ -95,29 +96,8 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.threads) s.threads = *a.threads;
 }
 
-// The path of frame k from a pattern holding one printf integer field (%d, %04d, ...).
-std::string framePath(const std::string& pattern, int k) {
-    std::vector<char> buf(pattern.size() + 32);
-    std::snprintf(buf.data(), buf.size(), pattern.c_str(), k);
-    return buf.data();
-}
-
 void validateFramePattern(const std::string& pattern, const std::string& what = "--frame-pattern") {
-    // Exactly one conversion, an integer one: %d with an optional zero-padded width.
-    size_t at = pattern.find('%'), count = 0;
-    bool ok = true;
-    while (at != std::string::npos) {
-        size_t i = at + 1;
-        if (i < pattern.size() && pattern[i] == '%') {
-            at = pattern.find('%', i + 1);
-            continue;
-        }
-        while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) ++i;
-        ok = ok && i < pattern.size() && pattern[i] == 'd' && i - at <= 4;
-        ++count;
-        at = pattern.find('%', i + 1);
-    }
-    if (!ok || count != 1) {
+    if (!isFramePattern(pattern)) {
         throw InputError(what + " " + pattern +
                          ": expected one frame-number field such as %d or %04d, e.g. out_%04d.png");
     }
@@ -320,6 +300,30 @@ AnimatedScene loadAnimation(const std::string& input) {
                          : AnimatedScene::fromFile(input);
 }
 
+// -o anim.mp4 of a --time range: the frames encoded in order (the writer opened at the first,
+// whose size every later one must have), the file renamed into place after the last.
+struct VideoSink {
+    std::string path;
+    double fps;
+    std::unique_ptr<VideoWriter> writer;
+    int width = 0, height = 0;
+
+    VideoSink(std::string p, double f) : path(std::move(p)), fps(f) {}
+    void add(const Film& film, long long number) {
+        if (!writer) {
+            writer = std::make_unique<VideoWriter>(path, film.width, film.height, fps);
+            width = film.width;
+            height = film.height;
+        } else if (film.width != width || film.height != height) {
+            throw InputError("--output " + path + ": frame " + std::to_string(number) + " is " +
+                             std::to_string(film.width) + "x" + std::to_string(film.height) +
+                             ", the video's frames are " + std::to_string(width) + "x" +
+                             std::to_string(height) + " (the image size is keyframed)");
+        }
+        writer->addFrame(toneMapSrgb(film.color).data());
+    }
+};
+
 // --time A:B: each frame's scene described at its time, its assets from one cache (each distinct
 // one loaded or baked once), rendered and written through the patterns; a line per frame.
 int renderAnimation(const RenderArgs& a, const TimeSpan& span,
@@ -332,10 +336,8 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     AssetCache cache;
     PrepareStats assets;
     double renderSeconds = 0;
-    // -o anim.mp4: the frames encoded in order, the file renamed into place after the last.
-    const bool video = a.outputFlag && a.outputFlag->count() > 0;
-    std::unique_ptr<VideoWriter> writer;
-    int firstWidth = 0, firstHeight = 0;
+    std::optional<VideoSink> video;
+    if (a.outputFlag && a.outputFlag->count() > 0) video.emplace(a.output, fps);
     unsigned kept = Film::bit(Aov::Color);
     for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
     for (long long i = 0; i < frames.count; ++i) {
@@ -353,34 +355,21 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
         Film film(plan.camera.width, plan.camera.height, kept);
         const RenderStats rs = renderImage(a, plan, film, "");
         renderSeconds += rs.seconds;
-        const int k = static_cast<int>(number);
-        if (!a.framePattern.empty()) writeAov(film, Aov::Color, framePath(a.framePattern, k));
-        for (const auto& [aov, path] : aovs) writeAov(film, aov, framePath(path, k));
-        if (video) {
-            if (!writer) {
-                writer = std::make_unique<VideoWriter>(a.output, film.width, film.height, fps);
-            } else if (film.width != firstWidth || film.height != firstHeight) {
-                throw InputError("--output " + a.output + ": frame " + std::to_string(number) +
-                                 " is " + std::to_string(film.width) + "x" +
-                                 std::to_string(film.height) + ", the video's frames are " +
-                                 std::to_string(firstWidth) + "x" + std::to_string(firstHeight) +
-                                 " (the image size is keyframed)");
-            }
-            firstWidth = film.width;
-            firstHeight = film.height;
-            writer->addFrame(toneMapSrgb(film.color).data());
-        }
+        if (!a.framePattern.empty()) writeAov(film, Aov::Color, framePath(a.framePattern, number));
+        for (const auto& [aov, path] : aovs) writeAov(film, aov, framePath(path, number));
+        if (video) video->add(film, number);
         if (!a.quiet)
-            std::fprintf(stderr,
-                         "sdftrace render: frame %lld of %lld (t = %.4g s) -> %s: %dx%d in %.3f "
-                         "s, %.2f%% hits\n",
-                         i + 1, frames.count, t,
-                         (a.framePattern.empty() ? a.output : framePath(a.framePattern, k)).c_str(),
-                         film.width, film.height, rs.seconds,
-                         100.0 * static_cast<double>(rs.hits) /
-                             std::max<double>(1, static_cast<double>(rs.primaryRays)));
+            std::fprintf(
+                stderr,
+                "sdftrace render: frame %lld of %lld (t = %.4g s) -> %s: %dx%d in %.3f "
+                "s, %.2f%% hits\n",
+                i + 1, frames.count, t,
+                (a.framePattern.empty() ? a.output : framePath(a.framePattern, number)).c_str(),
+                film.width, film.height, rs.seconds,
+                100.0 * static_cast<double>(rs.hits) /
+                    std::max<double>(1, static_cast<double>(rs.primaryRays)));
     }
-    if (writer) writer->finish();
+    if (video && video->writer) video->writer->finish();
     const double total = std::chrono::duration<double>(Clock::now() - start).count();
     std::fprintf(stderr,
                  "sdftrace render: %lld frames (t = %.4g to %.4g s at %.4g fps) in %.3f s, "

@@ -19,21 +19,32 @@ namespace sdft {
 // radius for the surface (a box around a mesh in a scene). Outside the box the bound is
 // sqrt(|p - q|^2 + gap^2) through the nearest box point q, as in GridView::sample.
 SDFT_HOST_DEVICE inline float gridDistanceBound(const GridView& g, Vec3 p) {
-    if (g.kind == GridKind::Sparse && g.blockSkip && g.tileSkip) {
-        const Vec3 hi = g.shape.origin + Vec3(static_cast<float>(g.shape.cells[0]),
-                                              static_cast<float>(g.shape.cells[1]),
-                                              static_cast<float>(g.shape.cells[2])) *
-                                             g.shape.voxelSize;
-        const Vec3 q = min(max(p, g.shape.origin), hi);
-        int i, j, k;
-        float u, v, w;
-        g.locate(q, i, j, k, u, v, w);
-        const int sh = g.blockShift(), bi = i >> sh, bj = j >> sh, bk = k >> sh;
-        const size_t tile = g.tileIndex(bi, bj, bk);
-        const int32_t page = g.tilePage[tile];
+    if (g.kind != GridKind::Sparse || !g.blockSkip || !g.tileSkip) return g.sample(p) / g.lipschitz;
+    // GridView::sample's steps, with the block looked up once for the gap and the samples.
+    const Vec3 hi = g.shape.origin + Vec3(static_cast<float>(g.shape.cells[0]),
+                                          static_cast<float>(g.shape.cells[1]),
+                                          static_cast<float>(g.shape.cells[2])) *
+                                         g.shape.voxelSize;
+    const Vec3 q = min(max(p, g.shape.origin), hi);
+    const Vec3 d = p - q;
+    const float out2 = dot(d, d);
+    int i, j, k;
+    float u, v, w;
+    g.locate(q, i, j, k, u, v, w);
+    const int sh = g.blockShift(), bi = i >> sh, bj = j >> sh, bk = k >> sh;
+    const size_t tile = g.tileIndex(bi, bj, bk);
+    const int32_t page = g.tilePage[tile];
+    const size_t slot = static_cast<size_t>(page) * kPageEntries + pageLocal(bi, bj, bk);
+    const int32_t data = g.blockData[slot];
+    float f;
+    if (data >= 0) {
+        float c[8];
+        g.blockCellCorners(data, i - (bi << sh), j - (bj << sh), k - (bk << sh), c);
+        f = trilinear(c, u, v, w);
+    } else {
+        const bool inside = g.flags[slot] == static_cast<uint8_t>(BlockFlag::Inside);
         const float blockSide = static_cast<float>(g.blockSize) * g.shape.voxelSize;
-        float gap = 0;
-        bool inside = page == kInsidePage;
+        float gap;
         if (page < kFirstOwnPage) {
             // The nearest such block lies in a tile at least tileSkip tiles away, past this
             // tile's nearest face.
@@ -47,19 +58,17 @@ SDFT_HOST_DEVICE inline float gridDistanceBound(const GridView& g, Vec3 p) {
             }
             gap = static_cast<float>((g.tileSkip[tile] - 1) * kTileBlocks + inner) * blockSide;
         } else {
-            const size_t slot = static_cast<size_t>(page) * kPageEntries + pageLocal(bi, bj, bk);
-            if (g.blockData[slot] < 0)
-                gap = static_cast<float>(static_cast<int>(g.blockSkip[slot]) - 1) * blockSide;
-            inside = g.flags[slot] == static_cast<uint8_t>(BlockFlag::Inside);
+            gap = static_cast<float>(static_cast<int>(g.blockSkip[slot]) - 1) * blockSide;
         }
         if (gap > g.background / g.lipschitz) {
-            const Vec3 d = p - q;
-            const float out2 = dot(d, d);
             if (inside) return out2 == 0.0f ? -gap : std::sqrt(out2);
             return std::sqrt(out2 + gap * gap);
         }
+        f = inside ? -g.background : g.background;
     }
-    return g.sample(p) / g.lipschitz;
+    if (out2 == 0.0f) return f / g.lipschitz;
+    const float outside = maxf(f, 0.0f);
+    return std::sqrt(out2 + outside * outside) / g.lipschitz;
 }
 
 }  // namespace sdft

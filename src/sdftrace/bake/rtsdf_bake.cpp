@@ -42,6 +42,45 @@ double since(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
+// Eq. 1's previous frame: none on the first frame or after the grid changed shape.
+void startFrame(RtsdfHistory& h, const GridShape& s) {
+    const bool carried = h.frames > 0 && h.shape.cells[0] == s.cells[0] &&
+                         h.shape.cells[1] == s.cells[1] && h.shape.cells[2] == s.cells[2] &&
+                         h.shape.origin.x == s.origin.x && h.shape.origin.y == s.origin.y &&
+                         h.shape.origin.z == s.origin.z && h.shape.voxelSize == s.voxelSize;
+    if (carried) return;
+    h.shape = s;
+    h.fine.assign(s.vertexCount(), INFINITY);
+    h.front.assign(s.vertexCount(), 0.0f);
+    h.back.assign(s.vertexCount(), 0.0f);
+    h.frames = 0;
+}
+
+// RTSDF §2.5.1, eq. 1 at vertex idx inside the mask: this frame's coarse value c, the rays'
+// minimum distance `best` (inf if none hit) and their front / back hits; the history updated,
+// the signed fine value returned.
+float accumulate(RtsdfHistory& h, size_t idx, float c, float best, int front, int back,
+                 float voxel) {
+    // The previous magnitude decays towards this frame's coarse value, and the rays' minimum
+    // replaces it where it is nearer. Without a previous value (the first frame, or a vertex
+    // that just entered the mask) f_{t-1} is taken as c_t: a single ray's distance (often across
+    // the object) would otherwise decay away over many frames.
+    const float previous = h.fine[idx];
+    const float prior = previous == INFINITY ? std::fabs(c) : previous;
+    const float m = std::fmin(h.alpha * prior + (1 - h.alpha) * std::fabs(c), best);
+    const float f = kVoteDecay * h.front[idx] + static_cast<float>(front);
+    const float b = kVoteDecay * h.back[idx] + static_cast<float>(back);
+    h.fine[idx] = m;
+    h.front[idx] = f;
+    h.back[idx] = b;
+    // The sign: the coarse SDF's (recomputed every frame, so it never lags a moving surface)
+    // beyond one coarse voxel of the surface, where it is reliable; nearer, this frame's vote,
+    // or the decayed votes where its rays all missed (the coarse sign before any hit).
+    const bool near = std::fabs(c) <= 2 * voxel;
+    const bool negative = front + back > 0 ? back > front : b > f;
+    return near && (f > 0 || b > 0) ? (negative ? -m : m) : std::copysign(m, c);
+}
+
 }  // namespace
 
 std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh,
@@ -67,19 +106,8 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
     const float mask = o.maskVoxels * s.voxelSize, tiny = 1e-4f * s.voxelSize;
     std::vector<float> out;
     assignHuge(out, s.vertexCount(), 0.0f);
-    // Eq. 1's previous frame: none on the first frame or after the grid changed shape.
     RtsdfHistory* h = o.history;
-    const bool carried = h && h->frames > 0 && h->shape.cells[0] == s.cells[0] &&
-                         h->shape.cells[1] == s.cells[1] && h->shape.cells[2] == s.cells[2] &&
-                         h->shape.origin.x == s.origin.x && h->shape.origin.y == s.origin.y &&
-                         h->shape.origin.z == s.origin.z && h->shape.voxelSize == s.voxelSize;
-    if (h && !carried) {
-        h->shape = s;
-        h->fine.assign(s.vertexCount(), INFINITY);
-        h->front.assign(s.vertexCount(), 0.0f);
-        h->back.assign(s.vertexCount(), 0.0f);
-        h->frames = 0;
-    }
+    if (h) startFrame(*h, s);
     std::atomic<size_t> refined{0}, missed{0};
     // Each accumulated frame casts new directions.
     const uint64_t frameSalt = h ? static_cast<uint64_t>(h->frames) * 0x9E3779B97F4A7C15ull : 0;
@@ -111,36 +139,12 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
                         best = std::fmin(best, std::fabs(hit.t));
                         (hit.front ? front : back) += 1;
                     }
+                    if (best == INFINITY) ++localMissed;
                     if (h) {
-                        // Eq. 1: the previous magnitude decays towards this frame's coarse
-                        // value, and the rays' minimum replaces it where it is nearer.
-                        const float previous = h->fine[idx];
-                        // Without a previous value (the first frame, or a vertex that just
-                        // entered the mask) f_{t-1} is taken as c_t: a single ray's distance
-                        // (often across the object) would otherwise decay away over many frames.
-                        const float prior = previous == INFINITY ? std::fabs(c) : previous;
-                        const float m =
-                            std::fmin(h->alpha * prior + (1 - h->alpha) * std::fabs(c), best);
-                        const float f = kVoteDecay * h->front[idx] + static_cast<float>(front);
-                        const float b = kVoteDecay * h->back[idx] + static_cast<float>(back);
-                        h->fine[idx] = m;
-                        h->front[idx] = f;
-                        h->back[idx] = b;
-                        if (best == INFINITY) ++localMissed;
-                        // The sign: the coarse SDF's (recomputed every frame, so it never
-                        // lags a moving surface) beyond one coarse voxel of the surface, where
-                        // it is reliable; nearer, the decayed vote (the coarse sign before any
-                        // hit).
-                        const bool near = std::fabs(c) <= 2 * s.voxelSize;
-                        const bool negative = front + back > 0 ? back > front : b > f;
-                        out[idx] =
-                            near && (f > 0 || b > 0) ? (negative ? -m : m) : std::copysign(m, c);
+                        out[idx] = accumulate(*h, idx, c, best, front, back, s.voxelSize);
                         continue;
                     }
-                    if (best == INFINITY) {
-                        ++localMissed;
-                        continue;
-                    }
+                    if (best == INFINITY) continue;
                     out[idx] = back > front ? -best : best;
                 }
             refined += localRefined;

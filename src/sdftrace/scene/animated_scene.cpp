@@ -62,20 +62,29 @@ AnimatedScene AnimatedScene::fromFile(const std::string& path) {
 
 const SceneTime& AnimatedScene::time() const { return m_impl->time; }
 
-Scene AnimatedScene::describeAt(double t) const {
-    const Impl& s = *m_impl;
-    if (s.tracks.empty()) {
-        Scene scene = describeSceneJson(s.root, s.source, s.baseDir);
-        scene.time = s.time;
-        return scene;
-    }
+namespace {
+// Runs f for the instant t of an animated scene; its InputErrors then name the time.
+template <class F>
+void atInstant(bool animated, double t, F f) {
     try {
-        Scene scene = describeSceneJson(valuesAt(s.root, s.tracks, t), s.source, s.baseDir);
-        scene.time = s.time;
-        return scene;
+        f();
     } catch (const InputError& e) {
+        if (!animated) throw;
         throw InputError(e.what() + atTime(t));
     }
+}
+}  // namespace
+
+Scene AnimatedScene::describeAt(double t) const {
+    const Impl& s = *m_impl;
+    Scene scene;
+    atInstant(!s.tracks.empty(), t, [&] {
+        scene = s.tracks.empty()
+                    ? describeSceneJson(s.root, s.source, s.baseDir)
+                    : describeSceneJson(valuesAt(s.root, s.tracks, t), s.source, s.baseDir);
+    });
+    scene.time = s.time;
+    return scene;
 }
 
 Scene AnimatedScene::at(double t, AssetCache& cache, const PrepareOptions& options,
@@ -85,12 +94,7 @@ Scene AnimatedScene::at(double t, AssetCache& cache, const PrepareOptions& optio
     InstantAssets& out = assets ? *assets : local;
     out.keys.clear();
     for (const AssetRequest& q : scene.assets) out.keys.push_back(q.key);
-    try {
-        out.stats = prepareScene(scene, cache, options);
-    } catch (const InputError& e) {
-        if (m_impl->tracks.empty()) throw;
-        throw InputError(e.what() + atTime(t));
-    }
+    atInstant(!m_impl->tracks.empty(), t, [&] { out.stats = prepareScene(scene, cache, options); });
     return scene;
 }
 

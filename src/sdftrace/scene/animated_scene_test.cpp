@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 
 #include "sdftrace/core/error.h"
@@ -18,6 +19,16 @@ namespace sdft {
 namespace {
 
 const std::string kMeshes = std::string(SDFT_SOURCE_DIR) + "/data/meshes/";
+
+// The message of the InputError f throws, "" when it throws none.
+std::string inputErrorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
 
 float fieldAt(const Scene& s, Vec3 p) {
     return compileTape(s.root, {.boundsCulling = false}).eval(p);
@@ -141,15 +152,11 @@ TEST(AnimatedScene, AMeshSequencePlaysOneFilePerFrame) {
     EXPECT_EQ(cache.size(), 1u);  // frame 0's grid is gone
     EXPECT_LT(fieldAt(second, Vec3(3, 0, 0)), -0.2f);
     EXPECT_GT(fieldAt(second, Vec3(0, 0, 0)), 0.2f);
-    try {
-        anim.at(2.5, cache);
-        ADD_FAILURE() << "a missing frame was accepted";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        EXPECT_NE(msg.find("cube_2.obj"), std::string::npos) << msg;
-        EXPECT_NE(msg.find("(at time 2.5 s)"), std::string::npos) << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    const std::string msg = inputErrorOf([&] { anim.at(2.5, cache); });
+    EXPECT_FALSE(msg.empty()) << "a missing frame was accepted";
+    EXPECT_NE(msg.find("cube_2.obj"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("(at time 2.5 s)"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
     fs::remove_all(dir);
 }
 
@@ -250,16 +257,11 @@ TEST(AnimatedScene, BadKeyframesAreOneClearError) {
          "/objects/0/method: a mesh with \"dynamic\""},
     };
     for (const auto& c : cases) {
-        try {
-            AnimatedScene::fromText(c.text, "bad.json");
-            ADD_FAILURE() << "accepted: " << c.text;
-        } catch (const InputError& e) {
-            const std::string msg = e.what();
-            EXPECT_EQ(msg.rfind("bad.json: ", 0), 0u) << msg;
-            EXPECT_NE(msg.find(c.expected), std::string::npos)
-                << msg << "\nexpected: " << c.expected;
-            EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-        }
+        const std::string msg = inputErrorOf([&] { AnimatedScene::fromText(c.text, "bad.json"); });
+        EXPECT_FALSE(msg.empty()) << "accepted: " << c.text;
+        EXPECT_EQ(msg.rfind("bad.json: ", 0), 0u) << msg;
+        EXPECT_NE(msg.find(c.expected), std::string::npos) << msg << "\nexpected: " << c.expected;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
         // The static description reports the same problems (at its start time).
         EXPECT_THROW(describeSceneText(c.text, "bad.json"), InputError) << c.text;
     }
@@ -274,12 +276,9 @@ TEST(AnimatedScene, ManyKeysAreCheckedAtASample) {
                 ", \"value\": " + (k == 2999 ? "-1" : "1") + "}";
     const std::string text =
         R"({"objects": [{"type": "sphere", "radius": {"keyframes": [)" + keys + "]}}]}";
-    try {
-        AnimatedScene::fromText(text, "many.json");
-        ADD_FAILURE() << "a negative radius at the last key was accepted";
-    } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("(at time 2999 s)"), std::string::npos) << e.what();
-    }
+    const std::string msg = inputErrorOf([&] { AnimatedScene::fromText(text, "many.json"); });
+    EXPECT_FALSE(msg.empty()) << "a negative radius at the last key was accepted";
+    EXPECT_NE(msg.find("(at time 2999 s)"), std::string::npos) << msg;
 }
 
 // A value that is only bad between keys is an error of that instant, naming the time.
@@ -289,15 +288,10 @@ TEST(AnimatedScene, AValueBadOnlyBetweenKeysNamesItsTime) {
     const AnimatedScene anim = AnimatedScene::fromText(text, "w.json");
     EXPECT_EQ(anim.describeAt(0).camera.width, 100);
     EXPECT_EQ(anim.describeAt(1).camera.width, 201);
-    try {
-        anim.describeAt(0.5);
-        ADD_FAILURE() << "a width of 150.5 accepted";
-    } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("w.json: /camera/width: expected an integer"),
-                  std::string::npos)
-            << e.what();
-        EXPECT_NE(std::string(e.what()).find("(at time 0.5 s)"), std::string::npos) << e.what();
-    }
+    const std::string msg = inputErrorOf([&] { anim.describeAt(0.5); });
+    EXPECT_FALSE(msg.empty()) << "a width of 150.5 accepted";
+    EXPECT_NE(msg.find("w.json: /camera/width: expected an integer"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("(at time 0.5 s)"), std::string::npos) << msg;
 }
 
 }  // namespace

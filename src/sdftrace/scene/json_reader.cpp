@@ -20,12 +20,13 @@ std::string typeName(const Json& v) {
 constexpr double kMaxNumber = kMaxCoordinate;
 const char* const tooLarge = "; numbers in scene files must lie within +-1e9";
 
+}  // namespace
+
 std::string show(double v) {
     std::ostringstream s;
     s << v;
     return s.str();
 }
-}  // namespace
 
 void Reader::requireObject(const char* what) const {
     if (!m_value.is_object())

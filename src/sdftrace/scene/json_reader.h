@@ -78,6 +78,9 @@ class Reader {
     std::string m_path;
 };
 
+// A number as messages show it (6 significant digits).
+std::string show(double v);
+
 inline bool positive(double v) { return v > 0; }
 inline bool nonNegative(double v) { return v >= 0; }
 inline bool anyFinite(double) { return true; }

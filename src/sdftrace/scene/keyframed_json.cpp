@@ -1,22 +1,16 @@
 #include "keyframed_json.h"
 
 #include <cmath>
-#include <sstream>
 
 namespace sdft {
 
 using json_reader::Json;
 using json_reader::Reader;
+using json_reader::show;
 
 namespace {
 
 constexpr size_t kMaxComponents = 16;  // the longest array a scene key takes is 3 (or 4) numbers
-
-std::string show(double v) {
-    std::ostringstream s;
-    s << v;
-    return s.str();
-}
 
 // The key's value as components; fails unless it is a finite number or 1-16 finite numbers.
 std::vector<double> keyValue(const Reader& key, bool& scalar, bool& integer) {

@@ -8,6 +8,7 @@
 
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/texture_coords.h"
+#include "sdftrace/core/frame_pattern.h"
 #include "sdftrace/field/noise.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/tape.h"
@@ -122,50 +123,60 @@ NodePtr requestGridFile(const Reader& r, NodeContext& ctx, const char* jsonKey =
     return node::gridAsset(addRequest(ctx, std::move(q)));
 }
 
-// A mesh sequence's file for frame `frame`: `pattern` holds one integer field (%d, %04d). Empty
-// when the pattern has another number of fields or another kind.
-std::string sequenceFile(const std::string& pattern, long long frame) {
-    size_t fields = 0, conversion = 0;  // the field's 'd'
-    for (size_t at = pattern.find('%'); at != std::string::npos; at = pattern.find('%', at + 1)) {
-        size_t i = at + 1;
-        if (i < pattern.size() && pattern[i] == '%') {
-            at = i;
-            continue;
-        }
-        while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) ++i;
-        if (i >= pattern.size() || pattern[i] != 'd' || i - at > 4) return "";
-        ++fields;
-        conversion = i;
-        at = i;
+// A mesh object's file: "mesh", or for a mesh sequence (issue 16) the file of the frame number
+// "frame" (keyframed to play it) in the pattern "mesh".
+std::string meshFileOf(const Reader& r) {
+    const std::string file = r.string("mesh");
+    const bool pattern = file.find('%') != std::string::npos;
+    if (!r.has("frame") && !pattern) return file;
+    if (!r.has("frame"))
+        r.failKey("mesh", "'" + file +
+                              "' is a file pattern; give \"frame\" (a frame number, "
+                              "keyframed to play the sequence) or name one file");
+    const double frame = r.number(
+        "frame", [](double v) { return v >= 0; }, "a frame number >= 0 (floored)");
+    if (!isFramePattern(file))
+        r.failKey("mesh", "'" + file +
+                              "': a mesh sequence's file pattern holds one frame-number field "
+                              "such as %d or %04d, e.g. frames/mesh_%04d.obj");
+    return framePath(file, static_cast<long long>(std::floor(frame)));
+}
+
+// A mesh object's "dynamic" block (issue 16): regenerated every frame, "rebake" afresh by its
+// bake method (the reference), "rtsdf" by RTSDF's per-frame pipeline with temporal accumulation
+// (Tan et al. 2022, §2.5.1). `method` is the object's static bake method.
+void parseDynamic(const Reader& r, const std::string& method, AssetRequest& q) {
+    Reader d = r.child("dynamic");
+    d.requireObject("a dynamic block {\"method\": \"rtsdf\" | \"rebake\", ...}");
+    d.allowKeys({"method", "rays", "alpha", "mask"});
+    const std::string how = d.string("method");
+    if (how == "rtsdf") {
+        if (r.has("method") && method != "rtsdf")
+            r.failKey("method",
+                      "a mesh with \"dynamic\": {\"method\": \"rtsdf\"} is "
+                      "baked by rtsdf every frame; drop \"method\" or use rebake");
+        q.dynamic = AssetRequest::Dynamic::Rtsdf;
+        q.bake.method = MeshBakeMethod::Rtsdf;
+        q.bake.rtsdf.rays = d.integer("rays", 1, 1, 4096);
+        q.alpha = d.number(
+            "alpha", 0.95f, [](double v) { return v >= 0 && v < 1; }, "a decay factor in [0, 1)");
+        q.bake.rtsdf.maskVoxels = d.number(
+            "mask", 3.0f, [](double v) { return v > 0 && v <= 64; },
+            "a mask distance in (0, 64] fine voxels");
+    } else if (how == "rebake") {
+        for (const char* k : {"rays", "alpha", "mask"})
+            if (d.has(k)) d.failKey(k, "applies to \"method\": \"rtsdf\" only");
+        q.dynamic = AssetRequest::Dynamic::Rebake;
+    } else {
+        d.failKey("method", "unknown dynamic method '" + how + "'; accepted: rtsdf, rebake");
     }
-    if (fields != 1) return "";
-    std::string fmt = pattern;
-    fmt.insert(conversion, "ll");
-    std::vector<char> buf(pattern.size() + 32);
-    std::snprintf(buf.data(), buf.size(), fmt.c_str(), frame);
-    return buf.data();
+    q.key.clear();  // never served from the cache: baked again every frame
 }
 
 // A mesh file (relative to the scene file) baked to a sparse grid by prepareScene; the same file
 // with the same options is baked once.
 NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
-    std::string file = r.string("mesh");
-    // A mesh sequence (issue 16): the file of the frame number `frame` (keyframed to play it).
-    const bool pattern = file.find('%') != std::string::npos;
-    if (r.has("frame") || pattern) {
-        if (!r.has("frame"))
-            r.failKey("mesh", "'" + file +
-                                  "' is a file pattern; give \"frame\" (a frame number, "
-                                  "keyframed to play the sequence) or name one file");
-        const double frame = r.number(
-            "frame", [](double v) { return v >= 0; }, "a frame number >= 0 (floored)");
-        const std::string name = sequenceFile(file, static_cast<long long>(std::floor(frame)));
-        if (name.empty())
-            r.failKey("mesh", "'" + file +
-                                  "': a mesh sequence's file pattern holds one frame-number field "
-                                  "such as %d or %04d, e.g. frames/mesh_%04d.obj");
-        file = name;
-    }
+    const std::string file = meshFileOf(r);
     const std::string path = resolvePath(ctx, file).lexically_normal().string();
     if (!isMeshFile(path)) {
         r.failKey("mesh", "unsupported mesh file '" + file +
@@ -195,36 +206,7 @@ NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
     q.bake = bake;
     q.key = "mesh|" + path + "|" + method + "|" + sign + "|" + std::to_string(o.resolution) + "|" +
             std::to_string(o.bandVoxels);
-    // Regenerated every frame (issue 16): "rebake" bakes the frame's mesh afresh by its method
-    // (the reference), "rtsdf" runs RTSDF's per-frame pipeline with temporal accumulation.
-    if (r.has("dynamic")) {
-        Reader d = r.child("dynamic");
-        d.requireObject("a dynamic block {\"method\": \"rtsdf\" | \"rebake\", ...}");
-        d.allowKeys({"method", "rays", "alpha", "mask"});
-        const std::string how = d.string("method");
-        if (how == "rtsdf") {
-            if (r.has("method") && method != "rtsdf")
-                r.failKey("method",
-                          "a mesh with \"dynamic\": {\"method\": \"rtsdf\"} is "
-                          "baked by rtsdf every frame; drop \"method\" or use rebake");
-            q.dynamic = AssetRequest::Dynamic::Rtsdf;
-            q.bake.method = MeshBakeMethod::Rtsdf;
-            q.bake.rtsdf.rays = d.integer("rays", 1, 1, 4096);
-            q.alpha = d.number(
-                "alpha", 0.95f, [](double v) { return v >= 0 && v < 1; },
-                "a decay factor in [0, 1)");
-            q.bake.rtsdf.maskVoxels = d.number(
-                "mask", 3.0f, [](double v) { return v > 0 && v <= 64; },
-                "a mask distance in (0, 64] fine voxels");
-        } else if (how == "rebake") {
-            for (const char* k : {"rays", "alpha", "mask"})
-                if (d.has(k)) d.failKey(k, "applies to \"method\": \"rtsdf\" only");
-            q.dynamic = AssetRequest::Dynamic::Rebake;
-        } else {
-            d.failKey("method", "unknown dynamic method '" + how + "'; accepted: rtsdf, rebake");
-        }
-        q.key.clear();  // never served from the cache: baked again every frame
-    }
+    if (r.has("dynamic")) parseDynamic(r, method, q);
     return node::gridAsset(addRequest(ctx, std::move(q)));
 }
 

@@ -150,7 +150,8 @@ void parseRender(const Reader& r, RenderSettings& s) {
     }
 }
 
-// The "animation" block: {"start": s, "end": e, "fps": f}, every key optional.
+// The "animation" block: {"start": s, "end": e, "fps": f}, every key optional (defaults from `t`;
+// the end no earlier than the start).
 SceneTime parseAnimation(const Reader& r, SceneTime t) {
     r.requireObject("an animation block {\"start\": s, \"end\": e, \"fps\": f}");
     r.allowKeys({"start", "end", "fps"});
@@ -158,12 +159,9 @@ SceneTime parseAnimation(const Reader& r, SceneTime t) {
                        "a start time in seconds");
     t.end = r.number("end", static_cast<float>(std::max(t.end, t.start)), json_reader::anyFinite,
                      "an end time in seconds");
-    if (t.end < t.start) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf, "the end time %g is before the start time %g", t.end,
-                      t.start);
-        r.failKey("end", buf);
-    }
+    if (t.end < t.start)
+        r.failKey("end", "the end time " + json_reader::show(t.end) + " is before the start time " +
+                             json_reader::show(t.start));
     t.fps = r.number(
         "fps", static_cast<float>(t.fps), [](double v) { return v > 0 && v <= 1000; },
         "frames per second in (0, 1000]");
@@ -269,11 +267,11 @@ SceneTime sceneTimeOf(const Json& root, const std::vector<JsonTrack>& tracks,
         }
     }
     Reader r(root, source, "");
-    if (r.has("animation")) {
-        SceneTime given = parseAnimation(r.child("animation"), SceneTime{});
-        given.animated = t.animated;
-        if (!r.child("animation").has("end")) given.end = std::max(given.start, t.end);
-        t = given;
+    if (r.has("animation")) {  // its defaults: start 0, end the keys' end, 30 fps
+        SceneTime defaults;
+        defaults.end = t.end;
+        defaults.animated = t.animated;
+        t = parseAnimation(r.child("animation"), defaults);
     }
     return t;
 }
