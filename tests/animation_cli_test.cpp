@@ -118,6 +118,59 @@ TEST(Animation, BakeAndMeshTakeAnInstant) {
     }
 }
 
+// Mean motion vector (x, y) over the pixels a depth image hits; the background's must be zero.
+std::pair<double, double> meanMotion(const std::string& motionPfm, const std::string& depthPfm) {
+    int w = 0, h = 0, c = 0, dw = 0, dh = 0, dc = 0;
+    const std::vector<float> motion = readPfm(motionPfm, w, h, c);
+    const std::vector<float> depth = readPfm(depthPfm, dw, dh, dc);
+    EXPECT_EQ(c, 3);
+    EXPECT_EQ(w * h, dw * dh);
+    double mx = 0, my = 0, n = 0;
+    for (int i = 0; i < w * h; ++i) {
+        const size_t j = static_cast<size_t>(i);
+        if (!std::isfinite(depth[j])) {
+            EXPECT_EQ(motion[3 * j], 0.0f);  // the background stays
+            continue;
+        }
+        mx += motion[3 * j];
+        my += motion[3 * j + 1];
+        ++n;
+    }
+    EXPECT_GT(n, 20);
+    return {mx / std::max(1.0, n), my / std::max(1.0, n)};
+}
+
+// The motion AOV points from each pixel to where its surface was one frame earlier: the ball
+// moves 0.5 units right per frame at 4 fps, 3.3 pixels at its distance; --taa blends the frames.
+TEST(Animation, MotionVectorsFollowTheBallAndTaaBlendsTheFrames) {
+    TempDir dir;
+    const std::string scene = dir.write("ball.json", kMovingBall);
+    RunResult r = runCli("render " + scene + " --time 0:1 --fps 4 --taa --frame-pattern " +
+                             dir.file("f_%02d.png") + " --aov motion=" + dir.file("m_%02d.pfm") +
+                             " --aov depth=" + dir.file("d_%02d.pfm"),
+                         dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("TAA: "), std::string::npos) << r.err;
+    const double pixelsPerUnit = 24 / (2 * 5 * std::tan(20 * 3.14159265 / 180));
+    // Frame 0 (t = 0) has none: before its first key the ball stands still (clamped).
+    for (int k = 1; k < 4; ++k) {
+        char m[32], d[32];
+        std::snprintf(m, sizeof m, "m_%02d.pfm", k);
+        std::snprintf(d, sizeof d, "d_%02d.pfm", k);
+        const auto [mx, my] = meanMotion(dir.file(m), dir.file(d));
+        EXPECT_NEAR(mx, -0.5 * pixelsPerUnit, 0.15 * pixelsPerUnit) << "frame " << k;
+        EXPECT_NEAR(my, 0, 0.1) << "frame " << k;
+    }
+    // One instant: the motion from the frame before it.
+    r = runCli("render " + scene + " -q --time 0.5 --fps 4 -o " + dir.file("s.png") +
+                   " --aov motion=" + dir.file("s.pfm") + " --aov depth=" + dir.file("sd.pfm"),
+               dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto [mx, my] = meanMotion(dir.file("s.pfm"), dir.file("sd.pfm"));
+    EXPECT_NEAR(mx, -0.5 * pixelsPerUnit, 0.15 * pixelsPerUnit);
+    EXPECT_NEAR(my, 0, 0.1);
+}
+
 TEST(Animation, BadTimeFlagsAreOneClearLineAndLeaveNoFile) {
     TempDir dir;
     const std::string scene = dir.write("ball.json", kMovingBall);
@@ -138,6 +191,9 @@ TEST(Animation, BadTimeFlagsAreOneClearLineAndLeaveNoFile) {
         {"--time 0:1 --orbit 2" + pattern, "--orbit: cannot be combined with a --time range"},
         {"--time 0:100000 --fps 1000" + pattern, "a range renders at most 1000000 frames"},
         {"--time 0:1 --fps 0" + pattern, "--fps"},
+        {"--taa -o " + dir.file("x.png"), "--taa: accumulates across the frames of a --time A:B"},
+        {"--time 0:1 --taa --frames 4" + pattern, "--taa: accumulates one jittered frame per"},
+        {"--time 0:1 --taa --taa-motion sideways" + pattern, "--taa-motion"},
     };
     for (const auto& c : cases) {
         RunResult r = runCli("render " + scene + " -q " + c.args, dir);

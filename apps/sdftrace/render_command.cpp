@@ -11,6 +11,7 @@
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/frame_pattern.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/atomic_file.h"
@@ -53,6 +54,8 @@ struct RenderArgs {
     int frames = 1;
     std::optional<float> taaAlpha;
     float orbit = 0;
+    bool taa = false;                   // --taa: accumulate across a --time range's frames
+    std::string taaMotion = "objects";  // --taa-motion objects|camera
     std::string framePattern;
     std::string time;           // --time T or A:B (scene files with keyframes)
     std::optional<double> fps;  // --fps (default: the scene's)
@@ -181,7 +184,16 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bo
             throw InputError(
                 "--orbit: cannot be combined with a --time range (keyframe the camera in the "
                 "scene file instead; docs/scene-format.md, \"Animation\")");
+        if (a.taa && a.frames > 1)
+            throw InputError(
+                "--taa: accumulates one jittered frame per instant across the "
+                "range; it cannot be combined with --frames " +
+                std::to_string(a.frames) + " (which accumulates at each instant)");
     } else {
+        if (a.taa)
+            throw InputError(
+                "--taa: accumulates across the frames of a --time A:B range; for "
+                "a still, use --frames N");
         imageFormatFromPath(a.output, "--output");
         checkWritablePath(a.output, "--output");
     }
@@ -195,7 +207,7 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bo
             throw InputError(
                 "--aov " + spec +
                 ": expected NAME=PATH with NAME one of color, depth, normal, steps, error, "
-                "trav_steps, isect_tests, shadow, ao");
+                "trav_steps, isect_tests, shadow, ao, motion");
         }
         std::string path = spec.substr(eq + 1);
         if (range) {
@@ -300,6 +312,23 @@ AnimatedScene loadAnimation(const std::string& input) {
                          : AnimatedScene::fromFile(input);
 }
 
+// The instant one frame before t, described (its assets pending: only its camera and placements
+// are read), with the flags' camera: where motion vectors point.
+Scene previousInstant(const AnimatedScene& anim, const RenderArgs& a, double t, double fps) {
+    Scene before = anim.describeAt(t - 1.0 / fps);
+    applyCamera(a, before.camera);
+    return before;
+}
+
+// The motion AOV and the reprojection of --taa: per-pixel motion to the previous instant, from
+// the camera and, unless --taa-motion camera, each object's placement.
+MotionVectors frameMotion(const RenderArgs& a, const Film& film, const FrameView& view,
+                          const Scene& before, const Scene& now) {
+    const SceneMotion motion(before.root, now.root);
+    return motionVectors(film.depth, view.camera, view.pixelJitter, before.camera,
+                         a.taaMotion == "objects" ? &motion : nullptr);
+}
+
 // -o anim.mp4 of a --time range: the frames encoded in order (the writer opened at the first,
 // whose size every later one must have), the file renamed into place after the last.
 struct VideoSink {
@@ -324,6 +353,17 @@ struct VideoSink {
     }
 };
 
+// The TAA part of the animation's total line.
+std::string taaSummary(const std::optional<TemporalAccumulator>& taa, size_t rejected,
+                       long long frames) {
+    if (!taa || frames < 2) return "";
+    char buf[120];
+    std::snprintf(buf, sizeof buf, "; TAA: %.2f%% of pixels without history per frame",
+                  100.0 * static_cast<double>(rejected) /
+                      (static_cast<double>(frames - 1) * taa->width() * taa->height()));
+    return buf;
+}
+
 // --time A:B: each frame's scene described at its time, its assets from one cache (each distinct
 // one loaded or baked once), rendered and written through the patterns; a line per frame.
 int renderAnimation(const RenderArgs& a, const TimeSpan& span,
@@ -340,6 +380,11 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     if (a.outputFlag && a.outputFlag->count() > 0) video.emplace(a.output, fps);
     unsigned kept = Film::bit(Aov::Color);
     for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
+    const bool motion = a.taa || (kept & Film::bit(Aov::Motion));
+    if (motion) kept |= Film::bit(Aov::Depth);
+    std::optional<TemporalAccumulator> taa;
+    if (a.taa) taa.emplace(a.taaAlpha.value_or(0.0f), true);
+    size_t rejected = 0;
     for (long long i = 0; i < frames.count; ++i) {
         const double t = frames.at(i);
         const long long number = frames.first + i;
@@ -352,9 +397,30 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
         assets.cached += st.cached;
         applyOverrides(a, scene);
         const RenderPlan plan = planRender(scene);
+        if (taa && i == 0)  // the history, its objects and depths, and the motion vectors
+            checkMemoryBudget(Film::bytesNeeded(plan.camera.width, plan.camera.height) +
+                                  37.0 * plan.camera.width * plan.camera.height,
+                              "--taa",
+                              "temporal accumulation of " + std::to_string(plan.camera.width) +
+                                  "x" + std::to_string(plan.camera.height) + " frames",
+                              "render a smaller image");
         Film film(plan.camera.width, plan.camera.height, kept);
-        const RenderStats rs = renderImage(a, plan, film, "");
+        FrameView view{plan.camera};
+        view.frame = static_cast<uint32_t>(number);
+        if (taa) frameJitter(static_cast<uint32_t>(i), view.pixelJitter);
+        const bool progress = !a.quiet && stderrIsTerminal();
+        const RenderStats rs =
+            taa ? render(plan, view, film, progress) : renderImage(a, plan, film, "");
         renderSeconds += rs.seconds;
+        if (motion) {
+            const MotionVectors mv =
+                frameMotion(a, film, view, previousInstant(anim, a, t, fps), scene);
+            if (film.has(Aov::Motion)) film.motion = mv.motion;
+            if (taa) {
+                taa->add(film, &mv);
+                rejected += taa->rejected();
+            }
+        }
         if (!a.framePattern.empty()) writeAov(film, Aov::Color, framePath(a.framePattern, number));
         for (const auto& [aov, path] : aovs) writeAov(film, aov, framePath(path, number));
         if (video) video->add(film, number);
@@ -373,10 +439,10 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     const double total = std::chrono::duration<double>(Clock::now() - start).count();
     std::fprintf(stderr,
                  "sdftrace render: %lld frames (t = %.4g to %.4g s at %.4g fps) in %.3f s, "
-                 "render %.3f s per frame; assets: %zu loaded, %zu baked, %zu reused\n",
+                 "render %.3f s per frame; assets: %zu loaded, %zu baked, %zu reused%s\n",
                  frames.count, frames.at(0), frames.at(frames.count - 1), fps, total,
                  renderSeconds / static_cast<double>(frames.count), assets.loaded, assets.baked,
-                 assets.cached);
+                 assets.cached, taaSummary(taa, rejected, frames.count).c_str());
     return 0;
 }
 
@@ -396,10 +462,12 @@ int runRender(const RenderArgs& a) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     Scene scene;
+    std::optional<AnimatedScene> anim;
+    const double instant = span ? span->from : 0.0;
     if (span) {
-        const AnimatedScene anim = loadAnimation(a.scene);
+        anim.emplace(loadAnimation(a.scene));
         AssetCache cache;
-        scene = anim.at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
+        scene = anim->at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
     } else {
         scene = loadInput(a.scene, !a.quiet && stderrIsTerminal(), a.quiet);
     }
@@ -408,9 +476,16 @@ int runRender(const RenderArgs& a) {
     const RenderPlan plan = planRender(scene);
     unsigned kept = Film::bit(Aov::Color);  // the film keeps only the AOVs to be written
     for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
+    if (kept & Film::bit(Aov::Motion)) kept |= Film::bit(Aov::Depth);
     Film film(plan.camera.width, plan.camera.height, kept);
     const auto t2 = Clock::now();
     const RenderStats st = renderImage(a, plan, film, a.framePattern);
+    if (anim && film.has(Aov::Motion)) {  // --time T: the motion from T - 1/fps
+        const double fps = a.fps ? *a.fps : anim->time().fps;
+        film.motion = frameMotion(a, film, FrameView{plan.camera},
+                                  previousInstant(*anim, a, instant, fps), scene)
+                          .motion;
+    }
     const auto t3 = Clock::now();
     writeAov(film, Aov::Color, a.output);
     for (const auto& [aov, path] : aovs) writeAov(film, aov, path);
@@ -495,6 +570,18 @@ void addFrameFlags(CLI::App* cmd, RenderArgs& args) {
                      "history is reprojected through depth and clamped to each frame's "
                      "neighbourhood")
         ->check(CLI::Range(-180.0, 180.0));
+    frames->add_flag("--taa", args.taa,
+                     "With a --time range: temporal anti-aliasing across its frames, one "
+                     "jittered frame per instant blended into a history reprojected by each "
+                     "pixel's motion (the camera's and each object's), rejected where the "
+                     "previous frame saw another object or depth, clamped to the neighbourhood "
+                     "(alpha: --taa-alpha, default 0.9)");
+    frames
+        ->add_option("--taa-motion", args.taaMotion,
+                     "What --taa reprojects by: objects (the camera and each object's keyframed "
+                     "placement) or camera (the camera only, the --orbit method)")
+        ->check(CLI::IsMember({"objects", "camera"}))
+        ->capture_default_str();
     frames->add_option("--frame-pattern", args.framePattern,
                        "Also write every accumulated frame, e.g. frames/out_%04d.png; with a "
                        "--time range, the animation's frames");
@@ -533,8 +620,9 @@ void addRenderCommand(CLI::App& app, Action& action) {
         "unit primary ray, inf on a miss), normal, steps (field evaluations of the primary "
         "ray), error (f where the march placed the hit, before the root refinement), trav_steps "
         "and isect_tests (grid DDA), shadow (the "
-        "first shadowing light's visibility), ao (ambient occlusion). PATH: .exr, .pfm, or .png "
-        "(heat map with legend)");
+        "first shadowing light's visibility), ao (ambient occlusion), motion (with --time: pixels "
+        "to where the surface was one frame earlier). PATH: .exr, .pfm, or .png (heat map with "
+        "legend)");
     addCameraFlags(cmd, *args);
     cmd->add_flag("--classic", args->classic,
                   "Plain sphere tracing (Hart): omega 1, no screen-space selection, no "

@@ -8,10 +8,10 @@
 
 namespace sdft {
 
-enum class Aov { Color, Depth, Normal, Steps, Error, TravSteps, IsectTests, Shadow, Ao };
+enum class Aov { Color, Depth, Normal, Steps, Error, TravSteps, IsectTests, Shadow, Ao, Motion };
 
 // Names as on the command line: color, depth, normal, steps, error, trav_steps, isect_tests,
-// shadow, ao.
+// shadow, ao, motion.
 const char* aovName(Aov aov);
 bool parseAov(const std::string& name, Aov& out);
 int aovChannels(Aov aov);
@@ -30,10 +30,14 @@ struct Film {
     // horizon); 1 on a miss
     std::vector<float> shadow;
     std::vector<float> ao;  // ambient occlusion (1: none, or off); 1 on a miss
+    // 2 per pixel: where the pixel's surface was in the previous frame's image minus where it is
+    // (pixels, +y down; motion.h); zero on a miss and in stills. Filled by animations, not by
+    // render().
+    std::vector<float> motion;
 
     // Which AOVs a film keeps, one bit per Aov (color always): the others stay empty and are
-    // not written, so a plain render does not fill 13 floats a pixel to keep 3.
-    static constexpr unsigned kAllAovs = 0x1ff;
+    // not written, so a plain render does not fill 15 floats a pixel to keep 3.
+    static constexpr unsigned kAllAovs = 0x3ff;
     static constexpr unsigned bit(Aov aov) { return 1u << static_cast<unsigned>(aov); }
 
     explicit Film(int w, int h, unsigned aovs = kAllAovs);

@@ -1,14 +1,18 @@
 // Temporal accumulation of jittered frames (RTSDF §2.5.2: jittered soft shadows, then TAA after
 // Karis 2014). Each frame moves the camera by a subpixel Halton (2, 3) offset and reseeds the
 // per-pixel jitter of soft shadows and light samples; frames are blended into a history:
-//  - stills (no camera motion): a running mean, so k frames average k jittered samples per pixel;
-//  - animations (the camera orbits its target by `orbitDegrees` per frame): the history is
-//    reprojected through the current frame's depth into the previous camera, clamped to the
-//    current frame's 3 x 3 colour neighbourhood (against ghosting), and blended with weight alpha.
+//  - stills (nothing moves): a running mean, so k frames average k jittered samples per pixel;
+//  - moving cameras (`orbitDegrees` per frame) and animated scenes (issue 16): the history is
+//    reprojected by each pixel's motion vector (motion.h: the camera's motion, and each object's
+//    own from its placement at the two instants), rejected where the previous frame saw another
+//    object or a surface at another depth there (disocclusion: the ground a moving object
+//    uncovers), clamped to the current frame's 3 x 3 colour neighbourhood (moving shadows and
+//    shading, deforming objects), and blended with weight alpha.
 #pragma once
 
 #include <functional>
 
+#include "sdftrace/render/motion.h"
 #include "sdftrace/render/renderer.h"
 
 namespace sdft {
@@ -22,6 +26,35 @@ struct TemporalOptions {
 
 // The camera of frame k: orbited by k * degrees about the vertical through the target.
 CameraDesc orbitCamera(const CameraDesc& camera, float degrees);
+
+// The subpixel offset of frame k, in [-0.5, 0.5)^2: Halton (2, 3) at index k + 1.
+void frameJitter(uint32_t k, float out[2]);
+
+// The history of one sequence of frames of a fixed size.
+class TemporalAccumulator {
+  public:
+    // alpha: the history's weight; 0 gives a running mean for stills and 0.9 when reprojecting.
+    // `clamp` (the neighbourhood clamp) and `reject` (the object and depth tests) are switches
+    // to measure each part against the others; both are on in every renderer.
+    TemporalAccumulator(float alpha, bool reproject, bool clamp = true, bool reject = true);
+    // Blends film.color with the history and makes it the blended image. Reprojecting needs the
+    // frame's depth and motion vectors; stills pass none. A frame of another size restarts.
+    void add(Film& film, const MotionVectors* motion = nullptr);
+    int frames() const { return m_frames; }
+    int width() const { return m_width; }
+    int height() const { return m_height; }
+    // Pixels of the last frame whose history was discarded (disoccluded or off screen).
+    size_t rejected() const { return m_rejected; }
+
+  private:
+    float m_alpha;
+    bool m_reproject, m_clamp, m_reject;
+    int m_frames = 0, m_width = 0, m_height = 0;
+    size_t m_rejected = 0;
+    std::vector<float> m_history;  // 3 per pixel
+    std::vector<int> m_objects;    // what the history's pixels show (MotionVectors::objects)
+    std::vector<float> m_depth;    // and at what distance
+};
 
 // Renders the frames into `film`: colour is the accumulated image, the other AOVs those of the last
 // frame. `onFrame(k, film)`, if set, sees each accumulated frame. Stats are summed over frames.

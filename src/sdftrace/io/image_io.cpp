@@ -270,11 +270,40 @@ std::vector<unsigned char> heatMapWithLegend(const std::vector<float>& values, i
     return img;
 }
 
+namespace {
+
+// Motion vectors: EXR channels backward.u / backward.v (Nuke's layer for the motion to the
+// previous frame), PFM as RGB with B = 0, PNG as 0.5 + m / (2 max |m|) in R and G.
+void writeMotion(const Film& film, ImageFormat format, const std::string& path) {
+    const std::vector<float>& m = film.motion;
+    if (format == ImageFormat::Exr) {
+        writeExr(path, film.width, film.height, 2, m, {"backward.u", "backward.v"});
+        return;
+    }
+    std::vector<float> rgb(3 * film.pixels(), 0.0f);
+    float scale = 0;
+    for (float v : m) scale = std::max(scale, std::fabs(v));
+    for (size_t i = 0; i < film.pixels(); ++i)
+        for (int c = 0; c < 2; ++c) rgb[3 * i + c] = m[2 * i + c];
+    if (format == ImageFormat::Pfm) {
+        writePfm(path, film.width, film.height, 3, rgb);
+        return;
+    }
+    std::vector<unsigned char> bytes(rgb.size());
+    for (size_t i = 0; i < rgb.size(); ++i)
+        bytes[i] = toByte(i % 3 == 2 ? 0.5f : 0.5f + (scale > 0 ? 0.5f * rgb[i] / scale : 0.0f));
+    writePng(path, film.width, film.height, 3, bytes);
+}
+
+}  // namespace
+
 void writeAov(const Film& film, Aov aov, const std::string& path) {
     ImageFormat format = imageFormatFromPath(path, std::string("--aov ") + aovName(aov));
     const std::vector<float>& data = film.channel(aov);
     int channels = aovChannels(aov);
-    if (format == ImageFormat::Exr) {
+    if (aov == Aov::Motion) {
+        writeMotion(film, format, path);
+    } else if (format == ImageFormat::Exr) {
         std::vector<std::string> names =
             channels == 3 ? std::vector<std::string>{"R", "G", "B"}
                           : std::vector<std::string>{aov == Aov::Depth ? "Z" : "Y"};

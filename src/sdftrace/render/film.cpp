@@ -28,13 +28,15 @@ const char* aovName(Aov aov) {
             return "shadow";
         case Aov::Ao:
             return "ao";
+        case Aov::Motion:
+            return "motion";
     }
     return "?";
 }
 
 bool parseAov(const std::string& name, Aov& out) {
     for (Aov a : {Aov::Color, Aov::Depth, Aov::Normal, Aov::Steps, Aov::Error, Aov::TravSteps,
-                  Aov::IsectTests, Aov::Shadow, Aov::Ao}) {
+                  Aov::IsectTests, Aov::Shadow, Aov::Ao, Aov::Motion}) {
         if (name == aovName(a)) {
             out = a;
             return true;
@@ -43,10 +45,13 @@ bool parseAov(const std::string& name, Aov& out) {
     return false;
 }
 
-int aovChannels(Aov aov) { return (aov == Aov::Color || aov == Aov::Normal) ? 3 : 1; }
+int aovChannels(Aov aov) {
+    if (aov == Aov::Motion) return 2;
+    return (aov == Aov::Color || aov == Aov::Normal) ? 3 : 1;
+}
 
 Film::Film(int w, int h, unsigned aovs) : width(w), height(h) {
-    // Up to 13 floats a pixel (52 MiB at 1024x1024): on huge pages, filled side by side.
+    // Up to 15 floats a pixel (60 MiB at 1024x1024): on huge pages, filled side by side.
     const size_t n = pixels();
     const float inf = std::numeric_limits<float>::infinity();
     auto keep = [&](std::vector<float>& v, Aov aov, size_t size, float value) {
@@ -66,11 +71,12 @@ Film::Film(int w, int h, unsigned aovs) : width(w), height(h) {
                              keep(isectTests, Aov::IsectTests, n, 0.0f);
                              keep(shadow, Aov::Shadow, n, 1.0f);
                              keep(ao, Aov::Ao, n, 1.0f);
+                             keep(motion, Aov::Motion, 2 * n, 0.0f);
                          });
 }
 
 double Film::bytesNeeded(int w, int h) {
-    return static_cast<double>(w) * static_cast<double>(h) * sizeof(float) * 13.0;
+    return static_cast<double>(w) * static_cast<double>(h) * sizeof(float) * 15.0;
 }
 
 const std::vector<float>& Film::channel(Aov aov) const {
@@ -93,6 +99,8 @@ const std::vector<float>& Film::channel(Aov aov) const {
             return shadow;
         case Aov::Ao:
             return ao;
+        case Aov::Motion:
+            return motion;
     }
     return color;
 }

@@ -1,8 +1,12 @@
 #include "sdftrace/render/temporal.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
+#include "sdftrace/core/macros.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/math/sampling.h"
 
@@ -10,20 +14,11 @@ namespace sdft {
 
 namespace {
 
-// Bilinear colour of `img` (3 channels, w x h) at continuous pixel coordinates (centres at +0.5).
-Vec3 bilinear(const std::vector<float>& img, int w, int h, float px, float py) {
-    const float fx = px - 0.5f, fy = py - 0.5f;
-    const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
-    const float ax = fx - x0, ay = fy - y0;
-    Vec3 c(0.0f);
-    for (int dy = 0; dy < 2; ++dy)
-        for (int dx = 0; dx < 2; ++dx) {
-            const int x = std::clamp(x0 + dx, 0, w - 1), y = std::clamp(y0 + dy, 0, h - 1);
-            const float wgt = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay);
-            const size_t p = 3 * (static_cast<size_t>(y) * w + x);
-            c += Vec3(img[p], img[p + 1], img[p + 2]) * wgt;
-        }
-    return c;
+// Relative depth difference below which a history pixel shows the same surface.
+constexpr float kDepthTolerance = 0.05f;
+
+Vec3 rgbAt(const std::vector<float>& img, size_t i) {
+    return {img[3 * i], img[3 * i + 1], img[3 * i + 2]};
 }
 
 }  // namespace
@@ -40,78 +35,141 @@ CameraDesc orbitCamera(const CameraDesc& c, float degrees) {
     return out;
 }
 
+void frameJitter(uint32_t k, float out[2]) {
+    out[0] = radicalInverse(k + 1, 2) - 0.5f;
+    out[1] = radicalInverse(k + 1, 3) - 0.5f;
+}
+
+TemporalAccumulator::TemporalAccumulator(float alpha, bool reproject, bool clamp, bool reject)
+    : m_alpha(alpha > 0 ? alpha : (reproject ? 0.9f : 0.0f)),
+      m_reproject(reproject),
+      m_clamp(clamp),
+      m_reject(reject) {}
+
+void TemporalAccumulator::add(Film& film, const MotionVectors* mv) {
+    const int w = film.width, h = film.height;
+    const size_t n = film.pixels();
+    SDFT_CHECK(!m_reproject || (mv && mv->motion.size() == 2 * n && film.has(Aov::Depth)));
+    if (m_frames == 0 || w != m_width || h != m_height) {
+        m_frames = 0;
+        m_width = w;
+        m_height = h;
+        m_history.clear();
+    }
+    if (m_frames == 0) {
+        m_history = film.color;
+        m_rejected = 0;
+    } else {
+        std::vector<float> next(film.color.size());
+        std::atomic<size_t> rejected{0};
+        const float weight0 = m_alpha > 0 ? m_alpha : static_cast<float>(m_frames) / (m_frames + 1);
+        tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+            size_t rejectedHere = 0;
+            for (int y = rows.begin(); y != rows.end(); ++y)
+                for (int x = 0; x < w; ++x) {
+                    const size_t i = static_cast<size_t>(y) * w + x;
+                    const Vec3 cur = rgbAt(film.color, i);
+                    Vec3 hist = rgbAt(m_history, i);
+                    float weight = weight0;
+                    if (m_reproject) {
+                        weight = 0;
+                        const float px = x + 0.5f + mv->motion[2 * i],
+                                    py = y + 0.5f + mv->motion[2 * i + 1];
+                        if (mv->visibleBefore[i] && px >= 0 && py >= 0 && px < w && py < h) {
+                            // Bilinear over the taps that show this surface: the same object
+                            // at the distance the point had from the previous eye.
+                            const float fx = px - 0.5f, fy = py - 0.5f;
+                            const int x0 = static_cast<int>(std::floor(fx)),
+                                      y0 = static_cast<int>(std::floor(fy));
+                            const float ax = fx - x0, ay = fy - y0;
+                            const int object = mv->objects[i];
+                            const float d = mv->depthBefore[i];
+                            Vec3 sum(0.0f);
+                            float total = 0;
+                            for (int dy = 0; dy < 2; ++dy)
+                                for (int dx = 0; dx < 2; ++dx) {
+                                    const int xx = std::clamp(x0 + dx, 0, w - 1),
+                                              yy = std::clamp(y0 + dy, 0, h - 1);
+                                    const size_t j = static_cast<size_t>(yy) * w + xx;
+                                    if (m_reject && m_objects[j] != object) continue;
+                                    if (m_reject && object >= 0 &&
+                                        !(std::fabs(m_depth[j] - d) <= kDepthTolerance * d))
+                                        continue;
+                                    const float wgt = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay);
+                                    sum += rgbAt(m_history, j) * wgt;
+                                    total += wgt;
+                                }
+                            if (total > 1e-4f) {
+                                hist = sum / total;
+                                weight = weight0;
+                            }
+                        }
+                        if (weight == 0) {
+                            ++rejectedHere;
+                        } else if (m_clamp) {
+                            // Clamp to the current 3 x 3 neighbourhood (Karis 2014).
+                            Vec3 lo(INFINITY), hi(-INFINITY);
+                            for (int dy = -1; dy <= 1; ++dy)
+                                for (int dx = -1; dx <= 1; ++dx) {
+                                    const int xx = std::clamp(x + dx, 0, w - 1),
+                                              yy = std::clamp(y + dy, 0, h - 1);
+                                    const Vec3 c =
+                                        rgbAt(film.color, static_cast<size_t>(yy) * w + xx);
+                                    lo = min(lo, c);
+                                    hi = max(hi, c);
+                                }
+                            hist = min(max(hist, lo), hi);
+                        }
+                    }
+                    const Vec3 out = hist * weight + cur * (1 - weight);
+                    for (int c = 0; c < 3; ++c) next[3 * i + c] = out[c];
+                }
+            rejected += rejectedHere;
+        });
+        m_history.swap(next);
+        m_rejected = rejected;
+    }
+    if (m_reproject) {
+        m_objects = mv->objects;
+        m_depth = film.depth;
+    }
+    ++m_frames;
+    film.color = m_history;
+}
+
 RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptions& o,
                          const std::function<void(int, const Film&)>& onFrame, bool progress) {
     const int w = film.width, h = film.height;
     const bool moving = o.orbitDegrees != 0;
-    const float alpha = o.alpha > 0 ? o.alpha : (moving ? 0.9f : 0.0f);
     RenderStats total;
-    // A frame's film besides the output film, and the colour history and its reprojection.
-    checkMemoryBudget(Film::bytesNeeded(w, h) + 2.0 * 3 * sizeof(float) * w * h, "--frames",
+    // A frame's film besides the output film, the colour history (12 bytes a pixel) and, when
+    // reprojecting, its objects and depths (8) and the frame's motion vectors (17).
+    const double perPixel = moving ? 37.0 : 12.0;
+    checkMemoryBudget(Film::bytesNeeded(w, h) + perPixel * w * h, "--frames",
                       "temporal accumulation of " + std::to_string(w) + "x" + std::to_string(h) +
                           " frames (a second film and the colour history)",
                       "render a smaller image");
-    std::vector<float> history;
-    Camera previous(plan.camera);
+    TemporalAccumulator history(o.alpha, moving);
+    CameraDesc previous = plan.camera;
     for (int k = 0; k < std::max(1, o.frames); ++k) {
         FrameView s;
         s.camera = orbitCamera(plan.camera, o.orbitDegrees * static_cast<float>(k));
         s.frame = static_cast<uint32_t>(k);
-        if (o.jitterCamera && o.frames > 1) {
-            s.pixelJitter[0] = radicalInverse(static_cast<uint32_t>(k) + 1, 2) - 0.5f;
-            s.pixelJitter[1] = radicalInverse(static_cast<uint32_t>(k) + 1, 3) - 0.5f;
-        }
+        if (o.jitterCamera && o.frames > 1) frameJitter(static_cast<uint32_t>(k), s.pixelJitter);
         Film current(w, h);
         const RenderStats frameStats = render(plan, s, current, progress && k == 0);
         total.add(frameStats);
         total.seconds += frameStats.seconds;
         total.threads = frameStats.threads;
         total.gridTracer = frameStats.gridTracer;
-        const Camera camera(s.camera);
-        if (k == 0) {
-            history = current.color;
+        if (moving) {
+            const MotionVectors mv =
+                motionVectors(current.depth, s.camera, s.pixelJitter, previous, nullptr);
+            history.add(current, &mv);
         } else {
-            std::vector<float> next(current.color.size());
-            for (int y = 0; y < h; ++y)
-                for (int x = 0; x < w; ++x) {
-                    const size_t i = static_cast<size_t>(y) * w + x;
-                    const Vec3 cur(current.color[3 * i], current.color[3 * i + 1],
-                                   current.color[3 * i + 2]);
-                    Vec3 hist(history[3 * i], history[3 * i + 1], history[3 * i + 2]);
-                    float weight = alpha > 0 ? alpha : static_cast<float>(k) / (k + 1);
-                    if (moving) {
-                        // Reproject through this frame's depth; clamp to the neighbourhood.
-                        float px = x + 0.5f, py = y + 0.5f;
-                        if (std::isfinite(current.depth[i])) {
-                            const Vec3 p = camera
-                                               .rayThrough(x + 0.5f + s.pixelJitter[0],
-                                                           y + 0.5f + s.pixelJitter[1])
-                                               .at(current.depth[i]);
-                            if (!previous.project(p, px, py) || px < 0 || py < 0 || px >= w ||
-                                py >= h)
-                                weight = 0;  // newly visible: no history
-                        }
-                        hist = bilinear(history, w, h, px, py);
-                        Vec3 lo(INFINITY), hi(-INFINITY);
-                        for (int dy = -1; dy <= 1; ++dy)
-                            for (int dx = -1; dx <= 1; ++dx) {
-                                const int xx = std::clamp(x + dx, 0, w - 1),
-                                          yy = std::clamp(y + dy, 0, h - 1);
-                                const size_t j = 3 * (static_cast<size_t>(yy) * w + xx);
-                                const Vec3 c(current.color[j], current.color[j + 1],
-                                             current.color[j + 2]);
-                                lo = min(lo, c);
-                                hi = max(hi, c);
-                            }
-                        hist = min(max(hist, lo), hi);
-                    }
-                    const Vec3 out = hist * weight + cur * (1 - weight);
-                    for (int c = 0; c < 3; ++c) next[3 * i + c] = out[c];
-                }
-            history.swap(next);
+            history.add(current);
         }
-        previous = camera;
-        current.color = history;
+        previous = s.camera;
         film = std::move(current);
         if (onFrame) onFrame(k, film);
     }
