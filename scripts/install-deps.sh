@@ -12,7 +12,8 @@ packages=(
     libboost-iostreams-dev libblosc-dev  # OpenVDB's CMake module needs them; sdftrace's .vdb reader too
     zlib1g-dev            # sdftrace's .vdb reader (zip-compressed level sets)
     libzstd-dev           # compressed .sdfg files (version 3)
-    libassimp-dev         # mesh loading (OBJ, PLY, STL, OFF, glTF)
+    libassimp-dev         # mesh loading (OBJ, PLY, STL, OFF, glTF; skinned and morph animation)
+    assimp-testmodels     # tests: third-party animated meshes (glTF morph targets, a skinned .x)
     libembree-dev         # BVH closest-point queries and ray casts for mesh baking
     libavcodec-dev libavformat-dev libswscale-dev libavutil-dev  # video output (H.264, FFmpeg)
     libgtest-dev          # tests

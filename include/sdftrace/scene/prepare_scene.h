@@ -12,6 +12,7 @@
 
 #include "sdftrace/bake/rtsdf_bake.h"
 #include "sdftrace/field/grid.h"
+#include "sdftrace/io/mesh_animation.h"
 #include "sdftrace/scene/scene.h"
 
 namespace sdft {
@@ -41,9 +42,17 @@ class AssetCache {
     // by the request's JSON path; kept by keepOnly.
     RtsdfHistory& rtsdfHistory(const std::string& where) { return m_histories[where]; }
 
+    // A file played by its own animation (AssetRequest::play), read once for all its poses.
+    const AnimatedMesh& animatedMesh(const std::string& path) {
+        auto it = m_animated.find(path);
+        if (it == m_animated.end()) it = m_animated.emplace(path, AnimatedMesh::load(path)).first;
+        return it->second;
+    }
+
   private:
     std::map<std::string, std::shared_ptr<const Grid>> m_grids;
     std::map<std::string, RtsdfHistory> m_histories;
+    std::map<std::string, AnimatedMesh> m_animated;
 };
 
 struct PrepareOptions {

@@ -35,6 +35,17 @@ struct AssetRequest {
     enum class Dynamic { None, Rebake, Rtsdf };
     Dynamic dynamic = Dynamic::None;
     float alpha = 0.95f;
+    // Mesh: a skinned or morph-animated file posed by its own animation (io/mesh_animation.h)
+    // at `seconds` into the clip named `clip` (or numbered `clipIndex` when `clip` is empty),
+    // wrapped into the clip when `loop`, else clamped to it.
+    struct Play {
+        std::string where;  // "<scene file>: <JSON path of the play block>"
+        std::string clip;
+        int clipIndex = 0;
+        double seconds = 0;
+        bool loop = true;
+    };
+    std::optional<Play> play;
 };
 
 // A check that needs the bounds of pending grids, run once they are loaded: copies of a

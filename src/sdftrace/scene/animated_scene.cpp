@@ -80,8 +80,8 @@ Scene AnimatedScene::describeAt(double t) const {
     Scene scene;
     atInstant(!s.tracks.empty(), t, [&] {
         scene = s.tracks.empty()
-                    ? describeSceneJson(s.root, s.source, s.baseDir)
-                    : describeSceneJson(valuesAt(s.root, s.tracks, t), s.source, s.baseDir);
+                    ? describeSceneJson(s.root, s.source, s.baseDir, t)
+                    : describeSceneJson(valuesAt(s.root, s.tracks, t), s.source, s.baseDir, t);
     });
     scene.time = s.time;
     return scene;

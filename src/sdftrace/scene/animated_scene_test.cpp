@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "sdftrace/core/error.h"
@@ -292,6 +293,84 @@ TEST(AnimatedScene, AValueBadOnlyBetweenKeysNamesItsTime) {
     EXPECT_FALSE(msg.empty()) << "a width of 150.5 accepted";
     EXPECT_NE(msg.find("w.json: /camera/width: expected an integer"), std::string::npos) << msg;
     EXPECT_NE(msg.find("(at time 0.5 s)"), std::string::npos) << msg;
+}
+
+// A skinned mesh plays its own animation (the tube of scripts/make-bending-tube.py: its upper
+// half bends 90 degrees towards -x while its root slides 1 unit along +x over 2 s): the scene at
+// t holds the pose at start + speed * t, looped into the clip.
+TEST(AnimatedScene, AMeshPlaysItsOwnAnimation) {
+    auto scene = [](const std::string& play) {
+        return AnimatedScene::fromText(
+            R"({"animation": {"end": 4}, "objects": [{"mesh": "bending_tube.gltf",
+                "resolution": 48, "band": 4, "play": )" +
+                play + "}]}",
+            "tube.json", kMeshes + "animated");
+    };
+    const AnimatedScene plain = scene("{}");
+    AssetCache cache;
+    const AnimatedScene once = scene(R"({"loop": false})");
+    AssetCache held;
+    const Scene start = plain.at(0, cache), end = once.at(2, held);
+    const Vec3 tip(0, 1.9f, 0), bent(0.5f, 1.0f, 0);
+    EXPECT_LT(fieldAt(start, tip), 0) << "upright at t = 0";
+    EXPECT_GT(fieldAt(start, bent), 0);
+    EXPECT_GT(fieldAt(end, tip), 0) << "bent over at t = 2";
+    EXPECT_LT(fieldAt(end, bent), 0);
+    // Looped: t = 3 is the clip's second 1; twice the speed reaches it at t = 0.5.
+    const Scene looped = plain.at(3, cache), one = plain.at(1, cache);
+    AssetCache other;
+    const Scene fast = scene(R"({"speed": 2, "animation": "bend"})").at(0.5, other);
+    for (const Vec3 p : {tip, bent, Vec3(0.3f, 1.6f, 0.1f), Vec3(0.1f, 0.4f, 0)}) {
+        EXPECT_EQ(fieldAt(looped, p), fieldAt(one, p));
+        EXPECT_EQ(fieldAt(fast, p), fieldAt(one, p));
+    }
+    // Not looped: held at the clip's end; looped, its end is its start.
+    EXPECT_EQ(fieldAt(once.at(3, held), bent), fieldAt(end, bent));
+    EXPECT_EQ(fieldAt(plain.at(2, cache), bent), fieldAt(start, bent));
+}
+
+TEST(AnimatedScene, PlayingWhatCannotPlayIsOneClearError) {
+    auto errorOf = [](const std::string& object) {
+        return inputErrorOf([&] {
+            AssetCache cache;
+            AnimatedScene::fromText(R"({"objects": [)" + object + "]}", "play.json", kMeshes)
+                .at(0, cache);
+        });
+    };
+    EXPECT_NE(errorOf(R"({"mesh": "bunny_npm.obj", "play": {}})")
+                  .find("/objects/0/mesh: unsupported mesh file 'bunny_npm.obj' to play"),
+              std::string::npos);
+    // The tube without its animation: a glTF that has none.
+    const std::string still = (std::filesystem::temp_directory_path() /
+                               ("sdft_still_" + std::to_string(getpid()) + ".gltf"))
+                                  .string();
+    {
+        std::ifstream in(kMeshes + "animated/bending_tube.gltf");
+        nlohmann::json tube = nlohmann::json::parse(in);
+        tube.erase("animations");
+        std::ofstream(still) << tube.dump();
+    }
+    const std::string noAnimation = errorOf(R"({"mesh": ")" + still + R"(", "play": {}})");
+    std::filesystem::remove(still);
+    EXPECT_NE(noAnimation.find("play.json: /objects/0/play: " + still +
+                               " has no skeletal or morph animation"),
+              std::string::npos)
+        << noAnimation;
+    const struct {
+        std::string play, expected;
+    } cases[] = {
+        {R"({"animation": "walk"})",
+         "play.json: /objects/0/play/animation: no animation named 'walk' in "},
+        {R"({"animation": 2})", "/objects/0/play/animation: animation 2 of "},
+        {R"({"animation": 2})", "which has 1: 0 'bend'"},
+        {R"({"speed": "fast"})", "/objects/0/play/speed"},
+        {R"({"rate": 2})", "/objects/0/play/rate"},
+    };
+    for (const auto& c : cases) {
+        const std::string e =
+            errorOf(R"({"mesh": "animated/bending_tube.gltf", "play": )" + c.play + "}");
+        EXPECT_NE(e.find(c.expected), std::string::npos) << c.play << ": " << e;
+    }
 }
 
 }  // namespace

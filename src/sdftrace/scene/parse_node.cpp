@@ -173,14 +173,40 @@ void parseDynamic(const Reader& r, const std::string& method, AssetRequest& q) {
     q.key.clear();  // never served from the cache: baked again every frame
 }
 
+// A mesh object's "play" block (issue 16): the file's own skeletal or morph animation, posed at
+// start + speed * (the scene's time) seconds into a clip; each pose is a mesh of its own.
+void parsePlay(const Reader& r, const NodeContext& ctx, AssetRequest& q) {
+    Reader p = r.child("play");
+    p.requireObject("a play block {\"animation\": index or name, \"speed\", \"start\", \"loop\"}");
+    p.allowKeys({"animation", "speed", "start", "loop"});
+    if (r.has("frame"))
+        r.failKey("play", "a mesh sequence (\"frame\") cannot also play an animation; use one");
+    AssetRequest::Play play;
+    play.where = r.location("play");
+    if (p.has("animation") && p.child("animation").value().is_string())
+        play.clip = p.string("animation");
+    else
+        play.clipIndex = p.integer("animation", 0, 0, 1 << 20);
+    const float speed = p.number("speed", 1.0f, json_reader::anyFinite, "a playback rate");
+    const float start =
+        p.number("start", 0.0f, json_reader::anyFinite, "a clip time in seconds at scene time 0");
+    play.seconds = static_cast<double>(start) + static_cast<double>(speed) * ctx.time;
+    play.loop = p.boolean("loop", true);
+    char pose[64];
+    std::snprintf(pose, sizeof pose, "|play|%d|%.9g|%d", play.clipIndex, play.seconds, play.loop);
+    q.key += pose + play.clip;
+    q.play = std::move(play);
+}
+
 // A mesh file (relative to the scene file) baked to a sparse grid by prepareScene; the same file
 // with the same options is baked once.
 NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
     const std::string file = meshFileOf(r);
     const std::string path = resolvePath(ctx, file).lexically_normal().string();
-    if (!isMeshFile(path)) {
+    if (r.has("play") ? !isAnimatedMeshFile(path) : !isMeshFile(path)) {
         r.failKey("mesh", "unsupported mesh file '" + file +
-                              "'; accepted: .obj, .ply, .stl, .off, .gltf, .glb");
+                              (r.has("play") ? "' to play; accepted: .gltf, .glb, .dae, .fbx, .x"
+                                             : "'; accepted: .obj, .ply, .stl, .off, .gltf, .glb"));
     }
     SampleOptions o;
     o.resolution = r.integer("resolution", 128, 8, 1024);
@@ -206,6 +232,7 @@ NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
     q.bake = bake;
     q.key = "mesh|" + path + "|" + method + "|" + sign + "|" + std::to_string(o.resolution) + "|" +
             std::to_string(o.bandVoxels);
+    if (r.has("play")) parsePlay(r, ctx, q);
     if (r.has("dynamic")) parseDynamic(r, method, q);
     return node::gridAsset(addRequest(ctx, std::move(q)));
 }
@@ -439,8 +466,8 @@ NodePtr parseNode(const Reader& r, NodeContext& ctx) {
     // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact", "sign":
     // "winding", "band": 3}.
     if (!r.has("type") && r.has("mesh")) {
-        r.allowKeys({"mesh", "frame", "dynamic", "resolution", "method", "sign", "band", "material",
-                     "translate", "rotate", "scale"});
+        r.allowKeys({"mesh", "frame", "dynamic", "play", "resolution", "method", "sign", "band",
+                     "material", "translate", "rotate", "scale"});
         return finishNode(r, requestMesh(r, ctx), ctx);
     }
     const std::string type = r.string("type");

@@ -19,6 +19,7 @@ struct NodeContext {
     Scene* scene = nullptr;
     std::map<std::string, int> requestIndex;  // request key -> index in scene->assets
     int depth = 0;                            // objects being parsed, outermost first
+    double time = 0;  // the scene's instant (seconds): meshes that "play" are posed there
 };
 
 // Objects nest at most this deep (parsing, compiling and bounding recurse over the tree; a union

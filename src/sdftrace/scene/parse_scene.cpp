@@ -168,7 +168,8 @@ SceneTime parseAnimation(const Reader& r, SceneTime t) {
     return t;
 }
 
-Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir) {
+Scene parseRoot(const Json& root, const std::string& source, const std::string& baseDir,
+                double time) {
     Reader r(root, source, "");
     r.requireObject("a scene");
     r.allowKeys({"camera", "lights", "ambient", "background", "environment", "textures",
@@ -178,6 +179,7 @@ Scene parseRoot(const Json& root, const std::string& source, const std::string& 
     NodeContext context;
     context.baseDir = baseDir;
     context.scene = &scene;
+    context.time = time;
     std::map<std::string, int>& materialIndex = context.materials;
     materialIndex["default"] = 0;
     TextureContext textures;
@@ -276,8 +278,9 @@ SceneTime sceneTimeOf(const Json& root, const std::vector<JsonTrack>& tracks,
     return t;
 }
 
-Scene describeSceneJson(const Json& root, const std::string& source, const std::string& baseDir) {
-    return parseRoot(root, source, baseDir);
+Scene describeSceneJson(const Json& root, const std::string& source, const std::string& baseDir,
+                        double time) {
+    return parseRoot(root, source, baseDir, time);
 }
 
 void validateImageSize(int width, int height, const std::string& what) {

@@ -1,5 +1,7 @@
 #include "sdftrace/scene/prepare_scene.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <unordered_map>
 
@@ -73,6 +75,32 @@ Grid sampleSubtree(const AssetRequest& q, const NodePtr& subtree) {
     return grid;
 }
 
+// The pose of a played mesh (AssetRequest::play): its clip chosen by name or number, its time
+// wrapped into the clip or clamped to it.
+TriangleMesh posedMesh(const AssetRequest& q, AssetCache& cache) {
+    const AssetRequest::Play& p = *q.play;
+    const AnimatedMesh& mesh = cache.animatedMesh(q.path);
+    if (mesh.clips().empty())
+        throw InputError(p.where + ": " + q.path +
+                         " has no skeletal or morph animation (assimp found none); remove "
+                         "\"play\", or give a glTF, Collada, FBX or .x file with one");
+    int clip = p.clipIndex;
+    if (!p.clip.empty()) {
+        clip = mesh.clipIndex(p.clip);
+        if (clip < 0)
+            throw InputError(p.where + "/animation: no animation named '" + p.clip + "' in " +
+                             q.path + "; it has " + mesh.clipList());
+    } else if (static_cast<size_t>(clip) >= mesh.clips().size()) {
+        throw InputError(p.where + "/animation: animation " + std::to_string(clip) + " of " +
+                         q.path + ", which has " + std::to_string(mesh.clips().size()) + ": " +
+                         mesh.clipList());
+    }
+    const double duration = mesh.clips()[static_cast<size_t>(clip)].duration;
+    double t = p.seconds;
+    if (p.loop && duration > 0) t -= duration * std::floor(t / duration);
+    return mesh.pose(clip, std::clamp(t, 0.0, duration));
+}
+
 // Loads or bakes one request; file and bake errors get the request's JSON path.
 std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subtree, bool progress,
                                       AssetCache& cache) {
@@ -83,7 +111,7 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
             case AssetRequest::Kind::Mesh: {
                 MeshBakeOptions bake = q.bake;
                 bake.progress = progress;
-                const TriangleMesh mesh = loadMesh(q.path);
+                const TriangleMesh mesh = q.play ? posedMesh(q, cache) : loadMesh(q.path);
                 if (q.dynamic == AssetRequest::Dynamic::Rtsdf) {
                     // RTSDF §2.5.1: one grid for all frames, over the first frame's bounds
                     // widened by a quarter each way so that the mesh may move and deform in it.
@@ -104,8 +132,9 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
         }
     } catch (const InputError& e) {
         const std::string m = e.what();
-        // Subtree errors already carry the path.
-        throw InputError(m.rfind(q.where, 0) == 0 ? m : q.where + ": " + m);
+        // Subtree and play errors already carry the path.
+        const bool located = m.rfind(q.where, 0) == 0 || (q.play && m.rfind(q.play->where, 0) == 0);
+        throw InputError(located ? m : q.where + ": " + m);
     }
     return nullptr;
 }

@@ -18,8 +18,9 @@ nlohmann::json readSceneJson(const std::string& text, const std::string& source)
 SceneTime sceneTimeOf(const nlohmann::json& root, const std::vector<JsonTrack>& tracks,
                       const std::string& source);
 
-// The scene of JSON whose keyframed values have been replaced by values (valuesAt).
+// The scene of JSON whose keyframed values have been replaced by values (valuesAt), at `time`
+// seconds (where meshes that "play" their own animation are posed).
 Scene describeSceneJson(const nlohmann::json& root, const std::string& source,
-                        const std::string& baseDir);
+                        const std::string& baseDir, double time = 0);
 
 }  // namespace sdft
