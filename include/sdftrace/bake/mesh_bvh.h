@@ -33,6 +33,8 @@ class MeshBvh {
     struct Hit {
         float t = INFINITY;
         bool front = false;
+        uint32_t triangle = 0;  // index into mesh().triangles
+        float u = 0, v = 0;     // barycentric coordinates of the hit: a (1-u-v) + b u + c v
     };
     // tnear < 0 also reports hits just behind the origin (origins on the surface).
     Hit firstHit(const Ray& ray, float tnear = 0) const;

@@ -25,6 +25,8 @@ struct Placement {
 
     Vec3 toLocal(Vec3 world) const;
     Vec3 toWorld(Vec3 local) const;
+    // A local surface normal in world space (the inverse transpose), unit length.
+    Vec3 normalToWorld(Vec3 local) const;
     bool sameShape(const Placement& other) const;  // the same kinds in the same order
 };
 

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "sdftrace/field/grid.h"
@@ -14,6 +15,7 @@
 #include "sdftrace/field/tape.h"
 #include "sdftrace/math/camera.h"
 #include "sdftrace/render/lighting.h"
+#include "sdftrace/render/mesh_primary.h"
 #include "sdftrace/render/render_settings.h"
 #include "sdftrace/render/texture.h"
 
@@ -35,6 +37,11 @@ struct RenderPlan {
     Lighting lighting;
     CameraDesc camera;
     RenderSettings settings;
+    // settings.primaryTriangles: the meshes primary rays hit as triangles, and the field of
+    // everything else (none when the scene is only meshes); shadows, AO and secondary rays use
+    // `tape`.
+    std::shared_ptr<const MeshPrimary> meshPrimary;
+    std::optional<Tape> primaryField;
 };
 
 // What changes between frames of one plan (temporal.h): the camera, the frame number that seeds

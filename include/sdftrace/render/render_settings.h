@@ -45,6 +45,9 @@ struct RenderSettings {
     bool dynamicEpsilon = true;
     float globalEpsilon = 1e-3f;
     bool convexBounds = true;  // Keinert §3.5 for rays inside convex objects
+    // RTSDF's hybrid mode: primary rays hit the triangles of mesh objects (mesh_primary.h),
+    // shadows and AO march their SDFs.
+    bool primaryTriangles = false;
     // The integrator: direct lighting (the tile renderer) or the path tracer (path_tracer.h).
     bool pathTracing = false;
     int samplesPerPixel = 16;       // path tracer

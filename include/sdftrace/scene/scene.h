@@ -4,6 +4,8 @@
 // prepared scene for the integrators.
 #pragma once
 
+#include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -76,6 +78,9 @@ struct Scene {
     CameraDesc camera;
     RenderSettings settings;
     SceneTime time;
+    // The triangles each mesh grid was baked from (prepareScene), for primary rays on the
+    // triangles (RenderSettings::primaryTriangles).
+    std::map<const Grid*, std::shared_ptr<const TriangleMesh>> meshes;
 };
 
 }  // namespace sdft

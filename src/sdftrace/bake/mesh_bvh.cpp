@@ -127,7 +127,8 @@ MeshBvh::Hit MeshBvh::firstHit(const Ray& ray, float tnear) const {
     rtcIntersect1(m_impl->scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
     const PackedTriangle& t = m_impl->triangles[rh.hit.primID];
-    return {rh.ray.tfar + back, dot(ray.direction, cross(t.b - t.a, t.c - t.a)) < 0};
+    return {rh.ray.tfar + back, dot(ray.direction, cross(t.b - t.a, t.c - t.a)) < 0, rh.hit.primID,
+            rh.hit.u, rh.hit.v};
 }
 
 int MeshBvh::crossings(const Ray& ray) const {

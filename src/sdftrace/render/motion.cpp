@@ -66,6 +66,20 @@ Vec3 Placement::toWorld(Vec3 p) const {
     return p;
 }
 
+Vec3 Placement::normalToWorld(Vec3 n) const {
+    for (auto it = steps.rbegin(); it != steps.rend(); ++it) {
+        const Step& s = *it;
+        if (s.kind == NodeKind::Rotate) {
+            n = {s.k[0] * n.x + s.k[1] * n.y + s.k[2] * n.z,
+                 s.k[3] * n.x + s.k[4] * n.y + s.k[5] * n.z,
+                 s.k[6] * n.x + s.k[7] * n.y + s.k[8] * n.z};
+        } else if (s.kind == NodeKind::Scale) {
+            n = n / Vec3(s.k[0], s.k[1], s.k[2]);
+        }
+    }
+    return normalize(n);
+}
+
 bool Placement::sameShape(const Placement& o) const {
     if (steps.size() != o.steps.size()) return false;
     for (size_t i = 0; i < steps.size(); ++i)

@@ -41,7 +41,8 @@ struct TileScratch {
     PacketScratch packet;
     std::vector<RaySegment> segments;
     std::vector<TraceResult> results;
-    std::vector<int> hitPixel;  // tile-local index of each hit
+    std::vector<int> hitPixel;                   // tile-local index of each hit
+    std::vector<MeshPrimary::Hit> triangleHits;  // hybrid mode: per pixel, t < inf on triangles
     std::vector<Vec3> hitPoint, hitNormal;
     std::vector<float> x, y, z, f;
     std::vector<RaySegment> shadowSegments;
@@ -133,6 +134,8 @@ class TileRenderer {
     }
     void tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1);
     void tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw);
+    void tracePrimaryTriangles(TileScratch& s);
+    void placeTriangleHits(TileScratch& s);
     void shadeDirect(TileScratch& s);
     void shadeSpecular(TileScratch& s);
     void writeFilm(const TileScratch& s);
@@ -224,6 +227,7 @@ void TileRenderer::renderTile(int x0, int y0, int x1, int y1, TileScratch& s) {
     } else {
         stencilNormals(s);
     }
+    if (m_plan.meshPrimary) placeTriangleHits(s);
     shadeDirect(s);
     shadeSpecular(s);
     writeFilm(s);
@@ -245,9 +249,13 @@ void TileRenderer::tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1) 
     }
     if (m_grid) {
         tracePrimaryGrid(s, x0, y0, tw);
+    } else if (m_plan.meshPrimary && !m_plan.primaryField) {
+        std::fill(s.results.begin(), s.results.end(), TraceResult{});  // only meshes
     } else {
-        tracePacket(m_tape, s.segments, m_primary, s.results, s.packet);
+        tracePacket(m_plan.primaryField ? *m_plan.primaryField : m_tape, s.segments, m_primary,
+                    s.results, s.packet);
     }
+    if (m_plan.meshPrimary) tracePrimaryTriangles(s);
     s.hitPixel.clear();
     s.hitPoint.clear();
     for (int i = 0; i < count; ++i) {
@@ -260,6 +268,35 @@ void TileRenderer::tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1) 
     }
     s.stats.primaryRays += count;
     s.stats.hits += s.hitPixel.size();
+}
+
+// Hybrid mode (RTSDF): each primary ray also against the meshes' triangles; a nearer triangle
+// hit replaces the field's.
+void TileRenderer::tracePrimaryTriangles(TileScratch& s) {
+    const size_t count = s.segments.size();
+    s.triangleHits.assign(count, MeshPrimary::Hit{});
+    for (size_t i = 0; i < count; ++i) {
+        TraceResult& r = s.results[i];
+        const float tMax = r.hit ? r.t : s.segments[i].tMax;
+        const MeshPrimary::Hit h = m_plan.meshPrimary->firstHit(s.segments[i].ray, tMax);
+        if (!(h.t < tMax)) continue;
+        r.hit = true;
+        r.t = h.t;
+        r.value = 0;
+        s.triangleHits[i] = h;
+    }
+}
+
+// Triangle hits shade with the triangle's normal, at a point one voxel of the mesh's grid off
+// the triangle (RTSDF §2.5.3's bias): the SDF that shadows and AO march is a voxel's accuracy
+// away from the triangles, and would shadow its own surface from below it.
+void TileRenderer::placeTriangleHits(TileScratch& s) {
+    for (size_t h = 0; h < s.hitPixel.size(); ++h) {
+        const MeshPrimary::Hit& t = s.triangleHits[static_cast<size_t>(s.hitPixel[h])];
+        if (!(t.t < INFINITY)) continue;
+        s.hitNormal[h] = t.normal;
+        s.hitPoint[h] += t.normal * t.bias;
+    }
 }
 
 // Ambient (scaled by SDF ambient occlusion) + for each light, Lambert + Blinn-Phong where the

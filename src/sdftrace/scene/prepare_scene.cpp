@@ -103,7 +103,8 @@ TriangleMesh posedMesh(const AssetRequest& q, AssetCache& cache) {
 
 // Loads or bakes one request; file and bake errors get the request's JSON path.
 std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subtree, bool progress,
-                                      AssetCache& cache) {
+                                      AssetCache& cache,
+                                      std::shared_ptr<const TriangleMesh>& triangles) {
     try {
         switch (q.kind) {
             case AssetRequest::Kind::GridFile:
@@ -111,7 +112,10 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
             case AssetRequest::Kind::Mesh: {
                 MeshBakeOptions bake = q.bake;
                 bake.progress = progress;
-                const TriangleMesh mesh = q.play ? posedMesh(q, cache) : loadMesh(q.path);
+                auto loaded = std::make_shared<const TriangleMesh>(q.play ? posedMesh(q, cache)
+                                                                          : loadMesh(q.path));
+                triangles = loaded;
+                const TriangleMesh& mesh = *loaded;
                 if (q.dynamic == AssetRequest::Dynamic::Rtsdf) {
                     // RTSDF §2.5.1: one grid for all frames, over the first frame's bounds
                     // widened by a quarter each way so that the mesh may move and deform in it.
@@ -158,6 +162,7 @@ PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions&
     for (size_t i = 0; i < scene.assets.size(); ++i) {
         const AssetRequest& q = scene.assets[i];
         if ((grids[i] = cache.find(q.key))) {
+            if (auto mesh = cache.findMesh(q.key)) scene.meshes[grids[i].get()] = mesh;
             ++stats.cached;
             continue;
         }
@@ -166,8 +171,11 @@ PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions&
                          describe(q).c_str());
         }
         const NodePtr subtree = q.subtree ? substitute(q.subtree, grids, done) : nullptr;
-        grids[i] = loadAsset(q, subtree, options.progress, cache);
+        std::shared_ptr<const TriangleMesh> triangles;
+        grids[i] = loadAsset(q, subtree, options.progress, cache, triangles);
         cache.insert(q.key, grids[i]);
+        cache.insertMesh(q.key, triangles);
+        if (triangles) scene.meshes[grids[i].get()] = triangles;
         ++(q.kind == AssetRequest::Kind::GridFile ? stats.loaded : stats.baked);
     }
     checkRepeats(scene, grids, done);

@@ -315,6 +315,14 @@ std::vector<RenderOption> makeTable() {
          .doc = "rays inside a convex top-level object jump to its bounding box and trace back on "
                 "its own field (Keinert §3.5)",
          SDFT_MEMBER(convexBounds)},
+        {.key = "primary_triangles",
+         .flags = "--primary-triangles",
+         .group = "Tracer",
+         .type = T::Bool,
+         .doc = "RTSDF's hybrid mode: primary rays hit mesh objects' triangles (Embree), shadows "
+                "and AO march their SDFs, the shading point biased one voxel off the triangle "
+                "(RTSDF §2.5.3); meshes under operators other than union and transforms stay SDFs",
+         SDFT_MEMBER(primaryTriangles)},
         // The integrator.
         {.key = "integrator",
          .flags = "--integrator",

@@ -1,0 +1,37 @@
+#include "placed_meshes.h"
+
+namespace sdft {
+
+std::vector<Vec3> smoothNormals(const TriangleMesh& mesh) {
+    std::vector<Vec3> n(mesh.positions.size(), Vec3(0.0f));
+    for (const auto& t : mesh.triangles) {
+        const Vec3 a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
+        const Vec3 area = cross(b - a, c - a);  // twice the area, along the face normal
+        for (uint32_t v : t) n[v] += area;
+    }
+    for (Vec3& v : n) v = length(v) > 0 ? normalize(v) : Vec3(0, 1, 0);
+    return n;
+}
+
+MeshPrimary::Hit PlacedMeshes::firstHit(const Ray& ray, float tMax) const {
+    Hit best;
+    best.t = tMax;
+    for (const PlacedMesh& m : m_meshes) {
+        // The ray in the mesh's coordinates, its direction not renormalised so that t stays the
+        // world distance through any scale.
+        const Vec3 o = m.placement.toLocal(ray.origin);
+        const Vec3 d = m.placement.toLocal(ray.origin + ray.direction) - o;
+        const MeshBvh::Hit h = m.bvh->firstHit(Ray{o, d});
+        if (!(h.t < best.t)) continue;
+        const auto& tri = m.mesh->triangles[h.triangle];
+        const Vec3 local =
+            m.normals[tri[0]] * (1 - h.u - h.v) + m.normals[tri[1]] * h.u + m.normals[tri[2]] * h.v;
+        Vec3 n = m.placement.normalToWorld(length(local) > 0 ? local : Vec3(0, 1, 0));
+        if (dot(n, ray.direction) > 0) n = -n;
+        best = {h.t, n, m.bias};
+    }
+    if (!(best.t < tMax)) best.t = INFINITY;
+    return best;
+}
+
+}  // namespace sdft

@@ -1,0 +1,36 @@
+// The meshes of a scene as triangles for primary rays (render/mesh_primary.h, RTSDF's hybrid
+// mode): each mesh keeps its Embree BVH in its own coordinates and rays are carried into them by
+// the mesh's placement (render/motion.h), so a moving rigid mesh is not rebuilt. Internal to the
+// scene module.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "sdftrace/bake/mesh_bvh.h"
+#include "sdftrace/render/mesh_primary.h"
+#include "sdftrace/render/motion.h"
+
+namespace sdft {
+
+struct PlacedMesh {
+    std::shared_ptr<const TriangleMesh> mesh;
+    std::shared_ptr<const MeshBvh> bvh;  // over *mesh
+    std::vector<Vec3> normals;           // per vertex (smoothNormals), in the mesh's coordinates
+    Placement placement;                 // mesh to world
+    float bias = 0;                      // MeshPrimary::Hit::bias
+};
+
+// Area-weighted vertex normals of a mesh, for shading its triangles smoothly.
+std::vector<Vec3> smoothNormals(const TriangleMesh& mesh);
+
+class PlacedMeshes : public MeshPrimary {
+  public:
+    explicit PlacedMeshes(std::vector<PlacedMesh> meshes) : m_meshes(std::move(meshes)) {}
+    Hit firstHit(const Ray& ray, float tMax) const override;
+
+  private:
+    std::vector<PlacedMesh> m_meshes;
+};
+
+}  // namespace sdft
