@@ -7,10 +7,11 @@
 // in the mask against the exact SDF of that frame's geometry (mean and max |error| in fine voxels,
 // wrong signs), and the ghosting: the mean amount by which the field underestimates the distance on
 // the vertices the surface left in the last 10 frames (exact distance now more than a voxel above
-// what it was 10 frames ago).
+// what it was 10 frames ago). With several decays (--alphas), the accuracy and ghosting against
+// alpha and x (RTSDF figs. 5-6: more history converges further and ghosts longer).
 //
 // usage: sdftrace_rtsdf_frame_bench [--mesh file] [--frames N] [--sizes 128,256] [--rays 1,5,10]
-//                                   [--alpha 0.95] [--threads T]
+//                                   [--alphas 0.95] [--degrees 6] [--threads T]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -44,17 +45,27 @@ std::vector<int> parseList(const char* s) {
     return out;
 }
 
+std::vector<float> parseFloats(const char* s) {
+    std::vector<float> out;
+    for (const char* p = s; *p;) {
+        out.push_back(static_cast<float>(std::atof(p)));
+        while (*p && *p != ',') ++p;
+        if (*p) ++p;
+    }
+    return out;
+}
+
 double median(std::vector<double> v) {
     if (v.empty()) return 0;
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
 }
 
-// The mesh moved to frame k of a circle of `frames` steps per turn, radius r, in the xz plane.
-TriangleMesh atFrame(const TriangleMesh& mesh, int k, int framesPerTurn, float r) {
+// The mesh moved to frame k of a circle, `degrees` per frame (0: it stands still), radius r, in
+// the xz plane.
+TriangleMesh atFrame(const TriangleMesh& mesh, int k, float degrees, float r) {
     TriangleMesh m = mesh;
-    const float a =
-        2.0f * static_cast<float>(M_PI) * static_cast<float>(k) / static_cast<float>(framesPerTurn);
+    const float a = static_cast<float>(M_PI) / 180 * degrees * static_cast<float>(k);
     const Vec3 offset(r * std::cos(a), 0, r * std::sin(a));
     for (Vec3& p : m.positions) p = p + offset;
     return m;
@@ -77,7 +88,8 @@ int main(int argc, char** argv) {
     // (decision 4), which rays through the holes do not see.
     std::string meshPath = std::string(SDFT_SOURCE_DIR) + "/data/meshes/bunny_npm.obj";
     int frames = 20, threads = 2;
-    float alpha = 0.95f;
+    std::vector<float> alphas = {0.95f};
+    float degrees = 6;
     std::vector<int> sizes = {128, 256}, rays = {1, 5, 10};
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i];
@@ -89,8 +101,10 @@ int main(int argc, char** argv) {
             sizes = parseList(argv[i + 1]);
         else if (a == "--rays")
             rays = parseList(argv[i + 1]);
-        else if (a == "--alpha")
-            alpha = static_cast<float>(std::atof(argv[i + 1]));
+        else if (a == "--alpha" || a == "--alphas")
+            alphas = parseFloats(argv[i + 1]);
+        else if (a == "--degrees")
+            degrees = static_cast<float>(std::atof(argv[i + 1]));
         else if (a == "--threads")
             threads = std::atoi(argv[i + 1]);
         else {
@@ -103,15 +117,14 @@ int main(int argc, char** argv) {
     const float radius = 0.5f * maxComponent(b.extent());
     // The region the mesh sweeps over a whole turn.
     const Bounds3 region{b.lo - Vec3(radius, 0, radius), b.hi + Vec3(radius, 0, radius)};
-    const int framesPerTurn = 60;  // 6 degrees per frame
     std::printf(
-        "## RTSDF per frame on the CPU: %s (%zu triangles) on a circle of radius %.3g, "
-        "%d frames, alpha %.2f, mask 3 fine voxels, %d threads\n\n",
-        meshPath.c_str(), mesh.triangles.size(), radius, frames, alpha, threads);
+        "## RTSDF per frame on the CPU: %s (%zu triangles) on a circle of radius %.3g, %.3g "
+        "degrees per frame, %d frames, mask 3 fine voxels, %d threads\n\n",
+        meshPath.c_str(), mesh.triangles.size(), radius, degrees, frames, threads);
     std::printf(
-        "| fine / coarse | x | BVH build | voxelize + jump flood (coarse) | rays (fine) | "
+        "| fine / coarse | alpha | x | BVH build | voxelize + jump flood (coarse) | rays (fine) | "
         "frame | refined vertices | mean / max error (voxels) | wrong signs | ghost "
-        "(voxels) |\n|---|---|---|---|---|---|---|---|---|---|\n");
+        "(voxels) |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (int size : sizes) {
         SampleOptions so;
         so.resolution = size;
@@ -121,60 +134,61 @@ int main(int argc, char** argv) {
         // The exact fields of the last frame and of 10 frames before it.
         const int last = frames - 1;
         const std::vector<float> exact =
-            exactSamples(atFrame(mesh, last, framesPerTurn, radius), shape, threads);
-        const std::vector<float> earlier = exactSamples(
-            atFrame(mesh, std::max(0, last - 10), framesPerTurn, radius), shape, threads);
-        for (int x : rays) {
-            RtsdfHistory history;
-            history.alpha = alpha;
-            RtsdfOptions o;
-            o.rays = x;
-            o.history = &history;
-            std::vector<double> bvhS, coarseS, rayS, frameS;
-            size_t refined = 0;
-            std::vector<float> f;
-            for (int k = 0; k < frames; ++k) {
-                const TriangleMesh m = atFrame(mesh, k, framesPerTurn, radius);
-                const auto t0 = Clock::now();
-                const MeshBvh bvh(m);
-                const auto t1 = Clock::now();
-                RtsdfStats st;
-                f = bakeRtsdfSamples(m, bvh, shape, o, threads, &st);
-                const auto t2 = Clock::now();
-                if (k > 0) {  // the first frame allocates the history
-                    bvhS.push_back(seconds(t0, t1));
-                    coarseS.push_back(st.coarseSeconds);
-                    rayS.push_back(st.raySeconds);
-                    frameS.push_back(seconds(t0, t2));
+            exactSamples(atFrame(mesh, last, degrees, radius), shape, threads);
+        const std::vector<float> earlier =
+            exactSamples(atFrame(mesh, std::max(0, last - 10), degrees, radius), shape, threads);
+        for (const float alpha : alphas)
+            for (int x : rays) {
+                RtsdfHistory history;
+                history.alpha = alpha;
+                RtsdfOptions o;
+                o.rays = x;
+                o.history = &history;
+                std::vector<double> bvhS, coarseS, rayS, frameS;
+                size_t refined = 0;
+                std::vector<float> f;
+                for (int k = 0; k < frames; ++k) {
+                    const TriangleMesh m = atFrame(mesh, k, degrees, radius);
+                    const auto t0 = Clock::now();
+                    const MeshBvh bvh(m);
+                    const auto t1 = Clock::now();
+                    RtsdfStats st;
+                    f = bakeRtsdfSamples(m, bvh, shape, o, threads, &st);
+                    const auto t2 = Clock::now();
+                    if (k > 0) {  // the first frame allocates the history
+                        bvhS.push_back(seconds(t0, t1));
+                        coarseS.push_back(st.coarseSeconds);
+                        rayS.push_back(st.raySeconds);
+                        frameS.push_back(seconds(t0, t2));
+                    }
+                    refined = st.refined;
                 }
-                refined = st.refined;
+                // Accuracy in the mask of the last frame, and the ghost where the surface left.
+                double sum = 0, worst = 0, ghost = 0;
+                size_t n = 0, wrong = 0, left = 0;
+                for (size_t i = 0; i < f.size(); ++i) {
+                    if (std::fabs(exact[i]) <= 3 * h) {
+                        const double e = std::fabs(f[i] - exact[i]) / h;
+                        sum += e;
+                        worst = std::max(worst, e);
+                        wrong += (f[i] < 0) != (exact[i] < 0) && std::fabs(exact[i]) > 0.5f * h;
+                        ++n;
+                    }
+                    if (std::fabs(exact[i]) <= 3 * h &&
+                        std::fabs(exact[i]) > std::fabs(earlier[i]) + h) {
+                        ghost += std::max(0.0f, std::fabs(exact[i]) - std::fabs(f[i])) / h;
+                        ++left;
+                    }
+                }
+                std::printf(
+                    "| %d / %d | %.2f | %d | %.1f ms | %.1f ms | %.1f ms | %.1f ms | %zu | %.3f / "
+                    "%.2f | %.3f%% | %.3f |\n",
+                    size, (size + 1) / 2, alpha, x, 1e3 * median(bvhS), 1e3 * median(coarseS),
+                    1e3 * median(rayS), 1e3 * median(frameS), refined, sum / n, worst,
+                    100.0 * static_cast<double>(wrong) / static_cast<double>(n),
+                    left ? ghost / static_cast<double>(left) : 0.0);
+                std::fflush(stdout);
             }
-            // Accuracy in the mask of the last frame, and the ghost where the surface left.
-            double sum = 0, worst = 0, ghost = 0;
-            size_t n = 0, wrong = 0, left = 0;
-            for (size_t i = 0; i < f.size(); ++i) {
-                if (std::fabs(exact[i]) <= 3 * h) {
-                    const double e = std::fabs(f[i] - exact[i]) / h;
-                    sum += e;
-                    worst = std::max(worst, e);
-                    wrong += (f[i] < 0) != (exact[i] < 0) && std::fabs(exact[i]) > 0.5f * h;
-                    ++n;
-                }
-                if (std::fabs(exact[i]) <= 3 * h &&
-                    std::fabs(exact[i]) > std::fabs(earlier[i]) + h) {
-                    ghost += std::max(0.0f, std::fabs(exact[i]) - std::fabs(f[i])) / h;
-                    ++left;
-                }
-            }
-            std::printf(
-                "| %d / %d | %d | %.1f ms | %.1f ms | %.1f ms | %.1f ms | %zu | %.3f / "
-                "%.2f | %.3f%% | %.3f |\n",
-                size, (size + 1) / 2, x, 1e3 * median(bvhS), 1e3 * median(coarseS),
-                1e3 * median(rayS), 1e3 * median(frameS), refined, sum / n, worst,
-                100.0 * static_cast<double>(wrong) / static_cast<double>(n),
-                left ? ghost / static_cast<double>(left) : 0.0);
-            std::fflush(stdout);
-        }
     }
     return 0;
 }

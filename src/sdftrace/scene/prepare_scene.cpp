@@ -77,9 +77,9 @@ Grid sampleSubtree(const AssetRequest& q, const NodePtr& subtree) {
 
 // The pose of a played mesh (AssetRequest::play): its clip chosen by name or number, its time
 // wrapped into the clip or clamped to it.
-TriangleMesh posedMesh(const AssetRequest& q, AssetCache& cache) {
+// A played mesh's clip (checked), by name or number.
+int playedClip(const AssetRequest& q, const AnimatedMesh& mesh) {
     const AssetRequest::Play& p = *q.play;
-    const AnimatedMesh& mesh = cache.animatedMesh(q.path);
     if (mesh.clips().empty())
         throw InputError(p.where + ": " + q.path +
                          " has no skeletal or morph animation (assimp found none); remove "
@@ -95,10 +95,28 @@ TriangleMesh posedMesh(const AssetRequest& q, AssetCache& cache) {
                          q.path + ", which has " + std::to_string(mesh.clips().size()) + ": " +
                          mesh.clipList());
     }
+    return clip;
+}
+
+TriangleMesh posedMesh(const AssetRequest& q, AssetCache& cache) {
+    const AssetRequest::Play& p = *q.play;
+    const AnimatedMesh& mesh = cache.animatedMesh(q.path);
+    const int clip = playedClip(q, mesh);
     const double duration = mesh.clips()[static_cast<size_t>(clip)].duration;
     double t = p.seconds;
     if (p.loop && duration > 0) t -= duration * std::floor(t / duration);
     return mesh.pose(clip, std::clamp(t, 0.0, duration));
+}
+
+// Where a played mesh goes over its whole clip (its poses at 33 evenly spaced times), so that the
+// grid RTSDF regenerates it in holds every frame.
+Bounds3 clipBounds(const AssetRequest& q, AssetCache& cache) {
+    const AnimatedMesh& mesh = cache.animatedMesh(q.path);
+    const int clip = playedClip(q, mesh);
+    const double duration = mesh.clips()[static_cast<size_t>(clip)].duration;
+    Bounds3 b;
+    for (int k = 0; k <= 32; ++k) b = unite(b, mesh.pose(clip, duration * k / 32).bounds());
+    return b;
 }
 
 // Loads or bakes one request; file and bake errors get the request's JSON path.
@@ -117,17 +135,24 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
                 triangles = loaded;
                 const TriangleMesh& mesh = *loaded;
                 if (q.dynamic == AssetRequest::Dynamic::Rtsdf) {
-                    // RTSDF §2.5.1: one grid for all frames, over the first frame's bounds
-                    // widened by a quarter each way so that the mesh may move and deform in it.
+                    // RTSDF §2.5.1: one grid for all frames, over the first frame's bounds (a
+                    // played mesh's: its whole clip's) widened by a quarter each way so that the
+                    // mesh may move and deform in it.
                     RtsdfHistory& h = cache.rtsdfHistory(q.where);
                     h.alpha = q.alpha;
                     if (h.frames == 0) {
-                        Bounds3 b = mesh.bounds();
+                        Bounds3 b = q.play ? clipBounds(q, cache) : mesh.bounds();
                         const Vec3 margin = b.extent() * 0.25f;
                         h.shape = gridShapeFor({b.lo - margin, b.hi + margin}, bake.sampling);
                     }
                     bake.shape = h.shape;
                     bake.rtsdf.history = &h;
+                    // Every block kept, as RTSDF's 3D textures cover their volume: beyond the
+                    // mask the grid holds the coarse SDF's distances, which SDF soft shadows
+                    // (k h / t) need (a narrow band leaves only lower bounds there, read as near
+                    // misses). Blocks, not one dense array, so that a block's Lipschitz bound (a
+                    // few rays' noisy distances, a wrong sign) slows only that block.
+                    bake.sampling.bandVoxels = 1e6f;
                 }
                 return std::make_shared<const Grid>(bakeMesh(mesh, bake).grid);
             }
