@@ -48,6 +48,36 @@ GridShape shape() {
     return gridShapeFor({Vec3(-1.2f), Vec3(1.2f)}, o);
 }
 
+// A single bake is relaxed to 1-Lipschitz along the axes: same-sign neighbours differ by at most
+// a voxel, where the fine rays' distances meet the coarse field and where two rays overestimated.
+// (Unrelaxed, neighbours here differ by up to 1.23 voxels; on the closed bunny at 64 cells and 4
+// rays the relaxation halves the band's mean error, 0.49 -> 0.26 voxel, by `bake --verify`.)
+TEST(RtsdfBake, ASingleBakeIsOneLipschitzAlongTheAxes) {
+    const GridShape s = shape();
+    const TriangleMesh mesh = box(0);
+    const MeshBvh bvh(mesh);
+    RtsdfOptions few;
+    few.rays = 2;
+    const std::vector<float> f = bakeRtsdfSamples(mesh, bvh, s, few);
+    const int n[3] = {s.vertices(0), s.vertices(1), s.vertices(2)};
+    const size_t stride[3] = {1, static_cast<size_t>(n[0]), static_cast<size_t>(n[0]) * n[1]};
+    size_t edges = 0;
+    for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+            for (int i = 0; i < n[0]; ++i) {
+                const size_t idx = i + j * stride[1] + k * stride[2];
+                const int at[3] = {i, j, k};
+                for (int a = 0; a < 3; ++a) {
+                    if (at[a] + 1 >= n[a]) continue;
+                    const float u = f[idx], v = f[idx + stride[a]];
+                    if ((u < 0) != (v < 0)) continue;
+                    ++edges;
+                    ASSERT_LE(std::fabs(u - v), s.voxelSize * 1.0001f) << i << " " << j << " " << k;
+                }
+            }
+    EXPECT_GT(edges, 100000u);
+}
+
 TEST(RtsdfAccumulation, FewRaysPerFrameConvergeLikeManyRaysAtOnce) {
     const GridShape s = shape();
     const TriangleMesh mesh = box(0);
