@@ -17,10 +17,9 @@ namespace sdft {
 // +-background / L, a few voxels: sphere tracing crawls through it in steps of that size, and a
 // screen-space hit test (Keinert §3.2) takes any of it seen from farther than that over the pixel
 // radius for the surface (a box around a mesh in a scene). Outside the box the bound is
-// sqrt(|p - q|^2 + gap^2) through the nearest box point q, as in GridView::sample.
+// sqrt(|p - q|^2 + gap^2) through the nearest box point q, as in GridView::sample, with f / L for
+// the gap where samples give it.
 SDFT_HOST_DEVICE inline float gridDistanceBound(const GridView& g, Vec3 p) {
-    if (g.kind != GridKind::Sparse || !g.blockSkip || !g.tileSkip) return g.sample(p) / g.lipschitz;
-    // GridView::sample's steps, with the block looked up once for the gap and the samples.
     const Vec3 hi = g.shape.origin + Vec3(static_cast<float>(g.shape.cells[0]),
                                           static_cast<float>(g.shape.cells[1]),
                                           static_cast<float>(g.shape.cells[2])) *
@@ -28,6 +27,12 @@ SDFT_HOST_DEVICE inline float gridDistanceBound(const GridView& g, Vec3 p) {
     const Vec3 q = min(max(p, g.shape.origin), hi);
     const Vec3 d = p - q;
     const float out2 = dot(d, d);
+    if (g.kind != GridKind::Sparse || !g.blockSkip || !g.tileSkip) {
+        if (out2 == 0.0f) return g.sample(p) / g.lipschitz;
+        const float outside = maxf(g.sample(q), 0.0f) / g.lipschitz;
+        return std::sqrt(out2 + outside * outside);
+    }
+    // GridView::sample's steps, with the block looked up once for the gap and the samples.
     int i, j, k;
     float u, v, w;
     g.locate(q, i, j, k, u, v, w);
@@ -67,8 +72,11 @@ SDFT_HOST_DEVICE inline float gridDistanceBound(const GridView& g, Vec3 p) {
         f = inside ? -g.background : g.background;
     }
     if (out2 == 0.0f) return f / g.lipschitz;
-    const float outside = maxf(f, 0.0f);
-    return std::sqrt(out2 + outside * outside) / g.lipschitz;
+    // |p - s|^2 >= |p - q|^2 + |q - s|^2 for any s in the box (q projects p onto it), and
+    // |q - s| >= f / L: the bound stays at least the distance to the box, as bounds culling and
+    // SDF soft shadows assume (dividing the whole root by L fell below it wherever L > 1).
+    const float outside = maxf(f, 0.0f) / g.lipschitz;
+    return std::sqrt(out2 + outside * outside);
 }
 
 }  // namespace sdft

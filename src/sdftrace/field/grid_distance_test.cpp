@@ -75,5 +75,36 @@ TEST(GridDistance, TreeAndTapeAgree) {
     }
 }
 
+// A grid whose Lipschitz bound exceeds 1 (here its samples are twice a sphere's distance, L = 2)
+// reads at least the distance to its box outside it, which bounds culling of unions and SDF soft
+// shadows rely on, and still at most the distance to the surface. Dividing the whole
+// sqrt(out^2 + f^2) by L fell below the box distance.
+TEST(GridDistance, OutsideItsBoxAGridReadsAtLeastTheBoxDistance) {
+    const Tape tape = compileTape(node::sphere(1.0f), {.boundsCulling = false});
+    SampleOptions o;
+    o.resolution = 48;
+    const GridShape shape = gridShapeFor({Vec3(-1.5f), Vec3(1.5f)}, o);
+    std::vector<float> samples = sampleVertices(tape, shape);
+    for (float& v : samples) v *= 2;  // steeper than a distance: L = 2
+    for (const Grid& grid :
+         {Grid::dense(shape, samples), Grid::sparseFromDense(shape, samples, 4, 3)}) {
+        const GridView g = grid.view();
+        ASSERT_GT(g.lipschitz, 1.9f);
+        const Bounds3 box = g.shape.bounds();
+        testing::Rng rng(5);
+        int outside = 0;
+        for (int i = 0; i < 5000; ++i) {
+            const Vec3 p = rng.inCube(4.0f);
+            const Vec3 d = max(max(box.lo - p, p - box.hi), Vec3(0.0f));
+            if (length(d) == 0) continue;
+            ++outside;
+            const float f = gridDistanceBound(g, p);
+            ASSERT_GE(f, length(d) * (1 - 1e-6f)) << p.x << "," << p.y << "," << p.z;
+            ASSERT_LE(f, length(p) - 1.0f + 0.05f * g.shape.voxelSize);
+        }
+        EXPECT_GT(outside, 3000);
+    }
+}
+
 }  // namespace
 }  // namespace sdft
