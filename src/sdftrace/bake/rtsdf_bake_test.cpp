@@ -94,9 +94,10 @@ TEST(RtsdfAccumulation, FewRaysPerFrameConvergeLikeManyRaysAtOnce) {
     for (int frame = 0; frame < 32; ++frame)
         last = meanError(bakeRtsdfSamples(mesh, bvh, s, few), s, 0, 3);
     EXPECT_EQ(history.frames, 32);
-    // 2 rays once are far off (their minimum overestimates); 32 frames of 2, starting from and
-    // decaying towards the coarse SDF, do better than 32 rays at once (measured: 1.26 voxels,
-    // 0.035 after 32 frames, 0.18 for 32 rays at once).
+    // 2 rays once are far off (their minimum overestimates; relaxed to 1-Lipschitz, as single
+    // bakes are); 32 frames of 2, starting from and decaying towards the coarse SDF, do better
+    // than 32 rays at once (measured: 0.28 voxel, 0.035 after 32 frames, 0.066 for 32 rays at
+    // once; unrelaxed 1.26 and 0.18).
     EXPECT_GT(single, 2 * once) << "single " << single << ", once " << once;
     EXPECT_LT(last, once) << "last " << last << ", once " << once;
     EXPECT_LT(last, single / 4) << "last " << last << ", single " << single;
