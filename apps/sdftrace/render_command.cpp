@@ -382,6 +382,7 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
     const bool motion = a.taa || (kept & Film::bit(Aov::Motion));
     if (motion) kept |= Film::bit(Aov::Depth);
+    if (a.taa) kept |= Film::bit(Aov::Shadow);  // moving shadows reject their history
     std::optional<TemporalAccumulator> taa;
     if (a.taa) taa.emplace(a.taaAlpha.value_or(0.0f), true);
     size_t rejected = 0;
@@ -397,6 +398,12 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
         assets.cached += st.cached;
         applyOverrides(a, scene);
         const RenderPlan plan = planRender(scene);
+        const ShadowMethod method = plan.settings.shadowMethod;
+        if (taa)  // deterministic shadows only: stochastic ones change every frame by design
+            taa->rejectShadowChanges(plan.settings.shadows && (method == ShadowMethod::Hard ||
+                                                               method == ShadowMethod::Soft)
+                                         ? 0.3f
+                                         : 0.0f);
         if (taa && i == 0)  // the history, its objects and depths, and the motion vectors
             checkMemoryBudget(Film::bytesNeeded(plan.camera.width, plan.camera.height) +
                                   37.0 * plan.camera.width * plan.camera.height,

@@ -6,8 +6,9 @@
 //    reprojected by each pixel's motion vector (motion.h: the camera's motion, and each object's
 //    own from its placement at the two instants), rejected where the previous frame saw another
 //    object or a surface at another depth there (disocclusion: the ground a moving object
-//    uncovers), clamped to the current frame's 3 x 3 colour neighbourhood (moving shadows and
-//    shading, deforming objects), and blended with weight alpha.
+//    uncovers) or, optionally, where the first light's visibility changed (moving shadows), clamped
+//    to the current frame's 3 x 3 colour neighbourhood (shading, deforming objects), and blended
+//    with weight alpha.
 #pragma once
 
 #include <functional>
@@ -40,6 +41,11 @@ class TemporalAccumulator {
     // Blends film.color with the history and makes it the blended image. Reprojecting needs the
     // frame's depth and motion vectors; stills pass none. A frame of another size restarts.
     void add(Film& film, const MotionVectors* motion = nullptr);
+    // Also reject history where the first shadowing light's visibility (the shadow AOV, which
+    // the films must then keep) changed by more than `change` since the previous frame: a moving
+    // occluder's shadow, or a moving light's, leaves no trail on surfaces that do not move. Only
+    // for deterministic shadows (hard, soft): stochastic ones vary from frame to frame by design.
+    void rejectShadowChanges(float change) { m_shadowChange = change; }
     int frames() const { return m_frames; }
     int width() const { return m_width; }
     int height() const { return m_height; }
@@ -54,6 +60,8 @@ class TemporalAccumulator {
     std::vector<float> m_history;  // 3 per pixel
     std::vector<int> m_objects;    // what the history's pixels show (MotionVectors::objects)
     std::vector<float> m_depth;    // and at what distance
+    std::vector<float> m_shadow;   // and how visible the first shadowing light was
+    float m_shadowChange = 0;
 };
 
 // Renders the frames into `film`: colour is the accumulated image, the other AOVs those of the last

@@ -61,6 +61,8 @@ void TemporalAccumulator::add(Film& film, const MotionVectors* mv) {
         m_rejected = 0;
     } else {
         std::vector<float> next(film.color.size());
+        const bool shadowTest = m_reject && m_shadowChange > 0 && film.has(Aov::Shadow) &&
+                                m_shadow.size() == film.pixels();
         std::atomic<size_t> rejected{0};
         const float weight0 = m_alpha > 0 ? m_alpha : static_cast<float>(m_frames) / (m_frames + 1);
         tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
@@ -94,6 +96,9 @@ void TemporalAccumulator::add(Film& film, const MotionVectors* mv) {
                                     if (m_reject && m_objects[j] != object) continue;
                                     if (m_reject && object >= 0 &&
                                         !(std::fabs(m_depth[j] - d) <= kDepthTolerance * d))
+                                        continue;
+                                    if (shadowTest &&
+                                        std::fabs(m_shadow[j] - film.shadow[i]) > m_shadowChange)
                                         continue;
                                     const float wgt = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay);
                                     sum += rgbAt(m_history, j) * wgt;
@@ -132,6 +137,7 @@ void TemporalAccumulator::add(Film& film, const MotionVectors* mv) {
     if (m_reproject) {
         m_objects = mv->objects;
         m_depth = film.depth;
+        if (m_shadowChange > 0 && film.has(Aov::Shadow)) m_shadow = film.shadow;
     }
     ++m_frames;
     film.color = m_history;
