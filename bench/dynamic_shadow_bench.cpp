@@ -50,6 +50,18 @@ struct Method {
     std::string name, tube, render;
 };
 
+// RMSE of a shadow AOV against the truth's over the shadowed pixels (either below 0.99).
+double rmse(const std::vector<float>& shadow, const std::vector<float>& truth) {
+    double sq = 0;
+    size_t n = 0;
+    for (size_t i = 0; i < shadow.size(); ++i) {
+        if (shadow[i] >= 0.99f && truth[i] >= 0.99f) continue;
+        sq += (double(shadow[i]) - truth[i]) * (double(shadow[i]) - truth[i]);
+        ++n;
+    }
+    return n ? std::sqrt(sq / static_cast<double>(n)) : 0;
+}
+
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v.empty() ? 0 : v[v.size() / 2];
@@ -129,17 +141,9 @@ int main(int argc, char** argv) {
         const auto shadows = shadowsOf(m, &times);
         double sumRmse = 0, worst = 0;
         for (int k = 0; k < frames; ++k) {
-            double sq = 0;
-            size_t n = 0;
-            for (size_t i = 0; i < shadows[k].size(); ++i) {
-                const float a = shadows[k][i], b = reference[k][i];
-                if (a >= 0.99f && b >= 0.99f) continue;
-                sq += (double(a) - b) * (double(a) - b);
-                ++n;
-            }
-            const double rmse = n ? std::sqrt(sq / n) : 0;
-            sumRmse += rmse;
-            worst = std::max(worst, rmse);
+            const double e = rmse(shadows[k], reference[k]);
+            sumRmse += e;
+            worst = std::max(worst, e);
         }
         std::printf("| %s | %.4f | %.4f | %.1f ms |\n", m.name.c_str(), sumRmse / frames, worst,
                     1e3 * median(times));

@@ -353,6 +353,21 @@ struct VideoSink {
     }
 };
 
+// --taa for a frame's plan: its shadow test (deterministic shadows only: stochastic ones change
+// every frame by design), and at the first frame the memory the history needs (its colours,
+// objects and depths, and the motion vectors).
+void setUpTaa(TemporalAccumulator& taa, const RenderPlan& plan, bool first) {
+    const ShadowMethod method = plan.settings.shadowMethod;
+    const bool deterministic = method == ShadowMethod::Hard || method == ShadowMethod::Soft;
+    taa.rejectShadowChanges(plan.settings.shadows && deterministic ? 0.3f : 0.0f);
+    if (!first) return;
+    const int w = plan.camera.width, h = plan.camera.height;
+    checkMemoryBudget(
+        Film::bytesNeeded(w, h) + 37.0 * w * h, "--taa",
+        "temporal accumulation of " + std::to_string(w) + "x" + std::to_string(h) + " frames",
+        "render a smaller image");
+}
+
 // The TAA part of the animation's total line.
 std::string taaSummary(const std::optional<TemporalAccumulator>& taa, size_t rejected,
                        long long frames) {
@@ -398,19 +413,7 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
         assets.cached += st.cached;
         applyOverrides(a, scene);
         const RenderPlan plan = planRender(scene);
-        const ShadowMethod method = plan.settings.shadowMethod;
-        if (taa)  // deterministic shadows only: stochastic ones change every frame by design
-            taa->rejectShadowChanges(plan.settings.shadows && (method == ShadowMethod::Hard ||
-                                                               method == ShadowMethod::Soft)
-                                         ? 0.3f
-                                         : 0.0f);
-        if (taa && i == 0)  // the history, its objects and depths, and the motion vectors
-            checkMemoryBudget(Film::bytesNeeded(plan.camera.width, plan.camera.height) +
-                                  37.0 * plan.camera.width * plan.camera.height,
-                              "--taa",
-                              "temporal accumulation of " + std::to_string(plan.camera.width) +
-                                  "x" + std::to_string(plan.camera.height) + " frames",
-                              "render a smaller image");
+        if (taa) setUpTaa(*taa, plan, i == 0);
         Film film(plan.camera.width, plan.camera.height, kept);
         FrameView view{plan.camera};
         view.frame = static_cast<uint32_t>(number);

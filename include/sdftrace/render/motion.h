@@ -1,6 +1,6 @@
-// Where the surface seen at a pixel was one frame earlier (issue 16): per-object motion from the
-// scene's top-level objects' placements (their outer translate / rotate / scale chains) at two
-// instants, for motion vectors and temporal accumulation of moving objects. An animated scene
+// Where the surface seen at a pixel was one frame earlier (issue 16), for RTSDF §2.5.2's temporal
+// accumulation of moving scenes: per-object motion from the scene's top-level objects'
+// placements (their outer translate / rotate / scale chains) at two instants. An animated scene
 // keeps its structure from frame to frame (keyframes replace values only), so object k of one
 // frame is object k of the next. Deforming objects (mesh sequences, keyframed radii, morphs) have
 // no rigid motion: their points stay where they are and the history is left to the rejection
@@ -23,6 +23,8 @@ struct Placement {
     };
     std::vector<Step> steps;
 
+    // Adds a Translate, Rotate or Scale node as the next (inner) step.
+    void append(const Node& n);
     Vec3 toLocal(Vec3 world) const;
     Vec3 toWorld(Vec3 local) const;
     // A local surface normal in world space (the inverse transpose), unit length.
@@ -30,12 +32,14 @@ struct Placement {
     bool sameShape(const Placement& other) const;  // the same kinds in the same order
 };
 
+bool isPlacementKind(NodeKind kind);  // Translate, Rotate or Scale
+
 // The outer transform chain of `n` (and the node below it).
 Placement placementOf(const NodePtr& n, NodePtr* shape = nullptr);
 
 struct MovingObject {
-    Tape field;  // the object's own field now, to tell which object a point lies on
-    Bounds3 bounds;
+    Tape field;    // the object's own field now, to tell which object a point lies on
+    float box[6];  // its bounds, lo then hi (xform::boxDistance's layout)
     bool boundsDominate = false;  // the field is at least the distance to `bounds` outside them
     Placement now, before;
     bool rigid = false;  // `before` matches `now` in shape: points move with the placement

@@ -53,6 +53,11 @@ class TemporalAccumulator {
     size_t rejected() const { return m_rejected; }
 
   private:
+    // The history at pixel (x, y) reprojected by its motion vector over the previous frame's
+    // taps that pass the rejection tests; false when none does (no history there).
+    bool reprojectedHistory(const Film& film, const MotionVectors& mv, int x, int y,
+                            bool shadowTest, Vec3& hist) const;
+
     float m_alpha;
     bool m_reproject, m_clamp, m_reject;
     int m_frames = 0, m_width = 0, m_height = 0;

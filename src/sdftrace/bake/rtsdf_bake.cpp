@@ -18,9 +18,9 @@ namespace {
 // Makes the samples 1-Lipschitz along the axes where fine ray distances meet the coarse field (and
 // where few rays overestimated a distance): |f| = min over same-sign neighbours u of |f_u| + h
 // steps, the L1 lower envelope computed by forward and backward passes along each axis in turn
-// (the distance transform's separability). It only lowers magnitudes, and the true distance is
-// already 1-Lipschitz, so it never moves a value past the truth from above; signs are kept and
-// a surface crossing is not relaxed across.
+// (the distance transform's separability; Danielsson's sweeps, Liktor 2008 §3.2, in L1). It only
+// lowers magnitudes, and the true distance is already 1-Lipschitz, so it never moves a value past
+// the truth from above; signs are kept and a surface crossing is not relaxed across.
 void relaxToLipschitz(std::vector<float>& f, const GridShape& s, int threads) {
     const int n[3] = {s.vertices(0), s.vertices(1), s.vertices(2)};
     const size_t stride[3] = {1, static_cast<size_t>(n[0]), static_cast<size_t>(n[0]) * n[1]};

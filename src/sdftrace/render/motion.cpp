@@ -5,13 +5,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sdftrace/field/transforms.h"
+
 namespace sdft {
 
 namespace {
-
-bool isPlacementKind(NodeKind k) {
-    return k == NodeKind::Translate || k == NodeKind::Rotate || k == NodeKind::Scale;
-}
 
 // The top-level objects: the root union's children, or the root itself.
 std::vector<NodePtr> topLevel(const NodePtr& root) {
@@ -20,13 +18,25 @@ std::vector<NodePtr> topLevel(const NodePtr& root) {
     return {root};
 }
 
-// Distance from p to the box (0 inside).
-float boxDistance(const Bounds3& b, Vec3 p) {
-    const Vec3 d = max(max(b.lo - p, p - b.hi), Vec3(0.0f));
-    return length(d);
+// A Rotate step's matrix (row-major, as Node::params).
+Mat3 rotationOf(const Placement::Step& s) {
+    Mat3 r;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r.m[i][j] = s.k[3 * i + j];
+    return r;
 }
 
 }  // namespace
+
+bool isPlacementKind(NodeKind k) {
+    return k == NodeKind::Translate || k == NodeKind::Rotate || k == NodeKind::Scale;
+}
+
+void Placement::append(const Node& n) {
+    Step s{n.kind, {}};
+    std::copy(n.params.begin(), n.params.begin() + std::min<size_t>(9, n.params.size()), s.k);
+    steps.push_back(s);
+}
 
 // A node's params are its forward transform (node.h): world = offset + local, R local, s * local.
 Vec3 Placement::toLocal(Vec3 p) const {
@@ -35,10 +45,8 @@ Vec3 Placement::toLocal(Vec3 p) const {
             case NodeKind::Translate:
                 p = p - Vec3(s.k[0], s.k[1], s.k[2]);
                 break;
-            case NodeKind::Rotate:  // R^T p
-                p = {s.k[0] * p.x + s.k[3] * p.y + s.k[6] * p.z,
-                     s.k[1] * p.x + s.k[4] * p.y + s.k[7] * p.z,
-                     s.k[2] * p.x + s.k[5] * p.y + s.k[8] * p.z};
+            case NodeKind::Rotate:
+                p = rotationOf(s).transposed() * p;
                 break;
             default:  // Scale
                 p = p / Vec3(s.k[0], s.k[1], s.k[2]);
@@ -55,9 +63,7 @@ Vec3 Placement::toWorld(Vec3 p) const {
                 p = p + Vec3(s.k[0], s.k[1], s.k[2]);
                 break;
             case NodeKind::Rotate:
-                p = {s.k[0] * p.x + s.k[1] * p.y + s.k[2] * p.z,
-                     s.k[3] * p.x + s.k[4] * p.y + s.k[5] * p.z,
-                     s.k[6] * p.x + s.k[7] * p.y + s.k[8] * p.z};
+                p = rotationOf(s) * p;
                 break;
             default:
                 p = p * Vec3(s.k[0], s.k[1], s.k[2]);
@@ -70,9 +76,7 @@ Vec3 Placement::normalToWorld(Vec3 n) const {
     for (auto it = steps.rbegin(); it != steps.rend(); ++it) {
         const Step& s = *it;
         if (s.kind == NodeKind::Rotate) {
-            n = {s.k[0] * n.x + s.k[1] * n.y + s.k[2] * n.z,
-                 s.k[3] * n.x + s.k[4] * n.y + s.k[5] * n.z,
-                 s.k[6] * n.x + s.k[7] * n.y + s.k[8] * n.z};
+            n = rotationOf(s) * n;
         } else if (s.kind == NodeKind::Scale) {
             n = n / Vec3(s.k[0], s.k[1], s.k[2]);
         }
@@ -91,10 +95,7 @@ Placement placementOf(const NodePtr& n, NodePtr* shape) {
     Placement pl;
     NodePtr cur = n;
     while (cur && isPlacementKind(cur->kind) && cur->children.size() == 1) {
-        Placement::Step s{cur->kind, {}};
-        std::copy(cur->params.begin(),
-                  cur->params.begin() + std::min<size_t>(9, cur->params.size()), s.k);
-        pl.steps.push_back(s);
+        pl.append(*cur);
         cur = cur->children[0];
     }
     if (shape) *shape = cur;
@@ -107,8 +108,10 @@ SceneMotion::SceneMotion(const NodePtr& previousRoot, const NodePtr& currentRoot
     for (size_t i = 0; i < now.size(); ++i) {
         MovingObject o;
         o.field = compileTape(now[i]);
-        o.bounds = nodeBounds(*now[i]);
-        o.boundsDominate = dominatesBounds(*now[i]) && o.bounds.finite();
+        const Bounds3 b = nodeBounds(*now[i]);
+        o.boundsDominate = dominatesBounds(*now[i]) && b.finite();
+        const float box[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+        std::copy(box, box + 6, o.box);
         o.now = placementOf(now[i]);
         if (matched) {
             o.before = placementOf(before[i]);
@@ -124,7 +127,7 @@ int SceneMotion::objectAt(Vec3 p) const {
     float bestValue = INFINITY;
     for (size_t i = 0; i < m_objects.size(); ++i) {
         const MovingObject& o = m_objects[i];
-        if (o.boundsDominate && boxDistance(o.bounds, p) >= bestValue) continue;
+        if (o.boundsDominate && xform::boxDistance(p, o.box) >= bestValue) continue;
         const float v = o.field.eval(p);
         if (v < bestValue) {
             bestValue = v;

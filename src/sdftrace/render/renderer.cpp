@@ -43,6 +43,7 @@ struct TileScratch {
     std::vector<TraceResult> results;
     std::vector<int> hitPixel;                   // tile-local index of each hit
     std::vector<MeshPrimary::Hit> triangleHits;  // hybrid mode: per pixel, t < inf on triangles
+    std::vector<int> normalHits;                 // the hits whose normal is the field's gradient
     std::vector<Vec3> hitPoint, hitNormal;
     std::vector<float> x, y, z, f;
     std::vector<RaySegment> shadowSegments;
@@ -397,29 +398,36 @@ void TileRenderer::writeFilm(const TileScratch& s) {
 
 // Normals: every stencil point of every hit in one batch.
 void TileRenderer::stencilNormals(TileScratch& s) {
-    int hits = static_cast<int>(s.hitPixel.size());
-    Stencil st = stencil(m_settings.normals);
-    int m = hits * st.count;
+    const int hits = static_cast<int>(s.hitPixel.size());
+    const Stencil st = stencil(m_settings.normals);
+    // Hits on triangles (hybrid mode) take the triangle's normal (placeTriangleHits).
+    std::vector<int>& todo = s.normalHits;
+    todo.clear();
+    for (int h = 0; h < hits; ++h)
+        if (!m_plan.meshPrimary || !(s.triangleHits[s.hitPixel[h]].t < INFINITY)) todo.push_back(h);
+    const int m = static_cast<int>(todo.size()) * st.count;
     s.x.resize(m);
     s.y.resize(m);
     s.z.resize(m);
     s.f.resize(m);
-    for (int h = 0; h < hits; ++h) {
+    for (size_t j = 0; j < todo.size(); ++j) {
+        const int h = todo[j];
         float t = s.results[s.hitPixel[h]].t;
         float eps = std::fmax(1e-4f, 0.5f * t * m_primary.pixelRadius);
         for (int k = 0; k < st.count; ++k) {
             Vec3 q = s.hitPoint[h] + st.offsets[k] * eps;
-            s.x[h * st.count + k] = q.x;
-            s.y[h * st.count + k] = q.y;
-            s.z[h * st.count + k] = q.z;
+            s.x[j * st.count + k] = q.x;
+            s.y[j * st.count + k] = q.y;
+            s.z[j * st.count + k] = q.z;
         }
     }
     m_tape.evalBatch(s.x.data(), s.y.data(), s.z.data(), s.f.data(), m, s.packet.batch);
     s.stats.normalEvaluations += m;
     s.hitNormal.resize(hits);
-    for (int h = 0; h < hits; ++h) {
+    for (size_t j = 0; j < todo.size(); ++j) {
+        const int h = todo[j];
         Vec3 g(0.0f);
-        for (int k = 0; k < st.count; ++k) g += st.offsets[k] * s.f[h * st.count + k];
+        for (int k = 0; k < st.count; ++k) g += st.offsets[k] * s.f[j * st.count + k];
         Vec3 n = normalize(g);
         // Degenerate gradient (a crease or a flat extremum): face the viewer rather than emit NaN.
         s.hitNormal[h] = length(n) > 0 ? n : -s.segments[s.hitPixel[h]].ray.direction;

@@ -46,6 +46,56 @@ TemporalAccumulator::TemporalAccumulator(float alpha, bool reproject, bool clamp
       m_clamp(clamp),
       m_reject(reject) {}
 
+namespace {
+
+// The neighbourhood clamp (Karis 2014): `hist` within the box of the current 3 x 3 colours.
+Vec3 clampToNeighbourhood(const Film& film, int x, int y, Vec3 hist) {
+    const int w = film.width, h = film.height;
+    Vec3 lo(INFINITY), hi(-INFINITY);
+    for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int xx = std::clamp(x + dx, 0, w - 1), yy = std::clamp(y + dy, 0, h - 1);
+            const Vec3 c = rgbAt(film.color, static_cast<size_t>(yy) * w + xx);
+            lo = min(lo, c);
+            hi = max(hi, c);
+        }
+    return min(max(hist, lo), hi);
+}
+
+}  // namespace
+
+bool TemporalAccumulator::reprojectedHistory(const Film& film, const MotionVectors& mv, int x,
+                                             int y, bool shadowTest, Vec3& hist) const {
+    const int w = film.width, h = film.height;
+    const size_t i = static_cast<size_t>(y) * w + x;
+    const float px = x + 0.5f + mv.motion[2 * i], py = y + 0.5f + mv.motion[2 * i + 1];
+    if (!mv.visibleBefore[i] || px < 0 || py < 0 || px >= w || py >= h) return false;
+    // Bilinear over the taps that show this surface: the same object at the distance the point
+    // had from the previous eye (and, with the shadow test, as visible a light).
+    const float fx = px - 0.5f, fy = py - 0.5f;
+    const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+    const float ax = fx - x0, ay = fy - y0;
+    const int object = mv.objects[i];
+    const float d = mv.depthBefore[i];
+    Vec3 sum(0.0f);
+    float total = 0;
+    for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+            const int xx = std::clamp(x0 + dx, 0, w - 1), yy = std::clamp(y0 + dy, 0, h - 1);
+            const size_t j = static_cast<size_t>(yy) * w + xx;
+            if (m_reject && m_objects[j] != object) continue;
+            if (m_reject && object >= 0 && !(std::fabs(m_depth[j] - d) <= kDepthTolerance * d))
+                continue;
+            if (shadowTest && std::fabs(m_shadow[j] - film.shadow[i]) > m_shadowChange) continue;
+            const float wgt = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay);
+            sum += rgbAt(m_history, j) * wgt;
+            total += wgt;
+        }
+    if (!(total > 1e-4f)) return false;
+    hist = sum / total;
+    return true;
+}
+
 void TemporalAccumulator::add(Film& film, const MotionVectors* mv) {
     const int w = film.width, h = film.height;
     const size_t n = film.pixels();
@@ -70,63 +120,17 @@ void TemporalAccumulator::add(Film& film, const MotionVectors* mv) {
             for (int y = rows.begin(); y != rows.end(); ++y)
                 for (int x = 0; x < w; ++x) {
                     const size_t i = static_cast<size_t>(y) * w + x;
-                    const Vec3 cur = rgbAt(film.color, i);
                     Vec3 hist = rgbAt(m_history, i);
                     float weight = weight0;
                     if (m_reproject) {
-                        weight = 0;
-                        const float px = x + 0.5f + mv->motion[2 * i],
-                                    py = y + 0.5f + mv->motion[2 * i + 1];
-                        if (mv->visibleBefore[i] && px >= 0 && py >= 0 && px < w && py < h) {
-                            // Bilinear over the taps that show this surface: the same object
-                            // at the distance the point had from the previous eye.
-                            const float fx = px - 0.5f, fy = py - 0.5f;
-                            const int x0 = static_cast<int>(std::floor(fx)),
-                                      y0 = static_cast<int>(std::floor(fy));
-                            const float ax = fx - x0, ay = fy - y0;
-                            const int object = mv->objects[i];
-                            const float d = mv->depthBefore[i];
-                            Vec3 sum(0.0f);
-                            float total = 0;
-                            for (int dy = 0; dy < 2; ++dy)
-                                for (int dx = 0; dx < 2; ++dx) {
-                                    const int xx = std::clamp(x0 + dx, 0, w - 1),
-                                              yy = std::clamp(y0 + dy, 0, h - 1);
-                                    const size_t j = static_cast<size_t>(yy) * w + xx;
-                                    if (m_reject && m_objects[j] != object) continue;
-                                    if (m_reject && object >= 0 &&
-                                        !(std::fabs(m_depth[j] - d) <= kDepthTolerance * d))
-                                        continue;
-                                    if (shadowTest &&
-                                        std::fabs(m_shadow[j] - film.shadow[i]) > m_shadowChange)
-                                        continue;
-                                    const float wgt = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay);
-                                    sum += rgbAt(m_history, j) * wgt;
-                                    total += wgt;
-                                }
-                            if (total > 1e-4f) {
-                                hist = sum / total;
-                                weight = weight0;
-                            }
-                        }
-                        if (weight == 0) {
+                        if (!reprojectedHistory(film, *mv, x, y, shadowTest, hist)) {
+                            weight = 0;
                             ++rejectedHere;
                         } else if (m_clamp) {
-                            // Clamp to the current 3 x 3 neighbourhood (Karis 2014).
-                            Vec3 lo(INFINITY), hi(-INFINITY);
-                            for (int dy = -1; dy <= 1; ++dy)
-                                for (int dx = -1; dx <= 1; ++dx) {
-                                    const int xx = std::clamp(x + dx, 0, w - 1),
-                                              yy = std::clamp(y + dy, 0, h - 1);
-                                    const Vec3 c =
-                                        rgbAt(film.color, static_cast<size_t>(yy) * w + xx);
-                                    lo = min(lo, c);
-                                    hi = max(hi, c);
-                                }
-                            hist = min(max(hist, lo), hi);
+                            hist = clampToNeighbourhood(film, x, y, hist);
                         }
                     }
-                    const Vec3 out = hist * weight + cur * (1 - weight);
+                    const Vec3 out = hist * weight + rgbAt(film.color, i) * (1 - weight);
                     for (int c = 0; c < 3; ++c) next[3 * i + c] = out[c];
                 }
             rejected += rejectedHere;

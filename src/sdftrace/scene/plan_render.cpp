@@ -47,12 +47,8 @@ NodePtr takeMeshes(const NodePtr& n, const Scene& scene, Placement placement,
         copy->children = std::move(kept);
         return copy;
     }
-    if (n->kind == NodeKind::Translate || n->kind == NodeKind::Rotate ||
-        n->kind == NodeKind::Scale) {
-        Placement::Step step{n->kind, {}};
-        std::copy(n->params.begin(), n->params.begin() + std::min<size_t>(9, n->params.size()),
-                  step.k);
-        placement.steps.push_back(step);
+    if (isPlacementKind(n->kind)) {
+        placement.append(*n);
         NodePtr child = takeMeshes(n->children[0], scene, placement, out);
         if (!child) return nullptr;
         if (child == n->children[0]) return n;
