@@ -16,6 +16,8 @@ packages=(
     assimp-testmodels     # tests: third-party animated meshes (glTF morph targets, a skinned .x)
     libembree-dev         # BVH closest-point queries and ray casts for mesh baking
     libavcodec-dev libavformat-dev libswscale-dev libavutil-dev  # video output (H.264, FFmpeg)
+    pybind11-dev python3-dev python3-numpy  # the Python module (python/)
+    python3-pytest        # its tests
     libgtest-dev          # tests
     libbenchmark-dev      # bench/
 )

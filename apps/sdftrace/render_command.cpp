@@ -8,7 +8,6 @@
 #include <string>
 
 #include "commands.h"
-#include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/frame_pattern.h"
 #include "sdftrace/core/memory_budget.h"
@@ -18,12 +17,11 @@
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/image_io.h"
 #include "sdftrace/io/mesh_file.h"
-#include "sdftrace/io/mesh_io.h"
 #include "sdftrace/io/video_writer.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/render/temporal.h"
 #include "sdftrace/scene/animated_scene.h"
-#include "sdftrace/scene/grid_scene.h"
+#include "sdftrace/scene/load_input.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
 #include "sdftrace/scene/prepare_scene.h"
@@ -219,33 +217,6 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bo
         aovs.emplace_back(aov, path);
     }
     return aovs;
-}
-
-// The scene of the input: the demo, a scene file (described, then its assets loaded and baked),
-// or a mesh or grid file framed automatically.
-Scene loadInput(const std::string& input, bool progress, bool quiet) {
-    if (input.empty()) return demoScene();
-    if (isMeshFile(input)) {
-        // A mesh rendered directly: baked exactly at the default resolution first.
-        MeshReport report;
-        TriangleMesh mesh = loadMesh(input, &report);
-        auto grid = std::make_shared<const Grid>(bakeMesh(mesh, MeshBakeOptions{}).grid);
-        if (!quiet)
-            std::fprintf(stderr, "sdftrace render: %s: %s; baked exactly at 128 cells\n",
-                         input.c_str(), report.summary().c_str());
-        return sceneForObject(node::grid(grid), grid->surfaceBounds());
-    }
-    if (isGridFile(input)) {
-        // A grid file rendered directly: framed by an automatic camera, lit by default lights.
-        auto grid = std::make_shared<const Grid>(loadGridFile(input));
-        Bounds3 frame = grid->surfaceBounds();
-        if (frame.empty())
-            throw InputError(input + ": the grid contains no surface (no sign change)");
-        return sceneForObject(node::grid(grid), frame);
-    }
-    Scene scene = describeSceneFile(input);
-    prepareScene(scene, PrepareOptions{.progress = progress});
-    return scene;
 }
 
 // One frame, or temporally accumulated frames (--frames, --orbit).
@@ -479,7 +450,10 @@ int runRender(const RenderArgs& a) {
         AssetCache cache;
         scene = anim->at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
     } else {
-        scene = loadInput(a.scene, !a.quiet && stderrIsTerminal(), a.quiet);
+        LoadedInput input = loadSceneInput(a.scene, !a.quiet && stderrIsTerminal());
+        if (!a.quiet && !input.note.empty())
+            std::fprintf(stderr, "sdftrace render: %s\n", input.note.c_str());
+        scene = std::move(input.scene);
     }
     applyOverrides(a, scene);
     const auto t1 = Clock::now();

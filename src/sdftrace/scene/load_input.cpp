@@ -1,0 +1,40 @@
+#include "sdftrace/scene/load_input.h"
+
+#include <memory>
+
+#include "sdftrace/bake/mesh_bake.h"
+#include "sdftrace/core/error.h"
+#include "sdftrace/io/grid_file.h"
+#include "sdftrace/io/mesh_file.h"
+#include "sdftrace/io/mesh_io.h"
+#include "sdftrace/scene/grid_scene.h"
+#include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/prepare_scene.h"
+
+namespace sdft {
+
+LoadedInput loadSceneInput(const std::string& input, bool progress) {
+    if (input.empty()) return {demoScene(), ""};
+    if (isMeshFile(input)) {
+        MeshReport report;
+        TriangleMesh mesh = loadMesh(input, &report);
+        MeshBakeOptions options;
+        options.progress = progress;
+        auto grid = std::make_shared<const Grid>(bakeMesh(mesh, options).grid);
+        return {sceneForObject(node::grid(grid), grid->surfaceBounds()),
+                input + ": " + report.summary() + "; baked exactly at " +
+                    std::to_string(options.sampling.resolution) + " cells"};
+    }
+    if (isGridFile(input)) {
+        auto grid = std::make_shared<const Grid>(loadGridFile(input));
+        const Bounds3 frame = grid->surfaceBounds();
+        if (frame.empty())
+            throw InputError(input + ": the grid contains no surface (no sign change)");
+        return {sceneForObject(node::grid(grid), frame), ""};
+    }
+    LoadedInput out{describeSceneFile(input), ""};
+    prepareScene(out.scene, PrepareOptions{.progress = progress});
+    return out;
+}
+
+}  // namespace sdft
