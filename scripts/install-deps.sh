@@ -18,6 +18,8 @@ packages=(
     libavcodec-dev libavformat-dev libswscale-dev libavutil-dev  # video output (H.264, FFmpeg)
     pybind11-dev python3-dev python3-numpy  # the Python module (python/)
     python3-pytest        # its tests
+    libglfw3-dev libimgui-dev  # the viewer (sdftrace view): GLFW + OpenGL, Dear ImGui
+    xvfb xauth libgl1-mesa-dri  # its tests: a virtual X server with Mesa's software OpenGL
     libgtest-dev          # tests
     libbenchmark-dev      # bench/
 )

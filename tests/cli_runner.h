@@ -80,10 +80,12 @@ inline bool onSilhouette(const std::vector<float>& depth, int w, int i) {
     return false;
 }
 
-inline RunResult runCli(const std::string& args, const TempDir& dir) {
+// `prefix` goes before the binary (environment settings, a wrapper such as xvfb-run).
+inline RunResult runCli(const std::string& args, const TempDir& dir,
+                        const std::string& prefix = "") {
     std::string out = dir.path() + "/.stdout", err = dir.path() + "/.stderr";
     std::string cmd =
-        std::string(SDFT_CLI_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+        prefix + std::string(SDFT_CLI_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null";
     int raw = std::system(cmd.c_str());
     RunResult r;
     r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;

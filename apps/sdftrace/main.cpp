@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
     sdft::cli::addInfoCommand(app, action);
     sdft::cli::addConvertCommand(app, action);
     sdft::cli::addMeshCommand(app, action);
+    sdft::cli::addViewCommand(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

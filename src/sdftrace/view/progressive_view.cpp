@@ -1,0 +1,71 @@
+#include "sdftrace/view/progressive_view.h"
+
+#include <algorithm>
+
+#include "sdftrace/render/renderer.h"
+
+namespace sdft {
+
+void ProgressiveView::setPlan(RenderPlan plan) {
+    const std::optional<CameraDesc> camera =
+        m_plan ? std::optional<CameraDesc>(m_plan->camera) : std::nullopt;
+    m_plan.emplace(std::move(plan));
+    if (camera) m_plan->camera = *camera;
+    restart();
+}
+
+void ProgressiveView::setCamera(const CameraDesc& camera) {
+    if (!m_plan) return;
+    m_plan->camera = camera;
+    restart();
+}
+
+void ProgressiveView::setFrames(int frames) {
+    m_options.frames = std::max(1, frames);
+    restart();
+}
+
+void ProgressiveView::restart() {
+    m_previewDone = false;
+    m_framesDone = 0;
+    m_history.reset();
+}
+
+bool ProgressiveView::done() const { return !m_plan || m_framesDone >= m_options.frames; }
+
+RenderStats ProgressiveView::step() {
+    if (done()) return {};
+    const CameraDesc& cam = m_plan->camera;
+    const int d = std::max(1, m_options.previewDivisor);
+    if (!m_previewDone && d > 1) {
+        // The preview: the same camera at 1/d of the pixels, no jitter.
+        FrameView view{cam};
+        view.camera.width = std::max(1, cam.width / d);
+        view.camera.height = std::max(1, cam.height / d);
+        m_preview.emplace(view.camera.width, view.camera.height);
+        m_previewDone = true;
+        return render(*m_plan, view, *m_preview);
+    }
+    m_previewDone = true;
+    // Frame k as renderFrames renders it (temporal.cpp): jittered when more than one frame is
+    // accumulated, blended into a running mean.
+    const int k = m_framesDone;
+    FrameView view{cam};
+    view.frame = static_cast<uint32_t>(k);
+    if (m_options.frames > 1) frameJitter(static_cast<uint32_t>(k), view.pixelJitter);
+    Film current(cam.width, cam.height);
+    const RenderStats stats = render(*m_plan, view, current);
+    if (!m_history) m_history.emplace(0.0f, false);
+    m_history->add(current);
+    m_film = std::move(current);
+    ++m_framesDone;
+    return stats;
+}
+
+const Film& ProgressiveView::film() const {
+    static const Film kNothing(0, 0);  // before the first pass
+    if (m_framesDone > 0 && m_film) return *m_film;
+    return m_preview ? *m_preview : kNothing;
+}
+
+}  // namespace sdft
