@@ -154,6 +154,79 @@ PyGrid bake(const pyb::handle& mesh, const pyb::handle& faces, int resolution,
     return PyGrid{std::make_shared<const Grid>(bakeMesh(m, o).grid)};
 }
 
+PyGrid gridFromNumpy(const pyb::handle& values, std::array<float, 3> origin, float voxelSize,
+                     bool sparse, int block, float band) {
+    FloatArray a = FloatArray::ensure(values);
+    if (!a || a.ndim() != 3 || a.shape(0) < 2 || a.shape(1) < 2 || a.shape(2) < 2) {
+        PyErr_Clear();
+        throw InputError(
+            "Grid.from_numpy: values: expected a 3-D array of at least "
+            "2 x 2 x 2 vertex distances indexed [i, j, k]");
+    }
+    if (!(voxelSize > 0) || !std::isfinite(voxelSize))
+        throw InputError("Grid.from_numpy: voxel_size: expected a finite size > 0");
+    if (block != 4 && block != 8) throw InputError("Grid.from_numpy: block: expected 4 or 8");
+    GridShape s;
+    for (int i = 0; i < 3; ++i) s.cells[i] = static_cast<int>(a.shape(i)) - 1;
+    s.origin = Vec3(origin[0], origin[1], origin[2]);
+    s.voxelSize = voxelSize;
+    std::vector<float> samples(s.vertexCount());
+    const float* src = a.data();  // C order: [i][j][k], k fastest
+    const size_t nx = a.shape(0), ny = a.shape(1), nz = a.shape(2);
+    for (size_t i = 0; i < nx; ++i)
+        for (size_t j = 0; j < ny; ++j)
+            for (size_t k = 0; k < nz; ++k) {
+                const float v = src[(i * ny + j) * nz + k];
+                if (!std::isfinite(v))
+                    throw InputError("Grid.from_numpy: values[" + std::to_string(i) + ", " +
+                                     std::to_string(j) + ", " + std::to_string(k) +
+                                     "] is not finite (expected distances)");
+                samples[(k * ny + j) * nx + i] = v;
+            }
+    pyb::gil_scoped_release release;
+    return PyGrid{std::make_shared<const Grid>(sparse
+                                                   ? Grid::sparseFromDense(s, samples, block, band)
+                                                   : Grid::dense(s, std::move(samples)))};
+}
+
+pyb::object gridSample(const PyGrid& g, const pyb::handle& points, bool gradients,
+                       std::optional<float> h) {
+    const FloatArray p = pointsArgument(points, "sample: points");
+    const float step = stepArgument(h, 0.5f * g.grid->shape().voxelSize, "sample");
+    const GridView view = g.grid->view();
+    return evaluatePoints(p, gradients, step, [view](const float* xyz, float* out, size_t count) {
+        for (size_t i = 0; i < count; ++i)
+            out[i] = view.sample(Vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]));
+    });
+}
+
+pyb::tuple gridToMesh(const PyGrid& g, float adaptivity, float isovalue) {
+    if (!(adaptivity >= 0 && adaptivity <= 1))
+        throw InputError("to_mesh: adaptivity: expected a number in [0, 1]");
+    ExtractOptions o;
+    o.adaptivity = adaptivity;
+    o.isovalue = isovalue;
+    TriangleMesh mesh;
+    {
+        pyb::gil_scoped_release release;
+        mesh = extractSurface(*g.grid, o, "to_mesh");
+    }
+    pyb::array_t<float> v(
+        std::vector<pyb::ssize_t>{static_cast<pyb::ssize_t>(mesh.positions.size()), 3});
+    pyb::array_t<int32_t> f(
+        std::vector<pyb::ssize_t>{static_cast<pyb::ssize_t>(mesh.triangles.size()), 3});
+    float* vp = v.mutable_data();
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        vp[3 * i] = mesh.positions[i].x;
+        vp[3 * i + 1] = mesh.positions[i].y;
+        vp[3 * i + 2] = mesh.positions[i].z;
+    }
+    int32_t* fp = f.mutable_data();
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int c = 0; c < 3; ++c) fp[3 * t + c] = static_cast<int32_t>(mesh.triangles[t][c]);
+    return pyb::make_tuple(v, f);
+}
+
 }  // namespace
 
 void bindGrid(pyb::module_& m) {
@@ -179,46 +252,9 @@ void bindGrid(pyb::module_& m) {
             "Writes .sdfg, .vdb, .sdf (SDFGen) or .raw (+ .raw.json), by the extension; atomic "
             "(a temporary file renamed into place)")
         .def_static(
-            "from_numpy",
-            [](const pyb::handle& values, std::array<float, 3> origin, float voxelSize, bool sparse,
-               int block, float band) {
-                FloatArray a = FloatArray::ensure(values);
-                if (!a || a.ndim() != 3 || a.shape(0) < 2 || a.shape(1) < 2 || a.shape(2) < 2) {
-                    PyErr_Clear();
-                    throw InputError(
-                        "Grid.from_numpy: values: expected a 3-D array of at least "
-                        "2 x 2 x 2 vertex distances indexed [i, j, k]");
-                }
-                if (!(voxelSize > 0) || !std::isfinite(voxelSize))
-                    throw InputError("Grid.from_numpy: voxel_size: expected a finite size > 0");
-                if (block != 4 && block != 8)
-                    throw InputError("Grid.from_numpy: block: expected 4 or 8");
-                GridShape s;
-                for (int i = 0; i < 3; ++i) s.cells[i] = static_cast<int>(a.shape(i)) - 1;
-                s.origin = Vec3(origin[0], origin[1], origin[2]);
-                s.voxelSize = voxelSize;
-                std::vector<float> samples(s.vertexCount());
-                const float* src = a.data();  // C order: [i][j][k], k fastest
-                const size_t nx = a.shape(0), ny = a.shape(1), nz = a.shape(2);
-                for (size_t i = 0; i < nx; ++i)
-                    for (size_t j = 0; j < ny; ++j)
-                        for (size_t k = 0; k < nz; ++k) {
-                            const float v = src[(i * ny + j) * nz + k];
-                            if (!std::isfinite(v))
-                                throw InputError("Grid.from_numpy: values[" + std::to_string(i) +
-                                                 ", " + std::to_string(j) + ", " +
-                                                 std::to_string(k) +
-                                                 "] is not finite (expected distances)");
-                            samples[(k * ny + j) * nx + i] = v;
-                        }
-                pyb::gil_scoped_release release;
-                return PyGrid{std::make_shared<const Grid>(
-                    sparse ? Grid::sparseFromDense(s, samples, block, band)
-                           : Grid::dense(s, std::move(samples)))};
-            },
-            pyb::arg("values"), pyb::arg("origin") = std::array<float, 3>{0, 0, 0},
-            pyb::arg("voxel_size") = 1.0f, pyb::arg("sparse") = false, pyb::arg("block") = 4,
-            pyb::arg("band") = 3.0f,
+            "from_numpy", &gridFromNumpy, pyb::arg("values"),
+            pyb::arg("origin") = std::array<float, 3>{0, 0, 0}, pyb::arg("voxel_size") = 1.0f,
+            pyb::arg("sparse") = false, pyb::arg("block") = 4, pyb::arg("band") = 3.0f,
             "A grid from vertex distances values[i, j, k] at origin + voxel_size * (i, j, k); "
             "sparse=True keeps the blocks within `band` voxels of the surface")
         .def("to_numpy", &gridArray,
@@ -226,22 +262,11 @@ void bindGrid(pyb::module_& m) {
              "[i, j, k] (vertex at origin + voxel_size * (i, j, k)): a read-only view of a dense "
              "grid's own samples (no copy), a copy for a sparse grid (dropped blocks read "
              "+-background)")
-        .def(
-            "sample",
-            [](const PyGrid& g, const pyb::handle& points, bool gradients, std::optional<float> h) {
-                const FloatArray p = pointsArgument(points, "sample: points");
-                const float step = stepArgument(h, 0.5f * g.grid->shape().voxelSize, "sample");
-                const GridView view = g.grid->view();
-                return evaluatePoints(
-                    p, gradients, step, [view](const float* xyz, float* out, size_t count) {
-                        for (size_t i = 0; i < count; ++i)
-                            out[i] = view.sample(Vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]));
-                    });
-            },
-            pyb::arg("points"), pyb::arg("gradients") = false, pyb::arg("h") = pyb::none(),
-            "Trilinear reconstruction at an N x 3 array of points (outside the grid: a distance "
-            "bound through the nearest grid point); gradients=True adds central differences of "
-            "step h (default half a voxel)")
+        .def("sample", &gridSample, pyb::arg("points"), pyb::arg("gradients") = false,
+             pyb::arg("h") = pyb::none(),
+             "Trilinear reconstruction at an N x 3 array of points (outside the grid: a distance "
+             "bound through the nearest grid point); gradients=True adds central differences of "
+             "step h (default half a voxel)")
         .def_property_readonly("info", &gridInfo,
                                "kind, cells, origin, voxel_size, bounds, surface_bounds, "
                                "lipschitz, memory_bytes, stored_samples (sparse: block_size, "
@@ -254,38 +279,9 @@ void bindGrid(pyb::module_& m) {
             },
             "The grid as a Field (its tape: one grid primitive), reading the samples divided by "
             "info['lipschitz'] so that the field is 1-Lipschitz for the tracer")
-        .def(
-            "to_mesh",
-            [](const PyGrid& g, float adaptivity, float isovalue) {
-                if (!(adaptivity >= 0 && adaptivity <= 1))
-                    throw InputError("to_mesh: adaptivity: expected a number in [0, 1]");
-                ExtractOptions o;
-                o.adaptivity = adaptivity;
-                o.isovalue = isovalue;
-                TriangleMesh mesh;
-                {
-                    pyb::gil_scoped_release release;
-                    mesh = extractSurface(*g.grid, o, "to_mesh");
-                }
-                pyb::array_t<float> v(
-                    std::vector<pyb::ssize_t>{static_cast<pyb::ssize_t>(mesh.positions.size()), 3});
-                pyb::array_t<int32_t> f(
-                    std::vector<pyb::ssize_t>{static_cast<pyb::ssize_t>(mesh.triangles.size()), 3});
-                float* vp = v.mutable_data();
-                for (size_t i = 0; i < mesh.positions.size(); ++i) {
-                    vp[3 * i] = mesh.positions[i].x;
-                    vp[3 * i + 1] = mesh.positions[i].y;
-                    vp[3 * i + 2] = mesh.positions[i].z;
-                }
-                int32_t* fp = f.mutable_data();
-                for (size_t t = 0; t < mesh.triangles.size(); ++t)
-                    for (int c = 0; c < 3; ++c)
-                        fp[3 * t + c] = static_cast<int32_t>(mesh.triangles[t][c]);
-                return pyb::make_tuple(v, f);
-            },
-            pyb::arg("adaptivity") = 0.0f, pyb::arg("isovalue") = 0.0f,
-            "The surface (or the offset surface `isovalue`) as (vertices N x 3 float32, faces "
-            "M x 3 int32), counter-clockwise seen from outside (OpenVDB's volumeToMesh)")
+        .def("to_mesh", &gridToMesh, pyb::arg("adaptivity") = 0.0f, pyb::arg("isovalue") = 0.0f,
+             "The surface (or the offset surface `isovalue`) as (vertices N x 3 float32, faces "
+             "M x 3 int32), counter-clockwise seen from outside (OpenVDB's volumeToMesh)")
         .def("__repr__", [](const PyGrid& g) {
             const GridShape& s = g.grid->shape();
             return std::string("<sdftrace.Grid: ") +

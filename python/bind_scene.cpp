@@ -139,11 +139,7 @@ pyb::object render(const pyb::handle& sceneArg, std::optional<int> width, std::o
     }
     if (width) cam.width = *width;
     if (height) cam.height = *height;
-    validateImageSize(cam.width, cam.height, "render: width/height");
-    if (length(cam.target - cam.eye) <= 0)
-        throw InputError("render: eye/target: the eye must differ from the target");
-    if (length(cross(normalize(cam.target - cam.eye), cam.up)) < 1e-6f)
-        throw InputError("render: up: must not be parallel to the viewing direction");
+    validateCamera(cam, "render: eye/target", "render: up", "render: width/height");
     if (frames < 1 || frames > 100000)
         throw InputError("render: frames = " + std::to_string(frames) +
                          ": expected an integer in [1, 100000]");

@@ -71,12 +71,7 @@ void applyCamera(const RenderArgs& a, CameraDesc& cam) {
     if (a.fov) cam.fovDeg = *a.fov;
     if (a.width) cam.width = *a.width;
     if (a.height) cam.height = *a.height;
-    if (length(cam.target - cam.eye) <= 0)
-        throw InputError("--eye/--target: the eye must differ from the target");
-    if (length(cross(normalize(cam.target - cam.eye), cam.up)) < 1e-6f) {
-        throw InputError("--up: must not be parallel to the viewing direction");
-    }
-    validateImageSize(cam.width, cam.height, "--width/--height");
+    validateCamera(cam, "--eye/--target", "--up", "--width/--height");
 }
 
 // Flags override the scene's render block; --classic resets the tracer before them.

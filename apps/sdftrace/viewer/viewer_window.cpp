@@ -107,7 +107,7 @@ void optionWidgets(ViewerSession& s, std::string& message) {
 }
 
 void panel(ViewerSession& s, const float range[2], int& frames, std::string& message,
-           bool& screenshot, bool& printCommand, bool& refresh) {
+           bool& screenshot, bool& printCommand) {
     ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(360, std::min(ImGui::GetIO().DisplaySize.y - 16, 640.0f)),
                              ImGuiCond_FirstUseEver);
@@ -138,10 +138,7 @@ void panel(ViewerSession& s, const float range[2], int& frames, std::string& mes
         ImGui::PopStyleColor();
     }
     int aov = static_cast<int>(s.aov());
-    if (ImGui::Combo("AOV", &aov, kAovs, IM_ARRAYSIZE(kAovs))) {
-        s.setAov(static_cast<Aov>(aov));
-        refresh = true;
-    }
+    if (ImGui::Combo("AOV", &aov, kAovs, IM_ARRAYSIZE(kAovs))) s.setAov(static_cast<Aov>(aov));
     bool classic = s.classic();
     if (ImGui::Checkbox("classic sphere tracing (--classic)", &classic)) s.setClassic(classic);
     if (ImGui::SliderInt("frames", &frames, 1, 64)) s.setFrames(frames);
@@ -168,11 +165,9 @@ void grabWindow(int w, int h, const std::string& path) {
     writePng(path, w, h, 3, flipped);
 }
 
-}  // namespace
-
-int runViewerWindow(ViewerSession& s, const WindowOptions& options) {
+// Opens the window, the GL context, ImGui and the picture's texture (into `win`).
+void openWindow(Window& win, const ViewerSession& s, Events& events) {
     glfwSetErrorCallback([](int, const char* text) { g_glfwError = text ? text : ""; });
-    Window win;
     if (!glfwInit())
         throw InputError("view: cannot open a window (" + g_glfwError +
                          "); the viewer needs a display: run it in a desktop session, or "
@@ -184,8 +179,8 @@ int runViewerWindow(ViewerSession& s, const WindowOptions& options) {
     if (!win.handle) throw InputError("view: cannot create an OpenGL window (" + g_glfwError + ")");
     glfwMakeContextCurrent(win.handle);
     glfwSwapInterval(1);
-    Events events;
     g_events = &events;
+    // Set before ImGui's backend, which chains to them.
     glfwSetScrollCallback(win.handle, onScroll);
     glfwSetKeyCallback(win.handle, onKey);
     IMGUI_CHECKVERSION();
@@ -198,130 +193,176 @@ int runViewerWindow(ViewerSession& s, const WindowOptions& options) {
     glBindTexture(GL_TEXTURE_2D, win.texture);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+}
 
-    bool quit = false, showPanel = options.panel, picture = false;
-    float range[2] = {0, 0};  // of the AOV shown
-    Aov shown = s.aov();
-    size_t next = 0;
-    int frames = s.frames();
-    std::string message;
-    double lastPoll = glfwGetTime(), lastTime = glfwGetTime();
-    double mouseX = 0, mouseY = 0;
-    glfwGetCursorPos(win.handle, &mouseX, &mouseY);
-    while (!quit && !glfwWindowShouldClose(win.handle)) {
-        const bool idle = s.refined() && next >= options.script.size();
-        if (idle)
+// One pass of the main loop at a time: input, the script, the file watcher, a render pass,
+// drawing.
+class ViewerLoop {
+  public:
+    ViewerLoop(ViewerSession& s, const WindowOptions& o, Window& win, Events& events)
+        : m_s(s),
+          m_o(o),
+          m_win(win),
+          m_events(events),
+          m_showPanel(o.panel),
+          m_shown(s.aov()),
+          m_frames(s.frames()) {
+        m_lastPoll = m_lastTime = glfwGetTime();
+        glfwGetCursorPos(win.handle, &m_mouseX, &m_mouseY);
+    }
+
+    bool running() const { return !m_quit && !glfwWindowShouldClose(m_win.handle); }
+
+    void pass() {
+        if (m_s.refined() && m_next >= m_o.script.size())
             glfwWaitEventsTimeout(0.25);  // still: wake for input or the file watcher
         else
             glfwPollEvents();
-        const double now = glfwGetTime(), dt = std::min(0.1, now - lastTime);
-        lastTime = now;
-        ImGuiIO& io = ImGui::GetIO();
+        const double now = glfwGetTime(), dt = std::min(0.1, now - m_lastTime);
+        m_lastTime = now;
         int fbw = 0, fbh = 0;
-        glfwGetFramebufferSize(win.handle, &fbw, &fbh);
-        if (fbw >= 16 && fbh >= 16) s.resize(fbw, fbh);
+        glfwGetFramebufferSize(m_win.handle, &fbw, &fbh);
+        if (fbw >= 16 && fbh >= 16) m_s.resize(fbw, fbh);
+        mouse();
+        keys(dt);
+        const std::string grab = script();
+        if (now - m_lastPoll > 0.3) {  // the file watcher
+            m_lastPoll = now;
+            if (m_s.pollInput() && !m_s.error().empty())
+                std::fprintf(stderr, "sdftrace view: %s\n", m_s.error().c_str());
+        }
+        if (m_s.step() || m_s.aov() != m_shown) upload();
+        draw(fbw, fbh, grab);
+        afterDraw();
+    }
 
-        // Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
+  private:
+    // Left drag orbits, right or middle drag pans, the wheel zooms.
+    void mouse() {
         double x = 0, y = 0;
-        glfwGetCursorPos(win.handle, &x, &y);
-        const float dx = static_cast<float>(x - mouseX), dy = static_cast<float>(y - mouseY);
-        mouseX = x;
-        mouseY = y;
-        if (!io.WantCaptureMouse) {
-            if (glfwGetMouseButton(win.handle, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS &&
-                (dx != 0 || dy != 0))
-                s.orbit(dx, dy);
-            if ((glfwGetMouseButton(win.handle, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
-                 glfwGetMouseButton(win.handle, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS) &&
-                (dx != 0 || dy != 0))
-                s.pan(dx, dy);
-            if (events.scroll != 0) s.zoom(static_cast<float>(events.scroll));
-        }
-        events.scroll = 0;
-        // Keys: WASD + QE fly (shift: faster), R resets, P prints the command, F12 screenshots,
-        // Tab toggles the panel, Esc closes.
-        bool screenshot = false, printCommand = false;
-        if (!io.WantCaptureKeyboard) {
-            const float speed = s.flySpeed() * static_cast<float>(dt) *
-                                (glfwGetKey(win.handle, GLFW_KEY_LEFT_SHIFT) ? 4.0f : 1.0f);
-            auto held = [&](int k) {
-                return glfwGetKey(win.handle, k) == GLFW_PRESS ? 1.0f : 0.0f;
-            };
-            const float f = held(GLFW_KEY_W) - held(GLFW_KEY_S);
-            const float r = held(GLFW_KEY_D) - held(GLFW_KEY_A);
-            const float u = held(GLFW_KEY_E) - held(GLFW_KEY_Q);
-            if (f != 0 || r != 0 || u != 0) s.fly(f * speed, r * speed, u * speed);
-            for (int key : events.keys) {
-                if (key == GLFW_KEY_R) s.resetView();
-                if (key == GLFW_KEY_P) printCommand = true;
-                if (key == GLFW_KEY_F12) screenshot = true;
-                if (key == GLFW_KEY_TAB) showPanel = !showPanel;
-                if (key == GLFW_KEY_ESCAPE) quit = true;
-            }
-        }
-        events.keys.clear();
+        glfwGetCursorPos(m_win.handle, &x, &y);
+        const float dx = static_cast<float>(x - m_mouseX), dy = static_cast<float>(y - m_mouseY);
+        m_mouseX = x;
+        m_mouseY = y;
+        const double scroll = m_events.scroll;
+        m_events.scroll = 0;
+        if (ImGui::GetIO().WantCaptureMouse) return;
+        auto down = [&](int b) { return glfwGetMouseButton(m_win.handle, b) == GLFW_PRESS; };
+        const bool moved = dx != 0 || dy != 0;
+        if (moved && down(GLFW_MOUSE_BUTTON_LEFT)) m_s.orbit(dx, dy);
+        if (moved && (down(GLFW_MOUSE_BUTTON_RIGHT) || down(GLFW_MOUSE_BUTTON_MIDDLE)))
+            m_s.pan(dx, dy);
+        if (scroll != 0) m_s.zoom(static_cast<float>(scroll));
+    }
 
-        // The script: commands run in order; `wait` holds until the picture is refined.
-        std::string grab;
-        while (next < options.script.size()) {
-            if (options.script[next].name == "grab") {  // after this frame is drawn
-                grab = options.script[next++].args.at(0);
-                imageFormatFromPath(grab, "grab");
-                checkWritablePath(grab, "grab");
-                break;
+    // WASD + QE fly (shift: faster), R resets, P prints the command, F12 screenshots, Tab
+    // toggles the panel, Esc closes.
+    void keys(double dt) {
+        std::vector<int> pressed;
+        pressed.swap(m_events.keys);
+        if (ImGui::GetIO().WantCaptureKeyboard) return;
+        auto held = [&](int k) { return glfwGetKey(m_win.handle, k) == GLFW_PRESS ? 1.0f : 0.0f; };
+        const float speed = m_s.flySpeed() * static_cast<float>(dt) *
+                            (held(GLFW_KEY_LEFT_SHIFT) != 0 ? 4.0f : 1.0f);
+        const float f = held(GLFW_KEY_W) - held(GLFW_KEY_S);
+        const float r = held(GLFW_KEY_D) - held(GLFW_KEY_A);
+        const float u = held(GLFW_KEY_E) - held(GLFW_KEY_Q);
+        if (f != 0 || r != 0 || u != 0) m_s.fly(f * speed, r * speed, u * speed);
+        for (int key : pressed) {
+            if (key == GLFW_KEY_R) m_s.resetView();
+            if (key == GLFW_KEY_P) m_printCommand = true;
+            if (key == GLFW_KEY_F12) m_screenshot = true;
+            if (key == GLFW_KEY_TAB) m_showPanel = !m_showPanel;
+            if (key == GLFW_KEY_ESCAPE) m_quit = true;
+        }
+    }
+
+    // Runs the script's commands in order until one must wait (`wait` before the picture is
+    // refined); returns the path of a `grab`, taken once this pass is drawn.
+    std::string script() {
+        while (m_next < m_o.script.size() && !m_quit) {
+            const ViewCommand& c = m_o.script[m_next];
+            if (c.name == "grab") {
+                ++m_next;
+                imageFormatFromPath(c.args.at(0), "grab");
+                checkWritablePath(c.args.at(0), "grab");
+                return c.args.at(0);
             }
             std::string out;
-            if (!s.run(options.script[next], quit, out)) break;
+            if (!m_s.run(c, m_quit, out)) break;
             if (!out.empty()) std::printf("%s\n", out.c_str());
             std::fflush(stdout);
-            ++next;
-            if (quit) break;
+            ++m_next;
         }
-        if (now - lastPoll > 0.3) {  // the file watcher
-            lastPoll = now;
-            if (s.pollInput() && !s.error().empty())
-                std::fprintf(stderr, "sdftrace view: %s\n", s.error().c_str());
-        }
-        if (s.step() || s.aov() != shown) picture = true;
-        shown = s.aov();
+        return "";
+    }
 
-        if (picture) {
-            int w = 0, h = 0;
-            const std::vector<uint8_t> rgb = s.picture(w, h, range);
-            glBindTexture(GL_TEXTURE_2D, win.texture);
-            glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, w, h, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
-            picture = false;
-        }
+    void upload() {
+        int w = 0, h = 0;
+        const std::vector<uint8_t> rgb = m_s.picture(w, h, m_range);
+        glBindTexture(GL_TEXTURE_2D, m_win.texture);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, w, h, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+        m_shown = m_s.aov();
+    }
+
+    void draw(int fbw, int fbh, const std::string& grab) {
         ImGui_ImplOpenGL2_NewFrame();
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
         ImGui::GetBackgroundDrawList()->AddImage(
-            reinterpret_cast<ImTextureID>(static_cast<intptr_t>(win.texture)), ImVec2(0, 0),
-            io.DisplaySize);
-        if (showPanel) panel(s, range, frames, message, screenshot, printCommand, picture);
+            reinterpret_cast<ImTextureID>(static_cast<intptr_t>(m_win.texture)), ImVec2(0, 0),
+            ImGui::GetIO().DisplaySize);
+        if (m_showPanel) panel(m_s, m_range, m_frames, m_message, m_screenshot, m_printCommand);
         ImGui::Render();
         glViewport(0, 0, fbw, fbh);
         glClearColor(0, 0, 0, 1);
         glClear(GL_COLOR_BUFFER_BIT);
         ImGui_ImplOpenGL2_RenderDrawData(ImGui::GetDrawData());
         if (!grab.empty()) grabWindow(fbw, fbh, grab);
-        glfwSwapBuffers(win.handle);
-        if (printCommand) {
-            std::printf("%s\n", s.renderCommand().c_str());
+        glfwSwapBuffers(m_win.handle);
+    }
+
+    // What the keys and buttons asked for this pass.
+    void afterDraw() {
+        if (m_printCommand) {
+            std::printf("%s\n", m_s.renderCommand().c_str());
             std::fflush(stdout);
         }
-        if (screenshot) {
+        if (m_screenshot) {
             try {
-                const std::string path = nextScreenshot(options.screenshotDir);
-                s.screenshot(path);
-                message = "wrote " + path;
-                std::fprintf(stderr, "sdftrace view: %s\n", message.c_str());
+                const std::string path = nextScreenshot(m_o.screenshotDir);
+                m_s.screenshot(path);
+                m_message = "wrote " + path;
+                std::fprintf(stderr, "sdftrace view: %s\n", m_message.c_str());
             } catch (const InputError& e) {
-                message = e.what();
+                m_message = e.what();
             }
         }
+        m_printCommand = m_screenshot = false;
     }
+
+    ViewerSession& m_s;
+    const WindowOptions& m_o;
+    Window& m_win;
+    Events& m_events;
+    bool m_quit = false, m_showPanel, m_screenshot = false, m_printCommand = false;
+    float m_range[2] = {0, 0};  // of the AOV shown
+    Aov m_shown;
+    size_t m_next = 0;  // the next script command
+    int m_frames;
+    std::string m_message;  // the panel's last note or error
+    double m_lastPoll = 0, m_lastTime = 0, m_mouseX = 0, m_mouseY = 0;
+};
+
+}  // namespace
+
+int runViewerWindow(ViewerSession& s, const WindowOptions& options) {
+    Window win;
+    Events events;
+    openWindow(win, s, events);
+    ViewerLoop loop(s, options, win, events);
+    while (loop.running()) loop.pass();
     g_events = nullptr;
     return 0;
 }

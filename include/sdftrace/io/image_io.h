@@ -23,6 +23,10 @@ void writePfm(const std::string& path, int width, int height, int channels,
 void writePng(const std::string& path, int width, int height, int channels,
               const std::vector<unsigned char>& data);
 
+// The 8-bit RGB picture a PNG of the AOV holds (not motion): colour tone-mapped to sRGB, normals
+// as 0.5 n + 0.5, the others a heat map over their finite range, with its legend strip below the
+// image when `legend`; `outHeight` is the picture's height.
+std::vector<unsigned char> aovPicture(const Film& film, Aov aov, bool legend, int& outHeight);
 // Writes one AOV of the film in the format the path asks for.
 void writeAov(const Film& film, Aov aov, const std::string& path);
 

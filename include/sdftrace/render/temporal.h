@@ -31,6 +31,10 @@ CameraDesc orbitCamera(const CameraDesc& camera, float degrees);
 // The subpixel offset of frame k, in [-0.5, 0.5)^2: Halton (2, 3) at index k + 1.
 void frameJitter(uint32_t k, float out[2]);
 
+// Frame k of `frames` accumulated still frames through `camera` (renderFrames, the viewer): its
+// number seeds the per-pixel sequences, and it is jittered when more than one is accumulated.
+FrameView accumulationFrame(const CameraDesc& camera, int k, int frames, bool jitter = true);
+
 // The history of one sequence of frames of a fixed size.
 class TemporalAccumulator {
   public:

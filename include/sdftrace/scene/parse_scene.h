@@ -24,5 +24,9 @@ const char* demoSceneText();
 
 // Rejects images that cannot be rendered (zero, absurd, or more than this machine's memory).
 void validateImageSize(int width, int height, const std::string& what);
+// A camera the renderer can use: the eye away from the target (else an error naming
+// `eyeTarget`), the up vector not along the view (`up`), and the image size (`size`).
+void validateCamera(const CameraDesc& camera, const std::string& eyeTarget, const std::string& up,
+                    const std::string& size);
 
 }  // namespace sdft

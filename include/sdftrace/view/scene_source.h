@@ -39,6 +39,7 @@ class SceneSource {
         bool operator==(const Stamp&) const = default;
     };
     Stamp stamp() const;
+    void load();  // throws InputError; the scene is replaced only when it succeeds
 
     std::string m_input;
     Scene m_scene;

@@ -310,17 +310,28 @@ void writeAov(const Film& film, Aov aov, const std::string& path) {
         writeExr(path, film.width, film.height, channels, data, names);
     } else if (format == ImageFormat::Pfm) {
         writePfm(path, film.width, film.height, channels, data);
-    } else if (aov == Aov::Color) {
-        writePng(path, film.width, film.height, 3, toneMapSrgb(data));
-    } else if (aov == Aov::Normal) {
-        std::vector<unsigned char> rgb(data.size());
-        for (size_t i = 0; i < data.size(); ++i) rgb[i] = toByte(0.5f * data[i] + 0.5f);
-        writePng(path, film.width, film.height, 3, rgb);
     } else {
         int outHeight = 0;
-        auto rgb = heatMapWithLegend(data, film.width, film.height, aovName(aov), outHeight);
+        const auto rgb = aovPicture(film, aov, true, outHeight);
         writePng(path, film.width, outHeight, 3, rgb);
     }
+}
+
+std::vector<unsigned char> aovPicture(const Film& film, Aov aov, bool legend, int& outHeight) {
+    const std::vector<float>& data = film.channel(aov);
+    outHeight = film.height;
+    if (aov == Aov::Color) return toneMapSrgb(data);
+    if (aov == Aov::Normal) {
+        std::vector<unsigned char> rgb(data.size());
+        for (size_t i = 0; i < data.size(); ++i) rgb[i] = toByte(0.5f * data[i] + 0.5f);
+        return rgb;
+    }
+    auto rgb = heatMapWithLegend(data, film.width, film.height, aovName(aov), outHeight);
+    if (!legend) {  // the legend strip is below the image
+        rgb.resize(static_cast<size_t>(film.width) * film.height * 3);
+        outHeight = film.height;
+    }
+    return rgb;
 }
 
 }  // namespace sdft

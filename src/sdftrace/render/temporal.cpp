@@ -147,6 +147,13 @@ void TemporalAccumulator::add(Film& film, const MotionVectors* mv) {
     film.color = m_history;
 }
 
+FrameView accumulationFrame(const CameraDesc& camera, int k, int frames, bool jitter) {
+    FrameView view{camera};
+    view.frame = static_cast<uint32_t>(k);
+    if (jitter && frames > 1) frameJitter(static_cast<uint32_t>(k), view.pixelJitter);
+    return view;
+}
+
 RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptions& o,
                          const std::function<void(int, const Film&)>& onFrame, bool progress) {
     const int w = film.width, h = film.height;
@@ -162,10 +169,9 @@ RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptio
     TemporalAccumulator history(o.alpha, moving);
     CameraDesc previous = plan.camera;
     for (int k = 0; k < std::max(1, o.frames); ++k) {
-        FrameView s;
-        s.camera = orbitCamera(plan.camera, o.orbitDegrees * static_cast<float>(k));
-        s.frame = static_cast<uint32_t>(k);
-        if (o.jitterCamera && o.frames > 1) frameJitter(static_cast<uint32_t>(k), s.pixelJitter);
+        const FrameView s =
+            accumulationFrame(orbitCamera(plan.camera, o.orbitDegrees * static_cast<float>(k)), k,
+                              o.frames, o.jitterCamera);
         Film current(w, h);
         const RenderStats frameStats = render(plan, s, current, progress && k == 0);
         total.add(frameStats);

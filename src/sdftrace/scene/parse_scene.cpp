@@ -283,6 +283,15 @@ Scene describeSceneJson(const Json& root, const std::string& source, const std::
     return parseRoot(root, source, baseDir, time);
 }
 
+void validateCamera(const CameraDesc& c, const std::string& eyeTarget, const std::string& up,
+                    const std::string& size) {
+    if (length(c.target - c.eye) <= 0)
+        throw InputError(eyeTarget + ": the eye must differ from the target");
+    if (length(cross(normalize(c.target - c.eye), c.up)) < 1e-6f)
+        throw InputError(up + ": must not be parallel to the viewing direction");
+    validateImageSize(c.width, c.height, size);
+}
+
 void validateImageSize(int width, int height, const std::string& what) {
     if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide) {
         throw InputError(what + ": image size " + std::to_string(width) + "x" +

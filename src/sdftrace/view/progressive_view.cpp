@@ -47,12 +47,8 @@ RenderStats ProgressiveView::step() {
         return render(*m_plan, view, *m_preview);
     }
     m_previewDone = true;
-    // Frame k as renderFrames renders it (temporal.cpp): jittered when more than one frame is
-    // accumulated, blended into a running mean.
-    const int k = m_framesDone;
-    FrameView view{cam};
-    view.frame = static_cast<uint32_t>(k);
-    if (m_options.frames > 1) frameJitter(static_cast<uint32_t>(k), view.pixelJitter);
+    // Frame k as renderFrames renders it, blended into a running mean.
+    const FrameView view = accumulationFrame(cam, m_framesDone, m_options.frames);
     Film current(cam.width, cam.height);
     const RenderStats stats = render(*m_plan, view, current);
     if (!m_history) m_history.emplace(0.0f, false);

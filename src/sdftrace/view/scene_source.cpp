@@ -7,12 +7,15 @@
 
 namespace sdft {
 
-SceneSource::SceneSource(std::string input) : m_input(std::move(input)) {
+SceneSource::SceneSource(std::string input) : m_input(std::move(input)) { load(); }
+
+void SceneSource::load() {
     m_stamp = stamp();
     LoadedInput loaded = loadSceneInput(m_input, false);
     m_scene = std::move(loaded.scene);
     m_note = std::move(loaded.note);
-    m_loads = 1;
+    m_error.clear();
+    ++m_loads;
 }
 
 SceneSource::Stamp SceneSource::stamp() const {
@@ -33,13 +36,8 @@ SceneSource::Poll SceneSource::poll() {
 
 SceneSource::Poll SceneSource::reload() {
     if (m_input.empty()) return Poll::Unchanged;
-    m_stamp = stamp();
     try {
-        LoadedInput loaded = loadSceneInput(m_input, false);
-        m_scene = std::move(loaded.scene);
-        m_note = std::move(loaded.note);
-        m_error.clear();
-        ++m_loads;
+        load();
         return Poll::Reloaded;
     } catch (const InputError& e) {
         m_error = e.what();

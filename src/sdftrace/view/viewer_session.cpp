@@ -138,25 +138,16 @@ std::vector<uint8_t> ViewerSession::picture(int& width, int& height, float range
     width = film.width;
     height = film.height;
     range[0] = range[1] = 0;
-    const std::vector<float>& data = film.channel(m_aov);
-    if (m_aov == Aov::Color) return toneMapSrgb(data);
-    if (m_aov == Aov::Normal) {
-        std::vector<uint8_t> rgb(data.size());
-        for (size_t i = 0; i < data.size(); ++i)
-            rgb[i] = srgbByte(std::clamp(0.5f * data[i] + 0.5f, 0.0f, 1.0f));
-        return rgb;
+    if (m_aov != Aov::Color && m_aov != Aov::Normal) {
+        bool any = false;
+        for (float v : film.channel(m_aov)) {
+            if (!std::isfinite(v)) continue;
+            range[0] = any ? std::min(range[0], v) : v;
+            range[1] = any ? std::max(range[1], v) : v;
+            any = true;
+        }
     }
-    bool any = false;
-    for (float v : data) {
-        if (!std::isfinite(v)) continue;
-        range[0] = any ? std::min(range[0], v) : v;
-        range[1] = any ? std::max(range[1], v) : v;
-        any = true;
-    }
-    int withLegend = 0;
-    std::vector<uint8_t> rgb = heatMapWithLegend(data, width, height, aovName(m_aov), withLegend);
-    rgb.resize(static_cast<size_t>(width) * height * 3);  // the legend strip is below the image
-    return rgb;
+    return aovPicture(film, m_aov, false, height);
 }
 
 void ViewerSession::screenshot(const std::string& path) const {
