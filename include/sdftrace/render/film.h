@@ -47,6 +47,9 @@ struct Film {
     static double bytesNeeded(int w, int h);
     // Interleaved channels of one AOV.
     const std::vector<float>& channel(Aov aov) const;
+    std::vector<float>& channel(Aov aov) {
+        return const_cast<std::vector<float>&>(static_cast<const Film&>(*this).channel(aov));
+    }
 };
 
 }  // namespace sdft

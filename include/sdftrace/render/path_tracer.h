@@ -25,4 +25,17 @@ namespace sdft {
 RenderStats renderPaths(const RenderPlan& plan, const FrameView& view, Film& film,
                         bool progress = false);
 
+// The path tracer of one frame, a pixel rectangle at a time (FrameRenderer).
+class PathFrame {
+  public:
+    PathFrame(const RenderPlan& plan, const FrameView& view, Film& film);
+    ~PathFrame();
+    // The pixels of `r`, serially; counters added to `st`.
+    void render(const PixelRect& r, RenderStats& st) const;
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
 }  // namespace sdft

@@ -9,6 +9,7 @@ namespace sdft {
 struct RenderStats {
     double seconds = 0;
     int threads = 0;
+    int ranks = 1;  // processes of a distributed render (cluster/distributed_render.h)
     uint64_t primaryRays = 0, primaryEvaluations = 0, hits = 0, fallbacks = 0;
     uint64_t normalEvaluations = 0, shadowRays = 0, shadowEvaluations = 0, aoEvaluations = 0;
     // Whitted reflection and refraction rays, their evaluations, and those that struck the

@@ -75,8 +75,11 @@ class TemporalAccumulator {
 
 // Renders the frames into `film`: colour is the accumulated image, the other AOVs those of the last
 // frame. `onFrame(k, film)`, if set, sees each accumulated frame. Stats are summed over frames.
+// `renderFrame`, when set, renders each frame instead of render(plan, ...) (a render across
+// ranks, cluster/distributed_render.h).
+using FrameRenderFn = std::function<RenderStats(const FrameView&, Film&, bool progress)>;
 RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptions& options,
                          const std::function<void(int, const Film&)>& onFrame = nullptr,
-                         bool progress = false);
+                         bool progress = false, const FrameRenderFn& renderFrame = nullptr);
 
 }  // namespace sdft

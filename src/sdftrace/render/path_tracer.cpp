@@ -241,42 +241,50 @@ Vec3 PathTracer::radiance(int x, int y, int sample, RenderStats& st, float* dept
 
 }  // namespace
 
-RenderStats renderPaths(const RenderPlan& plan, const FrameView& view, Film& film, bool progress) {
-    const auto start = std::chrono::steady_clock::now();
-    ThreadArena arena(plan.settings.threads);
-    PathTracer tracer(plan, view);
-    const int spp = std::max(1, plan.settings.samplesPerPixel);
-    tbb::enumerable_thread_specific<RenderStats> stats;
-    Progress bar("path tracing", static_cast<uint64_t>(film.height), progress);
+struct PathFrame::Impl {
+    Impl(const RenderPlan& plan, const FrameView& view, Film& f) : tracer(plan, view), film(f) {}
+    PathTracer tracer;
+    Film& film;
+    int spp = 1;
+};
+
+PathFrame::PathFrame(const RenderPlan& plan, const FrameView& view, Film& film)
+    : m_impl(std::make_unique<Impl>(plan, view, film)) {
+    m_impl->spp = std::max(1, plan.settings.samplesPerPixel);
+}
+
+PathFrame::~PathFrame() = default;
+
+void PathFrame::render(const PixelRect& r, RenderStats& st) const {
+    Film& film = m_impl->film;
+    const int spp = m_impl->spp;
     const bool normals = film.has(Aov::Normal), depths = film.has(Aov::Depth),
                keepSteps = film.has(Aov::Steps);
-    arena.execute([&] {
-        tbb::parallel_for(0, film.height, [&](int y) {
-            RenderStats& st = stats.local();
-            for (int x = 0; x < film.width; ++x) {
-                const size_t p = static_cast<size_t>(y) * film.width + x;
-                Vec3 sum(0.0f), normal(0.0f);
-                float depth = INFINITY;
-                int steps = 0;
-                for (int k = 0; k < spp; ++k)
-                    sum += tracer.radiance(x, y, k, st, k == 0 ? &depth : nullptr,
-                                           k == 0 ? &normal : nullptr, k == 0 ? &steps : nullptr);
-                const Vec3 c = sum / static_cast<float>(spp);
-                for (int a = 0; a < 3; ++a) {
-                    film.color[3 * p + a] = c[a];
-                    if (normals) film.normal[3 * p + a] = normal[a];
-                }
-                if (depths) film.depth[p] = depth;
-                if (keepSteps) film.steps[p] = static_cast<float>(steps);
+    for (int y = r.y0; y < r.y1; ++y)
+        for (int x = r.x0; x < r.x1; ++x) {
+            const size_t p = static_cast<size_t>(y) * film.width + x;
+            Vec3 sum(0.0f), normal(0.0f);
+            float depth = INFINITY;
+            int steps = 0;
+            for (int k = 0; k < spp; ++k)
+                sum +=
+                    m_impl->tracer.radiance(x, y, k, st, k == 0 ? &depth : nullptr,
+                                            k == 0 ? &normal : nullptr, k == 0 ? &steps : nullptr);
+            const Vec3 c = sum / static_cast<float>(spp);
+            for (int a = 0; a < 3; ++a) {
+                film.color[3 * p + a] = c[a];
+                if (normals) film.normal[3 * p + a] = normal[a];
             }
-            bar.advance();
-        });
-    });
-    RenderStats total;
-    for (const RenderStats& s : stats) total.add(s);
-    total.threads = arena.threads();
-    total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return total;
+            if (depths) film.depth[p] = depth;
+            if (keepSteps) film.steps[p] = static_cast<float>(steps);
+        }
+}
+
+RenderStats renderPaths(const RenderPlan& plan, const FrameView& view, Film& film, bool progress) {
+    FrameRenderer frame(plan, view, film);
+    Progress bar("path tracing", static_cast<uint64_t>(frame.tileCount()), progress);
+    frame.renderTiles(0, frame.tileCount(), &bar);
+    return frame.stats();
 }
 
 }  // namespace sdft

@@ -635,40 +635,88 @@ Vec3 estimateNormal(const Tape& tape, Vec3 p, float h, NormalEstimator estimator
     return normalize(g);
 }
 
-RenderStats render(const RenderPlan& plan, const FrameView& view, Film& film, bool progress) {
-    if (plan.settings.pathTracing) return renderPaths(plan, view, film, progress);
-    auto start = std::chrono::steady_clock::now();
-    ThreadArena arena(plan.settings.threads);
-    const int ts = std::max(1, plan.settings.tileSize);
-    const int tilesX = (film.width + ts - 1) / ts, tilesY = (film.height + ts - 1) / ts;
-    std::unique_ptr<TileRenderer> tiles;
+struct FrameRenderer::Impl {
+    Impl(const RenderPlan& p, const FrameView& v, Film& f)
+        : plan(p), view(v), film(f), arena(p.settings.threads) {}
+    const RenderPlan& plan;
+    const FrameView view;  // the renderers keep a reference to it
+    Film& film;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    ThreadArena arena;
+    int tileSize = 16, tilesX = 0, tilesY = 0;
+    std::unique_ptr<TileRenderer> direct;  // the direct-lighting renderer, or
+    std::unique_ptr<PathFrame> paths;      // the path tracer
     tbb::enumerable_thread_specific<TileScratch> scratch;
-    Progress bar("render", static_cast<uint64_t>(tilesX) * tilesY, progress);
-    arena.execute([&] {
-        // Shadow maps render here, on the same threads.
-        tiles = std::make_unique<TileRenderer>(plan, view, film);
-        TileRenderer& renderer = *tiles;
+    tbb::enumerable_thread_specific<RenderStats> pathStats;
+};
+
+FrameRenderer::FrameRenderer(const RenderPlan& plan, const FrameView& view, Film& film)
+    : m_impl(std::make_unique<Impl>(plan, view, film)) {
+    Impl& m = *m_impl;
+    m.tileSize = std::max(1, plan.settings.tileSize);
+    m.tilesX = (film.width + m.tileSize - 1) / m.tileSize;
+    m.tilesY = (film.height + m.tileSize - 1) / m.tileSize;
+    // Shadow maps render here, on the frame's threads.
+    m.arena.execute([&] {
+        if (plan.settings.pathTracing)
+            m.paths = std::make_unique<PathFrame>(plan, m.view, film);
+        else
+            m.direct = std::make_unique<TileRenderer>(plan, m.view, film);
+    });
+}
+
+FrameRenderer::~FrameRenderer() = default;
+
+int FrameRenderer::tileCount() const { return m_impl->tilesX * m_impl->tilesY; }
+
+PixelRect FrameRenderer::tile(int index) const {
+    const Impl& m = *m_impl;
+    const int tx = index % m.tilesX, ty = index / m.tilesX, ts = m.tileSize;
+    return {tx * ts, ty * ts, std::min(m.film.width, (tx + 1) * ts),
+            std::min(m.film.height, (ty + 1) * ts)};
+}
+
+void FrameRenderer::renderTiles(int first, int last, Progress* progress) {
+    Impl& m = *m_impl;
+    m.arena.execute([&] {
         tbb::parallel_for(
-            tbb::blocked_range<int>(0, tilesX * tilesY, 1),
+            tbb::blocked_range<int>(first, last, 1),
             [&](const tbb::blocked_range<int>& range) {
-                TileScratch& s = scratch.local();
-                for (int tile = range.begin(); tile != range.end(); ++tile) {
-                    int tx = tile % tilesX, ty = tile / tilesX;
-                    renderer.renderTile(tx * ts, ty * ts, std::min(film.width, (tx + 1) * ts),
-                                        std::min(film.height, (ty + 1) * ts), s);
-                    bar.advance();
+                for (int t = range.begin(); t != range.end(); ++t) {
+                    const PixelRect r = tile(t);
+                    if (m.paths) {
+                        m.paths->render(r, m.pathStats.local());
+                    } else {
+                        m.direct->renderTile(r.x0, r.y0, r.x1, r.y1, m.scratch.local());
+                    }
+                    if (progress) progress->advance();
                 }
             },
             tbb::simple_partitioner());
     });
+}
 
+RenderStats FrameRenderer::stats() const {
+    const Impl& m = *m_impl;
     RenderStats total;
-    for (const TileScratch& s : scratch) total.add(s.stats);
-    total.shadowEvaluations += tiles->mapEvaluations();
-    total.threads = arena.threads();
-    total.gridTracer = plan.ddaGrid != nullptr;
-    total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    for (const TileScratch& s : m.scratch) total.add(s.stats);
+    for (const RenderStats& s : m.pathStats) total.add(s);
+    if (m.direct) {
+        total.shadowEvaluations += m.direct->mapEvaluations();
+        total.gridTracer = m.plan.ddaGrid != nullptr;
+    }
+    total.threads = m.arena.threads();
+    total.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - m.start).count();
     return total;
+}
+
+RenderStats render(const RenderPlan& plan, const FrameView& view, Film& film, bool progress) {
+    if (plan.settings.pathTracing) return renderPaths(plan, view, film, progress);
+    FrameRenderer frame(plan, view, film);
+    Progress bar("render", static_cast<uint64_t>(frame.tileCount()), progress);
+    frame.renderTiles(0, frame.tileCount(), &bar);
+    return frame.stats();
 }
 
 }  // namespace sdft

@@ -68,6 +68,50 @@ TEST(Renderer, ThreadCountDoesNotChangeTheImage) {
     EXPECT_EQ(one.depth, two.depth);
 }
 
+// A frame split into tiles, each group rendered by its own FrameRenderer into its own film (as the
+// ranks of a distributed render do), is the whole frame's image bit for bit: direct lighting with
+// shadows, and the path tracer.
+TEST(Renderer, TilesRenderedApartMakeTheSameImage) {
+    for (const std::string file : {"", "/examples/path.json", "/examples/jewel.json"}) {
+        SCOPED_TRACE(file);
+        Scene scene =
+            file.empty() ? demoScene() : parseSceneFile(std::string(SDFT_SOURCE_DIR) + file);
+        scene.camera.width = 70;  // tiles cut by the film's edges
+        scene.camera.height = 37;
+        scene.settings.samplesPerPixel = 2;
+        const RenderPlan plan = planRender(scene);
+        Film whole(70, 37);
+        const RenderStats all = render(plan, whole);
+        Film pieced(70, 37);
+        FrameView view{plan.camera};
+        RenderStats sum;
+        const int tiles = FrameRenderer(plan, view, pieced).tileCount();
+        ASSERT_GT(tiles, 6);
+        for (int last = tiles; last > 0; last -= 5) {  // back to front, 5 at a time
+            const int first = std::max(0, last - 5);
+            Film part(70, 37);
+            FrameRenderer frame(plan, view, part);
+            frame.renderTiles(first, last);
+            sum.add(frame.stats());
+            for (int t = first; t < last; ++t) {
+                const PixelRect r = frame.tile(t);
+                for (int y = r.y0; y < r.y1; ++y)
+                    for (int x = r.x0; x < r.x1; ++x) {
+                        const size_t p = static_cast<size_t>(y) * 70 + x;
+                        for (int c = 0; c < 3; ++c) pieced.color[3 * p + c] = part.color[3 * p + c];
+                        pieced.depth[p] = part.depth[p];
+                        pieced.steps[p] = part.steps[p];
+                    }
+            }
+        }
+        EXPECT_EQ(whole.color, pieced.color);
+        EXPECT_EQ(whole.depth, pieced.depth);
+        EXPECT_EQ(whole.steps, pieced.steps);
+        EXPECT_EQ(all.primaryRays, sum.primaryRays);
+        EXPECT_EQ(all.primaryEvaluations, sum.primaryEvaluations);
+    }
+}
+
 // Every shadow method, with ambient occlusion, on sphere, rectangle, sun and point lights: no NaN
 // or infinite pixel, and the shadow and ao AOVs stay in [0, 1].
 TEST(Renderer, EveryShadowMethodGivesFinitePixels) {

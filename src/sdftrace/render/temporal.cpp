@@ -155,7 +155,8 @@ FrameView accumulationFrame(const CameraDesc& camera, int k, int frames, bool ji
 }
 
 RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptions& o,
-                         const std::function<void(int, const Film&)>& onFrame, bool progress) {
+                         const std::function<void(int, const Film&)>& onFrame, bool progress,
+                         const FrameRenderFn& renderFrame) {
     const int w = film.width, h = film.height;
     const bool moving = o.orbitDegrees != 0;
     RenderStats total;
@@ -173,10 +174,13 @@ RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptio
             accumulationFrame(orbitCamera(plan.camera, o.orbitDegrees * static_cast<float>(k)), k,
                               o.frames, o.jitterCamera);
         Film current(w, h);
-        const RenderStats frameStats = render(plan, s, current, progress && k == 0);
+        const bool bar = progress && k == 0;
+        const RenderStats frameStats =
+            renderFrame ? renderFrame(s, current, bar) : render(plan, s, current, bar);
         total.add(frameStats);
         total.seconds += frameStats.seconds;
         total.threads = frameStats.threads;
+        total.ranks = frameStats.ranks;
         total.gridTracer = frameStats.gridTracer;
         if (moving) {
             const MotionVectors mv =
