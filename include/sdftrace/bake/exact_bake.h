@@ -23,6 +23,7 @@
 // dense bake, and needs no BVH (but for parity signs).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -62,5 +63,28 @@ std::vector<float> bakeExactSamples(const MeshBvh& bvh, const GridShape& shape, 
 Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& shape, int blockSize,
                      float bandVoxels, SignMethod sign, int threads = 0,
                      ExactBakeStats* stats = nullptr, bool progress = false);
+
+// A slab of a sparse exact bake: the block layers [first, last) along z (cluster/distributed_bake.h
+// deals them to the ranks of a job). last = 0: the whole grid.
+struct BlockSlab {
+    int first = 0, last = 0;
+};
+struct SlabSamples {
+    BlockSlab slab;
+    std::vector<uint8_t> flags;  // BlockFlag per block of the slab's layers, flat (z, y, x)
+    std::vector<float> samples;  // per surface block in that order, its (B+1)^3 vertex samples
+};
+
+// The slab's blocks of bakeExactSparse(mesh, shape, ...): each its flag, and the surface blocks'
+// samples, bit for bit those of the whole bake. The work and the arrays are the slab's (plus a
+// block layer on each side): only the triangles that come within the band of the slab are
+// scattered; signs evaluated from scratch use the whole mesh's winding number.
+SlabSamples bakeExactSlab(const TriangleMesh& mesh, const GridShape& shape, int blockSize,
+                          float bandVoxels, SignMethod sign, BlockSlab slab, int threads = 0,
+                          ExactBakeStats* stats = nullptr, bool progress = false);
+
+// The sparse grid of slabs that cover the grid's block layers in order: bakeExactSparse's.
+Grid assembleExactSlabs(const GridShape& shape, int blockSize, float bandVoxels,
+                        const std::vector<const SlabSamples*>& slabs, int threads = 0);
 
 }  // namespace sdft

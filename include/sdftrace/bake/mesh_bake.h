@@ -51,10 +51,19 @@ void validateMeshBakeOptions(const MeshBakeOptions& options);
 // Bytes a bake of `mesh` at `shape` needs at its peak (the grid, the method's working arrays,
 // the BVH; `verify` adds the exact bake it is measured against), an estimate made before anything
 // is allocated. bakeMesh checks it against the memory budget (core/memory_budget.h).
+// `gridShare`: the part of the grid this process bakes (a slab of a distributed bake).
 double meshBakeBytes(const TriangleMesh& mesh, const GridShape& shape,
-                     const MeshBakeOptions& options, bool verify = false);
+                     const MeshBakeOptions& options, bool verify = false, double gridShare = 1);
+
+// What bakeMesh checks before it starts (InputError): the options, a mesh with triangles in a
+// finite range, and the memory budget for `gridShare` of the grid.
+void checkMeshBake(const TriangleMesh& mesh, const MeshBakeOptions& options, double gridShare = 1);
 
 MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& options);
+
+// The summary of an exact bake's work (MeshBakeResult::details): distances and signs.
+std::string exactBakeDetails(const ExactBakeStats& stats, const MeshBakeOptions& options,
+                             const GridShape& shape);
 
 const char* meshBakeMethodName(MeshBakeMethod m);
 // "exact", "jfa", "danielsson", "edt", "rtsdf"; false if unknown.

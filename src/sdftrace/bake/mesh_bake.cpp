@@ -54,11 +54,10 @@ void validateMeshBakeOptions(const MeshBakeOptions& o) {
     }
 }
 
-namespace {
+namespace {}  // namespace
 
-// The summary of an exact bake: how the distances were found, and the sign work.
-std::string exactDetails(const ExactBakeStats& st, const MeshBakeOptions& o,
-                         const GridShape& shape) {
+std::string exactBakeDetails(const ExactBakeStats& st, const MeshBakeOptions& o,
+                             const GridShape& shape) {
     const SampleOptions& so = o.sampling;
     char distances[160], line[400];
     if (so.kind == GridKind::Dense && o.closest == ClosestPoints::Transform) {
@@ -76,6 +75,8 @@ std::string exactDetails(const ExactBakeStats& st, const MeshBakeOptions& o,
                   distances, st.signEvaluations, signMethodName(o.sign), st.filmSums);
     return line;
 }
+
+namespace {
 
 // Exact distances: the narrow band (sparse) or the closest point transform / BVH (dense).
 void bakeExact(const TriangleMesh& mesh, const MeshBakeOptions& o, const GridShape& shape,
@@ -97,7 +98,7 @@ void bakeExact(const TriangleMesh& mesh, const MeshBakeOptions& o, const GridSha
         r.grid = Grid::dense(shape, std::move(exact));
         clock.mark("grid");
     }
-    r.details = exactDetails(st, o, shape);
+    r.details = exactBakeDetails(st, o, shape);
 }
 
 // RTSDF §2.1-2.3: a jump-flooded coarse field, refined by rays where it is near the surface.
@@ -185,7 +186,7 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
 }  // namespace
 
 double meshBakeBytes(const TriangleMesh& mesh, const GridShape& shape, const MeshBakeOptions& o,
-                     bool verify) {
+                     bool verify, double gridShare) {
     // Bytes per grid vertex of the working arrays: samples (sparse exact: per-block tables only);
     // rtsdf adds a coarse grid; the propagation methods hold seed points, triangles and ping-pong
     // or feature arrays. Embree's BVH and the mesh: about 160 bytes a triangle.
@@ -194,11 +195,11 @@ double meshBakeBytes(const TriangleMesh& mesh, const GridShape& shape, const Mes
                        : o.method == MeshBakeMethod::Rtsdf ? 8
                                                            : 40;
     if (verify) perVertex += 8;
-    return perVertex * static_cast<double>(shape.vertexCount()) +
+    return perVertex * static_cast<double>(shape.vertexCount()) * gridShare +
            160.0 * static_cast<double>(mesh.triangles.size());
 }
 
-MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& o) {
+void checkMeshBake(const TriangleMesh& mesh, const MeshBakeOptions& o, double gridShare) {
     validateMeshBakeOptions(o);
     if (mesh.triangles.empty()) throw InputError("mesh: no (non-degenerate) triangles to bake");
     if (std::string problem = meshRangeProblem(mesh); !problem.empty())
@@ -206,11 +207,16 @@ MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     {
         const GridShape shape = o.shape ? *o.shape : gridShapeFor(mesh.bounds(), o.sampling);
         checkMemoryBudget(
-            meshBakeBytes(mesh, shape, o), "resolution " + std::to_string(o.sampling.resolution),
+            meshBakeBytes(mesh, shape, o, false, gridShare),
+            "resolution " + std::to_string(o.sampling.resolution),
             "the bake's grid, working arrays and BVH at " + std::to_string(shape.cells[0]) + "x" +
                 std::to_string(shape.cells[1]) + "x" + std::to_string(shape.cells[2]) + " cells",
             "use a lower resolution or a sparse exact bake");
     }
+}
+
+MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& o) {
+    checkMeshBake(mesh, o);
     // Every stage, grid finishing included, on exactly the requested threads.
     ThreadArena arena(o.sampling.threads);
     MeshBakeResult r;

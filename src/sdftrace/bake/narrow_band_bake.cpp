@@ -53,9 +53,11 @@ struct OwnerLists {
 class NarrowBandBake {
   public:
     NarrowBandBake(const TriangleMesh& mesh, const GridShape& s, int B, float bandVoxels,
-                   SignMethod sign, int threads, bool progress);
+                   SignMethod sign, int threads, bool progress, BlockSlab slab = {});
 
     Grid run(ExactBakeStats* stats);
+    // The slab's blocks only (bakeExactSlab).
+    SlabSamples runSlab(ExactBakeStats* stats);
 
   private:
     using Carried = RowSampler::Carried;
@@ -66,16 +68,22 @@ class NarrowBandBake {
     void surfaceBlocks();
     void signs();
     void otherBlocks();
+    void phases();
     Grid gather(ExactBakeStats* stats);
+    void keptBlocks();
+    void blockSamples(size_t b, float* out) const;
 
+    // Blocks and owners are stored for the window of z layers a slab needs (the whole grid
+    // without slabs): index arithmetic takes global layers.
     size_t blockIndex(int bi, int bj, int bk) const {
-        return (static_cast<size_t>(bk) * m_nb[1] + bj) * m_nb[0] + bi;
+        return (static_cast<size_t>(bk - m_b0) * m_nb[1] + bj) * m_nb[0] + bi;
     }
     // Vertex v belongs to owner (v >> shift); one more owner layer holds the last vertices of each
     // axis.
     size_t ownerIndex(int oi, int oj, int ok) const {
-        return (static_cast<size_t>(ok) * m_no[1] + oj) * m_no[0] + oi;
+        return (static_cast<size_t>(ok - m_o0) * m_no[1] + oj) * m_no[0] + oi;
     }
+    size_t rowIndex(int oj, int ok) const { return static_cast<size_t>(ok - m_o0) * m_no[1] + oj; }
     // Index into m_owned of vertex (i, j, k), clamped to the grid.
     size_t localIndex(int i, int j, int k) const {
         i = std::min(i, m_s.cells[0]), j = std::min(j, m_s.cells[1]), k = std::min(k, m_s.cells[2]);
@@ -116,6 +124,10 @@ class NarrowBandBake {
     RowSampler m_sampler;
     const bool m_watertight, m_integerWinding;
     int m_nv[3], m_nb[3], m_no[3];
+    // The slab's block layers [m_z0, m_z1) (its output), and the windows of block layers
+    // [m_b0, m_b1) and owner layers [m_o0, m_o1) whose arrays it keeps: one layer more on each
+    // side, which is what the slab's results read (runSlab).
+    int m_z0 = 0, m_z1 = 0, m_b0 = 0, m_b1 = 0, m_o0 = 0, m_o1 = 0;
     size_t m_numBlocks, m_numOwners;
     size_t m_perOwner;
     std::atomic<size_t> m_queries{0}, m_signs{0}, m_filmSums{0};
@@ -137,7 +149,8 @@ class NarrowBandBake {
 };
 
 NarrowBandBake::NarrowBandBake(const TriangleMesh& mesh, const GridShape& s, int B,
-                               float bandVoxels, SignMethod sign, int threads, bool progress)
+                               float bandVoxels, SignMethod sign, int threads, bool progress,
+                               BlockSlab slab)
     : m_mesh(mesh),
       m_s(s),
       m_B(B),
@@ -161,8 +174,13 @@ NarrowBandBake::NarrowBandBake(const TriangleMesh& mesh, const GridShape& s, int
         m_nb[a] = (s.cells[a] + B - 1) / B;
         m_no[a] = (s.cells[a] >> m_shift) + 1;
     }
-    m_numBlocks = static_cast<size_t>(m_nb[0]) * m_nb[1] * m_nb[2];
-    m_numOwners = static_cast<size_t>(m_no[0]) * m_no[1] * m_no[2];
+    m_z0 = std::clamp(slab.first, 0, m_nb[2]);
+    m_z1 = slab.last > 0 ? std::clamp(slab.last, m_z0, m_nb[2]) : m_nb[2];
+    m_b0 = m_o0 = std::max(0, m_z0 - 1);
+    m_b1 = std::min(m_nb[2], m_z1 + 1);
+    m_o1 = std::min(m_no[2], m_z1 + 2);
+    m_numBlocks = static_cast<size_t>(m_nb[0]) * m_nb[1] * (m_b1 - m_b0);
+    m_numOwners = static_cast<size_t>(m_no[0]) * m_no[1] * (m_o1 - m_o0);
     m_perOwner = static_cast<size_t>(B) * B * B;
     float scale = 0;
     for (int a = 0; a < 3; ++a)
@@ -173,6 +191,11 @@ NarrowBandBake::NarrowBandBake(const TriangleMesh& mesh, const GridShape& s, int
 }
 
 Grid NarrowBandBake::run(ExactBakeStats* stats) {
+    phases();
+    return gather(stats);
+}
+
+void NarrowBandBake::phases() {
     m_phases.mark("setup");
     scatter();
     m_phases.mark("scatter");
@@ -187,7 +210,6 @@ Grid NarrowBandBake::run(ExactBakeStats* stats) {
     m_near = OwnerLists();
     m_gradient = std::vector<float>();
     m_sampler.releaseSigns();
-    return gather(stats);
 }
 
 // The owners whose vertices in the triangle's range come within `grow` of its plane (a large
@@ -202,7 +224,8 @@ void NarrowBandBake::forOwnersNearPlane(size_t t, const VertexRange& r, float gr
     n = len > 0 ? n / len : Vec3(0.0f);
     const Vec3 an(std::fabs(n.x), std::fabs(n.y), std::fabs(n.z));
     const float limit = grow * 1.001f + 1e-6f * m_h;
-    for (int ok = (r.lo[2] >> shift); ok <= (r.hi[2] >> shift); ++ok)
+    for (int ok = std::max(m_o0, r.lo[2] >> shift); ok <= std::min(m_o1 - 1, r.hi[2] >> shift);
+         ++ok)
         for (int oj = (r.lo[1] >> shift); oj <= (r.hi[1] >> shift); ++oj)
             for (int oi = (r.lo[0] >> shift); oi <= (r.hi[0] >> shift); ++oi) {
                 const Vec3 lo =
@@ -275,7 +298,7 @@ void NarrowBandBake::markCandidates() {
     assignHuge(m_flags, m_numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
     assignHuge(m_candidate, m_numBlocks, uint8_t{0});
     assignHuge(m_slot, m_numOwners, -1);
-    m_rowNeeded.assign(static_cast<size_t>(no[1]) * no[2], 0);
+    m_rowNeeded.assign(static_cast<size_t>(no[1]) * (m_o1 - m_o0), 0);
     // Both relations are 2x2x2 box dilations over the owner lattice (blocks index a part of it),
     // done one axis at a time in one byte per owner.
     std::vector<uint8_t> mark;
@@ -284,22 +307,22 @@ void NarrowBandBake::markCandidates() {
         tbb::parallel_for(size_t(0), m_numOwners,
                           [&](size_t o) { mark[o] = m_band.start[o + 1] > m_band.start[o]; });
         dilateOwners(mark, +1);
-        tbb::parallel_for(0, nb[2], [&](int bk) {
+        tbb::parallel_for(m_b0, m_b1, [&](int bk) {
             for (int bj = 0; bj < nb[1]; ++bj)
                 std::copy_n(&mark[ownerIndex(0, bj, bk)], nb[0],
                             &m_candidate[blockIndex(0, bj, bk)]);
         });
         // An owner is needed by the candidates among the (up to 8) blocks that use its vertices.
-        tbb::parallel_for(0, no[2], [&](int ok) {
+        tbb::parallel_for(m_o0, m_o1, [&](int ok) {
             for (int oj = 0; oj < no[1]; ++oj) {
                 uint8_t* row = &mark[ownerIndex(0, oj, ok)];
                 std::fill_n(row, no[0], uint8_t{0});
-                if (oj < nb[1] && ok < nb[2])
+                if (oj < nb[1] && ok < m_b1)
                     std::copy_n(&m_candidate[blockIndex(0, oj, ok)], nb[0], row);
             }
         });
         dilateOwners(mark, -1);
-        tbb::parallel_for(0, no[2], [&](int ok) {
+        tbb::parallel_for(m_o0, m_o1, [&](int ok) {
             for (int oj = 0; oj < no[1]; ++oj) {
                 const size_t first = ownerIndex(0, oj, ok);
                 uint8_t row = 0;
@@ -307,7 +330,7 @@ void NarrowBandBake::markCandidates() {
                     if (mark[first + oi]) m_slot[first + oi] = 0;
                     row |= mark[first + oi];
                 }
-                m_rowNeeded[static_cast<size_t>(ok) * no[1] + oj] = row;
+                m_rowNeeded[rowIndex(oj, ok)] = row;
             }
         });
     });
@@ -323,6 +346,7 @@ void NarrowBandBake::markCandidates() {
 // z (dir = +1 or -1), so that v[o] ends as the OR over the 2x2x2 box from o towards dir.
 void NarrowBandBake::dilateOwners(std::vector<uint8_t>& v, int dir) const {
     const int* no = m_no;
+    const int nz = m_o1 - m_o0;  // the window's layers
     const size_t sy = static_cast<size_t>(no[0]), sz = sy * no[1];
     // base[i * stride + w] |= base[(i + dir) * stride + w] for w < width, over i in the order that
     // reads each neighbour before it changes (ascending for +1, descending for -1).
@@ -334,21 +358,21 @@ void NarrowBandBake::dilateOwners(std::vector<uint8_t>& v, int dir) const {
             for (size_t w = 0; w < width; ++w) to[w] |= from[w];
         }
     };
-    tbb::parallel_for(0, no[1] * no[2], [&](int row) {
+    tbb::parallel_for(0, no[1] * nz, [&](int row) {
         orAlong(v.data() + static_cast<size_t>(row) * sy, no[0], 1, 1);
     });
-    tbb::parallel_for(0, no[2], [&](int ok) { orAlong(v.data() + ok * sz, no[1], sy, sy); });
-    tbb::parallel_for(0, no[1], [&](int oj) { orAlong(v.data() + oj * sy, no[2], sz, sy); });
+    tbb::parallel_for(0, nz, [&](int lk) { orAlong(v.data() + lk * sz, no[1], sy, sy); });
+    tbb::parallel_for(0, no[1], [&](int oj) { orAlong(v.data() + oj * sy, nz, sz, sy); });
 }
 
 // 3. Distances, one task per row of owners.
 void NarrowBandBake::distances() {
     m_nearBits.assign(m_owners, 0);
-    Progress bar("sdftrace bake: narrow band", static_cast<uint64_t>(m_no[1]) * m_no[2],
+    Progress bar("sdftrace bake: narrow band", static_cast<uint64_t>(m_no[1]) * (m_o1 - m_o0),
                  m_progress && stderrIsTerminal());
     m_arena.execute([&] {
-        tbb::parallel_for(0, m_no[1] * m_no[2], [&](int row) {
-            const int oj = row % m_no[1], ok = row / m_no[1];
+        tbb::parallel_for(0, m_no[1] * (m_o1 - m_o0), [&](int row) {
+            const int oj = row % m_no[1], ok = m_o0 + row / m_no[1];
             size_t found = 0;
             std::vector<std::pair<float, uint32_t>> order;
             for (int oi = 0; m_rowNeeded[row] && oi < m_no[0]; ++oi)
@@ -504,7 +528,7 @@ void NarrowBandBake::surfaceBlocks() {
     m_heldBy.assign(m_owners, 0);
     m_arena.execute([&] {
         // A candidate block is a surface block when one of its samples lies within the band.
-        tbb::parallel_for(0, nb[2], [&](int bk) {
+        tbb::parallel_for(m_b0, m_b1, [&](int bk) {
             for (int bj = 0; bj < nb[1]; ++bj)
                 for (int bi = 0; bi < nb[0]; ++bi) {
                     const size_t b = blockIndex(bi, bj, bk);
@@ -512,14 +536,14 @@ void NarrowBandBake::surfaceBlocks() {
                     bool near = false;
                     for (int d = 0; d < 8 && !near; ++d) {
                         int oi = bi + (d & 1), oj = bj + ((d >> 1) & 1), ok = bk + (d >> 2);
-                        if (oi >= no[0] || oj >= no[1] || ok >= no[2]) continue;
+                        if (oi >= no[0] || oj >= no[1] || ok >= m_o1) continue;
                         int32_t sl = m_slot[ownerIndex(oi, oj, ok)];
                         near = sl >= 0 && (m_nearBits[sl] >> d & 1);
                     }
                     m_keep[b] = near;
                 }
         });
-        tbb::parallel_for(0, no[2], [&](int ok) {
+        tbb::parallel_for(m_o0, m_o1, [&](int ok) {
             for (int oj = 0; oj < no[1]; ++oj)
                 for (int oi = 0; oi < no[0]; ++oi) {
                     int32_t sl = m_slot[ownerIndex(oi, oj, ok)];
@@ -527,8 +551,8 @@ void NarrowBandBake::surfaceBlocks() {
                     uint8_t bits = 0;
                     for (int d = 0; d < 8; ++d) {
                         int bi = oi - (d & 1), bj = oj - ((d >> 1) & 1), bk = ok - (d >> 2);
-                        if (bi >= 0 && bj >= 0 && bk >= 0 && bi < nb[0] && bj < nb[1] &&
-                            bk < nb[2] && m_keep[blockIndex(bi, bj, bk)])
+                        if (bi >= 0 && bj >= 0 && bk >= m_b0 && bi < nb[0] && bj < nb[1] &&
+                            bk < m_b1 && m_keep[blockIndex(bi, bj, bk)])
                             bits |= static_cast<uint8_t>(1 << d);
                     }
                     m_heldBy[sl] = bits;
@@ -597,7 +621,7 @@ void NarrowBandBake::ownerGradients() {
     assignHuge(m_gradient, m_integerWinding ? static_cast<size_t>(m_owners) : 0, 0.0f);
     if (!m_integerWinding || m_watertight) return;
     m_arena.execute([&] {
-        tbb::parallel_for(0, m_no[2], [&](int ok) {
+        tbb::parallel_for(m_o0, m_o1, [&](int ok) {
             for (int oj = 0; oj < m_no[1]; ++oj)
                 for (int oi = 0; oi < m_no[0]; ++oi) {
                     int32_t sl = m_slot[ownerIndex(oi, oj, ok)];
@@ -641,13 +665,14 @@ void NarrowBandBake::signs() {
     m_cornerWinding.assign(m_integerWinding ? m_owners : 0, 0);
     ownerGradients();
     m_arena.execute([&] {
-        tbb::parallel_for(0, m_no[2], [&](int ok) {
+        // The slab's owner layers: those its blocks' vertices lie in.
+        tbb::parallel_for(m_z0, std::min(m_z1 + 1, m_o1), [&](int ok) {
             SlabSigns slab;
             slab.layers = &layers.local();
             for (int k = ok * m_B; k < std::min(ok * m_B + m_B, m_nv[2]); ++k)
                 for (int j = 0; j < m_nv[1]; ++j) {
                     const int oj = j >> m_shift;
-                    if (!m_rowNeeded[static_cast<size_t>(ok) * m_no[1] + oj]) {
+                    if (!m_rowNeeded[rowIndex(oj, ok)]) {
                         j = oj * m_B + m_B - 1;
                         continue;
                     }
@@ -749,7 +774,7 @@ void NarrowBandBake::signVertexRow(int ok, int k, int j, SlabSigns& slab) {
 void NarrowBandBake::otherBlocks() {
     std::atomic<size_t> centreSigns{0};
     m_arena.execute([&] {
-        tbb::parallel_for(0, m_nb[1] * m_nb[2], [&](int row) {
+        tbb::parallel_for(0, m_nb[1] * (m_z1 - m_z0), [&](int row) {
             size_t evaluated = 0, refreshed = 0;
             signBlockRow(row, evaluated, refreshed);
             centreSigns += evaluated;
@@ -761,7 +786,7 @@ void NarrowBandBake::otherBlocks() {
 
 void NarrowBandBake::signBlockRow(int row, size_t& evaluated, size_t& refreshed) {
     const int B = m_B;
-    const int bj = row % m_nb[1], bk = row / m_nb[1];
+    const int bj = row % m_nb[1], bk = m_z0 + row / m_nb[1];
     bool prevFree = false, prevInside = false;
     Carried prevCarried;
     Vec3 prevCentre;
@@ -834,34 +859,47 @@ void NarrowBandBake::signBlockRow(int row, size_t& evaluated, size_t& refreshed)
     }
 }
 
-// The surface blocks' samples copied out of the owners, and the sparse grid.
-Grid NarrowBandBake::gather(ExactBakeStats* stats) {
-    const int B = m_B, V = B + 1;
-    for (size_t b = 0; b < m_numBlocks; ++b)
+// The surface blocks of the slab's layers, in flat block order.
+void NarrowBandBake::keptBlocks() {
+    const size_t layer = static_cast<size_t>(m_nb[0]) * m_nb[1];
+    for (size_t b = (m_z0 - m_b0) * layer; b < (m_z1 - m_b0) * layer; ++b)
         if (m_keep[b]) m_kept.push_back(b);
     m_keep = std::vector<uint8_t>();
+}
+
+// Block b's (B+1)^3 vertex samples, x fastest, out of the owners.
+void NarrowBandBake::blockSamples(size_t b, float* out) const {
+    const int B = m_B, V = B + 1;
+    const int bi = static_cast<int>(b % m_nb[0]), bj = static_cast<int>((b / m_nb[0]) % m_nb[1]),
+              bk = m_b0 + static_cast<int>(b / (static_cast<size_t>(m_nb[0]) * m_nb[1]));
+    for (int k = 0; k < V; ++k)
+        for (int j = 0; j < V; ++j) {
+            // The first B vertices of a row lie in one owner (unless clamped at the end).
+            int i = 0;
+            if (bi * B + B <= m_s.cells[0]) {
+                const float* row = &m_owned[localIndex(bi * B, bj * B + j, bk * B + k)];
+                for (; i < B; ++i) *out++ = row[i];
+            }
+            for (; i < V; ++i) *out++ = m_owned[localIndex(bi * B + i, bj * B + j, bk * B + k)];
+        }
+}
+
+// The surface blocks' samples copied out of the owners, and the sparse grid.
+Grid NarrowBandBake::gather(ExactBakeStats* stats) {
+    SDFT_CHECK(m_z0 == 0 && m_z1 == m_nb[2]);  // the whole grid (slabs: runSlab)
+    keptBlocks();
     // Straight into the grid's compact layout (the owners' samples are one value per vertex).
-    SparseGridBuilder builder(m_s, B, (m_bandVoxels - 1) * m_h,
+    SparseGridBuilder builder(m_s, m_B, (m_bandVoxels - 1) * m_h,
                               BlockTable::fromDense(m_nb, m_flags, "exact bake"), "exact bake");
     m_flags = std::vector<uint8_t>();
     m_arena.execute([&] {
         tbb::parallel_for(size_t(0), m_kept.size(), [&](size_t n) {
-            size_t b = m_kept[n];
-            int bi = static_cast<int>(b % m_nb[0]), bj = static_cast<int>((b / m_nb[0]) % m_nb[1]),
-                bk = static_cast<int>(b / (static_cast<size_t>(m_nb[0]) * m_nb[1]));
+            const size_t b = m_kept[n];
             float block[9 * 9 * 9];  // (B+1)^3, B <= 8
-            float* out = block;
-            for (int k = 0; k < V; ++k)
-                for (int j = 0; j < V; ++j) {
-                    // The first B vertices of a row lie in one owner (unless clamped at the end).
-                    int i = 0;
-                    if (bi * B + B <= m_s.cells[0]) {
-                        const float* row = &m_owned[localIndex(bi * B, bj * B + j, bk * B + k)];
-                        for (; i < B; ++i) *out++ = row[i];
-                    }
-                    for (; i < V; ++i)
-                        *out++ = m_owned[localIndex(bi * B + i, bj * B + j, bk * B + k)];
-                }
+            blockSamples(b, block);
+            const int bi = static_cast<int>(b % m_nb[0]),
+                      bj = static_cast<int>((b / m_nb[0]) % m_nb[1]),
+                      bk = static_cast<int>(b / (static_cast<size_t>(m_nb[0]) * m_nb[1]));
             builder.addBlock(bi, bj, bk, block);
         });
     });
@@ -876,11 +914,90 @@ Grid NarrowBandBake::gather(ExactBakeStats* stats) {
     return grid;
 }
 
+SlabSamples NarrowBandBake::runSlab(ExactBakeStats* stats) {
+    phases();
+    keptBlocks();
+    SlabSamples out;
+    out.slab = {m_z0, m_z1};
+    const size_t layer = static_cast<size_t>(m_nb[0]) * m_nb[1];
+    out.flags.assign(m_flags.begin() + (m_z0 - m_b0) * layer,
+                     m_flags.begin() + (m_z1 - m_b0) * layer);
+    m_flags = std::vector<uint8_t>();
+    const size_t perBlock = static_cast<size_t>(m_B + 1) * (m_B + 1) * (m_B + 1);
+    assignHuge(out.samples, m_kept.size() * perBlock, 0.0f);
+    m_arena.execute([&] {
+        tbb::parallel_for(size_t(0), m_kept.size(), [&](size_t n) {
+            blockSamples(m_kept[n], out.samples.data() + n * perBlock);
+        });
+    });
+    m_owned.reset();
+    m_phases.mark("other blocks and gather");
+    report(stats, m_queries, m_signs, m_filmSums);
+    if (stats) {
+        stats->surfaceBlocks = m_kept.size();
+        stats->phases = std::move(m_stages);
+    }
+    return out;
+}
+
 }  // namespace
 
 Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float bandVoxels,
                      SignMethod sign, int threads, ExactBakeStats* stats, bool progress) {
     return NarrowBandBake(mesh, s, B, bandVoxels, sign, threads, progress).run(stats);
+}
+
+}  // namespace sdft
+
+namespace sdft {
+
+SlabSamples bakeExactSlab(const TriangleMesh& mesh, const GridShape& shape, int blockSize,
+                          float bandVoxels, SignMethod sign, BlockSlab slab, int threads,
+                          ExactBakeStats* stats, bool progress) {
+    return NarrowBandBake(mesh, shape, blockSize, bandVoxels, sign, threads, progress, slab)
+        .runSlab(stats);
+}
+
+Grid assembleExactSlabs(const GridShape& shape, int blockSize, float bandVoxels,
+                        const std::vector<const SlabSamples*>& slabs, int threads) {
+    const int B = blockSize;
+    int nb[3];
+    for (int a = 0; a < 3; ++a) nb[a] = (shape.cells[a] + B - 1) / B;
+    const size_t layer = static_cast<size_t>(nb[0]) * nb[1];
+    std::vector<uint8_t> flags;
+    assignHuge(flags, layer * nb[2], static_cast<uint8_t>(BlockFlag::Outside));
+    int covered = 0;
+    for (const SlabSamples* s : slabs) {
+        if (s->slab.first != covered || s->flags.size() != layer * (s->slab.last - s->slab.first))
+            throw std::runtime_error("exact bake: slabs do not cover the grid in order");
+        std::copy(s->flags.begin(), s->flags.end(), flags.begin() + covered * layer);
+        covered = s->slab.last;
+    }
+    if (covered != nb[2]) throw std::runtime_error("exact bake: slabs do not cover the grid");
+    SparseGridBuilder builder(shape, B, (bandVoxels - 1) * shape.voxelSize,
+                              BlockTable::fromDense(nb, flags, "exact bake"), "exact bake");
+    flags = std::vector<uint8_t>();
+    const size_t perBlock = static_cast<size_t>(B + 1) * (B + 1) * (B + 1);
+    ThreadArena arena(threads);
+    Grid grid;
+    arena.execute([&] {
+        for (const SlabSamples* s : slabs) {
+            // The slab's surface blocks, in flat order, numbered as its samples are.
+            std::vector<size_t> blocks;
+            for (size_t b = 0; b < s->flags.size(); ++b)
+                if (s->flags[b] == static_cast<uint8_t>(BlockFlag::Surface)) blocks.push_back(b);
+            if (blocks.size() * perBlock != s->samples.size())
+                throw std::runtime_error("exact bake: a slab's samples do not match its blocks");
+            tbb::parallel_for(size_t(0), blocks.size(), [&](size_t n) {
+                const size_t b = blocks[n];
+                builder.addBlock(static_cast<int>(b % nb[0]), static_cast<int>((b / nb[0]) % nb[1]),
+                                 s->slab.first + static_cast<int>(b / layer),
+                                 s->samples.data() + n * perBlock);
+            });
+        }
+        grid = builder.finish();
+    });
+    return grid;
 }
 
 }  // namespace sdft
