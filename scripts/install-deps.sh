@@ -20,6 +20,7 @@ packages=(
     python3-pytest        # its tests
     libglfw3-dev libimgui-dev  # the viewer (sdftrace view): GLFW + OpenGL, Dear ImGui
     xvfb xauth libgl1-mesa-dri  # its tests: a virtual X server with Mesa's software OpenGL
+    libopenmpi-dev openmpi-bin  # mpirun -np N sdftrace render|bake (SDFT_MPI)
     libgtest-dev          # tests
     libbenchmark-dev      # bench/
 )

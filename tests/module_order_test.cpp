@@ -32,6 +32,8 @@ const std::map<std::string, std::set<std::string>>& allowedIncludes() {
         {"scene", {"core", "math", "exec", "field", "trace", "render", "bake", "io"}},
         {"cuda", {"core", "math", "exec", "field", "trace", "render"}},
         {"view", {"core", "math", "exec", "field", "trace", "render", "bake", "io", "scene"}},
+        // Renders and bakes across the ranks of an MPI job.
+        {"cluster", {"core", "math", "exec", "field", "trace", "render", "bake", "io", "scene"}},
     };
     return rules;
 }

@@ -16,6 +16,8 @@
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/texture_coords.h"
 #include "sdftrace/bake/verify_bake.h"
+#include "sdftrace/cluster/distributed_bake.h"
+#include "sdftrace/cluster/work_farm.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/field/sample_grid.h"
@@ -200,31 +202,62 @@ void printFieldVerify(const FieldVerification& v) {
                      v.signedCentres);
 }
 
-// A mesh file, by any method of mesh_bake.h; --verify compares with the exact bake.
-int bakeMesh(const BakeArgs& a) {
+// A mesh file, by any method of mesh_bake.h; --verify compares with the exact bake. Under mpirun
+// the sparse exact bake runs on every rank, one slab each (cluster/distributed_bake.h); the other
+// methods run on rank 0.
+int bakeMesh(const BakeArgs& a, Communicator& comm) {
     MeshBakeOptions o;
-    if (!parseMeshBakeMethod(a.method, o.method)) {
-        throw InputError("--method " + a.method + ": unknown; accepted: " + kMeshBakeMethods);
-    }
-    o.sampling = sampleOptions(a);
-    parseSignMethod(a.sign, o.sign);           // CLI11 checked the name
-    parseClosestPoints(a.closest, o.closest);  // likewise
-    o.jfaVariant = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
-                   : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
-                                             : JfaVariant::Plain;
-    o.betaVoxels = a.beta;
-    o.rtsdf.rays = a.rays;
-    o.rtsdf.maskVoxels = a.mask;
-    o.progress = !a.quiet;
-    validateMeshBakeOptions(o);
     auto t0 = std::chrono::steady_clock::now();
     MeshReport report;
-    TriangleMesh mesh = loadMesh(a.scene, &report);
-    checkMemory(meshBakeBytes(mesh, gridShapeFor(mesh.bounds(), o.sampling), o, a.verify),
-                a.resolution);
+    TriangleMesh mesh;
+    bool across = false;
+    together(comm, [&] {
+        if (!parseMeshBakeMethod(a.method, o.method)) {
+            throw InputError("--method " + a.method + ": unknown; accepted: " + kMeshBakeMethods);
+        }
+        o.sampling = sampleOptions(a);
+        parseSignMethod(a.sign, o.sign);           // CLI11 checked the name
+        parseClosestPoints(a.closest, o.closest);  // likewise
+        o.jfaVariant = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
+                       : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
+                                                 : JfaVariant::Plain;
+        o.betaVoxels = a.beta;
+        o.rtsdf.rays = a.rays;
+        o.rtsdf.maskVoxels = a.mask;
+        o.progress = !a.quiet;
+        validateMeshBakeOptions(o);
+        across = comm.distributed() && o.method == MeshBakeMethod::Exact &&
+                 o.sampling.kind == GridKind::Sparse;
+        if (comm.distributed() && !across && !comm.root()) return;  // rank 0 bakes alone
+        mesh = loadMesh(a.scene, &report);
+        // Each rank checks its own budget for its share of the grid's working arrays.
+        const double share = across ? 1.0 / comm.size() : 1.0;
+        checkMemory(meshBakeBytes(mesh, gridShapeFor(mesh.bounds(), o.sampling), o,
+                                  a.verify && comm.root(), share),
+                    a.resolution);
+        if (across) checkMeshBake(mesh, o, share);
+    });
+    if (comm.distributed() && !comm.root()) {
+        if (across) serveRounds(comm, [&](const Bytes& c) { return exactSlabWorker(mesh, o, c); });
+        return 0;
+    }
+    if (comm.distributed() && !across) {
+        comm.setOthersDone();
+        std::fprintf(stderr,
+                     "sdftrace bake: --method %s%s runs on rank 0 alone (the sparse exact bake is "
+                     "the one split across ranks)\n",
+                     a.method.c_str(), o.sampling.kind == GridKind::Dense ? " --dense" : "");
+    }
     std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.scene.c_str(), report.summary().c_str());
     auto t1 = std::chrono::steady_clock::now();
-    MeshBakeResult r = bakeMesh(mesh, o);
+    MeshBakeResult r;
+    if (across) {
+        WorkFarm farm(comm);
+        r = bakeExactAcross(farm, mesh, o);
+        farm.end();
+    } else {
+        r = bakeMesh(mesh, o);
+    }
     auto t2 = std::chrono::steady_clock::now();
     const GridShape& shape = r.grid.shape();
     if (a.verify) {
@@ -274,19 +307,33 @@ int bakeMesh(const BakeArgs& a) {
     return 0;
 }
 
-int runBake(const BakeArgs& a) {
-    if (!isGridFile(a.output))
-        throw InputError("--output " + a.output + ": accepted extensions: .sdfg, .vdb");
-    checkWritablePath(a.output, "--output");
-    if (!a.texcoords.empty() && std::filesystem::path(a.output).extension() != ".sdfg") {
-        throw InputError("--texcoords: texture coordinates are stored in .sdfg files only, not " +
-                         a.output);
+int runBake(const BakeArgs& args) {
+    Communicator& comm = Communicator::world();
+    BakeArgs a = args;
+    if (comm.distributed()) {
+        if (!a.threads) a.threads = defaultRankThreads(comm);
+        if (!comm.root()) a.quiet = true;
     }
-    rejectFlagsThatDoNotApply(a, isMeshFile(a.scene));
-    if (a.time && isMeshFile(a.scene))
-        throw InputError("--time: " + a.scene +
-                         " is a mesh; --time picks the instant of a scene file with keyframes");
-    if (isMeshFile(a.scene)) return bakeMesh(a);
+    together(comm, [&] {
+        if (!isGridFile(a.output))
+            throw InputError("--output " + a.output + ": accepted extensions: .sdfg, .vdb");
+        if (comm.root()) checkWritablePath(a.output, "--output");  // rank 0 writes it
+        if (!a.texcoords.empty() && std::filesystem::path(a.output).extension() != ".sdfg") {
+            throw InputError(
+                "--texcoords: texture coordinates are stored in .sdfg files only, not " + a.output);
+        }
+        rejectFlagsThatDoNotApply(a, isMeshFile(a.scene));
+        if (a.time && isMeshFile(a.scene))
+            throw InputError("--time: " + a.scene +
+                             " is a mesh; --time picks the instant of a scene file with keyframes");
+    });
+    if (isMeshFile(a.scene)) return bakeMesh(a, comm);
+    // A scene file's field is sampled on rank 0.
+    if (comm.distributed()) {
+        if (!comm.root()) return 0;
+        comm.setOthersDone();
+        std::fprintf(stderr, "sdftrace bake: a scene file is sampled on rank 0 alone\n");
+    }
     AssetCache cache;
     Scene scene =
         a.time ? AnimatedScene::fromFile(a.scene).at(*a.time, cache) : parseSceneFile(a.scene);

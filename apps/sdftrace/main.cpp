@@ -4,6 +4,8 @@
 #include <exception>
 
 #include "commands.h"
+#include "sdftrace/cluster/communicator.h"
+#include "sdftrace/cluster/work_farm.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/simd.h"
@@ -18,8 +20,18 @@ void onTerminatingSignal(int sig) {
 }
 }  // namespace
 
+int run(int argc, char** argv);
+
 int main(int argc, char** argv) {
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, onTerminatingSignal);
+    // Under mpirun: MPI's world (docs/cluster.md); otherwise nothing changes.
+    sdft::Communicator::init(argc, argv);
+    const int status = run(argc, argv);
+    sdft::Communicator::finalize();
+    return status;
+}
+
+int run(int argc, char** argv) {
     CLI::App app{"sdftrace: build and ray trace signed distance fields"};
     app.name("sdftrace");
     app.require_subcommand(1);
@@ -47,8 +59,15 @@ int main(int argc, char** argv) {
     sdft::cli::addConvertCommand(app, action);
     sdft::cli::addMeshCommand(app, action);
     sdft::cli::addViewCommand(app, action);
+    // Under mpirun every rank parses the same flags: rank 0 alone prints help and flag errors.
+    const bool printer = sdft::Communicator::world().root();
     try {
-        app.parse(argc, argv);
+        try {
+            app.parse(argc, argv);
+        } catch (const CLI::ParseError& e) {
+            if (!printer) return e.get_exit_code() == 0 ? 0 : 2;
+            throw;
+        }
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {
@@ -63,19 +82,31 @@ int main(int argc, char** argv) {
                      name.c_str());
         return 2;
     }
+    sdft::Communicator& comm = sdft::Communicator::world();
+    // Only render and bake are split across ranks (docs/cluster.md); the others run on rank 0.
+    if (comm.distributed() && !app.got_subcommand("render") && !app.got_subcommand("bake")) {
+        if (!comm.root()) return 0;
+        comm.setOthersDone();
+    }
+    // One line on stderr; under mpirun an error that the ranks did not agree on (others may be
+    // waiting for this rank) names the rank and ends the whole job.
+    auto fail = [&](const std::string& message) -> int {
+        if (!comm.distributed() || comm.othersDone()) {
+            std::fprintf(stderr, "sdftrace: error: %s\n", message.c_str());
+            return 1;
+        }
+        std::fprintf(stderr, "sdftrace: error: %s: %s (the job stops)\n",
+                     comm.name(comm.rank()).c_str(), message.c_str());
+        std::fflush(stderr);
+        comm.abort(1);
+    };
     try {
         return action ? action() : 2;
-    } catch (const sdft::InputError& e) {
-        std::fprintf(stderr, "sdftrace: error: %s\n", e.what());
+    } catch (const sdft::RankFailure& e) {
+        // Every rank of the job stops; rank 0 says why.
+        if (e.report()) std::fprintf(stderr, "sdftrace: error: %s\n", e.what());
         return 1;
-    } catch (const std::bad_alloc&) {
-        std::fprintf(stderr,
-                     "sdftrace: error: out of memory (an allocation over the memory budget of %s, "
-                     "or the machine's memory is exhausted; see --max-memory)\n",
-                     sdft::formatBytes(sdft::memoryBudgetBytes()).c_str());
-        return 1;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "sdftrace: error: %s\n", e.what());
-        return 1;
+    } catch (...) {
+        return fail(sdft::describeException(std::current_exception()));
     }
 }

@@ -4,14 +4,19 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "commands.h"
+#include "sdftrace/cluster/distributed_render.h"
+#include "sdftrace/cluster/work_farm.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/frame_pattern.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/progress.h"
+#include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
@@ -92,13 +97,14 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
     if (a.threads) s.threads = *a.threads;
 }
 
-void validateFramePattern(const std::string& pattern, const std::string& what = "--frame-pattern") {
+void validateFramePattern(const std::string& pattern, const std::string& what = "--frame-pattern",
+                          bool paths = true) {
     if (!isFramePattern(pattern)) {
         throw InputError(what + " " + pattern +
                          ": expected one frame-number field such as %d or %04d, e.g. out_%04d.png");
     }
     imageFormatFromPath(framePath(pattern, 0), what);
-    checkWritablePath(framePath(pattern, 0), what);
+    if (paths) checkWritablePath(framePath(pattern, 0), what);
 }
 
 // --time: one instant T, or the frames of [A, B) at --fps (docs/cli.md, "Animation").
@@ -157,7 +163,10 @@ FrameTimes frameTimes(const TimeSpan& span, double fps, const std::string& timeT
 
 // Every output is validated before the (possibly long) render starts; the AOVs to write. A time
 // range writes each frame through --frame-pattern and the --aov paths, each one a pattern.
-std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bool range) {
+// `paths`: whether the files can be written is checked too (under mpirun by rank 0 alone, which
+// writes them; the other ranks need only the AOVs).
+std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bool range,
+                                                         bool paths = true) {
     if (range) {
         const bool video = a.outputFlag && a.outputFlag->count() > 0;
         if (video && !VideoWriter::isVideoPath(a.output))
@@ -168,7 +177,7 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bo
             throw InputError("--output " + a.output +
                              ": this build of sdftrace writes no video (FFmpeg's libraries were "
                              "not found when it was built); write frames with --frame-pattern");
-        if (video) checkWritablePath(a.output, "--output");
+        if (video && paths) checkWritablePath(a.output, "--output");
         if (!video && a.framePattern.empty())
             throw InputError("--time " + a.time +
                              ": a time range renders one image per frame; give --frame-pattern, "
@@ -188,9 +197,9 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bo
                 "--taa: accumulates across the frames of a --time A:B range; for "
                 "a still, use --frames N");
         imageFormatFromPath(a.output, "--output");
-        checkWritablePath(a.output, "--output");
+        if (paths) checkWritablePath(a.output, "--output");
     }
-    if (!a.framePattern.empty()) validateFramePattern(a.framePattern);
+    if (!a.framePattern.empty()) validateFramePattern(a.framePattern, "--frame-pattern", paths);
     std::vector<std::pair<Aov, std::string>> aovs;
     for (const std::string& spec : a.aovs) {
         auto eq = spec.find('=');
@@ -204,21 +213,24 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bo
         }
         std::string path = spec.substr(eq + 1);
         if (range) {
-            validateFramePattern(path, "--aov " + spec.substr(0, eq));
+            validateFramePattern(path, "--aov " + spec.substr(0, eq), paths);
         } else {
             imageFormatFromPath(path, "--aov " + spec.substr(0, eq));
-            checkWritablePath(path, "--aov " + spec.substr(0, eq));
+            if (paths) checkWritablePath(path, "--aov " + spec.substr(0, eq));
         }
         aovs.emplace_back(aov, path);
     }
     return aovs;
 }
 
-// One frame, or temporally accumulated frames (--frames, --orbit).
+// One frame, or temporally accumulated frames (--frames, --orbit). `across`, when set, renders each
+// frame on every rank of the job (mpirun).
 RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
-                        const std::string& subFramePattern) {
+                        const std::string& subFramePattern, const FrameRenderFn& across = nullptr) {
     const bool progress = !a.quiet && stderrIsTerminal();
-    if (a.frames <= 1 && a.orbit == 0) return render(plan, film, progress);
+    if (a.frames <= 1 && a.orbit == 0)
+        return across ? across(FrameView{plan.camera}, film, progress)
+                      : render(plan, film, progress);
     TemporalOptions t;
     t.frames = a.frames;
     t.orbitDegrees = a.orbit;
@@ -229,7 +241,12 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
             writeAov(f, Aov::Color, framePath(subFramePattern, k));
         };
     }
-    return renderFrames(plan, film, t, onFrame, progress);
+    return renderFrames(plan, film, t, onFrame, progress, across);
+}
+
+std::string threadsText(const RenderStats& st) {
+    if (st.ranks <= 1) return std::to_string(st.threads) + " threads";
+    return std::to_string(st.ranks) + " ranks (" + std::to_string(st.threads) + " threads)";
 }
 
 // The summary line on stderr (docs/cli.md "Outputs").
@@ -240,12 +257,12 @@ void printSummary(const RenderStats& st, const Film& film, const RenderPlan& pla
         const double rayCount =
             static_cast<double>(st.primaryRays + st.secondaryRays + st.shadowRays);
         std::fprintf(stderr,
-                     "sdftrace render: %dx%d path traced, %.0f paths per pixel, in %.3f s on %d "
-                     "threads, %.3f Mpaths/s, %.2f rays per path (%.2f shadow rays), %.2f "
+                     "sdftrace render: %dx%d path traced, %.0f paths per pixel, in %.3f s on %s, "
+                     "%.3f Mpaths/s, %.2f rays per path (%.2f shadow rays), %.2f "
                      "evaluations per path, L = %.3g\n",
                      film.width, film.height, rays / static_cast<double>(film.pixels()), st.seconds,
-                     st.threads, rays / st.seconds * 1e-6, rayCount / rays, st.shadowRays / rays,
-                     st.totalEvaluations() / rays, lipschitz);
+                     threadsText(st).c_str(), rays / st.seconds * 1e-6, rayCount / rays,
+                     st.shadowRays / rays, st.totalEvaluations() / rays, lipschitz);
         return;
     }
     std::string counters;
@@ -262,14 +279,14 @@ void printSummary(const RenderStats& st, const Film& film, const RenderPlan& pla
             st.secondaryRays / rays, static_cast<unsigned long long>(st.selfIntersections));
         counters += buf;
     }
-    std::fprintf(
-        stderr,
-        "sdftrace render: %dx%d in %.3f s on %d threads, %.3f Mrays/s, %.2f evaluations per "
-        "primary ray (%.2f per pixel with normals and shadows), %.2f%% hits, %llu "
-        "over-relaxation fallbacks, L = %.3g%s\n",
-        film.width, film.height, st.seconds, st.threads, rays / st.seconds * 1e-6,
-        st.primaryEvaluations / rays, st.totalEvaluations() / rays, 100.0 * st.hits / rays,
-        static_cast<unsigned long long>(st.fallbacks), lipschitz, counters.c_str());
+    std::fprintf(stderr,
+                 "sdftrace render: %dx%d in %.3f s on %s, %.3f Mrays/s, %.2f evaluations per "
+                 "primary ray (%.2f per pixel with normals and shadows), %.2f%% hits, %llu "
+                 "over-relaxation fallbacks, L = %.3g%s\n",
+                 film.width, film.height, st.seconds, threadsText(st).c_str(),
+                 rays / st.seconds * 1e-6, st.primaryEvaluations / rays,
+                 st.totalEvaluations() / rays, 100.0 * st.hits / rays,
+                 static_cast<unsigned long long>(st.fallbacks), lipschitz, counters.c_str());
 }
 
 // The scene of --time: a scene file, or the demo.
@@ -345,120 +362,377 @@ std::string taaSummary(const std::optional<TemporalAccumulator>& taa, size_t rej
     return buf;
 }
 
-// --time A:B: each frame's scene described at its time, its assets from one cache (each distinct
-// one loaded or baked once), rendered and written through the patterns; a line per frame.
-int renderAnimation(const RenderArgs& a, const TimeSpan& span,
-                    const std::vector<std::pair<Aov, std::string>>& aovs) {
-    using Clock = std::chrono::steady_clock;
-    const auto start = Clock::now();
-    const AnimatedScene anim = loadAnimation(a.scene);
-    const double fps = a.fps ? *a.fps : anim.time().fps;
-    const FrameTimes frames = frameTimes(span, fps, a.time);
-    AssetCache cache;
-    PrepareStats assets;
-    double renderSeconds = 0;
-    std::optional<VideoSink> video;
-    if (a.outputFlag && a.outputFlag->count() > 0) video.emplace(a.output, fps);
-    unsigned kept = Film::bit(Aov::Color);
-    for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
-    const bool motion = a.taa || (kept & Film::bit(Aov::Motion));
-    if (motion) kept |= Film::bit(Aov::Depth);
-    if (a.taa) kept |= Film::bit(Aov::Shadow);  // moving shadows reject their history
-    std::optional<TemporalAccumulator> taa;
-    if (a.taa) taa.emplace(a.taaAlpha.value_or(0.0f), true);
-    size_t rejected = 0;
-    for (long long i = 0; i < frames.count; ++i) {
-        const double t = frames.at(i);
-        const long long number = frames.first + i;
-        AnimatedScene::InstantAssets used;
-        Scene scene = anim.at(t, cache, {.progress = !a.quiet && stderrIsTerminal()}, &used);
-        cache.keepOnly(used.keys);  // what this frame needs stays cached, the rest goes
-        const PrepareStats& st = used.stats;
-        assets.loaded += st.loaded;
-        assets.baked += st.baked;
-        assets.cached += st.cached;
-        applyOverrides(a, scene);
-        const RenderPlan plan = planRender(scene);
-        if (taa) setUpTaa(*taa, plan, i == 0);
-        Film film(plan.camera.width, plan.camera.height, kept);
-        FrameView view{plan.camera};
-        view.frame = static_cast<uint32_t>(number);
-        if (taa) frameJitter(static_cast<uint32_t>(i), view.pixelJitter);
-        const bool progress = !a.quiet && stderrIsTerminal();
-        const RenderStats rs =
-            taa ? render(plan, view, film, progress) : renderImage(a, plan, film, "");
-        renderSeconds += rs.seconds;
-        if (motion) {
-            const MotionVectors mv =
-                frameMotion(a, film, view, previousInstant(anim, a, t, fps), scene);
-            if (film.has(Aov::Motion)) film.motion = mv.motion;
-            if (taa) {
-                taa->add(film, &mv);
-                rejected += taa->rejected();
-            }
-        }
-        if (!a.framePattern.empty()) writeAov(film, Aov::Color, framePath(a.framePattern, number));
-        for (const auto& [aov, path] : aovs) writeAov(film, aov, framePath(path, number));
-        if (video) video->add(film, number);
-        if (!a.quiet)
+// A frame of a --time range that has been rendered: what rank 0 writes.
+struct FinishedFrame {
+    long long index = 0;
+    Film film{0, 0, 0};
+    RenderStats stats;
+};
+
+// What rank 0 does with each finished frame of a --time range: its files, the video (in frame
+// order: the frames of a distributed render may finish out of order) and its line on stderr.
+// Thread-safe: rank 0's own frames and the other ranks' arrive on different threads.
+class FrameSink {
+  public:
+    FrameSink(const RenderArgs& a, const std::vector<std::pair<Aov, std::string>>& aovs,
+              const FrameTimes& frames, std::optional<VideoSink>& video)
+        : m_a(a), m_aovs(aovs), m_frames(frames), m_video(video) {}
+
+    void add(FinishedFrame f) {
+        const long long number = m_frames.first + f.index;
+        const Film& film = f.film;
+        if (!m_a.framePattern.empty())
+            writeAov(film, Aov::Color, framePath(m_a.framePattern, number));
+        for (const auto& [aov, path] : m_aovs) writeAov(film, aov, framePath(path, number));
+        std::lock_guard lock(m_mutex);
+        m_renderSeconds += f.stats.seconds;
+        if (!m_a.quiet)
             std::fprintf(
                 stderr,
                 "sdftrace render: frame %lld of %lld (t = %.4g s) -> %s: %dx%d in %.3f "
                 "s, %.2f%% hits\n",
-                i + 1, frames.count, t,
-                (a.framePattern.empty() ? a.output : framePath(a.framePattern, number)).c_str(),
-                film.width, film.height, rs.seconds,
-                100.0 * static_cast<double>(rs.hits) /
-                    std::max<double>(1, static_cast<double>(rs.primaryRays)));
+                f.index + 1, m_frames.count, m_frames.at(f.index),
+                (m_a.framePattern.empty() ? m_a.output : framePath(m_a.framePattern, number))
+                    .c_str(),
+                film.width, film.height, f.stats.seconds,
+                100.0 * static_cast<double>(f.stats.hits) /
+                    std::max<double>(1, static_cast<double>(f.stats.primaryRays)));
+        if (!m_video) return;
+        const long long at = f.index;
+        m_pending.emplace(at, std::move(f.film));
+        for (auto it = m_pending.find(m_nextVideo); it != m_pending.end();
+             it = m_pending.find(m_nextVideo)) {
+            m_video->add(it->second, m_frames.first + m_nextVideo);
+            m_pending.erase(it);
+            ++m_nextVideo;
+        }
+    }
+    double renderSeconds() const { return m_renderSeconds; }
+    const std::vector<std::pair<Aov, std::string>>& aovs() const { return m_aovs; }
+
+  private:
+    const RenderArgs& m_a;
+    const std::vector<std::pair<Aov, std::string>>& m_aovs;
+    const FrameTimes& m_frames;
+    std::optional<VideoSink>& m_video;
+    std::mutex m_mutex;
+    std::map<long long, Film> m_pending;  // video frames waiting for an earlier one
+    long long m_nextVideo = 0;
+    double m_renderSeconds = 0;
+};
+
+// The frames of a --time range, shared by every way of rendering them: the scene of frame i at its
+// time (its assets from the rank's cache, each distinct one loaded or baked once), its plan, and
+// the AOVs to keep.
+struct Animation {
+    const RenderArgs& a;
+    AnimatedScene anim;
+    double fps = 30;
+    FrameTimes frames;
+    unsigned kept = 0;
+    bool motion = false;  // motion vectors: the motion AOV or --taa
+
+    struct Instant {
+        Scene scene;
+        std::optional<RenderPlan> plan;
+    };
+    std::unique_ptr<Instant> prepare(long long i, AssetCache& cache, PrepareStats& assets) const {
+        auto in = std::make_unique<Instant>();
+        AnimatedScene::InstantAssets used;
+        in->scene =
+            anim.at(frames.at(i), cache, {.progress = !a.quiet && stderrIsTerminal()}, &used);
+        cache.keepOnly(used.keys);  // what this frame needs stays cached, the rest goes
+        assets.loaded += used.stats.loaded;
+        assets.baked += used.stats.baked;
+        assets.cached += used.stats.cached;
+        applyOverrides(a, in->scene);
+        in->plan.emplace(planRender(in->scene));
+        return in;
+    }
+    // A frame without TAA: independent of every other frame.
+    FinishedFrame renderOne(long long i, AssetCache& cache, PrepareStats& assets) const {
+        const std::unique_ptr<Instant> in = prepare(i, cache, assets);
+        const RenderPlan& plan = *in->plan;
+        FinishedFrame f{i, Film(plan.camera.width, plan.camera.height, kept), {}};
+        FrameView view{plan.camera};
+        view.frame = static_cast<uint32_t>(frames.first + i);
+        f.stats = renderImage(a, plan, f.film, "");
+        if (f.film.has(Aov::Motion)) {
+            const double t = frames.at(i);
+            f.film.motion =
+                frameMotion(a, f.film, view, previousInstant(anim, a, t, fps), in->scene).motion;
+        }
+        return f;
+    }
+    // Whether a frame depends on the ones before it: TAA's history, or a mesh regenerated by RTSDF
+    // with temporal accumulation (its history lives in the cache).
+    bool sequential() const {
+        if (a.taa) return true;
+        for (const AssetRequest& r : anim.describeAt(frames.at(0)).assets)
+            if (r.dynamic == AssetRequest::Dynamic::Rtsdf) return true;
+        return false;
+    }
+};
+
+std::string animationTotal(const Animation& job, double total, double renderSeconds,
+                           const PrepareStats& assets, const std::string& taa) {
+    char buf[320];
+    std::snprintf(buf, sizeof buf,
+                  "sdftrace render: %lld frames (t = %.4g to %.4g s at %.4g fps) in %.3f s, "
+                  "render %.3f s per frame; assets: %zu loaded, %zu baked, %zu reused%s\n",
+                  job.frames.count, job.frames.at(0), job.frames.at(job.frames.count - 1), job.fps,
+                  total, renderSeconds / static_cast<double>(job.frames.count), assets.loaded,
+                  assets.baked, assets.cached, taa.c_str());
+    return buf;
+}
+
+// The frames in order on this process, or (mpirun, sequential frames) on rank 0 with each frame's
+// tiles rendered across the ranks by `across`: TAA blends each frame into the history
+// reprojected by its motion vectors.
+// Returns the TAA part of the total line.
+std::string renderFramesInOrder(
+    const Animation& job, FrameSink& sink, PrepareStats& assets,
+    const std::function<FrameRenderFn(long long, const RenderPlan&)>& across) {
+    const RenderArgs& a = job.a;
+    AssetCache cache;
+    std::optional<TemporalAccumulator> taa;
+    if (a.taa) taa.emplace(a.taaAlpha.value_or(0.0f), true);
+    size_t rejected = 0;
+    for (long long i = 0; i < job.frames.count; ++i) {
+        const double t = job.frames.at(i);
+        const std::unique_ptr<Animation::Instant> in = job.prepare(i, cache, assets);
+        const RenderPlan& plan = *in->plan;
+        if (taa) setUpTaa(*taa, plan, i == 0);
+        FinishedFrame f{i, Film(plan.camera.width, plan.camera.height, job.kept), {}};
+        FrameView view{plan.camera};
+        view.frame = static_cast<uint32_t>(job.frames.first + i);
+        if (taa) frameJitter(static_cast<uint32_t>(i), view.pixelJitter);
+        const bool progress = !a.quiet && stderrIsTerminal();
+        const FrameRenderFn fn = across ? across(i, plan) : nullptr;
+        f.stats = taa ? (fn ? fn(view, f.film, progress) : render(plan, view, f.film, progress))
+                      : renderImage(a, plan, f.film, "", fn);
+        if (job.motion) {
+            const MotionVectors mv =
+                frameMotion(a, f.film, view, previousInstant(job.anim, a, t, job.fps), in->scene);
+            if (f.film.has(Aov::Motion)) f.film.motion = mv.motion;
+            if (taa) {
+                taa->add(f.film, &mv);
+                rejected += taa->rejected();
+            }
+        }
+        sink.add(std::move(f));
+    }
+    return taaSummary(taa, rejected, job.frames.count);
+}
+
+// mpirun, frames independent of each other: whole frames dealt to the ranks, each rendering its
+// own with all its threads and loading its own assets; rank 0 writes them as they arrive.
+void renderFramesDealt(WorkFarm& farm, const Animation& job, FrameSink& sink,
+                       PrepareStats& assets) {
+    AssetCache cache;
+    Progress bar("frames", static_cast<uint64_t>(job.frames.count),
+                 !job.a.quiet && stderrIsTerminal());
+    RoundPlan round;
+    round.items = static_cast<int>(job.frames.count);
+    round.local = [&](int first, int last) {
+        for (int i = first; i < last; ++i) sink.add(job.renderOne(i, cache, assets));
+    };
+    round.onResult = [&](int, int first, int last, ByteReader& in) {
+        for (int i = first; i < last; ++i) {
+            FinishedFrame f;
+            f.index = i;
+            f.stats = in.get<RenderStats>();
+            const auto st = in.get<PrepareStats>();
+            assets.loaded += st.loaded;
+            assets.baked += st.baked;
+            assets.cached += st.cached;
+            f.film = unpackFilm(in);
+            for (const auto& [aov, path] : sink.aovs())
+                if (!f.film.has(aov))
+                    throw std::runtime_error("frame " + std::to_string(i) + " came without " +
+                                             aovName(aov));
+            sink.add(std::move(f));
+        }
+    };
+    round.progress = &bar;
+    farm.round(round);
+}
+
+// The other ranks' side of renderFramesDealt.
+class DealtFrameWorker : public RoundWorker {
+  public:
+    explicit DealtFrameWorker(const Animation& job) : m_job(job) {}
+    void run(int first, int last, ByteWriter& out) override {
+        for (int i = first; i < last; ++i) {
+            PrepareStats st;
+            const FinishedFrame f = m_job.renderOne(i, m_cache, st);
+            out.put(f.stats);
+            out.put(st);
+            packFilm(f.film, out);
+        }
+    }
+
+  private:
+    const Animation& m_job;
+    AssetCache m_cache;
+};
+
+// The other ranks' side of renderFramesInOrder under mpirun: each round renders tiles of frame i
+// (its index leads the round's context). The frames' scenes are prepared here in the same order as
+// on rank 0, so that RTSDF histories evolve alike; the next one while rank 0 prepares it too
+// (after each round), so that the ranks prepare side by side.
+class OrderedFrameWorker {
+  public:
+    explicit OrderedFrameWorker(const Animation& job) : m_job(job) {}
+    std::unique_ptr<RoundWorker> start(const Bytes& context) {
+        ByteReader in(context);
+        const auto i = in.get<long long>();
+        while (m_prepared < i) prepareNext();
+        // Instants before i are done with (the --frames of one instant share it).
+        m_instants.erase(m_instants.begin(), m_instants.lower_bound(i));
+        return tileWorker(*m_instants.at(i)->plan, in);
+    }
+    void prepareNext() {
+        if (m_prepared + 1 >= m_job.frames.count) return;
+        PrepareStats unused;
+        ++m_prepared;
+        m_instants[m_prepared] = m_job.prepare(m_prepared, m_cache, unused);
+    }
+
+  private:
+    const Animation& m_job;
+    AssetCache m_cache;
+    long long m_prepared = -1;
+    std::map<long long, std::unique_ptr<Animation::Instant>> m_instants;
+};
+
+// --time A:B: the frames rendered and written through the patterns and/or the video, a line per
+// frame and a total.
+int renderAnimation(const RenderArgs& a, const TimeSpan& span,
+                    const std::vector<std::pair<Aov, std::string>>& aovs, Communicator& comm) {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    std::optional<Animation> job;
+    together(comm, [&] {
+        AnimatedScene anim = loadAnimation(a.scene);
+        const double fps = a.fps ? *a.fps : anim.time().fps;
+        job.emplace(Animation{a, std::move(anim), fps, frameTimes(span, fps, a.time)});
+    });
+    unsigned kept = Film::bit(Aov::Color);
+    for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
+    job->motion = a.taa || (kept & Film::bit(Aov::Motion));
+    if (job->motion) kept |= Film::bit(Aov::Depth);
+    if (a.taa) kept |= Film::bit(Aov::Shadow);  // moving shadows reject their history
+    job->kept = kept;
+    const bool ordered = job->sequential();
+    if (comm.distributed() && !comm.root()) {
+        if (ordered) {
+            OrderedFrameWorker w(*job);
+            serveRounds(
+                comm, [&](const Bytes& c) { return w.start(c); }, [&] { w.prepareNext(); });
+        } else {
+            serveRounds(comm,
+                        [&](const Bytes&) { return std::make_unique<DealtFrameWorker>(*job); });
+        }
+        return 0;
+    }
+    std::optional<VideoSink> video;
+    if (a.outputFlag && a.outputFlag->count() > 0) video.emplace(a.output, job->fps);
+    FrameSink sink(a, aovs, job->frames, video);
+    PrepareStats assets;
+    std::string taaText;
+    if (!comm.distributed()) {
+        taaText = renderFramesInOrder(*job, sink, assets, nullptr);
+    } else {
+        WorkFarm farm(comm);
+        if (ordered) {
+            taaText = renderFramesInOrder(
+                *job, sink, assets, [&](long long i, const RenderPlan& plan) -> FrameRenderFn {
+                    return [&farm, &plan, i](const FrameView& view, Film& film, bool progress) {
+                        ByteWriter prefix;
+                        prefix.put(i);
+                        return renderAcross(farm, plan, view, film, progress,
+                                            std::move(prefix.bytes()));
+                    };
+                });
+        } else {
+            renderFramesDealt(farm, *job, sink, assets);
+        }
+        farm.end();
     }
     if (video && video->writer) video->writer->finish();
     const double total = std::chrono::duration<double>(Clock::now() - start).count();
-    std::fprintf(stderr,
-                 "sdftrace render: %lld frames (t = %.4g to %.4g s at %.4g fps) in %.3f s, "
-                 "render %.3f s per frame; assets: %zu loaded, %zu baked, %zu reused%s\n",
-                 frames.count, frames.at(0), frames.at(frames.count - 1), fps, total,
-                 renderSeconds / static_cast<double>(frames.count), assets.loaded, assets.baked,
-                 assets.cached, taaSummary(taa, rejected, frames.count).c_str());
+    std::fputs(animationTotal(*job, total, sink.renderSeconds(), assets, taaText).c_str(), stderr);
     return 0;
 }
 
-int runRender(const RenderArgs& a) {
-    if (a.listOptions) {
+int runRender(const RenderArgs& args) {
+    if (args.listOptions) {
         std::fputs(renderOptionsMarkdown().c_str(), stdout);
         return 0;
     }
-    const std::optional<TimeSpan> span =
-        a.time.empty() ? std::nullopt : std::optional<TimeSpan>(parseTimeArg(a.time));
-    if (span && (isMeshFile(a.scene) || isGridFile(a.scene)))
-        throw InputError("--time " + a.time + ": " + a.scene +
-                         " is not a scene file; only scene files have keyframes "
-                         "(docs/scene-format.md, \"Animation\")");
-    const auto aovs = validateOutputs(a, span && span->range);
-    if (span && span->range) return renderAnimation(a, *span, aovs);
+    Communicator& comm = Communicator::world();
+    RenderArgs a = args;
+    if (comm.distributed()) {
+        if (!a.threads) a.threads = defaultRankThreads(comm);
+        if (!comm.root()) a.quiet = true;  // progress and notes from rank 0 only
+    }
+    std::optional<TimeSpan> span;
+    std::vector<std::pair<Aov, std::string>> aovs;
+    together(comm, [&] {
+        span = a.time.empty() ? std::nullopt : std::optional<TimeSpan>(parseTimeArg(a.time));
+        if (span && (isMeshFile(a.scene) || isGridFile(a.scene)))
+            throw InputError("--time " + a.time + ": " + a.scene +
+                             " is not a scene file; only scene files have keyframes "
+                             "(docs/scene-format.md, \"Animation\")");
+        aovs = validateOutputs(a, span && span->range, comm.root());  // rank 0 writes them
+    });
+    if (span && span->range) return renderAnimation(a, *span, aovs, comm);
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     Scene scene;
     std::optional<AnimatedScene> anim;
-    const double instant = span ? span->from : 0.0;
-    if (span) {
-        anim.emplace(loadAnimation(a.scene));
-        AssetCache cache;
-        scene = anim->at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
-    } else {
-        LoadedInput input = loadSceneInput(a.scene, !a.quiet && stderrIsTerminal());
-        if (!a.quiet && !input.note.empty())
-            std::fprintf(stderr, "sdftrace render: %s\n", input.note.c_str());
-        scene = std::move(input.scene);
+    std::optional<RenderPlan> planned;
+    auto t1 = t0;
+    together(comm, [&] {
+        if (span) {
+            anim.emplace(loadAnimation(a.scene));
+            AssetCache cache;
+            scene = anim->at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
+        } else {
+            LoadedInput input = loadSceneInput(a.scene, !a.quiet && stderrIsTerminal());
+            if (!a.quiet && !input.note.empty())
+                std::fprintf(stderr, "sdftrace render: %s\n", input.note.c_str());
+            scene = std::move(input.scene);
+        }
+        applyOverrides(a, scene);
+        t1 = Clock::now();
+        planned.emplace(planRender(scene));
+    });
+    const RenderPlan& plan = *planned;
+    if (comm.distributed() && !comm.root()) {
+        serveRounds(comm, [&](const Bytes& c) {
+            ByteReader in(c);
+            return tileWorker(plan, in);
+        });
+        return 0;
     }
-    applyOverrides(a, scene);
-    const auto t1 = Clock::now();
-    const RenderPlan plan = planRender(scene);
+    const double instant = span ? span->from : 0.0;
     unsigned kept = Film::bit(Aov::Color);  // the film keeps only the AOVs to be written
     for (const auto& [aov, path] : aovs) kept |= Film::bit(aov);
     if (kept & Film::bit(Aov::Motion)) kept |= Film::bit(Aov::Depth);
     Film film(plan.camera.width, plan.camera.height, kept);
     const auto t2 = Clock::now();
-    const RenderStats st = renderImage(a, plan, film, a.framePattern);
+    std::optional<WorkFarm> farm;
+    FrameRenderFn across;
+    if (comm.distributed()) {
+        farm.emplace(comm);
+        across = [&](const FrameView& view, Film& f, bool progress) {
+            return renderAcross(*farm, plan, view, f, progress);
+        };
+    }
+    const RenderStats st = renderImage(a, plan, film, a.framePattern, across);
+    if (farm) farm->end();
     if (anim && film.has(Aov::Motion)) {  // --time T: the motion from T - 1/fps
         const double fps = a.fps ? *a.fps : anim->time().fps;
         film.motion = frameMotion(a, film, FrameView{plan.camera},

@@ -1,0 +1,231 @@
+// mpirun -np N sdftrace render|bake on this machine (docs/cluster.md): the outputs of 2 and more
+// ranks against a single process's bit for bit, and failures on one rank that stop the whole job
+// with one error and no output. Skipped where the build has no MPI (SDFT_MPI).
+#include <gtest/gtest.h>
+
+#include "cli_runner.h"
+
+namespace sdft::e2e {
+namespace {
+
+#ifdef SDFT_MPIRUN
+constexpr bool kHaveMpi = true;
+const std::string kMpirun = SDFT_MPIRUN;
+#else
+constexpr bool kHaveMpi = false;
+const std::string kMpirun;
+#endif
+
+const std::string kSource = SDFT_SOURCE_DIR;
+const std::string kCli = SDFT_CLI_PATH;
+
+// Open MPI refuses root without the first two (CI runs as root); oversubscription lets 3 to 5
+// ranks share this machine's 2 cores; shared-memory messages without the single-copy mechanism
+// (CMA), which containers without ptrace permission refuse.
+const std::string kMpiEnv =
+    "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+    "OMPI_MCA_rmaps_base_oversubscribe=1 OMPI_MCA_btl_vader_single_copy_mechanism=none ";
+
+// Runs a whole command line (mpirun ...) with output captured outside `dir`.
+RunResult runShell(const std::string& cmd) {
+    TempDir logs;
+    const std::string out = logs.file("stdout"), err = logs.file("stderr");
+    const int raw = std::system((cmd + " >" + out + " 2>" + err + " </dev/null").c_str());
+    RunResult r;
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = readFile(out);
+    r.err = readFile(err);
+    return r;
+}
+
+RunResult mpirun(int ranks, const std::string& args, const std::string& env = "") {
+    return runShell(kMpiEnv + env + kMpirun + " -np " + std::to_string(ranks) + " " + kCli + " " +
+                    args);
+}
+
+RunResult single(const std::string& args) { return runShell(kCli + " " + args); }
+
+#define REQUIRE_MPI() \
+    if (!kHaveMpi) GTEST_SKIP() << "this build has no MPI (SDFT_MPI: libopenmpi-dev not found)"
+
+// The number of lines of `text` that contain `what`.
+int linesWith(const std::string& text, const std::string& what) {
+    int n = 0;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) n += line.find(what) != std::string::npos;
+    return n;
+}
+
+void expectSameFile(const std::string& a, const std::string& b) {
+    const std::string x = readFile(a), y = readFile(b);
+    ASSERT_FALSE(x.empty()) << a;
+    EXPECT_TRUE(x == y) << a << " and " << b << " differ";
+}
+
+// Renders with one process and with `ranks`; every output compared byte for byte.
+void expectSameRender(const TempDir& dir, int ranks, const std::string& args) {
+    const std::string one = "-q -o " + dir.file("one.pfm") +
+                            " --aov depth=" + dir.file("one-depth.pfm") +
+                            " --aov steps=" + dir.file("one-steps.pfm");
+    const std::string many = "-q -o " + dir.file("many.pfm") +
+                             " --aov depth=" + dir.file("many-depth.pfm") +
+                             " --aov steps=" + dir.file("many-steps.pfm");
+    const RunResult a = single("render " + args + " " + one);
+    ASSERT_EQ(a.status, 0) << a.err;
+    const RunResult b = mpirun(ranks, "render " + args + " " + many);
+    ASSERT_EQ(b.status, 0) << b.err;
+    EXPECT_NE(b.err.find("on " + std::to_string(ranks) + " ranks"), std::string::npos) << b.err;
+    expectSameFile(dir.file("one.pfm"), dir.file("many.pfm"));
+    expectSameFile(dir.file("one-depth.pfm"), dir.file("many-depth.pfm"));
+    expectSameFile(dir.file("one-steps.pfm"), dir.file("many-steps.pfm"));
+}
+
+TEST(Cluster, StillsAreTheSingleProcessImagesBitForBit) {
+    REQUIRE_MPI();
+    TempDir dir;
+    const std::string small = " --width 120 --height 72";
+    // Analytic CSG with soft shadows; Whitted glass; a grid traced by the DDA; the demo scene.
+    expectSameRender(dir, 2, kSource + "/examples/csg.json" + small);
+    expectSameRender(dir, 3, kSource + "/examples/jewel.json" + small);
+    expectSameRender(dir, 2, kSource + "/examples/rock.json" + small);
+    expectSameRender(dir, 4, small);
+}
+
+TEST(Cluster, PathTracingAndAccumulatedFramesAreBitForBit) {
+    REQUIRE_MPI();
+    TempDir dir;
+    expectSameRender(dir, 2,
+                     kSource + "/examples/path.json --width 64 --height 40 --spp 3 --threads 1");
+    // Accumulated frames: each one's tiles across the ranks, blended on rank 0; the orbit
+    // reprojects through depth.
+    expectSameRender(dir, 2, kSource + "/examples/shadows.json --width 80 --height 48 --frames 3");
+    expectSameRender(dir, 3,
+                     kSource + "/examples/csg.json --width 80 --height 48 --frames 3 --orbit 4");
+}
+
+// A --time range: independent frames dealt whole to the ranks; with --taa (frames depend on the
+// ones before) each frame's tiles across the ranks.
+TEST(Cluster, AnimationsAreTheSingleProcessFramesBitForBit) {
+    REQUIRE_MPI();
+    TempDir dir;
+    const std::string scene = kSource +
+                              "/examples/animated.json --time 0:0.4 --fps 10 "
+                              "--width 64 --height 40 -q ";
+    for (const std::string& mode : {std::string(""), std::string("--taa ")}) {
+        const RunResult a =
+            single("render " + scene + mode + "--frame-pattern " + dir.file("one-%02d.pfm") +
+                   " --aov motion=" + dir.file("one-m%02d.pfm"));
+        ASSERT_EQ(a.status, 0) << a.err;
+        const RunResult b =
+            mpirun(2, "render " + scene + mode + "--frame-pattern " + dir.file("many-%02d.pfm") +
+                          " --aov motion=" + dir.file("many-m%02d.pfm"));
+        ASSERT_EQ(b.status, 0) << b.err;
+        for (int i = 0; i < 4; ++i) {
+            char name[32];
+            std::snprintf(name, sizeof name, "%02d.pfm", i);
+            expectSameFile(dir.file(std::string("one-") + name),
+                           dir.file(std::string("many-") + name));
+            expectSameFile(dir.file(std::string("one-m") + name),
+                           dir.file(std::string("many-m") + name));
+        }
+        EXPECT_EQ(linesWith(b.err, "4 frames"), 1) << b.err;
+    }
+}
+
+// Open and closed meshes, 2 to 5 ranks, both block sizes: the gathered grid is the
+// single-process file byte for byte (.sdfg); a .vdb differs only in the UUID of its header.
+TEST(Cluster, SparseExactBakesAreTheSingleProcessGridBitForBit) {
+    REQUIRE_MPI();
+    TempDir dir;
+    struct Case {
+        std::string mesh, flags;
+        int ranks;
+    };
+    const std::vector<Case> cases = {
+        {"stanford-bunny.obj", "--res 80", 2},
+        {"elephant-with-holes.obj", "--res 72 --block 8 --band 4", 3},
+        {"teapot.obj", "--res 64 --sign parity", 2},
+        {"suzanne.obj", "--res 20", 5},  // more ranks than some slabs have layers
+    };
+    for (const Case& c : cases) {
+        const std::string args =
+            "bake " + kSource + "/data/meshes/" + c.mesh + " " + c.flags + " -q";
+        const RunResult a = single(args + " -o " + dir.file("one.sdfg"));
+        ASSERT_EQ(a.status, 0) << a.err;
+        const RunResult b = mpirun(c.ranks, args + " -o " + dir.file("many.sdfg"));
+        ASSERT_EQ(b.status, 0) << b.err;
+        EXPECT_NE(b.err.find(std::to_string(c.ranks) + " ranks, one slab each"), std::string::npos)
+            << b.err;
+        SCOPED_TRACE(c.mesh);
+        expectSameFile(dir.file("one.sdfg"), dir.file("many.sdfg"));
+    }
+    const std::string args = "bake " + kSource + "/data/meshes/suzanne.obj --res 48 -q";
+    ASSERT_EQ(single(args + " -o " + dir.file("one.vdb")).status, 0);
+    ASSERT_EQ(mpirun(2, args + " -o " + dir.file("many.vdb")).status, 0);
+    const std::string x = readFile(dir.file("one.vdb")), y = readFile(dir.file("many.vdb"));
+    ASSERT_EQ(x.size(), y.size());
+    size_t differ = 0;
+    for (size_t i = 0; i < x.size(); ++i)
+        if (x[i] != y[i]) {
+            ++differ;
+            // OpenVDB's header: magic, versions, a flag, then the file's 36-character UUID.
+            EXPECT_TRUE(i >= 21 && i < 57) << "byte " << i;
+        }
+    EXPECT_GT(differ, 0u);  // two files, two UUIDs
+}
+
+// Every rank stops with a non-zero status; rank 0 prints the failing rank's error once; nothing
+// is written.
+void expectJobFailed(const RunResult& r, const std::string& error, const TempDir& dir, int files) {
+    EXPECT_NE(r.status, 0) << r.err;
+    EXPECT_EQ(linesWith(r.err, "sdftrace: error:"), 1) << r.err;
+    EXPECT_EQ(linesWith(r.err, "sdftrace: error: rank 1: " + error), 1) << r.err;
+    EXPECT_EQ(dir.count(), files) << "an output or temporary file was left";
+}
+
+TEST(Cluster, AFailureOnOneRankStopsEveryRankWithOneErrorAndNoOutput) {
+    REQUIRE_MPI();
+    TempDir dir;
+    const std::string inject = "-x SDFTRACE_INJECT_FAILURE ";
+    // In the middle of a render: rank 1 fails at its second chunk of tiles (docs/cluster.md's
+    // test hook), after rank 0 has some of the image.
+    const std::string csg = kSource + "/examples/csg.json --width 160 --height 96 -q";
+    RunResult r = runShell(kMpiEnv + "SDFTRACE_INJECT_FAILURE=1:2 " + kMpirun + " " + inject +
+                           "-np 2 " + kCli + " render " + csg + " -o " + dir.file("out.png"));
+    expectJobFailed(r, "injected failure", dir, 0);
+    // In a bake's slab, and in the frames of an animation (a video: no file until the last).
+    r = runShell(kMpiEnv + "SDFTRACE_INJECT_FAILURE=1 " + kMpirun + " " + inject + "-np 2 " + kCli +
+                 " bake " + kSource + "/data/meshes/teapot.obj --res 48 -q -o " +
+                 dir.file("out.sdfg"));
+    expectJobFailed(r, "injected failure", dir, 0);
+    r = runShell(kMpiEnv + "SDFTRACE_INJECT_FAILURE=1 " + kMpirun + " " + inject + "-np 2 " + kCli +
+                 " render " + kSource +
+                 "/examples/animated.json --time 0:0.5 --fps 10 --width 48 --height 32 -q -o " +
+                 dir.file("out.mp4"));
+    expectJobFailed(r, "injected failure", dir, 0);
+    // A file missing on one node: rank 1 runs in a directory without the scene.
+    TempDir a, b;
+    std::filesystem::copy_file(kSource + "/examples/csg.json", a.file("scene.json"));
+    r = runShell(kMpiEnv + kMpirun + " -np 1 -wdir " + a.path() + " " + kCli +
+                 " render scene.json -q -o " + a.file("out.png") + " : -np 1 -wdir " + b.path() +
+                 " " + kCli + " render scene.json -q -o " + a.file("out.png"));
+    expectJobFailed(r, "scene.json: cannot open scene file", a, 1);
+    // Not enough memory on one node: rank 1's budget refuses the bake's arrays.
+    const std::string bake =
+        " bake " + kSource + "/data/meshes/teapot.obj --res 128 -q -o " + dir.file("out.sdfg");
+    r = runShell(kMpiEnv + kMpirun + " -np 1 " + kCli + bake + " : -np 1 " + kCli +
+                 " --max-memory 64K" + bake);
+    expectJobFailed(r, "", dir, 0);
+    EXPECT_NE(r.err.find("budget of 64 KiB"), std::string::npos) << r.err;
+}
+
+// Without mpirun nothing changes: the summary names threads, not ranks.
+TEST(Cluster, WithoutMpirunTheJobIsOneProcess) {
+    TempDir dir;
+    const RunResult r = single("render --width 32 --height 24 -o " + dir.file("x.png"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err.find("ranks"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace sdft::e2e
