@@ -530,12 +530,13 @@ std::string renderFramesInOrder(
 void renderFramesDealt(WorkFarm& farm, const Animation& job, FrameSink& sink,
                        PrepareStats& assets) {
     AssetCache cache;
+    PrepareStats local;  // rank 0's own frames' (its thread), merged after the round
     Progress bar("frames", static_cast<uint64_t>(job.frames.count),
                  !job.a.quiet && stderrIsTerminal());
     RoundPlan round;
     round.items = static_cast<int>(job.frames.count);
     round.local = [&](int first, int last) {
-        for (int i = first; i < last; ++i) sink.add(job.renderOne(i, cache, assets));
+        for (int i = first; i < last; ++i) sink.add(job.renderOne(i, cache, local));
     };
     round.onResult = [&](int, int first, int last, ByteReader& in) {
         for (int i = first; i < last; ++i) {
@@ -556,6 +557,9 @@ void renderFramesDealt(WorkFarm& farm, const Animation& job, FrameSink& sink,
     };
     round.progress = &bar;
     farm.round(round);
+    assets.loaded += local.loaded;
+    assets.baked += local.baked;
+    assets.cached += local.cached;
 }
 
 // The other ranks' side of renderFramesDealt.
@@ -624,10 +628,12 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     if (job->motion) kept |= Film::bit(Aov::Depth);
     if (a.taa) kept |= Film::bit(Aov::Shadow);  // moving shadows reject their history
     job->kept = kept;
-    const bool ordered = job->sequential();
+    bool ordered = false;
+    together(comm, [&] { ordered = job->sequential(); });
     if (comm.distributed() && !comm.root()) {
         if (ordered) {
             OrderedFrameWorker w(*job);
+            // Frame 0 before the first round too: the ranks prepare side by side.
             serveRounds(
                 comm, [&](const Bytes& c) { return w.start(c); }, [&] { w.prepareNext(); });
         } else {

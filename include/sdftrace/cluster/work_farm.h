@@ -63,11 +63,12 @@ class WorkFarm {
 
 // A worker's side: serves rounds until rank 0 ends the job. `start` makes the round's worker from
 // its context. Returns when the job ended normally; throws RankFailure (not to be printed: rank 0
-// reports) when any rank failed, this one included. `afterRound`, if set, runs once a round is over
-// (its results sent) while rank 0 prepares the next: work that the next round will need.
+// reports) when any rank failed, this one included. `prepare`, if set, runs before each round is
+// awaited (at the start, and once a round's results are sent) while rank 0 gets the next round
+// ready: work the next round will need. Its error is reported when that round starts.
 void serveRounds(Communicator& comm,
                  const std::function<std::unique_ptr<RoundWorker>(const Bytes& context)>& start,
-                 const std::function<void()>& afterRound = nullptr);
+                 const std::function<void()>& prepare = nullptr);
 
 // A rank's threads under mpirun when none are asked for: its share of the machine's cores (the
 // ranks on one machine split them).

@@ -214,7 +214,7 @@ void WorkFarm::round(const RoundPlan& plan) {
 
 void serveRounds(Communicator& comm,
                  const std::function<std::unique_ptr<RoundWorker>(const Bytes& context)>& start,
-                 const std::function<void()>& afterRound) {
+                 const std::function<void()>& prepare) {
     // An error here is rank 0's to report; this rank stops.
     auto reportAndStop = [&] {
         ByteWriter w;
@@ -222,9 +222,16 @@ void serveRounds(Communicator& comm,
         comm.send(0, kError, w.bytes());
         failSilently();
     };
-    std::exception_ptr deferred;  // afterRound's error
+    std::exception_ptr deferred;  // prepare's error, reported when the next round starts
     int chunks = 0;
     for (;;) {
+        if (prepare) {
+            try {
+                prepare();
+            } catch (...) {
+                deferred = std::current_exception();
+            }
+        }
         Message m = comm.receive(0);
         if (m.tag == kQuit) return;
         if (m.tag != kRound) failSilently();  // kAbort (or anything unexpected)
@@ -259,15 +266,6 @@ void serveRounds(Communicator& comm,
                     reportAndStop();
                 }
                 comm.send(0, kFinish, f);
-                worker.reset();
-                if (afterRound) {
-                    try {
-                        afterRound();
-                    } catch (...) {
-                        // Reported when rank 0 next asks for this rank (a round's start).
-                        deferred = std::current_exception();
-                    }
-                }
                 break;
             } else {
                 failSilently();
