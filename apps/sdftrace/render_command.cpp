@@ -223,11 +223,17 @@ std::vector<std::pair<Aov, std::string>> validateOutputs(const RenderArgs& a, bo
     return aovs;
 }
 
+// Whether progress is shown: on a terminal, and on a distributed job's rank 0 whatever its stderr
+// (a pipe to mpirun: progress lines, exec/progress.h).
+bool showProgress(const RenderArgs& a) {
+    return !a.quiet && (stderrIsTerminal() || Communicator::world().distributed());
+}
+
 // One frame, or temporally accumulated frames (--frames, --orbit). `across`, when set, renders each
 // frame on every rank of the job (mpirun).
 RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
-                        const std::string& subFramePattern, const FrameRenderFn& across = nullptr) {
-    const bool progress = !a.quiet && stderrIsTerminal();
+                        const std::string& subFramePattern, bool progress,
+                        const FrameRenderFn& across = nullptr) {
     if (a.frames <= 1 && a.orbit == 0)
         return across ? across(FrameView{plan.camera}, film, progress)
                       : render(plan, film, progress);
@@ -456,7 +462,7 @@ struct Animation {
         FinishedFrame f{i, Film(plan.camera.width, plan.camera.height, kept), {}};
         FrameView view{plan.camera};
         view.frame = static_cast<uint32_t>(frames.first + i);
-        f.stats = renderImage(a, plan, f.film, "");
+        f.stats = renderImage(a, plan, f.film, "", !a.quiet && stderrIsTerminal());
         if (f.film.has(Aov::Motion)) {
             const double t = frames.at(i);
             f.film.motion =
@@ -510,7 +516,7 @@ std::string renderFramesInOrder(
         const bool progress = !a.quiet && stderrIsTerminal();
         const FrameRenderFn fn = across ? across(i, plan) : nullptr;
         f.stats = taa ? (fn ? fn(view, f.film, progress) : render(plan, view, f.film, progress))
-                      : renderImage(a, plan, f.film, "", fn);
+                      : renderImage(a, plan, f.film, "", progress, fn);
         if (job.motion) {
             const MotionVectors mv =
                 frameMotion(a, f.film, view, previousInstant(job.anim, a, t, job.fps), in->scene);
@@ -531,8 +537,7 @@ void renderFramesDealt(WorkFarm& farm, const Animation& job, FrameSink& sink,
                        PrepareStats& assets) {
     AssetCache cache;
     PrepareStats local;  // rank 0's own frames' (its thread), merged after the round
-    Progress bar("frames", static_cast<uint64_t>(job.frames.count),
-                 !job.a.quiet && stderrIsTerminal());
+    Progress bar("frames", static_cast<uint64_t>(job.frames.count), showProgress(job.a));
     RoundPlan round;
     round.items = static_cast<int>(job.frames.count);
     round.local = [&](int first, int last) {
@@ -737,7 +742,7 @@ int runRender(const RenderArgs& args) {
             return renderAcross(*farm, plan, view, f, progress);
         };
     }
-    const RenderStats st = renderImage(a, plan, film, a.framePattern, across);
+    const RenderStats st = renderImage(a, plan, film, a.framePattern, showProgress(a), across);
     if (farm) farm->end();
     if (anim && film.has(Aov::Motion)) {  // --time T: the motion from T - 1/fps
         const double fps = a.fps ? *a.fps : anim->time().fps;

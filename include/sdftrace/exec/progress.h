@@ -1,4 +1,6 @@
-// Progress of long work on stderr: a percentage rewritten in place when stderr is a terminal.
+// Progress of long work on stderr: a percentage rewritten in place when stderr is a terminal, one
+// line per 10 % when it is not (a log: under mpirun rank 0's stderr is a pipe to mpirun). Callers
+// enable it only where stderr is a terminal, except for a distributed job's rank 0.
 #pragma once
 
 #include <atomic>
@@ -16,7 +18,7 @@ class Progress {
   private:
     std::string m_label;
     uint64_t m_total;
-    bool m_enabled;
+    bool m_enabled, m_lines;
     std::atomic<uint64_t> m_done{0};
     std::atomic<int> m_lastPercent{-1};
 };

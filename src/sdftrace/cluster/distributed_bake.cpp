@@ -140,7 +140,8 @@ MeshBakeResult bakeExactAcross(WorkFarm& farm, const TriangleMesh& mesh, const M
     ByteWriter context;
     context.put<uint64_t>(slabs.size());
     for (const BlockSlab& s : slabs) context.put(s);
-    Progress bar("sdftrace bake: slabs", slabs.size(), o.progress && stderrIsTerminal());
+    // Rank 0's stderr is a pipe to mpirun: progress lines (exec/progress.h) unless -q.
+    Progress bar("sdftrace bake: slabs", slabs.size(), o.progress);
     RoundPlan round;
     round.context = std::move(context.bytes());
     round.items = static_cast<int>(slabs.size());
