@@ -15,7 +15,6 @@
 // Prints a markdown table on stdout.
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -32,6 +31,7 @@
 #include "sdftrace/bake/exact_bake.h"
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/winding_number.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/io/mesh_io.h"
 
 using namespace sdft;
@@ -56,12 +56,6 @@ struct Case {
     bool dense = false;
     int threads = 1;
 };
-
-double peakMiB() {
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return u.ru_maxrss / 1024.0;
-}
 
 // Error statistics of (baked, exact) pairs in voxels.
 struct Errors {
@@ -163,7 +157,7 @@ Result runOnce(const TriangleMesh& mesh, const Case& c, bool measure) {
     r.meanErr = err.n ? err.sum / err.n : 0;
     r.maxErr = err.max;
     r.wrongSign = err.n ? 100.0 * err.wrong / err.n : 0;
-    r.peakMiB = peakMiB();
+    r.peakMiB = peakResidentMiB();
     return r;
 }
 
@@ -185,7 +179,7 @@ Result runCase(const std::string& meshPath, const Case& c, int reps) {
         }
         std::sort(times.begin(), times.end());
         first.ms = times[times.size() / 2];
-        first.peakMiB = peakMiB();
+        first.peakMiB = peakResidentMiB();
         if (write(fd[1], &first, sizeof first) != sizeof first) _exit(1);
         _exit(0);
     }

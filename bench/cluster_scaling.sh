@@ -5,7 +5,8 @@
 # time (mpirun's start and MPI's set-up included) and the phase sdftrace itself times (render:
 # the summary's seconds; bake: its total, load to write), the speed-up against 1 rank and the efficiency
 # speed-up / min(N, cores).
-#   bash bench/cluster_scaling.sh [path/to/sdftrace]        RUNS=5 for steadier medians
+#   bash bench/cluster_scaling.sh [path/to/sdftrace]        RUNS=5 for steadier medians,
+#   ONLY=bake for the jobs whose name holds "bake"
 set -euo pipefail
 cli=${1:-build/release/apps/sdftrace/sdftrace}
 runs=${RUNS:-3}
@@ -21,6 +22,7 @@ median() { sort -g | awk '{v[NR]=$1} END {print v[int((NR+1)/2)]}'; }
 job() {
     local name=$1 phase=$2
     shift 2
+    [[ -n "${ONLY:-}" && "$name" != *"$ONLY"* ]] && return 0
     local base_wall="" base_phase=""
     for n in 1 2 4; do
         local walls=() phases=()
@@ -52,3 +54,5 @@ job "animation 16 frames 192x108" 'in [0-9.]+ s, render' render "$root/examples/
     --time 0:2 --fps 8 --width 192 --height 108 -q --frame-pattern "$out/f%03d.png"
 job "bake bunny 256, sparse exact" 'total [0-9.]+ s' \
     bake "$root/data/meshes/stanford-bunny.obj" --res 256 -o "$out/bunny.sdfg"
+job "bake elephant 384, open mesh" 'total [0-9.]+ s' \
+    bake "$root/data/meshes/elephant-with-holes.obj" --res 384 -o "$out/elephant.sdfg"

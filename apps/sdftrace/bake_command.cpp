@@ -1,8 +1,8 @@
 // sdftrace bake scene.json --res N -o field.sdfg [--dense | --sparse] [--block 4|8] [--band W]
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -168,12 +168,6 @@ void addTexcoords(const BakeArgs& a, Grid& grid, const std::function<float(Vec3)
         seconds(t0, std::chrono::steady_clock::now()));
 }
 
-double peakMemoryMiB() {
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return u.ru_maxrss / 1024.0;  // KiB on Linux
-}
-
 void printVerify(const char* method, const BakeVerification& v) {
     auto line = [&](const char* where, const BakeError& e) {
         if (e.count == 0) return;
@@ -205,6 +199,58 @@ void printFieldVerify(const FieldVerification& v) {
 // A mesh file, by any method of mesh_bake.h; --verify compares with the exact bake. Under mpirun
 // the sparse exact bake runs on every rank, one slab each (cluster/distributed_bake.h); the other
 // methods run on rank 0.
+// The mesh bake's options from the flags (validated).
+MeshBakeOptions meshBakeOptions(const BakeArgs& a) {
+    MeshBakeOptions o;
+    if (!parseMeshBakeMethod(a.method, o.method)) {
+        throw InputError("--method " + a.method + ": unknown; accepted: " + kMeshBakeMethods);
+    }
+    o.sampling = sampleOptions(a);
+    parseSignMethod(a.sign, o.sign);           // CLI11 checked the name
+    parseClosestPoints(a.closest, o.closest);  // likewise
+    o.jfaVariant = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
+                   : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
+                                             : JfaVariant::Plain;
+    o.betaVoxels = a.beta;
+    o.rtsdf.rays = a.rays;
+    o.rtsdf.maskVoxels = a.mask;
+    o.progress = !a.quiet;
+    validateMeshBakeOptions(o);
+    return o;
+}
+
+// The summary lines of a finished mesh bake (t0: start, t1: loaded, t2: baked, t3 / t4: around
+// the write).
+void printMeshBakeSummary(const BakeArgs& a, const MeshBakeResult& r,
+                          const std::array<std::chrono::steady_clock::time_point, 5>& t) {
+    const GridShape& shape = r.grid.shape();
+    std::string stages = "load " + std::to_string(seconds(t[0], t[1])).substr(0, 5) + " s";
+    for (const BakeStage& st : r.stages) {
+        char one[96];
+        std::snprintf(one, sizeof one, ", %s %.3f s", st.name.c_str(), st.seconds);
+        stages += one;
+    }
+    char tail[96];
+    std::snprintf(tail, sizeof tail, ", write %.3f s; total %.3f s", seconds(t[3], t[4]),
+                  seconds(t[0], t[4]) - seconds(t[2], t[3]));
+    stages += tail;
+    if (!r.details.empty())
+        std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.method.c_str(), r.details.c_str());
+    size_t in = 0, out = 0, surf = 0;
+    if (r.grid.kind() == GridKind::Sparse) r.grid.blockCounts(in, out, surf);
+    std::fprintf(stderr,
+                 "sdftrace bake: %s, %dx%dx%d cells (voxel %.4g), %s%s, grid %.2f MiB, peak "
+                 "memory %.0f MiB\nsdftrace bake: %s\n",
+                 a.method.c_str(), shape.cells[0], shape.cells[1], shape.cells[2], shape.voxelSize,
+                 r.grid.kind() == GridKind::Dense ? "dense" : "sparse",
+                 r.grid.kind() == GridKind::Sparse
+                     ? (" (" + std::to_string(surf) + " surface / " + std::to_string(in) +
+                        " inside / " + std::to_string(out) + " outside blocks)")
+                           .c_str()
+                     : "",
+                 r.grid.memoryBytes() / 1048576.0, peakResidentMiB(), stages.c_str());
+}
+
 int bakeMesh(const BakeArgs& a, Communicator& comm) {
     MeshBakeOptions o;
     auto t0 = std::chrono::steady_clock::now();
@@ -212,20 +258,7 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
     TriangleMesh mesh;
     bool across = false;
     together(comm, [&] {
-        if (!parseMeshBakeMethod(a.method, o.method)) {
-            throw InputError("--method " + a.method + ": unknown; accepted: " + kMeshBakeMethods);
-        }
-        o.sampling = sampleOptions(a);
-        parseSignMethod(a.sign, o.sign);           // CLI11 checked the name
-        parseClosestPoints(a.closest, o.closest);  // likewise
-        o.jfaVariant = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
-                       : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
-                                                 : JfaVariant::Plain;
-        o.betaVoxels = a.beta;
-        o.rtsdf.rays = a.rays;
-        o.rtsdf.maskVoxels = a.mask;
-        o.progress = !a.quiet;
-        validateMeshBakeOptions(o);
+        o = meshBakeOptions(a);
         across = comm.distributed() && o.method == MeshBakeMethod::Exact &&
                  o.sampling.kind == GridKind::Sparse;
         if (comm.distributed() && !across && !comm.root()) return;  // rank 0 bakes alone
@@ -259,11 +292,10 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
         r = bakeMesh(mesh, o);
     }
     auto t2 = std::chrono::steady_clock::now();
-    const GridShape& shape = r.grid.shape();
     if (a.verify) {
         MeshBvh bvh(mesh);
-        std::vector<float> exact =
-            bakeExactSamples(bvh, shape, SignMethod::WindingNumber, a.threads, nullptr, true);
+        std::vector<float> exact = bakeExactSamples(bvh, r.grid.shape(), SignMethod::WindingNumber,
+                                                    a.threads, nullptr, true);
         printVerify(a.method.c_str(), verifyBake(r.grid, exact, a.band));
     }
     if (!a.texcoords.empty()) {
@@ -278,32 +310,7 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
     }
     auto t3 = std::chrono::steady_clock::now();
     saveGridFile(r.grid, a.output);
-    auto t4 = std::chrono::steady_clock::now();
-    std::string stages = "load " + std::to_string(seconds(t0, t1)).substr(0, 5) + " s";
-    for (const BakeStage& st : r.stages) {
-        char one[96];
-        std::snprintf(one, sizeof one, ", %s %.3f s", st.name.c_str(), st.seconds);
-        stages += one;
-    }
-    char tail[96];
-    std::snprintf(tail, sizeof tail, ", write %.3f s; total %.3f s", seconds(t3, t4),
-                  seconds(t0, t4) - seconds(t2, t3));
-    stages += tail;
-    if (!r.details.empty())
-        std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.method.c_str(), r.details.c_str());
-    size_t in = 0, out = 0, surf = 0;
-    if (r.grid.kind() == GridKind::Sparse) r.grid.blockCounts(in, out, surf);
-    std::fprintf(stderr,
-                 "sdftrace bake: %s, %dx%dx%d cells (voxel %.4g), %s%s, grid %.2f MiB, peak "
-                 "memory %.0f MiB\nsdftrace bake: %s\n",
-                 a.method.c_str(), shape.cells[0], shape.cells[1], shape.cells[2], shape.voxelSize,
-                 r.grid.kind() == GridKind::Dense ? "dense" : "sparse",
-                 r.grid.kind() == GridKind::Sparse
-                     ? (" (" + std::to_string(surf) + " surface / " + std::to_string(in) +
-                        " inside / " + std::to_string(out) + " outside blocks)")
-                           .c_str()
-                     : "",
-                 r.grid.memoryBytes() / 1048576.0, peakMemoryMiB(), stages.c_str());
+    printMeshBakeSummary(a, r, {t0, t1, t2, t3, std::chrono::steady_clock::now()});
     return 0;
 }
 

@@ -155,9 +155,7 @@ struct Animation {
         in->scene =
             anim.at(frames.at(i), cache, {.progress = !a.quiet && stderrIsTerminal()}, &used);
         cache.keepOnly(used.keys);  // what this frame needs stays cached, the rest goes
-        assets.loaded += used.stats.loaded;
-        assets.baked += used.stats.baked;
-        assets.cached += used.stats.cached;
+        assets.add(used.stats);
         applyOverrides(a, in->scene);
         in->plan.emplace(planRender(in->scene));
         return in;
@@ -255,10 +253,7 @@ void renderFramesDealt(WorkFarm& farm, const Animation& job, FrameSink& sink,
             FinishedFrame f;
             f.index = i;
             f.stats = in.get<RenderStats>();
-            const auto st = in.get<PrepareStats>();
-            assets.loaded += st.loaded;
-            assets.baked += st.baked;
-            assets.cached += st.cached;
+            assets.add(in.get<PrepareStats>());
             f.film = unpackFilm(in);
             for (const auto& [aov, path] : sink.aovs())
                 if (!f.film.has(aov))
@@ -269,9 +264,7 @@ void renderFramesDealt(WorkFarm& farm, const Animation& job, FrameSink& sink,
     };
     round.progress = &bar;
     farm.round(round);
-    assets.loaded += local.loaded;
-    assets.baked += local.baked;
-    assets.cached += local.cached;
+    assets.add(local);
 }
 
 // The other ranks' side of renderFramesDealt.

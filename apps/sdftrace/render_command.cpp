@@ -276,6 +276,43 @@ MotionVectors frameMotion(const RenderArgs& a, const Film& film, const FrameView
 
 namespace {
 
+// A still's scene: the input (a scene, grid or mesh file, or the demo), or a scene file's instant
+// --time T (with its animation, for the motion AOV).
+struct StillScene {
+    Scene scene;
+    std::optional<AnimatedScene> anim;
+};
+
+StillScene loadStill(const RenderArgs& a, const std::optional<TimeSpan>& span) {
+    StillScene still;
+    if (span) {
+        still.anim.emplace(loadAnimation(a.scene));
+        AssetCache cache;
+        still.scene =
+            still.anim->at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
+    } else {
+        LoadedInput input = loadSceneInput(a.scene, !a.quiet && stderrIsTerminal());
+        if (!a.quiet && !input.note.empty())
+            std::fprintf(stderr, "sdftrace render: %s\n", input.note.c_str());
+        still.scene = std::move(input.scene);
+    }
+    applyOverrides(a, still.scene);
+    return still;
+}
+
+// The still on this process, or (rank 0 of an mpirun job) its tiles across the ranks.
+RenderStats renderStill(const RenderArgs& a, const RenderPlan& plan, Film& film,
+                        Communicator& comm) {
+    if (!comm.distributed()) return renderImage(a, plan, film, a.framePattern, showProgress(a));
+    WorkFarm farm(comm);
+    const RenderStats st = renderImage(a, plan, film, a.framePattern, showProgress(a),
+                                       [&](const FrameView& view, Film& f, bool progress) {
+                                           return renderAcross(farm, plan, view, f, progress);
+                                       });
+    farm.end();
+    return st;
+}
+
 int runRender(const RenderArgs& args) {
     if (args.listOptions) {
         std::fputs(renderOptionsMarkdown().c_str(), stdout);
@@ -300,24 +337,13 @@ int runRender(const RenderArgs& args) {
     if (span && span->range) return renderAnimation(a, *span, aovs, comm);
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
-    Scene scene;
-    std::optional<AnimatedScene> anim;
+    StillScene still;
     std::optional<RenderPlan> planned;
     auto t1 = t0;
     together(comm, [&] {
-        if (span) {
-            anim.emplace(loadAnimation(a.scene));
-            AssetCache cache;
-            scene = anim->at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
-        } else {
-            LoadedInput input = loadSceneInput(a.scene, !a.quiet && stderrIsTerminal());
-            if (!a.quiet && !input.note.empty())
-                std::fprintf(stderr, "sdftrace render: %s\n", input.note.c_str());
-            scene = std::move(input.scene);
-        }
-        applyOverrides(a, scene);
+        still = loadStill(a, span);
         t1 = Clock::now();
-        planned.emplace(planRender(scene));
+        planned.emplace(planRender(still.scene));
     });
     const RenderPlan& plan = *planned;
     if (comm.distributed() && !comm.root()) {
@@ -333,20 +359,11 @@ int runRender(const RenderArgs& args) {
     if (kept & Film::bit(Aov::Motion)) kept |= Film::bit(Aov::Depth);
     Film film(plan.camera.width, plan.camera.height, kept);
     const auto t2 = Clock::now();
-    std::optional<WorkFarm> farm;
-    FrameRenderFn across;
-    if (comm.distributed()) {
-        farm.emplace(comm);
-        across = [&](const FrameView& view, Film& f, bool progress) {
-            return renderAcross(*farm, plan, view, f, progress);
-        };
-    }
-    const RenderStats st = renderImage(a, plan, film, a.framePattern, showProgress(a), across);
-    if (farm) farm->end();
-    if (anim && film.has(Aov::Motion)) {  // --time T: the motion from T - 1/fps
-        const double fps = a.fps ? *a.fps : anim->time().fps;
+    const RenderStats st = renderStill(a, plan, film, comm);
+    if (still.anim && film.has(Aov::Motion)) {  // --time T: the motion from T - 1/fps
+        const double fps = a.fps ? *a.fps : still.anim->time().fps;
         film.motion = frameMotion(a, film, FrameView{plan.camera},
-                                  previousInstant(*anim, a, instant, fps), scene)
+                                  previousInstant(*still.anim, a, instant, fps), still.scene)
                           .motion;
     }
     const auto t3 = Clock::now();

@@ -30,7 +30,6 @@ class RoundWorker {
 struct RoundPlan {
     Bytes context;  // sent to every worker at the start
     int items = 0;
-    int minChunk = 1, maxChunk = 1 << 30;
     // Rank 0's own share, on its worker thread: items [first, last).
     std::function<void(int first, int last)> local;
     // On rank 0's main thread, as each worker's chunk arrives (disjoint from the local share).

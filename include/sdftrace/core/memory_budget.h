@@ -9,6 +9,8 @@
 namespace sdft {
 
 double physicalMemoryBytes();
+// This process's peak resident memory so far, in MiB (getrusage).
+double peakResidentMiB();
 double memoryBudgetBytes();
 // bytes <= 0 restores the default.
 void setMemoryBudgetBytes(double bytes);

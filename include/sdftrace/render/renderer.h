@@ -22,9 +22,10 @@ struct PixelRect {
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
 };
 
-// One frame rendered tiles at a time, in any order and any grouping, by any process: a pixel's
-// value depends only on the plan, the view and the pixel, so a frame split across threads or
-// ranks (cluster/distributed_render.h) is the same image bit for bit. The frame's shared work
+// One frame rendered tiles at a time (Jamriška 2010, §8: square tiles of the image dealt to the
+// threads; here to the ranks of a job too), in any order and any grouping, by any process: a
+// pixel's value depends only on the plan, the view and the pixel, so a frame split across threads
+// or ranks (cluster/distributed_render.h) is the same image bit for bit. The frame's shared work
 // (shadow maps) is done once, in the constructor. Tiles are plan.settings.tileSize squares in
 // row-major order, the last row and column cut by the film.
 class FrameRenderer {

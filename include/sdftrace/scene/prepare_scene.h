@@ -76,6 +76,12 @@ struct PrepareStats {
     size_t loaded = 0;  // grid files read
     size_t baked = 0;   // meshes and subtrees baked
     size_t cached = 0;  // requests served by the cache
+
+    void add(const PrepareStats& o) {
+        loaded += o.loaded;
+        baked += o.baked;
+        cached += o.cached;
+    }
 };
 
 PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions& options = {});

@@ -1,6 +1,5 @@
 #include "sdftrace/cluster/distributed_bake.h"
 
-#include <sys/resource.h>
 #include <zstd.h>
 
 #include <algorithm>
@@ -10,6 +9,7 @@
 #include <stdexcept>
 
 #include "sdftrace/bake/surface_seeds.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/progress.h"
 
 namespace sdft {
@@ -24,6 +24,20 @@ SlabSamples bakeSlab(const TriangleMesh& mesh, const GridShape& shape, const Mes
     if (slab.last <= slab.first) return SlabSamples{slab, {}, {}};
     const SampleOptions& so = o.sampling;
     return bakeExactSlab(mesh, shape, so.blockSize, so.bandVoxels, o.sign, slab, so.threads, &st);
+}
+
+// The counters of a slab's bake added to the job's.
+void addSlabStats(ExactBakeStats& total, const ExactBakeStats& st) {
+    total.distanceQueries += st.distanceQueries;
+    total.signEvaluations += st.signEvaluations;
+    total.filmSums += st.filmSums;
+    total.surfaceBlocks += st.surfaceBlocks;
+}
+
+double phaseSeconds(const ExactBakeStats& st) {
+    double seconds = 0;
+    for (const BakeStage& b : st.phases) seconds += b.seconds;
+    return seconds;
 }
 
 // A slab on the wire: its layers, its flags (zstd: runs of one flag compress a thousandfold) and
@@ -42,12 +56,8 @@ void packSlab(const SlabSamples& s, const ExactBakeStats& st, ByteWriter& out) {
     out.put(st.signEvaluations);
     out.put(st.filmSums);
     out.put(st.surfaceBlocks);
-    double seconds = 0;
-    for (const BakeStage& b : st.phases) seconds += b.seconds;
-    out.put(seconds);
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    out.put(u.ru_maxrss / 1024.0);  // this rank's peak so far, MiB (KiB on Linux)
+    out.put(phaseSeconds(st));
+    out.put(peakResidentMiB());  // this rank's peak so far
 }
 
 SlabSamples unpackSlab(ByteReader& in, ExactBakeStats& st, double& seconds, double& peakMiB) {
@@ -60,10 +70,10 @@ SlabSamples unpackSlab(ByteReader& in, ExactBakeStats& st, double& seconds, doub
         throw std::runtime_error("exact bake: a slab's block flags do not decompress");
     s.samples.resize(in.get<uint64_t>());
     in.read(s.samples.data(), s.samples.size() * sizeof(float));
-    st.distanceQueries += in.get<size_t>();
-    st.signEvaluations += in.get<size_t>();
-    st.filmSums += in.get<size_t>();
-    st.surfaceBlocks += in.get<size_t>();
+    st.distanceQueries = in.get<size_t>();
+    st.signEvaluations = in.get<size_t>();
+    st.filmSums = in.get<size_t>();
+    st.surfaceBlocks = in.get<size_t>();
     seconds = in.get<double>();
     peakMiB = in.get<double>();
     return s;
@@ -151,13 +161,8 @@ MeshBakeResult bakeExactAcross(WorkFarm& farm, const TriangleMesh& mesh, const M
             SlabSamples s = bakeSlab(mesh, shape, o, slabs[i], st);
             std::lock_guard lock(mutex);
             done[i] = std::move(s);
-            total.distanceQueries += st.distanceQueries;
-            total.signEvaluations += st.signEvaluations;
-            total.filmSums += st.filmSums;
-            total.surfaceBlocks += st.surfaceBlocks;
-            double seconds = 0;
-            for (const BakeStage& b : st.phases) seconds += b.seconds;
-            slowest = std::max(slowest, seconds);
+            addSlabStats(total, st);
+            slowest = std::max(slowest, phaseSeconds(st));
             if (rank0Phases.empty()) rank0Phases = st.phases;
         }
     };
@@ -170,10 +175,7 @@ MeshBakeResult bakeExactAcross(WorkFarm& farm, const TriangleMesh& mesh, const M
             if (s.slab.first != slabs[i].first || s.slab.last != slabs[i].last)
                 throw std::runtime_error("exact bake: a rank returned another slab");
             done[i] = std::move(s);
-            total.distanceQueries += st.distanceQueries;
-            total.signEvaluations += st.signEvaluations;
-            total.filmSums += st.filmSums;
-            total.surfaceBlocks += st.surfaceBlocks;
+            addSlabStats(total, st);
             slowest = std::max(slowest, seconds);
             othersPeak = std::max(othersPeak, peak);
         }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <utility>
 
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/render/renderer.h"
@@ -20,11 +21,22 @@ unsigned keptAovs(const Film& film) {
     return bits;
 }
 
-// The channels a render fills (motion vectors come after it, from the frame's depth).
-template <class F>
-void forRenderedChannels(const Film& film, F&& f) {
-    for (Aov aov : kAovs)
-        if (aov != Aov::Motion && film.has(aov)) f(aov, aovChannels(aov));
+// The rows of tiles [first, last) in every channel a render fills (motion vectors come after it,
+// from the frame's depth), channel by channel: f(the row's first float, its byte count). The order
+// of the chunk's pixels on the wire, for both ends.
+template <class FilmT, class F>
+void forTileRows(FilmT& film, const FrameRenderer& frame, int first, int last, F&& f) {
+    for (Aov aov : kAovs) {
+        if (aov == Aov::Motion || !film.has(aov)) continue;
+        const int n = aovChannels(aov);
+        auto& data = film.channel(aov);
+        for (int t = first; t < last; ++t) {
+            const PixelRect r = frame.tile(t);
+            for (int y = r.y0; y < r.y1; ++y)
+                f(&data[(static_cast<size_t>(y) * film.width + r.x0) * n],
+                  sizeof(float) * n * (r.x1 - r.x0));
+        }
+    }
 }
 
 struct Context {
@@ -40,16 +52,8 @@ class TileWorker : public RoundWorker {
 
     void run(int first, int last, ByteWriter& out) override {
         m_frame.renderTiles(first, last);
-        // Per channel, the chunk's tiles row by row.
-        forRenderedChannels(m_film, [&](Aov aov, int n) {
-            const std::vector<float>& data = m_film.channel(aov);
-            for (int t = first; t < last; ++t) {
-                const PixelRect r = m_frame.tile(t);
-                for (int y = r.y0; y < r.y1; ++y)
-                    out.append(&data[(static_cast<size_t>(y) * m_film.width + r.x0) * n],
-                               sizeof(float) * n * (r.x1 - r.x0));
-            }
-        });
+        forTileRows(std::as_const(m_film), m_frame, first, last,
+                    [&](const float* row, size_t bytes) { out.append(row, bytes); });
     }
     Bytes finish() override {
         ByteWriter w;
@@ -81,15 +85,8 @@ RenderStats renderAcross(WorkFarm& farm, const RenderPlan& plan, const FrameView
     round.items = frame.tileCount();
     round.local = [&](int first, int last) { frame.renderTiles(first, last); };
     round.onResult = [&](int, int first, int last, ByteReader& in) {
-        forRenderedChannels(film, [&](Aov aov, int n) {
-            std::vector<float>& data = film.channel(aov);
-            for (int t = first; t < last; ++t) {
-                const PixelRect r = frame.tile(t);
-                for (int y = r.y0; y < r.y1; ++y)
-                    in.read(&data[(static_cast<size_t>(y) * film.width + r.x0) * n],
-                            sizeof(float) * n * (r.x1 - r.x0));
-            }
-        });
+        forTileRows(film, frame, first, last,
+                    [&](float* row, size_t bytes) { in.read(row, bytes); });
     };
     round.onFinish = [&](int, const Bytes& b) {
         ByteReader in(b);
@@ -125,9 +122,6 @@ Film unpackFilm(ByteReader& in) {
     const int w = in.get<int>(), h = in.get<int>();
     const auto aovs = in.get<unsigned>();
     Film film(w, h, aovs);
-    // Motion vectors are not part of a film's constructor.
-    if ((aovs & Film::bit(Aov::Motion)) && !film.has(Aov::Motion))
-        film.motion.assign(film.pixels() * 2, 0.0f);
     for (Aov aov : kAovs)
         if (film.has(aov)) {
             std::vector<float>& d = film.channel(aov);

@@ -43,8 +43,7 @@ class Dealer {
         std::lock_guard lock(m_mutex);
         if (m_stopped || m_next >= m_plan.items) return false;
         const int left = m_plan.items - m_next;
-        const int chunk = std::clamp((left + 2 * m_ranks - 1) / (2 * m_ranks), m_plan.minChunk,
-                                     std::max(m_plan.minChunk, m_plan.maxChunk));
+        const int chunk = (left + 2 * m_ranks - 1) / (2 * m_ranks);
         first = m_next;
         last = m_next = std::min(m_plan.items, m_next + chunk);
         return true;
@@ -127,101 +126,164 @@ void WorkFarm::end() {
     m_comm.setOthersDone();
 }
 
-void WorkFarm::round(const RoundPlan& plan) {
-    Dealer dealer(plan, m_comm.size());
-    std::mutex failureMutex;
-    std::string failure;  // the first failure, naming its rank
-    std::vector<bool> failed(m_comm.size(), false);
-    auto fail = [&](int rank, const std::string& what) {
-        dealer.stop();
-        std::lock_guard lock(failureMutex);
-        if (failure.empty())
-            failure = rank == 0 ? what : "rank " + std::to_string(rank) + ": " + what;
-    };
-    for (int r = 1; r < m_comm.size(); ++r) m_comm.send(r, kRound, plan.context);
-    std::atomic<bool> localDone{false};
-    std::thread local([&] {
+namespace {
+
+// Rank 0's side of one round: the dealer, the first failure, and the answers to the workers.
+class RoundServer {
+  public:
+    RoundServer(Communicator& comm, const RoundPlan& plan)
+        : m_comm(comm), m_plan(plan), m_dealer(plan, comm.size()), m_failed(comm.size(), false) {}
+
+    // Rank 0's own share, on its second thread.
+    void runLocalShare() {
         try {
             int first = 0, last = 0;
-            while (dealer.deal(first, last)) {
-                plan.local(first, last);
-                if (plan.progress) plan.progress->advance(static_cast<uint64_t>(last - first));
+            while (m_dealer.deal(first, last)) {
+                m_plan.local(first, last);
+                if (m_plan.progress) m_plan.progress->advance(static_cast<uint64_t>(last - first));
             }
         } catch (...) {
             fail(0, describeException(std::current_exception()));
         }
-        localDone = true;
-    });
-    auto reply = [&](int rank) {
-        int first = 0, last = 0;
-        if (dealer.deal(first, last)) {
-            const int range[2] = {first, last};
-            m_comm.send(rank, kChunk, range, sizeof range);
-        } else {
-            m_comm.send(rank, kRoundEnd, nullptr, 0);
-        }
-    };
-    int active = m_comm.size() - 1;
-    Backoff backoff;
-    while (active > 0 || !localDone) {
-        std::optional<Message> m = m_comm.tryReceive();
-        if (!m) {
-            backoff.wait();
-            continue;
-        }
-        backoff.reset();
-        const int r = m->source;
+    }
+
+    // One worker message; false once that worker is done with the round.
+    bool handle(const Message& m) {
+        const int r = m.source;
         try {
-            ByteReader in(m->bytes);
-            switch (m->tag) {
+            ByteReader in(m.bytes);
+            switch (m.tag) {
                 case kRequest:
                     reply(r);
-                    break;
+                    return true;
                 case kResult: {
                     const int first = in.get<int>(), last = in.get<int>();
-                    if (plan.onResult) plan.onResult(r, first, last, in);
-                    if (plan.progress) plan.progress->advance(static_cast<uint64_t>(last - first));
+                    if (m_plan.onResult) m_plan.onResult(r, first, last, in);
+                    if (m_plan.progress)
+                        m_plan.progress->advance(static_cast<uint64_t>(last - first));
                     reply(r);
-                    break;
+                    return true;
                 }
                 case kFinish:
-                    --active;
-                    if (plan.onFinish) plan.onFinish(r, m->bytes);
-                    break;
+                    if (m_plan.onFinish) m_plan.onFinish(r, m.bytes);
+                    return false;
                 case kError:
-                    --active;
-                    failed[r] = true;
+                    m_failed[r] = true;
                     fail(r, in.getString());
-                    break;
+                    return false;
                 default:
-                    fail(0, "cluster: unexpected message " + std::to_string(m->tag) +
-                                " from rank " + std::to_string(r));
+                    fail(0, "cluster: unexpected message " + std::to_string(m.tag) + " from rank " +
+                                std::to_string(r));
+                    return true;
             }
         } catch (...) {
             // Rank 0 could not take this result (out of memory, say): the round ends as a failure;
             // the sender is still answered so that it does not wait.
             fail(0, describeException(std::current_exception()));
-            if (m->tag == kResult) reply(r);
+            if (m.tag == kResult) reply(r);
+            return m.tag != kFinish && m.tag != kError;
+        }
+    }
+
+    const std::string& failure() const { return m_failure; }
+    bool failed(int rank) const { return m_failed[rank]; }
+
+  private:
+    void fail(int rank, const std::string& what) {
+        m_dealer.stop();
+        std::lock_guard lock(m_failureMutex);
+        if (m_failure.empty())
+            m_failure = rank == 0 ? what : "rank " + std::to_string(rank) + ": " + what;
+    }
+    // The next chunk, or the end of the round.
+    void reply(int rank) {
+        int range[2] = {0, 0};
+        if (m_dealer.deal(range[0], range[1]))
+            m_comm.send(rank, kChunk, range, sizeof range);
+        else
+            m_comm.send(rank, kRoundEnd, nullptr, 0);
+    }
+
+    Communicator& m_comm;
+    const RoundPlan& m_plan;
+    Dealer m_dealer;
+    std::mutex m_failureMutex;
+    std::string m_failure;  // the first failure, naming its rank
+    std::vector<bool> m_failed;
+};
+
+}  // namespace
+
+void WorkFarm::round(const RoundPlan& plan) {
+    RoundServer server(m_comm, plan);
+    for (int r = 1; r < m_comm.size(); ++r) m_comm.send(r, kRound, plan.context);
+    std::atomic<bool> localDone{false};
+    std::thread local([&] {
+        server.runLocalShare();
+        localDone = true;
+    });
+    int active = m_comm.size() - 1;
+    Backoff backoff;
+    while (active > 0 || !localDone) {
+        if (std::optional<Message> m = m_comm.tryReceive()) {
+            backoff.reset();
+            if (!server.handle(*m)) --active;
+        } else {
+            backoff.wait();
         }
     }
     local.join();
-    if (failure.empty()) return;
+    if (server.failure().empty()) return;
     m_ended = true;
     for (int r = 1; r < m_comm.size(); ++r)
-        if (!failed[r]) m_comm.send(r, kAbort, nullptr, 0);
-    throw RankFailure(failure, true);
+        if (!server.failed(r)) m_comm.send(r, kAbort, nullptr, 0);
+    throw RankFailure(server.failure(), true);
 }
+
+namespace {
+
+// A worker's failure: reported to rank 0, which reports it; this rank stops.
+[[noreturn]] void reportAndStop(Communicator& comm) {
+    ByteWriter w;
+    w.putString(describeException(std::current_exception()));
+    comm.send(0, kError, w.bytes());
+    failSilently();
+}
+
+// One round's chunks, until rank 0 says the round is over.
+void serveChunks(Communicator& comm, RoundWorker& worker, int& chunks) {
+    comm.send(0, kRequest, nullptr, 0);
+    for (;;) {
+        const Message c = comm.receive(0);
+        if (c.tag == kRoundEnd) break;
+        if (c.tag != kChunk) failSilently();  // kAbort
+        ByteReader in(c.bytes);
+        const int first = in.get<int>(), last = in.get<int>();
+        ByteWriter out;
+        out.put(first);
+        out.put(last);
+        try {
+            injectedFailure(comm, ++chunks);
+            worker.run(first, last, out);
+        } catch (...) {
+            reportAndStop(comm);
+        }
+        comm.send(0, kResult, out.bytes());
+    }
+    Bytes finished;
+    try {
+        finished = worker.finish();
+    } catch (...) {
+        reportAndStop(comm);
+    }
+    comm.send(0, kFinish, finished);
+}
+
+}  // namespace
 
 void serveRounds(Communicator& comm,
                  const std::function<std::unique_ptr<RoundWorker>(const Bytes& context)>& start,
                  const std::function<void()>& prepare) {
-    // An error here is rank 0's to report; this rank stops.
-    auto reportAndStop = [&] {
-        ByteWriter w;
-        w.putString(describeException(std::current_exception()));
-        comm.send(0, kError, w.bytes());
-        failSilently();
-    };
     std::exception_ptr deferred;  // prepare's error, reported when the next round starts
     int chunks = 0;
     for (;;) {
@@ -232,7 +294,7 @@ void serveRounds(Communicator& comm,
                 deferred = std::current_exception();
             }
         }
-        Message m = comm.receive(0);
+        const Message m = comm.receive(0);
         if (m.tag == kQuit) return;
         if (m.tag != kRound) failSilently();  // kAbort (or anything unexpected)
         std::unique_ptr<RoundWorker> worker;
@@ -240,37 +302,9 @@ void serveRounds(Communicator& comm,
             if (deferred) std::rethrow_exception(std::exchange(deferred, nullptr));
             worker = start(m.bytes);
         } catch (...) {
-            reportAndStop();
+            reportAndStop(comm);
         }
-        comm.send(0, kRequest, nullptr, 0);
-        for (;;) {
-            Message c = comm.receive(0);
-            if (c.tag == kChunk) {
-                ByteReader in(c.bytes);
-                const int first = in.get<int>(), last = in.get<int>();
-                ByteWriter out;
-                out.put(first);
-                out.put(last);
-                try {
-                    injectedFailure(comm, ++chunks);
-                    worker->run(first, last, out);
-                } catch (...) {
-                    reportAndStop();
-                }
-                comm.send(0, kResult, out.bytes());
-            } else if (c.tag == kRoundEnd) {
-                Bytes f;
-                try {
-                    f = worker->finish();
-                } catch (...) {
-                    reportAndStop();
-                }
-                comm.send(0, kFinish, f);
-                break;
-            } else {
-                failSilently();
-            }
-        }
+        serveChunks(comm, *worker, chunks);
     }
 }
 

@@ -1,5 +1,6 @@
 #include "sdftrace/core/memory_budget.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -14,6 +15,12 @@ namespace sdft {
 
 namespace {
 std::atomic<double> g_budget{0.0};  // 0: the default
+}
+
+double peakResidentMiB() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss / 1024.0;  // KiB on Linux
 }
 
 double physicalMemoryBytes() {
