@@ -7,14 +7,9 @@
 
 #include "sdftrace/field/tape.h"
 #include "sdftrace/trace/sphere_tracer.h"
+#include "sdftrace/trace/trace_tape.h"
 
 namespace sdft {
-
-struct RaySegment {
-    Ray ray;
-    float tMin = 0;
-    float tMax = kInfinity;
-};
 
 TraceResult traceRay(const Tape& tape, const RaySegment& segment, const TraceOptions& options);
 

@@ -2,6 +2,8 @@
 // can be turned off to measure it against the plain method.
 #pragma once
 
+#include "sdftrace/core/macros.h"
+
 namespace sdft {
 
 struct TraceOptions {
@@ -33,7 +35,7 @@ struct TraceOptions {
     // The options of a ray without a pixel footprint of its own (shadow, reflection, refraction,
     // shadow-map and path rays): the primary rays' march and relaxation, a plain threshold, no
     // screen-space selection, no refinement, no fixed step count.
-    TraceOptions secondary() const {
+    SDFT_HOST_DEVICE TraceOptions secondary() const {
         TraceOptions o = *this;
         o.screenSpace = false;
         o.forceHit = false;
@@ -44,14 +46,14 @@ struct TraceOptions {
 
     // The options of a ray asked only whether something is in the way (shadow rays): no root
     // refinement either.
-    TraceOptions occlusion() const {
+    SDFT_HOST_DEVICE TraceOptions occlusion() const {
         TraceOptions o = secondary();
         o.rootIters = 0;
         return o;
     }
 
     // The plain method of Hart 1996 (Keinert Listing 1): no enhancement at all.
-    static TraceOptions classic() {
+    SDFT_HOST_DEVICE static TraceOptions classic() {
         TraceOptions o;
         o.omega = 1;
         o.screenSpace = false;

@@ -1,5 +1,5 @@
-// Tape evaluators: scalar (one point, optional material tracking) and batch (structure of arrays).
-// Both dispatch to the same per-op functions in primitives.h / operators.h / transforms.h.
+// The batch evaluator (structure of arrays) and the Tape's view; the scalar evaluator is in
+// field/tape_view.h, whose per-op functions both share.
 #include <algorithm>
 
 #include "sdftrace/core/macros.h"
@@ -13,196 +13,21 @@
 
 namespace sdft {
 
-namespace {
-constexpr int kMaxScalarRegs = Tape::kMaxScalarRegs;
-constexpr int kMaxPointRegs = Tape::kMaxPointRegs;
-
-float evalPrimitive(Op op, Vec3 p, const float* k) {
-    switch (op) {
-#define SDFT_PRIMITIVE_EVAL(Kind, name, eval, ...) \
-    case Op::Kind:                                 \
-        return eval(p, k);
-        SDFT_PRIMITIVES(SDFT_PRIMITIVE_EVAL)
-#undef SDFT_PRIMITIVE_EVAL
-        default:
-            return 0;
-    }
+TapeView Tape::view() const {
+    TapeView v;
+    v.instrs = m_instrs.data();
+    v.consts = m_consts.data();
+    v.grids = m_gridViews.data();
+    v.count = static_cast<uint32_t>(m_instrs.size());
+    v.result = m_result;
+    v.numScalarRegs = static_cast<uint16_t>(m_numScalarRegs);
+    v.numPointRegs = static_cast<uint16_t>(m_numPointRegs);
+    v.lipschitz = m_lipschitz;
+    v.bounds = m_bounds;
+    return v;
 }
 
-// Binary scalar ops. `h` returns the weight of `a` for material blending.
-inline float evalBinary(Op op, float a, float b, const float* k, float& h) {
-    switch (op) {
-        case Op::Union:
-            h = a <= b ? 1.f : 0.f;
-            return minf(a, b);
-        case Op::Intersection:
-            h = a >= b ? 1.f : 0.f;
-            return maxf(a, b);
-        case Op::Difference:
-            h = a >= -b ? 1.f : 0.f;
-            return maxf(a, -b);
-        case Op::SmoothUnion:
-            return ops::smoothMin(a, b, k[0], h);
-        case Op::SmoothIntersection:
-            return ops::smoothMax(a, b, k[0], h);
-        case Op::SmoothDifference:
-            return ops::smoothMax(a, -b, k[0], h);
-        case Op::Morph:
-            h = 1 - k[0];
-            return (1 - k[0]) * a + k[0] * b;
-        default:
-            h = 1;
-            return a;
-    }
-}
-
-inline Vec3 evalPointOp(Op op, Vec3 p, const float* k) {
-    switch (op) {
-        case Op::Translate:
-            return p - Vec3(k[0], k[1], k[2]);
-        case Op::Rotate: {
-            return {k[0] * p.x + k[1] * p.y + k[2] * p.z, k[3] * p.x + k[4] * p.y + k[5] * p.z,
-                    k[6] * p.x + k[7] * p.y + k[8] * p.z};
-        }
-        case Op::ScalePoint:
-            return p / Vec3(k[0], k[1], k[2]);
-        case Op::RepeatPoint:
-            return xform::repeatPoint(p, k);
-        default:
-            return p;
-    }
-}
-
-// CullIfFar's test, as the batch loop computes it: box distance >= acc + margin, squared.
-inline bool cullSkips(Vec3 p, float acc, const float* k) {
-    float dx = maxf(maxf(k[0] - p.x, p.x - k[3]), 0.0f);
-    float dy = maxf(maxf(k[1] - p.y, p.y - k[4]), 0.0f);
-    float dz = maxf(maxf(k[2] - p.z, p.z - k[5]), 0.0f);
-    float t = acc + k[6];
-    return (t <= 0.0f) | (dx * dx + dy * dy + dz * dz >= t * t);
-}
-
-// A grid's value, normalized by its Lipschitz bound so it is 1-Lipschitz like the primitives.
-inline float gridValue(const GridView& g, Vec3 p) { return gridDistanceBound(g, p); }
-
-inline float displacement(Vec3 p, const float* k) {
-    return k[0] * noise::fbm(p * k[1], static_cast<int>(k[2]), k[3]);
-}
-}  // namespace
-
-MaterialBlend MaterialBlend::single(int material, Vec3 local) {
-    MaterialBlend b;
-    b.id[0] = material;
-    b.weight[0] = 1;
-    b.local[0] = local;
-    b.count = 1;
-    return b;
-}
-
-MaterialBlend MaterialBlend::mix(const MaterialBlend& a, const MaterialBlend& b, float t) {
-    if (t <= 0) return a;
-    if (t >= 1) return b;
-    struct Entry {
-        int id;
-        float w;
-        Vec3 local;
-        float u, v, uvWeight;
-    };
-    Entry e[2 * kMax];
-    int n = 0;
-    auto add = [&](const MaterialBlend& m, int i, float w) {
-        const float uw = m.hasUv[i] ? w : 0.0f;
-        for (int j = 0; j < n; ++j) {
-            if (e[j].id == m.id[i]) {
-                e[j].local += m.local[i] * w;
-                e[j].u += m.u[i] * uw;
-                e[j].v += m.v[i] * uw;
-                e[j].uvWeight += uw;
-                e[j].w += w;
-                return;
-            }
-        }
-        e[n++] = {m.id[i], w, m.local[i] * w, m.u[i] * uw, m.v[i] * uw, uw};
-    };
-    for (int i = 0; i < a.count; ++i) add(a, i, a.weight[i] * (1 - t));
-    for (int i = 0; i < b.count; ++i) add(b, i, b.weight[i] * t);
-    // Keep the heaviest kMax entries, renormalized.
-    MaterialBlend out;
-    float total = 0;
-    for (int slot = 0; slot < kMax && slot < n; ++slot) {
-        int best = slot;
-        for (int i = slot + 1; i < n; ++i)
-            if (e[i].w > e[best].w) best = i;
-        std::swap(e[slot], e[best]);
-        const Entry& x = e[slot];
-        out.id[slot] = x.id;
-        out.weight[slot] = x.w;
-        out.local[slot] = x.w > 0 ? x.local / x.w : Vec3(0.0f);
-        out.hasUv[slot] = x.uvWeight > 0;
-        if (out.hasUv[slot]) {
-            out.u[slot] = x.u / x.uvWeight;
-            out.v[slot] = x.v / x.uvWeight;
-        }
-        total += x.w;
-        out.count = slot + 1;
-    }
-    for (int i = 0; i < out.count; ++i) out.weight[i] /= total;
-    return out;
-}
-
-template <bool kMaterial>
-float Tape::evalScalar(Vec3 p, MaterialBlend* blend) const {
-    float s[kMaxScalarRegs];
-    Vec3 pts[kMaxPointRegs];
-    MaterialBlend mats[kMaterial ? kMaxScalarRegs : 1];
-    pts[0] = p;
-    const float* consts = m_consts.data();
-    const size_t count = m_instrs.size();
-    for (size_t pc = 0; pc < count; ++pc) {
-        const Instr& in = m_instrs[pc];
-        const float* k = consts + in.k;
-        Op op = in.op;
-        if (op == Op::CullIfFar) {
-            if (cullSkips(pts[in.a], s[in.b], k)) pc = in.jump - 1;
-            continue;
-        }
-        if (op <= Op::Grid) {
-            s[in.out] = op == Op::Grid
-                            ? gridValue(m_gridViews[static_cast<size_t>(k[0])], pts[in.a])
-                            : evalPrimitive(op, pts[in.a], k);
-            if constexpr (kMaterial) {
-                mats[in.out] = MaterialBlend::single(in.material, pts[in.materialPoint]);
-                if (op == Op::Grid) {
-                    const GridView& g = m_gridViews[static_cast<size_t>(k[0])];
-                    if (g.texcoords)
-                        mats[in.out].hasUv[0] =
-                            g.texcoordsAt(pts[in.a], mats[in.out].u[0], mats[in.out].v[0]);
-                }
-            }
-        } else if (op <= Op::Morph) {
-            float h;
-            s[in.out] = evalBinary(op, s[in.a], s[in.b], k, h);
-            if constexpr (kMaterial)
-                mats[in.out] = MaterialBlend::mix(mats[in.a], mats[in.b], 1 - h);
-        } else if (op == Op::Complement) {
-            s[in.out] = -s[in.a];
-        } else if (op == Op::ScaleValue) {
-            s[in.out] = s[in.a] * k[0];
-        } else if (op == Op::RepeatBound) {
-            s[in.out] = minf(s[in.a], xform::repeatNeighbourBound(pts[in.b], k));
-        } else if (op == Op::FloorByBounds) {
-            s[in.out] = xform::floorByBounds(s[in.a], pts[in.b], k);
-        } else if (op == Op::Displace) {
-            s[in.out] = s[in.a] + displacement(pts[in.b], k);
-        } else {
-            pts[in.out] = evalPointOp(op, pts[in.a], k);
-        }
-    }
-    if constexpr (kMaterial) *blend = mats[m_result];
-    return s[m_result];
-}
-
-float Tape::eval(Vec3 p) const { return evalScalar<false>(p, nullptr); }
+float Tape::eval(Vec3 p) const { return evalTape(view(), p); }
 
 int Tape::findUniformMaterial() const {
     const Instr* leaf = nullptr;
@@ -219,7 +44,7 @@ int Tape::findUniformMaterial() const {
 
 MaterialBlend Tape::evalMaterial(Vec3 p) const {
     MaterialBlend blend;
-    evalScalar<true>(p, &blend);
+    evalTapeAt<kMaxScalarRegs>(view(), p, &blend);
     return blend;
 }
 
@@ -307,7 +132,8 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 const GridView& g = m_gridViews[static_cast<size_t>(k[0])];
                 const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);
                 float* o = sr(in.out);
-                for (int l = 0; l < n; ++l) o[l] = gridValue(g, Vec3(ax[l], ay[l], az[l]));
+                for (int l = 0; l < n; ++l)
+                    o[l] = tape_ops::gridValue(g, Vec3(ax[l], ay[l], az[l]));
                 break;
             }
             case Op::Union: {
@@ -335,9 +161,9 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 if (in.cull >= 0) {  // a culled smooth-union operand: masked lanes keep a
                     const uint8_t* mask = scratch.culled.data() + static_cast<size_t>(in.cull) * W;
                     for (int l = 0; l < n; ++l)
-                        o[l] = mask[l] ? a[l] : evalBinary(in.op, a[l], b[l], k, h);
+                        o[l] = mask[l] ? a[l] : tape_ops::binary(in.op, a[l], b[l], k, h);
                 } else {
-                    for (int l = 0; l < n; ++l) o[l] = evalBinary(in.op, a[l], b[l], k, h);
+                    for (int l = 0; l < n; ++l) o[l] = tape_ops::binary(in.op, a[l], b[l], k, h);
                 }
                 break;
             }
@@ -365,7 +191,7 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 for (int l = 0; l < n; ++l) {
                     Vec3 q(bx[l], by[l], bz[l]);
                     o[l] = in.op == Op::RepeatBound ? minf(a[l], xform::repeatNeighbourBound(q, k))
-                                                    : a[l] + displacement(q, k);
+                                                    : a[l] + tape_ops::displacement(q, k);
                 }
                 break;
             }
@@ -376,7 +202,7 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 const float *ax = px(in.a), *ay = py(in.a), *az = pz(in.a);
                 float *ox = px(in.out), *oy = py(in.out), *oz = pz(in.out);
                 for (int l = 0; l < n; ++l) {
-                    Vec3 q = evalPointOp(in.op, Vec3(ax[l], ay[l], az[l]), k);
+                    Vec3 q = tape_ops::pointOp(in.op, Vec3(ax[l], ay[l], az[l]), k);
                     ox[l] = q.x;
                     oy[l] = q.y;
                     oz[l] = q.z;

@@ -14,6 +14,7 @@
 #include "sdftrace/math/camera.h"
 #include "sdftrace/math/sampling.h"
 #include "sdftrace/render/light_sample.h"
+#include "sdftrace/render/normal_stencil.h"
 #include "sdftrace/render/path_tracer.h"
 #include "sdftrace/render/whitted.h"
 #include "sdftrace/trace/field_tracer.h"
@@ -23,19 +24,6 @@
 namespace sdft {
 
 namespace {
-
-// Both estimators are grad f ~ sum_i o_i f(p + h o_i): central differences use the six axis
-// directions, the tetrahedral estimate the four vertices of a tetrahedron.
-struct Stencil {
-    const Vec3* offsets;
-    int count;
-};
-constexpr Vec3 kCentral[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-constexpr Vec3 kTetrahedral[4] = {{1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {1, 1, 1}};
-
-Stencil stencil(NormalEstimator e) {
-    return e == NormalEstimator::Central ? Stencil{kCentral, 6} : Stencil{kTetrahedral, 4};
-}
 
 struct TileScratch {
     PacketScratch packet;
@@ -399,13 +387,14 @@ void TileRenderer::writeFilm(const TileScratch& s) {
 // Normals: every stencil point of every hit in one batch.
 void TileRenderer::stencilNormals(TileScratch& s) {
     const int hits = static_cast<int>(s.hitPixel.size());
-    const Stencil st = stencil(m_settings.normals);
+    const NormalEstimator est = m_settings.normals;
+    const int sn = stencilSize(est);
     // Hits on triangles (hybrid mode) take the triangle's normal (placeTriangleHits).
     std::vector<int>& todo = s.normalHits;
     todo.clear();
     for (int h = 0; h < hits; ++h)
         if (!m_plan.meshPrimary || !(s.triangleHits[s.hitPixel[h]].t < INFINITY)) todo.push_back(h);
-    const int m = static_cast<int>(todo.size()) * st.count;
+    const int m = static_cast<int>(todo.size()) * sn;
     s.x.resize(m);
     s.y.resize(m);
     s.z.resize(m);
@@ -413,12 +402,12 @@ void TileRenderer::stencilNormals(TileScratch& s) {
     for (size_t j = 0; j < todo.size(); ++j) {
         const int h = todo[j];
         float t = s.results[s.hitPixel[h]].t;
-        float eps = std::fmax(1e-4f, 0.5f * t * m_primary.pixelRadius);
-        for (int k = 0; k < st.count; ++k) {
-            Vec3 q = s.hitPoint[h] + st.offsets[k] * eps;
-            s.x[j * st.count + k] = q.x;
-            s.y[j * st.count + k] = q.y;
-            s.z[j * st.count + k] = q.z;
+        const float eps = primaryNormalSpacing(t, m_primary.pixelRadius);
+        for (int k = 0; k < sn; ++k) {
+            Vec3 q = s.hitPoint[h] + stencilOffset(est, k) * eps;
+            s.x[j * sn + k] = q.x;
+            s.y[j * sn + k] = q.y;
+            s.z[j * sn + k] = q.z;
         }
     }
     m_tape.evalBatch(s.x.data(), s.y.data(), s.z.data(), s.f.data(), m, s.packet.batch);
@@ -427,7 +416,7 @@ void TileRenderer::stencilNormals(TileScratch& s) {
     for (size_t j = 0; j < todo.size(); ++j) {
         const int h = todo[j];
         Vec3 g(0.0f);
-        for (int k = 0; k < st.count; ++k) g += st.offsets[k] * s.f[j * st.count + k];
+        for (int k = 0; k < sn; ++k) g += stencilOffset(est, k) * s.f[j * sn + k];
         Vec3 n = normalize(g);
         // Degenerate gradient (a crease or a flat extremum): face the viewer rather than emit NaN.
         s.hitNormal[h] = length(n) > 0 ? n : -s.segments[s.hitPixel[h]].ray.direction;
@@ -629,10 +618,7 @@ void TileRenderer::distributedShadows(TileScratch& s, std::vector<float>& visibl
 }  // namespace
 
 Vec3 estimateNormal(const Tape& tape, Vec3 p, float h, NormalEstimator estimator) {
-    Stencil st = stencil(estimator);
-    Vec3 g(0.0f);
-    for (int k = 0; k < st.count; ++k) g += st.offsets[k] * tape.eval(p + st.offsets[k] * h);
-    return normalize(g);
+    return estimateTapeNormal(tape.view(), p, h, estimator);
 }
 
 struct FrameRenderer::Impl {

@@ -5,11 +5,7 @@
 namespace sdft {
 
 TraceResult traceRay(const Tape& tape, const RaySegment& seg, const TraceOptions& o) {
-    SphereTraceState s;
-    float invL = 1.0f / tape.lipschitz();
-    sphereTraceBegin(s, seg.ray, seg.tMin, seg.tMax, tape.bounds(), o);
-    while (!s.done()) sphereTraceAdvance(s, tape.eval(s.queryPoint()), invL, o);
-    return s.result;
+    return traceTapeRay(tape.view(), seg, o);
 }
 
 void tracePacket(const Tape& tape, std::span<const RaySegment> segments, const TraceOptions& o,

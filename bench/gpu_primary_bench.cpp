@@ -1,0 +1,189 @@
+// Primary rays on the GPU against the CPU on the same machine (issue 14, docs/gpu.md): Keinert et
+// al. 2014's ray-cast timings (city 16.8 ms, jewel 2.98 ms at 1280x720 on a GTX Titan) and a
+// level set of about 512 cells at 1024^2. Both devices run the same tracer: the GPU one thread per
+// pixel (tracePrimaryPixel, gpu/gpu_primary.h), the CPU the renderer's packets of a 16x16 tile on
+// every hardware thread. Primary rays and their normals, no shading; evaluations per ray count
+// the march only. Medians of --runs.
+//
+//   sdftrace_gpu_primary_bench [--runs 10] [--cpu-runs 3] [--scenes city,jewel,bunny512]
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "sdftrace/core/error.h"
+#include "sdftrace/gpu/gpu_device.h"
+#include "sdftrace/gpu/gpu_primary.h"
+#include "sdftrace/render/normal_stencil.h"
+#include "sdftrace/render/render_plan.h"
+#include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/plan_render.h"
+#include "sdftrace/trace/field_tracer.h"
+
+using namespace sdft;
+
+namespace {
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+struct Case {
+    std::string name;
+    Scene scene;
+};
+
+Case loadCase(const std::string& name) {
+    const std::string dir = std::string(SDFT_SOURCE_DIR) + "/examples/";
+    if (name == "bunny512") {
+        // A sparse level set of the Stanford bunny, 512 cells along its longest axis, seen whole.
+        const std::string text = R"({"camera": {"eye": [0, 1.0, 3.2], "target": [0, 0.45, 0],
+            "fov": 30, "width": 1024, "height": 1024},
+          "lights": [{"type": "directional", "direction": [-0.4, -1, -0.5]}],
+          "objects": [{"mesh": "../data/meshes/stanford-bunny.obj", "resolution": 512,
+                       "scale": 6, "translate": [0.1, -0.2, 0]}]})";
+        return {name, parseSceneText(text, "bunny512", dir)};
+    }
+    Case c{name, parseSceneFile(dir + name + ".json")};
+    c.scene.camera.width = 1280;
+    c.scene.camera.height = 720;
+    return c;
+}
+
+// The CPU renderer's primary rays: 16x16 tiles, one packet each, then the hits' normals in one
+// batch of stencil points, on every hardware thread (what the GPU's threads do per pixel).
+double cpuPrimaryMs(const RenderPlan& plan, const Camera& camera, const TraceOptions& options,
+                    double& evaluationsPerRay) {
+    const int w = plan.camera.width, h = plan.camera.height, tilesX = (w + 15) / 16,
+              tilesY = (h + 15) / 16;
+    std::vector<uint64_t> evals(static_cast<size_t>(tilesX) * tilesY);
+    const auto start = std::chrono::steady_clock::now();
+    tbb::parallel_for(0, tilesX * tilesY, [&](int tile) {
+        thread_local PacketScratch scratch;
+        thread_local std::vector<RaySegment> segments;
+        thread_local std::vector<TraceResult> results;
+        thread_local std::vector<float> sx, sy, sz, sf;
+        const int x0 = (tile % tilesX) * 16, y0 = (tile / tilesX) * 16;
+        const int x1 = std::min(w, x0 + 16), y1 = std::min(h, y0 + 16);
+        segments.clear();
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x)
+                segments.push_back({camera.pixelRay(x, y), 0.0f, plan.settings.maxDistance});
+        results.resize(segments.size());
+        tracePacket(plan.tape, segments, options, results, scratch);
+        const NormalEstimator est = plan.settings.normals;
+        const int sn = stencilSize(est);
+        sx.clear();
+        sy.clear();
+        sz.clear();
+        for (size_t i = 0; i < results.size(); ++i) {
+            if (!results[i].hit) continue;
+            const Vec3 p = segments[i].ray.at(results[i].t);
+            const float eps = primaryNormalSpacing(results[i].t, options.pixelRadius);
+            for (int k = 0; k < sn; ++k) {
+                const Vec3 q = p + stencilOffset(est, k) * eps;
+                sx.push_back(q.x);
+                sy.push_back(q.y);
+                sz.push_back(q.z);
+            }
+        }
+        sf.resize(sx.size());
+        plan.tape.evalBatch(sx.data(), sy.data(), sz.data(), sf.data(), static_cast<int>(sx.size()),
+                            scratch.batch);
+        uint64_t e = 0;
+        for (const TraceResult& r : results) e += r.evaluations;
+        evals[static_cast<size_t>(tile)] = e;
+    });
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    uint64_t total = 0;
+    for (uint64_t e : evals) total += e;
+    evaluationsPerRay = static_cast<double>(total) / (static_cast<double>(w) * h);
+    return ms;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    int runs = 10, cpuRuns = 3;
+    std::string scenes = "city,jewel,bunny512";
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--runs" && i + 1 < argc) {
+            runs = std::max(1, std::atoi(argv[++i]));
+        } else if (a == "--cpu-runs" && i + 1 < argc) {
+            cpuRuns = std::max(1, std::atoi(argv[++i]));
+        } else if (a == "--scenes" && i + 1 < argc) {
+            scenes = argv[++i];
+        } else {
+            std::fprintf(stderr,
+                         "usage: sdftrace_gpu_primary_bench [--runs N] [--cpu-runs N] "
+                         "[--scenes city,jewel,bunny512]\n");
+            return 2;
+        }
+    }
+    const GpuInfo& gpu = gpuInfo();
+    std::printf("GPU: %s\n", gpu.present ? gpu.name.c_str() : gpu.why.c_str());
+    std::printf("CPU: %d hardware threads\n\n", tbb::this_task_arena::max_concurrency());
+    std::printf(
+        "| scene | pixels | evaluations per ray (GPU / CPU) | GPU kernel ms | GPU frame ms "
+        "| G rays/s | CPU ms | GPU / CPU |\n| --- | --- | --- | --- | --- | --- | --- | "
+        "--- |\n");
+    std::stringstream list(scenes);
+    for (std::string name; std::getline(list, name, ',');) {
+        try {
+            const Case c = loadCase(name);
+            const RenderPlan plan = planRender(c.scene);
+            const std::string unsupported = primaryPixelUnsupported(plan);
+            if (!unsupported.empty()) {
+                std::printf("| %s | skipped: %s |\n", name.c_str(), unsupported.c_str());
+                continue;
+            }
+            FrameView frame;
+            frame.camera = plan.camera;
+            const PrimaryPixelView view = primaryPixelView(plan, frame);
+            const int w = plan.camera.width, h = plan.camera.height;
+            const double pixels = static_cast<double>(w) * h;
+            double cpuEvals = 0;
+            std::vector<double> cpuMs;
+            for (int r = 0; r < cpuRuns; ++r)
+                cpuMs.push_back(cpuPrimaryMs(plan, view.camera, view.options, cpuEvals));
+            const double cpu = median(cpuMs);
+            if (!gpu.present) {
+                std::printf("| %s | %dx%d | - / %.2f | - | - | - | %.2f | - |\n", name.c_str(), w,
+                            h, cpuEvals, cpu);
+                continue;
+            }
+            const GpuTape tape(plan.tape);
+            std::vector<double> kernel, whole;
+            double gpuEvals = 0;
+            for (int r = 0; r < runs + 1; ++r) {
+                const GpuPrimaryImage img = tracePrimaryGpu(tape, view, w, h);
+                if (r == 0) {  // the first launch loads the module: not timed
+                    double e = 0;
+                    for (int32_t v : img.evaluations) e += v;
+                    gpuEvals = e / pixels;
+                    continue;
+                }
+                kernel.push_back(img.kernelMs);
+                whole.push_back(img.frameMs);
+            }
+            const double k = median(kernel);
+            std::printf("| %s | %dx%d | %.2f / %.2f | %.3f | %.3f | %.2f | %.2f | %.1fx |\n",
+                        name.c_str(), w, h, gpuEvals, cpuEvals, k, median(whole),
+                        pixels / (k * 1e6), cpu, cpu / k);
+        } catch (const std::exception& e) {
+            std::printf("| %s | error: %s |\n", name.c_str(), e.what());
+        }
+        std::fflush(stdout);
+    }
+    return 0;
+}

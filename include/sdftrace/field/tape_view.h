@@ -1,0 +1,177 @@
+// A compiled tape as plain data (docs/design.md "one plan, two devices"): pointers to its
+// instructions, constants and grid views, trivially copyable, so a kernel takes it by value and
+// the CPU's Tape hands out the same view of its own arrays. The scalar evaluators here are the
+// only ones: Tape::eval and Tape::evalMaterial call them on the CPU, a device calls them per
+// thread. The per-op functions are shared with the CPU's batch evaluator (field/tape_eval.cpp).
+#pragma once
+
+#include <cstdint>
+#include <type_traits>
+
+#include "sdftrace/core/macros.h"
+#include "sdftrace/field/grid.h"
+#include "sdftrace/field/grid_distance.h"
+#include "sdftrace/field/material_blend.h"
+#include "sdftrace/field/noise.h"
+#include "sdftrace/field/operators.h"
+#include "sdftrace/field/primitives.h"
+#include "sdftrace/field/tape_instr.h"
+#include "sdftrace/field/transforms.h"
+
+namespace sdft {
+
+struct TapeView {
+    const Instr* instrs = nullptr;
+    const float* consts = nullptr;
+    const GridView* grids = nullptr;  // Op::Grid's k[0] indexes this
+    uint32_t count = 0;               // instructions
+    uint16_t result = 0;              // the scalar register holding the value
+    uint16_t numScalarRegs = 1;
+    uint16_t numPointRegs = 1;
+    float lipschitz = 1;
+    Bounds3 bounds;
+};
+static_assert(std::is_trivially_copyable_v<TapeView>);
+
+// The scalar evaluator's register files live on the stack; the tape compiler keeps every tape
+// within these (deeper trees are rejected with an InputError).
+inline constexpr int kTapeMaxScalarRegs = 64;
+inline constexpr int kTapeMaxPointRegs = 32;
+
+namespace tape_ops {
+
+SDFT_HOST_DEVICE inline float primitive(Op op, Vec3 p, const float* k) {
+    switch (op) {
+#define SDFT_PRIMITIVE_EVAL(Kind, name, eval, ...) \
+    case Op::Kind:                                 \
+        return eval(p, k);
+        SDFT_PRIMITIVES(SDFT_PRIMITIVE_EVAL)
+#undef SDFT_PRIMITIVE_EVAL
+        default:
+            return 0;
+    }
+}
+
+// Binary scalar ops. `h` returns the weight of `a` for material blending.
+SDFT_HOST_DEVICE inline float binary(Op op, float a, float b, const float* k, float& h) {
+    switch (op) {
+        case Op::Union:
+            h = a <= b ? 1.f : 0.f;
+            return minf(a, b);
+        case Op::Intersection:
+            h = a >= b ? 1.f : 0.f;
+            return maxf(a, b);
+        case Op::Difference:
+            h = a >= -b ? 1.f : 0.f;
+            return maxf(a, -b);
+        case Op::SmoothUnion:
+            return ops::smoothMin(a, b, k[0], h);
+        case Op::SmoothIntersection:
+            return ops::smoothMax(a, b, k[0], h);
+        case Op::SmoothDifference:
+            return ops::smoothMax(a, -b, k[0], h);
+        case Op::Morph:
+            h = 1 - k[0];
+            return (1 - k[0]) * a + k[0] * b;
+        default:
+            h = 1;
+            return a;
+    }
+}
+
+SDFT_HOST_DEVICE inline Vec3 pointOp(Op op, Vec3 p, const float* k) {
+    switch (op) {
+        case Op::Translate:
+            return p - Vec3(k[0], k[1], k[2]);
+        case Op::Rotate:
+            return {k[0] * p.x + k[1] * p.y + k[2] * p.z, k[3] * p.x + k[4] * p.y + k[5] * p.z,
+                    k[6] * p.x + k[7] * p.y + k[8] * p.z};
+        case Op::ScalePoint:
+            return p / Vec3(k[0], k[1], k[2]);
+        case Op::RepeatPoint:
+            return xform::repeatPoint(p, k);
+        default:
+            return p;
+    }
+}
+
+// CullIfFar's test, as the batch loop computes it: box distance >= acc + margin, squared.
+SDFT_HOST_DEVICE inline bool cullSkips(Vec3 p, float acc, const float* k) {
+    float dx = maxf(maxf(k[0] - p.x, p.x - k[3]), 0.0f);
+    float dy = maxf(maxf(k[1] - p.y, p.y - k[4]), 0.0f);
+    float dz = maxf(maxf(k[2] - p.z, p.z - k[5]), 0.0f);
+    float t = acc + k[6];
+    return (t <= 0.0f) | (dx * dx + dy * dy + dz * dz >= t * t);
+}
+
+SDFT_HOST_DEVICE inline float displacement(Vec3 p, const float* k) {
+    return k[0] * noise::fbm(p * k[1], static_cast<int>(k[2]), k[3]);
+}
+
+// A grid's value, normalized by its Lipschitz bound so it is 1-Lipschitz like the primitives.
+SDFT_HOST_DEVICE inline float gridValue(const GridView& g, Vec3 p) {
+    return gridDistanceBound(g, p);
+}
+
+}  // namespace tape_ops
+
+// The field at p and, with kMaterialRegs > 0, the material blend there. A material register per
+// scalar register: kMaterialRegs must be at least the tape's numScalarRegs (the caller checks;
+// a device build chooses a smaller file than the CPU's, since each entry is 120 bytes of stack).
+template <int kMaterialRegs>
+SDFT_HOST_DEVICE inline float evalTapeAt(const TapeView& t, Vec3 p, MaterialBlend* blend) {
+    constexpr bool kMaterial = kMaterialRegs > 0;
+    float s[kTapeMaxScalarRegs];
+    Vec3 pts[kTapeMaxPointRegs];
+    MaterialBlend mats[kMaterial ? kMaterialRegs : 1];
+    pts[0] = p;
+    for (uint32_t pc = 0; pc < t.count; ++pc) {
+        const Instr& in = t.instrs[pc];
+        const float* k = t.consts + in.k;
+        const Op op = in.op;
+        if (op == Op::CullIfFar) {
+            if (tape_ops::cullSkips(pts[in.a], s[in.b], k)) pc = in.jump - 1;
+            continue;
+        }
+        if (op <= Op::Grid) {
+            s[in.out] = op == Op::Grid
+                            ? tape_ops::gridValue(t.grids[static_cast<size_t>(k[0])], pts[in.a])
+                            : tape_ops::primitive(op, pts[in.a], k);
+            if constexpr (kMaterial) {
+                mats[in.out] = MaterialBlend::single(in.material, pts[in.materialPoint]);
+                if (op == Op::Grid) {
+                    const GridView& g = t.grids[static_cast<size_t>(k[0])];
+                    if (g.texcoords)
+                        mats[in.out].hasUv[0] =
+                            g.texcoordsAt(pts[in.a], mats[in.out].u[0], mats[in.out].v[0]);
+                }
+            }
+        } else if (op <= Op::Morph) {
+            float h;
+            s[in.out] = tape_ops::binary(op, s[in.a], s[in.b], k, h);
+            if constexpr (kMaterial)
+                mats[in.out] = MaterialBlend::mix(mats[in.a], mats[in.b], 1 - h);
+        } else if (op == Op::Complement) {
+            s[in.out] = -s[in.a];
+        } else if (op == Op::ScaleValue) {
+            s[in.out] = s[in.a] * k[0];
+        } else if (op == Op::RepeatBound) {
+            s[in.out] = minf(s[in.a], xform::repeatNeighbourBound(pts[in.b], k));
+        } else if (op == Op::FloorByBounds) {
+            s[in.out] = xform::floorByBounds(s[in.a], pts[in.b], k);
+        } else if (op == Op::Displace) {
+            s[in.out] = s[in.a] + tape_ops::displacement(pts[in.b], k);
+        } else {
+            pts[in.out] = tape_ops::pointOp(op, pts[in.a], k);
+        }
+    }
+    if constexpr (kMaterial) *blend = mats[t.result];
+    return s[t.result];
+}
+
+// The field at p.
+SDFT_HOST_DEVICE inline float evalTape(const TapeView& t, Vec3 p) {
+    return evalTapeAt<0>(t, p, nullptr);
+}
+
+}  // namespace sdft

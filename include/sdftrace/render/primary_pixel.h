@@ -1,0 +1,57 @@
+// One pixel's primary ray through the plan's field and the normal at its hit: what the CPU
+// renderer's tile loop does for a packet of pixels (tracePrimary, then stencilNormals), as one
+// function a device thread runs for its pixel. The enhanced sphere tracer of Keinert et al. 2014
+// (§3.1 over-relaxation, §3.2 screen-space hit selection with the camera's pixel footprint, §3.4
+// discontinuity reduction) and the root refinement come from trace/sphere_tracer.h unchanged.
+#pragma once
+
+#include <string>
+
+#include "sdftrace/core/macros.h"
+#include "sdftrace/field/tape_view.h"
+#include "sdftrace/math/camera.h"
+#include "sdftrace/render/normal_stencil.h"
+#include "sdftrace/trace/trace_tape.h"
+
+namespace sdft {
+
+struct RenderPlan;
+struct FrameView;
+
+// Plain data: a kernel takes it by value.
+struct PrimaryPixelView {
+    TapeView field;
+    Camera camera{CameraDesc{}};
+    TraceOptions options;  // the plan's primary-ray options, pixelRadius set from the camera
+    float maxDistance = kInfinity;
+    float jitter[2] = {0, 0};
+    NormalEstimator normals = NormalEstimator::Tetrahedral;
+};
+
+struct PrimaryPixel {
+    TraceResult trace;
+    Vec3 normal{0, 0, 0};  // unit on a hit (facing the viewer where the gradient vanishes)
+};
+
+SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v, int x, int y) {
+    PrimaryPixel out;
+    const RaySegment seg{v.camera.rayThrough(x + 0.5f + v.jitter[0], y + 0.5f + v.jitter[1]), 0.0f,
+                         v.maxDistance};
+    out.trace = traceTapeRay(v.field, seg, v.options);
+    if (out.trace.hit) {
+        const float h = primaryNormalSpacing(out.trace.t, v.options.pixelRadius);
+        const Vec3 n = estimateTapeNormal(v.field, seg.ray.at(out.trace.t), h, v.normals);
+        out.normal = length(n) > 0 ? n : -seg.ray.direction;
+    }
+    return out;
+}
+
+// Why `plan` cannot be traced by tracePrimaryPixel (empty when it can): a single-grid scene
+// traced by the DDA, and meshes whose primary rays hit triangles, have primary paths of their own.
+std::string primaryPixelUnsupported(const RenderPlan& plan);
+
+// The view of `plan`'s field, camera and primary-ray options for one frame. The plan must outlive
+// it (the field's arrays are the plan's tape's).
+PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame);
+
+}  // namespace sdft

@@ -1,0 +1,40 @@
+// The GPU entry points of a build without the CUDA backend (CMake's SDFT_CUDA found no nvcc or was
+// OFF): every request for a GPU is one clear error, and gpuInfo() says why.
+#include "sdftrace/core/error.h"
+#include "sdftrace/gpu/gpu_device.h"
+#include "sdftrace/gpu/gpu_primary.h"
+#include "sdftrace/gpu/gpu_tape.h"
+
+namespace sdft {
+
+const GpuInfo& gpuInfo() {
+    static const GpuInfo info = [] {
+        GpuInfo i;
+        i.why =
+            "this build of sdftrace has no CUDA backend (configure with -DSDFT_CUDA=ON where "
+            "nvcc is installed)";
+        return i;
+    }();
+    return info;
+}
+
+void requireGpu(const std::string& what) { throw InputError(what + ": " + gpuInfo().why); }
+
+struct GpuTape::Impl {};
+
+GpuTape::GpuTape(const Tape&) { requireGpu("GPU tape"); }
+GpuTape::~GpuTape() = default;
+GpuTape::GpuTape(GpuTape&&) noexcept = default;
+GpuTape& GpuTape::operator=(GpuTape&&) noexcept = default;
+const TapeView& GpuTape::view() const {
+    static const TapeView none;
+    return none;
+}
+size_t GpuTape::deviceBytes() const { return 0; }
+
+GpuPrimaryImage tracePrimaryGpu(const GpuTape&, const PrimaryPixelView&, int, int) {
+    requireGpu("GPU primary rays");
+    return {};
+}
+
+}  // namespace sdft
