@@ -44,12 +44,13 @@ struct Case {
 Case loadCase(const std::string& name) {
     const std::string dir = std::string(SDFT_SOURCE_DIR) + "/examples/";
     if (name == "bunny512") {
-        // A sparse level set of the Stanford bunny, 512 cells along its longest axis, seen whole.
+        // A sparse level set of the Stanford bunny, 512 cells along its longest axis, seen whole;
+        // a band of 8 voxels, wider than a pixel's footprint here (docs/scene-format.md).
         const std::string text = R"({"camera": {"eye": [0, 1.0, 3.2], "target": [0, 0.45, 0],
             "fov": 30, "width": 1024, "height": 1024},
           "lights": [{"type": "directional", "direction": [-0.4, -1, -0.5]}],
           "objects": [{"mesh": "../data/meshes/stanford-bunny.obj", "resolution": 512,
-                       "scale": 6, "translate": [0.1, -0.2, 0]}]})";
+                       "band": 8, "scale": 6, "translate": [0.1, -0.2, 0]}]})";
         return {name, parseSceneText(text, "bunny512", dir)};
     }
     Case c{name, parseSceneFile(dir + name + ".json")};

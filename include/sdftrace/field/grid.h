@@ -80,6 +80,14 @@ struct GridView {
     // with d = 0; a ray in a tile with a nonzero entry may skip the cube of tiles of side 2d - 1.
     // Both are null for a traversal without empty-space skipping.
     const uint8_t* tileSkip = nullptr;
+    // Local Lipschitz bounds of the reconstruction (Grid::computeLocalLipschitz), which
+    // gridDistanceBound divides by instead of the global bound: a code per block slot of the own
+    // pages (over the block and one block around it) and per tile for blocks of the shared
+    // constant pages, 0 for `lipschitz` itself and 1 for the gentle blocks' lipschitzLevel[1].
+    // Null: the global bound everywhere.
+    const uint8_t* blockLipschitz = nullptr;
+    const uint8_t* tileLipschitz = nullptr;
+    float lipschitzLevel[2] = {1, 1};
     float background = 1;  // |value| assumed in non-surface blocks (a lower bound of the distance)
     // Optional texture coordinates (Liktor 2008, §5.5.2): 3 floats per stored sample, beside the
     // distance (dense: per vertex; sparse: per surface-block sample), mapped to (u, v) by
@@ -191,6 +199,8 @@ class Grid {
     const std::vector<int32_t>& blockData() const { return m_blockData; }
     const std::vector<int32_t>& tilePage() const { return m_tilePage; }
     const std::vector<uint8_t>& tileSkip() const { return m_tileSkip; }
+    const std::vector<uint8_t>& tileLipschitz() const { return m_tileLipschitz; }
+    const std::vector<uint8_t>& blockLipschitz() const { return m_blockLipschitz; }
     // Sample blocks (GridView::blockSamples): the surface blocks' B^3 own samples first.
     const std::vector<float>& blockSamples() const { return m_blockSamples; }
     // Per surface block, 8 sample-block indices (GridView::blockNeighbors).
@@ -249,6 +259,9 @@ class Grid {
     friend class SparseGridBuilder;  // fills the sparse layout (sparse_grid_builder.h)
     void computeLipschitz();         // dense
     void computeBlockSkip();         // sparse, from the flags and cell masks
+    // Sparse: m_blockLipschitz and m_tileLipschitz from each surface block's squared cell
+    // gradient bound (times h^2).
+    void computeLocalLipschitz(const std::vector<float>& blockWorst);
 
     GridKind m_kind = GridKind::Dense;
     GridShape m_shape;
@@ -260,6 +273,8 @@ class Grid {
     float m_background = 1;
     std::vector<int32_t> m_tilePage;
     std::vector<uint8_t> m_tileSkip;
+    std::vector<uint8_t> m_tileLipschitz, m_blockLipschitz;  // GridView::lipschitzLevel codes
+    float m_gentleLipschitz = 1;
     std::vector<int> m_ownTiles;  // (ti, tj, tk) per own page, from kFirstOwnPage
     std::vector<uint8_t> m_flags;
     std::vector<int32_t> m_blockData;

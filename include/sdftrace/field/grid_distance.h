@@ -8,7 +8,8 @@
 namespace sdft {
 
 // The grid primitive's value: GridView::sample over the grid's Lipschitz bound L (so that it is
-// 1-Lipschitz like the primitives), except in sparse blocks without samples. There +-background / L
+// 1-Lipschitz like the primitives; a sparse grid's L is its block's, Grid::computeLocalLipschitz),
+// except in sparse blocks without samples. There +-background / L
 // is raised to the gap to the nearest block holding a sign-changing cell, which is where the
 // reconstruction's zero set lies: a block at Chebyshev block distance d (blockSkip) from every such
 // block is at least (d - 1) B h away from them, a block of a constant tile at tile distance d
@@ -40,6 +41,11 @@ SDFT_HOST_DEVICE inline float gridDistanceBound(const GridView& g, Vec3 p) {
     const size_t tile = g.tileIndex(bi, bj, bk);
     const int32_t page = g.tilePage[tile];
     const size_t slot = static_cast<size_t>(page) * kPageEntries + pageLocal(bi, bj, bk);
+    // The block's or the tile's bound where the grid has them (Grid::computeLocalLipschitz).
+    const float lipschitz = !g.tileLipschitz
+                                ? g.lipschitz
+                                : g.lipschitzLevel[page < kFirstOwnPage ? g.tileLipschitz[tile]
+                                                                        : g.blockLipschitz[slot]];
     const int32_t data = g.blockData[slot];
     float f;
     if (data >= 0) {
@@ -65,17 +71,17 @@ SDFT_HOST_DEVICE inline float gridDistanceBound(const GridView& g, Vec3 p) {
         } else {
             gap = static_cast<float>(static_cast<int>(g.blockSkip[slot]) - 1) * blockSide;
         }
-        if (gap > g.background / g.lipschitz) {
+        if (gap > g.background / lipschitz) {
             if (inside) return out2 == 0.0f ? -gap : std::sqrt(out2);
             return std::sqrt(out2 + gap * gap);
         }
         f = inside ? -g.background : g.background;
     }
-    if (out2 == 0.0f) return f / g.lipschitz;
+    if (out2 == 0.0f) return f / lipschitz;
     // |p - s|^2 >= |p - q|^2 + |q - s|^2 for any s in the box (q projects p onto it), and
     // |q - s| >= f / L: the bound stays at least the distance to the box, as bounds culling and
     // SDF soft shadows assume (dividing the whole root by L fell below it wherever L > 1).
-    const float outside = maxf(f, 0.0f) / g.lipschitz;
+    const float outside = maxf(f, 0.0f) / lipschitz;
     return std::sqrt(out2 + outside * outside);
 }
 

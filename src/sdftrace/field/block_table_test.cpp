@@ -82,11 +82,12 @@ TEST(BlockTable, MemoryFollowsTheSurface) {
         for (int j = 0; j < 5; ++j)
             for (int i = 0; i < 5; ++i) samples[(k * 5 + j) * 5 + i] = (i - 2.5f) / 1024;
     const Grid g = Grid::sparseFromTable(shape, 4, 2.0f / 1024, std::move(t), samples, "t");
-    // 32^3 tiles of 5 bytes, 3 pages of 6 bytes per entry, one block's samples (its own and the
-    // apron's: no neighbour holds it), neighbour table and mask.
+    // 32^3 tiles of 6 bytes (page, skip distance, Lipschitz level), 3 pages of 7 bytes per entry,
+    // one block's samples (its own and the apron's: no neighbour holds it), neighbour table and
+    // mask.
     EXPECT_LE(g.blockSamples().size(), size_t{8 * 64});
     EXPECT_LT(g.memoryBytes(),
-              size_t{32 * 32 * 32 * 5 + 3 * 512 * 6 + 8 * 64 * 4 + 8 * 4 + 64 + 64});
+              size_t{32 * 32 * 32 * 6 + 3 * 512 * 7 + 8 * 64 * 4 + 8 * 4 + 64 + 64});
     size_t inside, outside, surface;
     g.blockCounts(inside, outside, surface);
     EXPECT_EQ(surface, 1u);

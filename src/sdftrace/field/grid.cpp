@@ -256,6 +256,10 @@ GridView Grid::view() const {
     }
     v.tilePage = m_tilePage.data();
     v.tileSkip = m_tileSkip.empty() ? nullptr : m_tileSkip.data();
+    v.tileLipschitz = m_tileLipschitz.empty() ? nullptr : m_tileLipschitz.data();
+    v.blockLipschitz = m_blockLipschitz.empty() ? nullptr : m_blockLipschitz.data();
+    v.lipschitzLevel[0] = m_lipschitz;
+    v.lipschitzLevel[1] = m_gentleLipschitz;
     v.flags = m_flags.data();
     v.blockData = m_blockData.data();
     v.blockSamples = m_blockSamples.data();
@@ -365,8 +369,8 @@ size_t Grid::memoryBytes() const {
            m_blockData.size() * sizeof(int32_t) + m_blockSamples.size() * sizeof(float) +
            m_blockNeighbors.size() * sizeof(int32_t) + m_apronFrom.size() * sizeof(int32_t) +
            m_apronCode.size() + m_cellMasks.size() * sizeof(uint64_t) + m_blockSkip.size() +
-           m_tilePage.size() * sizeof(int32_t) + m_tileSkip.size() +
-           m_ownTiles.size() * sizeof(int);
+           m_tilePage.size() * sizeof(int32_t) + m_tileSkip.size() + m_tileLipschitz.size() +
+           m_blockLipschitz.size() + m_ownTiles.size() * sizeof(int);
 }
 
 void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
@@ -586,6 +590,86 @@ void Grid::computeBlockSkip() {
                 }
         if (any) centreTileDistances(win, out);
     });
+}
+
+// A grid's global Lipschitz bound is its steepest cell's. An open mesh signed by its winding number
+// has a few very steep cells: across the surface that closes each hole (decision 0004), samples
+// flip from +d to -d, d up to the band, so the Stanford bunny's bound is 6 sqrt 3 = 10.4 where its
+// body's cells need 1.4. Divided by that everywhere, the field reads a tenth of the distance:
+// sphere tracing crawls, and Keinert's screen-space test (§3.2) takes the band, and non-surface
+// blocks next to a steep cell, for surfaces (decision 0012).
+//
+// So blocks get one of two bounds: the global one, or a second, lower one where every cell within
+// one block (of the surface blocks near an own page's block; near the tile, for blocks of the
+// shared constant pages) is at most that steep. The second is the one of the needs, at most half
+// the global bound, that minimizes the bounds' sum over the blocks near surface.
+// gridDistanceBound(p) = f(p) / L_b for p in block b is still at most the distance r to the
+// reconstruction's zero set: when r < B h, the segment to the nearest zero stays within b and
+// the blocks around it, where the slope is at most L_b; otherwise |f| <= background <= L_b B h <
+// r, given L_b >= background / (B h) (and >= 1). Two bounds, not one per block: normals
+// estimated across a face between blocks of different bounds see two scales, a seam; a bound per
+// block put seams on every flat face of a baked cube. Grids whose steepest cell is less than
+// twice their gentlest need (closed meshes) keep the global bound everywhere.
+void Grid::computeLocalLipschitz(const std::vector<float>& blockWorst) {
+    std::vector<float> tileWorst(m_tilePage.size(), 0.0f), slotWorst(m_flags.size(), 0.0f);
+    auto tileOf = [&](int bi, int bj, int bk) {
+        return (static_cast<size_t>(bk >> kTileShift) * m_tiles[1] + (bj >> kTileShift)) *
+                   m_tiles[0] +
+               (bi >> kTileShift);
+    };
+    forEachPagedBlock(
+        [&](int bi, int bj, int bk, size_t slot) {
+            const int32_t data = m_blockData[slot];
+            if (data < 0) return;
+            const float w = blockWorst[static_cast<size_t>(data)];
+            const int b[3] = {bi, bj, bk};
+            int lo[3], hi[3];
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::max(0, b[a] - 1);
+                hi[a] = std::min(m_blocks[a] - 1, b[a] + 1);
+            }
+            for (int k = lo[2]; k <= hi[2]; ++k)
+                for (int j = lo[1]; j <= hi[1]; ++j)
+                    for (int i = lo[0]; i <= hi[0]; ++i) {
+                        const size_t tile = tileOf(i, j, k);
+                        tileWorst[tile] = std::max(tileWorst[tile], w);
+                        const int32_t page = m_tilePage[tile];
+                        if (page < kFirstOwnPage) continue;  // shared: the tile's bound
+                        float& m = slotWorst[static_cast<size_t>(page) * kPageEntries +
+                                             pageLocal(i, j, k)];
+                        m = std::max(m, w);
+                    }
+        },
+        false);
+    // The slope each bound must cover, never below the floor.
+    const float floor =
+        std::max(1.0f, m_background / (static_cast<float>(m_blockSize) * m_shape.voxelSize));
+    auto need = [&](float worst) { return std::max(floor, std::sqrt(worst) / m_shape.voxelSize); };
+    // The second bound: of the needs at most half the global bound, the one that minimizes the sum
+    // of the bounds over the blocks near surface (each block's bound is what slows its rays).
+    std::vector<float> needs;
+    for (float w : slotWorst)
+        if (w > 0) needs.push_back(need(w));
+    std::sort(needs.begin(), needs.end());
+    m_gentleLipschitz = m_lipschitz;
+    double best = static_cast<double>(needs.size()) * m_lipschitz;
+    for (size_t i = 0; i < needs.size() && needs[i] <= 0.5f * m_lipschitz; ++i) {
+        if (i + 1 < needs.size() && needs[i + 1] == needs[i]) continue;
+        const double cost = static_cast<double>(i + 1) * needs[i] +
+                            static_cast<double>(needs.size() - i - 1) * m_lipschitz;
+        if (cost < best) {
+            best = cost;
+            m_gentleLipschitz = needs[i];
+        }
+    }
+    const float gentle = m_gentleLipschitz < m_lipschitz ? m_gentleLipschitz : -1.0f;
+    // A NaN need (a damaged file) compares false: the global bound.
+    auto code = [&](float worst) { return static_cast<uint8_t>(need(worst) <= gentle ? 1 : 0); };
+    m_tileLipschitz.resize(tileWorst.size());
+    for (size_t t = 0; t < tileWorst.size(); ++t) m_tileLipschitz[t] = code(tileWorst[t]);
+    m_blockLipschitz.resize(slotWorst.size());
+    tbb::parallel_for(size_t(0), slotWorst.size(),
+                      [&](size_t s) { m_blockLipschitz[s] = code(slotWorst[s]); });
 }
 
 }  // namespace sdft

@@ -331,10 +331,11 @@ Grid SparseGridBuilder::finish() {
     m_constantBits = std::vector<uint32_t>();
     float worst = 0;
     for (float w : m_worst) worst = std::max(worst, w);
-    m_worst = std::vector<float>();
     // The outside extension sqrt(d^2 + f(q)^2) is 1-Lipschitz in d; never report below 1.
     g.m_lipschitz = std::max(1.0f, std::sqrt(worst) / g.m_shape.voxelSize);
     g.computeBlockSkip();
+    g.computeLocalLipschitz(m_worst);
+    m_worst = std::vector<float>();
     return std::move(g);
 }
 

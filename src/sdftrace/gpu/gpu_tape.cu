@@ -60,7 +60,8 @@ GpuTape::GpuTape(const Tape& tape) : m_impl(std::make_unique<Impl>()) {
     struct GridPieces {
         GridView view;
         size_t samples = 0, tilePage = 0, tileSkip = 0, flags = 0, blockData = 0, blockSamples = 0,
-               blockNeighbors = 0, cellMasks = 0, blockSkip = 0, texcoords = 0;
+               blockNeighbors = 0, cellMasks = 0, blockSkip = 0, texcoords = 0, tileLipschitz = 0,
+               blockLipschitz = 0;
     };
     std::vector<GridPieces> grids;
     for (const auto& g : tape.grids()) {
@@ -76,6 +77,8 @@ GpuTape::GpuTape(const Tape& tape) : m_impl(std::make_unique<Impl>()) {
         p.cellMasks = pack.add(g->cellMasks());
         p.blockSkip = pack.add(g->blockSkip());
         p.texcoords = pack.add(g->texcoords());
+        p.tileLipschitz = pack.add(g->tileLipschitz());
+        p.blockLipschitz = pack.add(g->blockLipschitz());
         grids.push_back(p);
     }
     // The views' offsets are known now; their addresses once the buffer is allocated.
@@ -98,6 +101,8 @@ GpuTape::GpuTape(const Tape& tape) : m_impl(std::make_unique<Impl>()) {
         relocate(p.view.cellMasks, g.cellMasks(), p.cellMasks, base);
         relocate(p.view.blockSkip, g.blockSkip(), p.blockSkip, base);
         relocate(p.view.texcoords, g.texcoords(), p.texcoords, base);
+        relocate(p.view.tileLipschitz, g.tileLipschitz(), p.tileLipschitz, base);
+        relocate(p.view.blockLipschitz, g.blockLipschitz(), p.blockLipschitz, base);
         std::memcpy(bytes.data() + viewsAt + i * sizeof(GridView), &p.view, sizeof(GridView));
     }
     SDFT_CUDA_CHECK(cudaMemcpy(m_impl->buffer, bytes.data(), bytes.size(), cudaMemcpyHostToDevice));
