@@ -45,4 +45,10 @@ SDFT_HOST_DEVICE inline Vec3 estimateTapeNormal(const TapeView& tape, Vec3 p, fl
     return normalize(g);
 }
 
+// An estimated normal, or (a crease or a flat extremum: the gradient vanished) the direction back
+// towards the viewer rather than a zero vector.
+SDFT_HOST_DEVICE inline Vec3 normalOrFacing(Vec3 n, Vec3 rayDirection) {
+    return length(n) > 0 ? n : -rayDirection;
+}
+
 }  // namespace sdft

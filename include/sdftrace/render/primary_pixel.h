@@ -33,15 +33,19 @@ struct PrimaryPixel {
     Vec3 normal{0, 0, 0};  // unit on a hit (facing the viewer where the gradient vanishes)
 };
 
+// The primary ray of pixel (x, y): through (x + 0.5 + jx, y + 0.5 + jy) (FrameView's jitter).
+SDFT_HOST_DEVICE inline Ray primaryRay(const Camera& camera, int x, int y, const float jitter[2]) {
+    return camera.rayThrough(x + 0.5f + jitter[0], y + 0.5f + jitter[1]);
+}
+
 SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v, int x, int y) {
     PrimaryPixel out;
-    const RaySegment seg{v.camera.rayThrough(x + 0.5f + v.jitter[0], y + 0.5f + v.jitter[1]), 0.0f,
-                         v.maxDistance};
+    const RaySegment seg{primaryRay(v.camera, x, y, v.jitter), 0.0f, v.maxDistance};
     out.trace = traceTapeRay(v.field, seg, v.options);
     if (out.trace.hit) {
         const float h = primaryNormalSpacing(out.trace.t, v.options.pixelRadius);
         const Vec3 n = estimateTapeNormal(v.field, seg.ray.at(out.trace.t), h, v.normals);
-        out.normal = length(n) > 0 ? n : -seg.ray.direction;
+        out.normal = normalOrFacing(n, seg.ray.direction);
     }
     return out;
 }

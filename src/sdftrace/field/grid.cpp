@@ -592,7 +592,8 @@ void Grid::computeBlockSkip() {
     });
 }
 
-// A grid's global Lipschitz bound is its steepest cell's. An open mesh signed by its winding number
+// Sphere tracing needs the field's Lipschitz bound (Liktor 2008, §2.2); a grid's global bound is
+// its steepest cell's. An open mesh signed by its winding number
 // has a few very steep cells: across the surface that closes each hole (decision 0004), samples
 // flip from +d to -d, d up to the band, so the Stanford bunny's bound is 6 sqrt 3 = 10.4 where its
 // body's cells need 1.4. Divided by that everywhere, the field reads a tenth of the distance:
@@ -612,11 +613,7 @@ void Grid::computeBlockSkip() {
 // twice their gentlest need (closed meshes) keep the global bound everywhere.
 void Grid::computeLocalLipschitz(const std::vector<float>& blockWorst) {
     std::vector<float> tileWorst(m_tilePage.size(), 0.0f), slotWorst(m_flags.size(), 0.0f);
-    auto tileOf = [&](int bi, int bj, int bk) {
-        return (static_cast<size_t>(bk >> kTileShift) * m_tiles[1] + (bj >> kTileShift)) *
-                   m_tiles[0] +
-               (bi >> kTileShift);
-    };
+    const GridView table = view();
     forEachPagedBlock(
         [&](int bi, int bj, int bk, size_t slot) {
             const int32_t data = m_blockData[slot];
@@ -631,7 +628,7 @@ void Grid::computeLocalLipschitz(const std::vector<float>& blockWorst) {
             for (int k = lo[2]; k <= hi[2]; ++k)
                 for (int j = lo[1]; j <= hi[1]; ++j)
                     for (int i = lo[0]; i <= hi[0]; ++i) {
-                        const size_t tile = tileOf(i, j, k);
+                        const size_t tile = table.tileIndex(i, j, k);
                         tileWorst[tile] = std::max(tileWorst[tile], w);
                         const int32_t page = m_tilePage[tile];
                         if (page < kFirstOwnPage) continue;  // shared: the tile's bound

@@ -38,6 +38,23 @@ void relocate(const T*& field, const std::vector<T>& host, size_t offset,
     field = field && !host.empty() ? reinterpret_cast<const T*>(base + offset) : nullptr;
 }
 
+// f(view's pointer, grid's array) for every array a GridView points into, in one order.
+template <class F>
+void forEachGridArray(GridView& v, const Grid& g, F&& f) {
+    f(v.samples, g.samples());
+    f(v.tilePage, g.tilePage());
+    f(v.tileSkip, g.tileSkip());
+    f(v.flags, g.flags());
+    f(v.blockData, g.blockData());
+    f(v.blockSamples, g.blockSamples());
+    f(v.blockNeighbors, g.blockNeighbors());
+    f(v.cellMasks, g.cellMasks());
+    f(v.blockSkip, g.blockSkip());
+    f(v.texcoords, g.texcoords());
+    f(v.tileLipschitz, g.tileLipschitz());
+    f(v.blockLipschitz, g.blockLipschitz());
+}
+
 }  // namespace
 
 struct GpuTape::Impl {
@@ -56,61 +73,34 @@ GpuTape::GpuTape(const Tape& tape) : m_impl(std::make_unique<Impl>()) {
     const std::span<const float> consts = tape.constants();
     const size_t instrAt = pack.add(instrs.data(), instrs.size_bytes());
     const size_t constAt = pack.add(consts.data(), consts.size_bytes());
-    // Each grid's arrays, then the array of their (relocated) views.
-    struct GridPieces {
-        GridView view;
-        size_t samples = 0, tilePage = 0, tileSkip = 0, flags = 0, blockData = 0, blockSamples = 0,
-               blockNeighbors = 0, cellMasks = 0, blockSkip = 0, texcoords = 0, tileLipschitz = 0,
-               blockLipschitz = 0;
-    };
-    std::vector<GridPieces> grids;
+    // Each grid's arrays (their offsets in forEachGridArray's order), then their views.
+    std::vector<GridView> views;
+    std::vector<size_t> offsets;
     for (const auto& g : tape.grids()) {
-        GridPieces p;
-        p.view = g->view();
-        p.samples = pack.add(g->samples());
-        p.tilePage = pack.add(g->tilePage());
-        p.tileSkip = pack.add(g->tileSkip());
-        p.flags = pack.add(g->flags());
-        p.blockData = pack.add(g->blockData());
-        p.blockSamples = pack.add(g->blockSamples());
-        p.blockNeighbors = pack.add(g->blockNeighbors());
-        p.cellMasks = pack.add(g->cellMasks());
-        p.blockSkip = pack.add(g->blockSkip());
-        p.texcoords = pack.add(g->texcoords());
-        p.tileLipschitz = pack.add(g->tileLipschitz());
-        p.blockLipschitz = pack.add(g->blockLipschitz());
-        grids.push_back(p);
+        views.push_back(g->view());
+        forEachGridArray(views.back(), *g,
+                         [&](auto&, const auto& host) { offsets.push_back(pack.add(host)); });
     }
     // The views' offsets are known now; their addresses once the buffer is allocated.
     const size_t viewsAt = pack.add(nullptr, 0);
-    pack.bytes().resize(viewsAt + grids.size() * sizeof(GridView));
+    pack.bytes().resize(viewsAt + views.size() * sizeof(GridView));
     std::vector<unsigned char>& bytes = pack.bytes();
     SDFT_CUDA_CHECK(cudaMalloc(&m_impl->buffer, bytes.size() ? bytes.size() : 1));
     m_impl->bytes = bytes.size();
     const unsigned char* base = static_cast<const unsigned char*>(m_impl->buffer);
-    for (size_t i = 0; i < grids.size(); ++i) {
-        GridPieces& p = grids[i];
-        const Grid& g = *tape.grids()[i];
-        relocate(p.view.samples, g.samples(), p.samples, base);
-        relocate(p.view.tilePage, g.tilePage(), p.tilePage, base);
-        relocate(p.view.tileSkip, g.tileSkip(), p.tileSkip, base);
-        relocate(p.view.flags, g.flags(), p.flags, base);
-        relocate(p.view.blockData, g.blockData(), p.blockData, base);
-        relocate(p.view.blockSamples, g.blockSamples(), p.blockSamples, base);
-        relocate(p.view.blockNeighbors, g.blockNeighbors(), p.blockNeighbors, base);
-        relocate(p.view.cellMasks, g.cellMasks(), p.cellMasks, base);
-        relocate(p.view.blockSkip, g.blockSkip(), p.blockSkip, base);
-        relocate(p.view.texcoords, g.texcoords(), p.texcoords, base);
-        relocate(p.view.tileLipschitz, g.tileLipschitz(), p.tileLipschitz, base);
-        relocate(p.view.blockLipschitz, g.blockLipschitz(), p.blockLipschitz, base);
-        std::memcpy(bytes.data() + viewsAt + i * sizeof(GridView), &p.view, sizeof(GridView));
+    size_t next = 0;
+    for (size_t i = 0; i < views.size(); ++i) {
+        forEachGridArray(views[i], *tape.grids()[i], [&](auto& field, const auto& host) {
+            relocate(field, host, offsets[next++], base);
+        });
+        std::memcpy(bytes.data() + viewsAt + i * sizeof(GridView), &views[i], sizeof(GridView));
     }
     SDFT_CUDA_CHECK(cudaMemcpy(m_impl->buffer, bytes.data(), bytes.size(), cudaMemcpyHostToDevice));
     TapeView& v = m_impl->view;
     v = tape.view();
     v.instrs = reinterpret_cast<const Instr*>(base + instrAt);
     v.consts = reinterpret_cast<const float*>(base + constAt);
-    v.grids = grids.empty() ? nullptr : reinterpret_cast<const GridView*>(base + viewsAt);
+    v.grids = views.empty() ? nullptr : reinterpret_cast<const GridView*>(base + viewsAt);
 }
 
 GpuTape::~GpuTape() = default;

@@ -16,6 +16,7 @@
 #include "sdftrace/render/light_sample.h"
 #include "sdftrace/render/normal_stencil.h"
 #include "sdftrace/render/path_tracer.h"
+#include "sdftrace/render/primary_pixel.h"
 #include "sdftrace/render/whitted.h"
 #include "sdftrace/trace/field_tracer.h"
 #include "sdftrace/trace/grid_tracer.h"
@@ -232,9 +233,8 @@ void TileRenderer::tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1) 
     s.segments.resize(count);
     s.results.resize(count);
     for (int i = 0; i < count; ++i) {
-        s.segments[i] = {m_camera.rayThrough(x0 + i % tw + 0.5f + m_view.pixelJitter[0],
-                                             y0 + i / tw + 0.5f + m_view.pixelJitter[1]),
-                         0.0f, m_settings.maxDistance};
+        s.segments[i] = {primaryRay(m_camera, x0 + i % tw, y0 + i / tw, m_view.pixelJitter), 0.0f,
+                         m_settings.maxDistance};
     }
     if (m_grid) {
         tracePrimaryGrid(s, x0, y0, tw);
@@ -418,8 +418,7 @@ void TileRenderer::stencilNormals(TileScratch& s) {
         Vec3 g(0.0f);
         for (int k = 0; k < sn; ++k) g += stencilOffset(est, k) * s.f[j * sn + k];
         Vec3 n = normalize(g);
-        // Degenerate gradient (a crease or a flat extremum): face the viewer rather than emit NaN.
-        s.hitNormal[h] = length(n) > 0 ? n : -s.segments[s.hitPixel[h]].ray.direction;
+        s.hitNormal[h] = normalOrFacing(n, s.segments[s.hitPixel[h]].ray.direction);
     }
 }
 
@@ -459,7 +458,7 @@ void TileRenderer::gridNormals(TileScratch& s) {
     s.hitNormal.resize(hits);
     for (int h = 0; h < hits; ++h) {
         Vec3 n = gridNormal(*m_grid, s.hitPoint[h], m_settings.gridNormals);
-        s.hitNormal[h] = length(n) > 0 ? n : -s.segments[s.hitPixel[h]].ray.direction;
+        s.hitNormal[h] = normalOrFacing(n, s.segments[s.hitPixel[h]].ray.direction);
     }
 }
 
