@@ -19,15 +19,14 @@ namespace sdft {
 // f_t = min(alpha f_{t-1} + (1 - alpha) c_t, r_t) where the coarse SDF c_t is within the mask
 // distance d (f_{t-1} taken as c_t where none exists), f_t = c_t beyond it (no ghost can survive
 // there). The sign follows a moving surface at once: the coarse SDF's beyond one coarse voxel of
-// it, nearer the frame's own front / back vote, the accumulated votes (decaying by half each frame)
-// only where the frame's rays all missed. Empty before the first frame; bound to one grid shape (a
-// new shape starts afresh).
+// it, nearer the frame's own front / back vote (the coarse sign where all its rays missed); no
+// vote is carried over. Empty before the first frame; bound to one grid shape (a new shape starts
+// afresh).
 struct RtsdfHistory {
     float alpha = 0.95f;
     GridShape shape;
-    std::vector<float> fine;         // |f_{t-1}| per vertex, inf where none was refined
-    std::vector<float> front, back;  // decayed hit counts per vertex
-    int frames = 0;                  // frames accumulated
+    std::vector<float> fine;  // |f_{t-1}| per vertex, inf where none was refined
+    int frames = 0;           // frames accumulated
 };
 
 struct RtsdfOptions {

@@ -42,6 +42,22 @@ double meanError(const std::vector<float>& f, const GridShape& s, float dx, floa
     return sum / static_cast<double>(n);
 }
 
+// Vertices within 3 voxels of the exact surface (and not on it) whose sign is wrong.
+int wrongSigns(const std::vector<float>& f, const GridShape& s, float dx) {
+    int n = 0;
+    for (int k = 0; k < s.vertices(2); ++k)
+        for (int j = 0; j < s.vertices(1); ++j)
+            for (int i = 0; i < s.vertices(0); ++i) {
+                const Vec3 p = s.origin + Vec3(i, j, k) * s.voxelSize;
+                const float exact = boxDistance(p, dx);
+                if (std::fabs(exact) > 3 * s.voxelSize || std::fabs(exact) < 0.05f * s.voxelSize)
+                    continue;
+                const size_t idx = (static_cast<size_t>(k) * s.vertices(1) + j) * s.vertices(0) + i;
+                n += (f[idx] < 0) != (exact < 0);
+            }
+    return n;
+}
+
 GridShape shape() {
     SampleOptions o;
     o.resolution = 40;
@@ -142,6 +158,32 @@ TEST(RtsdfAccumulation, AnotherGridShapeStartsAfresh) {
     bakeRtsdfSamples(mesh, bvh, s2, o);
     EXPECT_EQ(history.frames, 1);
     EXPECT_EQ(history.fine.size(), s2.vertexCount());
+}
+
+// Signs follow a moved mesh at once, whatever the history holds: the frame after a box moved by
+// 2.5 voxels has as few wrong signs near its surface as a first frame of the moved box (none: from
+// inside a closed surface every ray hits a back face, and a vertex whose rays all missed takes the
+// coarse sign). Votes carried from frame to frame (decaying by half) gave 287 wrong signs at one
+// ray per vertex and 61 at four, and the bent tube's SDF shadows were off by 0.21 RMSE.
+TEST(RtsdfAccumulation, SignsFollowAMovedMeshAtOnce) {
+    const GridShape s = shape();
+    const TriangleMesh before = box(0), after = box(0.15f);
+    const MeshBvh bvhBefore(before), bvhAfter(after);
+    for (int rays : {1, 4}) {
+        for (float alpha : {0.0f, 0.8f}) {
+            RtsdfOptions o;
+            o.rays = rays;
+            RtsdfHistory moving, fresh;
+            moving.alpha = fresh.alpha = alpha;
+            o.history = &moving;
+            for (int frame = 0; frame < 3; ++frame) bakeRtsdfSamples(before, bvhBefore, s, o);
+            const int afterMove = wrongSigns(bakeRtsdfSamples(after, bvhAfter, s, o), s, 0.15f);
+            o.history = &fresh;
+            const int first = wrongSigns(bakeRtsdfSamples(after, bvhAfter, s, o), s, 0.15f);
+            EXPECT_LE(afterMove, first) << rays << " rays, alpha " << alpha;
+            EXPECT_EQ(first, 0) << rays << " rays, alpha " << alpha;
+        }
+    }
 }
 
 }  // namespace
