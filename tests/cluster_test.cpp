@@ -204,6 +204,11 @@ TEST(Cluster, AFailureOnOneRankStopsEveryRankWithOneErrorAndNoOutput) {
     RunResult r = runShell(kMpiEnv + "SDFTRACE_INJECT_FAILURE=1:2 " + kMpirun + " " + inject +
                            "-np 2 " + kCli + " render " + csg + " -o " + dir.file("out.png"));
     expectJobFailed(r, "injected failure", dir, 0);
+    // A chunk rank 1 never reaches (rank 0 deals them all first): it fails when the round ends,
+    // so that the hook fires however the work was shared.
+    r = runShell(kMpiEnv + "SDFTRACE_INJECT_FAILURE=1:1000 " + kMpirun + " " + inject + "-np 2 " +
+                 kCli + " render " + csg + " -o " + dir.file("out.png"));
+    expectJobFailed(r, "injected failure", dir, 0);
     // In a bake's slab, and in the frames of an animation (a video: no file until the last).
     r = runShell(kMpiEnv + "SDFTRACE_INJECT_FAILURE=1 " + kMpirun + " " + inject + "-np 2 " + kCli +
                  " bake " + kSource + "/data/meshes/teapot.obj --res 48 -q -o " +

@@ -64,13 +64,15 @@ class Dealer {
 [[noreturn]] void failSilently() { throw RankFailure("", false); }
 
 // A test hook (docs/cluster.md, "Failures"): SDFTRACE_INJECT_FAILURE=R:N makes rank R fail at the
-// start of its N-th chunk (N from 1; "R" alone: its first).
-void injectedFailure(const Communicator& comm, int chunk) {
+// start of its N-th chunk (N from 1; "R" alone: its first), or at the end of a round if rank 0 has
+// dealt every chunk before R reached its N-th (a small job on a busy machine), so that the failure
+// always happens. roundEnd: called when a round ends, with the chunks R has served so far.
+void injectedFailure(const Communicator& comm, int chunk, bool roundEnd = false) {
     const char* v = std::getenv("SDFTRACE_INJECT_FAILURE");
     if (!v) return;
     int rank = -1, at = 1;
     if (std::sscanf(v, "%d:%d", &rank, &at) < 1) return;
-    if (rank == comm.rank() && chunk == at)
+    if (rank == comm.rank() && (chunk == at || (roundEnd && chunk < at)))
         throw std::runtime_error("injected failure (SDFTRACE_INJECT_FAILURE=" + std::string(v) +
                                  ")");
 }
@@ -255,7 +257,14 @@ void serveChunks(Communicator& comm, RoundWorker& worker, int& chunks) {
     comm.send(0, kRequest, nullptr, 0);
     for (;;) {
         const Message c = comm.receive(0);
-        if (c.tag == kRoundEnd) break;
+        if (c.tag == kRoundEnd) {
+            try {
+                injectedFailure(comm, chunks, true);
+            } catch (...) {
+                reportAndStop(comm);
+            }
+            break;
+        }
         if (c.tag != kChunk) failSilently();  // kAbort
         ByteReader in(c.bytes);
         const int first = in.get<int>(), last = in.get<int>();
