@@ -5,7 +5,9 @@
 //   ao = clamp(1 - strength · sum_i (i·step - f(p + n i·step)) / 2^i, 0, 1).
 #pragma once
 
+#include "sdftrace/core/macros.h"
 #include "sdftrace/field/tape.h"
+#include "sdftrace/field/tape_view.h"
 
 namespace sdft {
 
@@ -19,6 +21,25 @@ struct AmbientOcclusionResult {
     float ao = 1;  // 1: unoccluded
     int evaluations = 0;
 };
+
+// By a tape's scalar evaluator: a device thread's, and the CPU's ambientOcclusion below.
+SDFT_HOST_DEVICE inline AmbientOcclusionResult ambientOcclusionTape(
+    const TapeView& field, Vec3 p, Vec3 n, const AmbientOcclusionOptions& o) {
+    AmbientOcclusionResult r;
+    const float invL = 1.0f / field.lipschitz;
+    float occlusion = 0, weight = 0.5f;
+    for (int i = 1; i <= o.samples; ++i) {
+        const float h = static_cast<float>(i) * o.step;
+        const float d = evalTape(field, p + n * h) * invL;
+        occlusion += weight * std::fmax(0.0f, h - d);
+        weight *= 0.5f;
+    }
+    r.evaluations = o.samples;
+    // Normalized by the step so that `strength` does not depend on the scene's scale.
+    const float ao = 1.0f - o.strength * occlusion / std::fmax(o.step, 1e-30f);
+    r.ao = std::fmin(std::fmax(ao, 0.0f), 1.0f);
+    return r;
+}
 
 AmbientOcclusionResult ambientOcclusion(const Tape& tape, Vec3 p, Vec3 n,
                                         const AmbientOcclusionOptions& options);

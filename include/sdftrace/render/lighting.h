@@ -1,9 +1,11 @@
 // Materials (Blinn-Phong) and lights of the direct-lighting integrator.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <vector>
 
+#include "sdftrace/core/macros.h"
 #include "sdftrace/math/vec.h"
 
 namespace sdft {
@@ -24,6 +26,15 @@ struct Material {
     Vec3 absorption{0, 0, 0};  // dielectric: Beer-Lambert coefficients per unit length
 };
 
+// Lambert + Blinn-Phong for unit normal n, unit direction to the light l and the viewing ray's
+// unit direction d, per unit of light (the CPU renderer's and render/direct_pixel.h's term).
+SDFT_HOST_DEVICE inline Vec3 blinnPhong(Vec3 color, float diffuse, float specular, float shininess,
+                                        Vec3 n, Vec3 l, Vec3 d) {
+    const Vec3 half = normalize(l - d);
+    const float spec = std::pow(std::fmax(dot(n, half), 0.0f), shininess);
+    return color * (diffuse * dot(n, l)) + Vec3(specular * spec);
+}
+
 // Lights of the direct-lighting integrator. Sphere and rectangle lights have a size: their
 // shadows have penumbrae (soft_shadow.h estimates them in one march, light_sample.h samples them
 // for distributed shadow rays). A directional light may subtend an angle (the sun: 0.53 degrees).
@@ -41,9 +52,9 @@ struct Light {
     float intensity = 1.0f;
     bool castShadows = true;
 
-    bool positional() const { return kind != Kind::Directional; }
+    SDFT_HOST_DEVICE bool positional() const { return kind != Kind::Directional; }
     // Whether its shadows have a penumbra.
-    bool hasSize() const {
+    SDFT_HOST_DEVICE bool hasSize() const {
         return kind == Kind::Sphere || kind == Kind::Rect ||
                (kind == Kind::Directional && angle > 0);
     }

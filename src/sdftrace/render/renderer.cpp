@@ -323,16 +323,11 @@ void TileRenderer::shadeDirect(TileScratch& s) {
             if (visible[h] == 0) continue;
             const Material& m = s.materials[h];
             const LightDirection to = towardLight(light, s.hitPoint[h]);
-            const Vec3 l = to.dir;
-            const float scale = to.scale * visible[h];
-            Vec3 n = s.hitNormal[h];
-            float ndotl = dot(n, l);
-            if (ndotl <= 0) continue;
-            Vec3 v = -s.segments[s.hitPixel[h]].ray.direction;
-            Vec3 half = normalize(l + v);
-            float spec = std::pow(std::fmax(dot(n, half), 0.0f), m.shininess);
-            Vec3 c = m.color * (m.diffuse * ndotl) + Vec3(m.specular * spec);
-            s.radiance[h] += c * light.color * scale;
+            const Vec3 n = s.hitNormal[h];
+            if (dot(n, to.dir) <= 0) continue;
+            const Vec3 c = blinnPhong(m.color, m.diffuse, m.specular, m.shininess, n, to.dir,
+                                      s.segments[s.hitPixel[h]].ray.direction);
+            s.radiance[h] += c * light.color * (to.scale * visible[h]);
         }
     }
 }

@@ -52,16 +52,14 @@ Vec3 WhittedTracer::shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m) const
     const auto& lights = m_plan.lighting.lights;
     for (size_t li = 0; li < lights.size(); ++li) {
         const LightDirection to = towardLight(lights[li], p);
-        const float ndotl = dot(n, to.dir);
-        if (ndotl <= 0) continue;
+        if (dot(n, to.dir) <= 0) continue;
         float vis = 1;
         if (m_plan.settings.shadows && lights[li].castShadows)
             vis = m_visibility(p, n, lights[li], static_cast<int>(li));
         if (vis <= 0) continue;
-        const Vec3 half = normalize(to.dir - d);
-        const float spec = std::pow(std::max(dot(n, half), 0.0f), std::max(m.shininess, 1.0f));
-        c += (m.color * (m.diffuse * ndotl) + Vec3(m.specular * spec)) * lights[li].color *
-             (to.scale * vis);
+        c +=
+            blinnPhong(m.color, m.diffuse, m.specular, std::fmax(m.shininess, 1.0f), n, to.dir, d) *
+            lights[li].color * (to.scale * vis);
     }
     return c;
 }

@@ -1,0 +1,198 @@
+// One pixel of the direct-lighting integrator: its primary ray and normal (primary_pixel.h), the
+// material blend at the hit, ambient occlusion, and each light's Lambert + Blinn-Phong term where
+// its shadow method lets it through. What the CPU renderer's tile loop does for a packet of
+// pixels (renderer.cpp's shadeDirect and its shadow passes), as one function a device thread runs
+// for its pixel; held to the renderer's film on the examples (direct_pixel_test.cpp). The shadow
+// methods are the renderer's: hard rays with Keinert et al. 2014 §3.3's dynamic origin offset,
+// RTSDF's SDF soft shadows (§2.4-2.5, soft_shadow.h) and distributed rays to points sampled on
+// the light (Cook et al. 1984), seeded per pixel and frame as the renderer seeds them.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sdftrace/core/macros.h"
+#include "sdftrace/math/sampling.h"
+#include "sdftrace/render/ambient_occlusion.h"
+#include "sdftrace/render/light_sample.h"
+#include "sdftrace/render/lighting.h"
+#include "sdftrace/render/primary_pixel.h"
+#include "sdftrace/render/render_settings.h"
+#include "sdftrace/render/soft_shadow.h"
+
+namespace sdft {
+
+// A plastic material's Blinn-Phong parameters: Material without its name and the kinds and
+// textures the per-pixel path does not shade.
+struct PhongParams {
+    Vec3 color{0.8f, 0.8f, 0.8f};
+    float diffuse = 1, specular = 0.2f, shininess = 32;
+};
+
+// Plain data: a kernel takes it by value. The light and material arrays are the caller's
+// (DirectPixelTables on the CPU, device copies on a GPU).
+struct DirectPixelView {
+    PrimaryPixelView primary;
+    const Light* lights = nullptr;
+    int lightCount = 0;
+    const PhongParams* materials = nullptr;
+    int materialCount = 0;
+    int uniformMaterial = -1;  // >= 0: every point's material (Tape::uniformMaterial)
+    Vec3 ambient{0, 0, 0}, background{0, 0, 0};
+    bool shadows = true;
+    ShadowMethod shadowMethod = ShadowMethod::Hard;
+    TraceOptions shadowRay;  // hard and distributed rays: hit or miss only
+    SoftShadowOptions soft;  // with the renderer's epsilon and step budget
+    int shadowRays = 64;
+    float shadowOffsetMin = 1e-3f;
+    bool ambientOcclusion = false;
+    AmbientOcclusionOptions ao;
+    int filmWidth = 0;   // pixel (x, y) seeds its random numbers with y * filmWidth + x
+    uint32_t frame = 0;  // FrameView::frame
+};
+
+struct DirectPixel {
+    PrimaryPixel primary;
+    Vec3 color{0, 0, 0};  // finite: the background on a miss, 0 where shading overflowed
+    float shadow = 1;     // the first shadow-casting light's visibility
+    float ao = 1;
+    uint32_t shadowEvaluations = 0, aoEvaluations = 0;
+};
+
+namespace direct_pixel {
+
+// The blend of the plastic materials at p (material_at.cpp's sums, in its order).
+template <int kMaterialRegs>
+SDFT_HOST_DEVICE inline PhongParams materialAt(const DirectPixelView& v, Vec3 p) {
+    if (v.uniformMaterial >= 0 && v.uniformMaterial < v.materialCount)
+        return v.materials[v.uniformMaterial];
+    MaterialBlend b;
+    evalTapeAt<kMaterialRegs>(v.primary.field, p, &b);
+    PhongParams m;
+    m.color = Vec3(0.0f);
+    m.diffuse = m.specular = m.shininess = 0;
+    for (int i = 0; i < b.count; ++i) {
+        int id = b.id[i] < 0 ? 0 : b.id[i];
+        if (id > v.materialCount - 1) id = v.materialCount - 1;
+        const PhongParams& src = v.materials[id];
+        const float w = b.weight[i];
+        m.color += src.color * w;
+        m.diffuse += src.diffuse * w;
+        m.specular += src.specular * w;
+        m.shininess += src.shininess * w;
+    }
+    return m;
+}
+
+// A ray to the light: blocked or not.
+SDFT_HOST_DEVICE inline bool occluded(const DirectPixelView& v, Vec3 origin, Vec3 dir, float tMax,
+                                      uint32_t& evaluations) {
+    const TraceResult r = traceTapeRay(v.primary.field, {{origin, dir}, 0.0f, tMax}, v.shadowRay);
+    evaluations += static_cast<uint32_t>(r.evaluations);
+    return r.hit;
+}
+
+// How much of light `li` the hit at p (unit normal n) sees, in [0, 1]; `offset` is the shadow
+// ray's origin offset along n.
+SDFT_HOST_DEVICE inline float visibility(const DirectPixelView& v, const Light& light, int li,
+                                         Vec3 p, Vec3 n, float offset, uint32_t pixel,
+                                         uint32_t& evaluations) {
+    const Vec3 origin = p + n * offset;
+    const bool hard = v.shadowMethod == ShadowMethod::Hard ||
+                      (v.shadowMethod == ShadowMethod::Distributed && !light.hasSize());
+    if (hard || v.shadowMethod == ShadowMethod::Soft) {
+        const LightDirection to = towardLight(light, p);
+        if (dot(n, to.dir) <= 0) return 0.0f;  // facing away: the light is below the horizon
+        if (hard) return occluded(v, origin, to.dir, to.dist, evaluations) ? 0.0f : 1.0f;
+        Rng rng(pixel, v.frame, 0x50F7u + static_cast<uint32_t>(li));
+        const SoftShadowResult s = softShadowTape(v.primary.field, origin, to.dir, 0.0f,
+                                                  std::fmin(to.dist, v.primary.maxDistance),
+                                                  lightTanRadius(light, p), v.soft, rng.uniform());
+        evaluations += static_cast<uint32_t>(s.evaluations);
+        return s.visibility;
+    }
+    // Distributed: a per-pixel rotated Halton sequence continued from frame to frame.
+    const int rays = v.shadowRays > 1 ? v.shadowRays : 1;
+    Rng rng(pixel, 0xD157u + static_cast<uint32_t>(li));
+    const float r1 = rng.uniform(), r2 = rng.uniform();
+    int seen = 0;
+    for (int k = 0; k < rays; ++k) {
+        float u1, u2;
+        rotatedHalton(v.frame * static_cast<uint32_t>(rays) + static_cast<uint32_t>(k), r1, r2, u1,
+                      u2);
+        const LightSample ls = sampleLight(light, p, u1, u2);
+        if (ls.dist <= 0) {  // inside the light
+            ++seen;
+        } else if (dot(n, ls.dir) > 0) {
+            seen += !occluded(v, origin, ls.dir, ls.dist, evaluations);
+        }
+    }
+    return static_cast<float>(seen) / static_cast<float>(rays);
+}
+
+}  // namespace direct_pixel
+
+// Pixel (x, y), shaded. kMaterialRegs: the material register file (at least the tape's scalar
+// registers unless the view has a uniform material; a device picks the smallest that fits).
+template <int kMaterialRegs>
+SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, int x, int y) {
+    DirectPixel out;
+    out.primary = tracePrimaryPixel(v.primary, x, y);
+    out.color = v.background;
+    if (!out.primary.trace.hit) return out;
+    const Ray ray = primaryRay(v.primary.camera, x, y, v.primary.jitter);
+    const Vec3 p = ray.at(out.primary.trace.t);
+    const Vec3 n = out.primary.normal;
+    const PhongParams m = direct_pixel::materialAt<kMaterialRegs>(v, p);
+    Vec3 radiance = v.ambient * m.color;
+    if (v.ambientOcclusion) {
+        const AmbientOcclusionResult ao = ambientOcclusionTape(v.primary.field, p, n, v.ao);
+        out.ao = ao.ao;
+        radiance *= ao.ao;
+        out.aoEvaluations = static_cast<uint32_t>(ao.evaluations);
+    }
+    // Keinert et al. 2014, §3.3: shadow rays start 2 max(eps_min, |f(p)|) off the surface.
+    const float offset = 2.0f * std::fmax(v.shadowOffsetMin, std::fabs(out.primary.trace.value) /
+                                                                 v.primary.field.lipschitz);
+    const uint32_t pixel =
+        static_cast<uint32_t>(y) * static_cast<uint32_t>(v.filmWidth) + static_cast<uint32_t>(x);
+    bool firstShadow = true;
+    for (int li = 0; li < v.lightCount; ++li) {
+        const Light& light = v.lights[li];
+        float visible = 1;
+        if (v.shadows && light.castShadows) {
+            visible =
+                direct_pixel::visibility(v, light, li, p, n, offset, pixel, out.shadowEvaluations);
+            if (firstShadow) out.shadow = visible;
+            firstShadow = false;
+        }
+        if (visible == 0) continue;
+        const LightDirection to = towardLight(light, p);
+        if (dot(n, to.dir) <= 0) continue;
+        const Vec3 c =
+            blinnPhong(m.color, m.diffuse, m.specular, m.shininess, n, to.dir, ray.direction);
+        radiance += c * light.color * (to.scale * visible);
+    }
+    out.color = isFinite(radiance) ? radiance : Vec3(0.0f);
+    return out;
+}
+
+// Why `plan` cannot be shaded by shadeDirectPixel (empty when it can): what primaryPixelUnsupported
+// names, the path tracer, mirrors and dielectrics (Whitted rays), textured materials and shadow
+// maps stay on the CPU renderer for now.
+std::string directPixelUnsupported(const RenderPlan& plan);
+
+// The host side of a view: the plan's lights and its materials' Blinn-Phong parameters.
+struct DirectPixelTables {
+    std::vector<Light> lights;
+    std::vector<PhongParams> materials;
+};
+DirectPixelTables directPixelTables(const RenderPlan& plan);
+
+// The view of `plan` for one frame of a film `filmWidth` pixels wide, its arrays `tables`'s; both
+// must outlive it.
+DirectPixelView directPixelView(const RenderPlan& plan, const FrameView& frame,
+                                const DirectPixelTables& tables, int filmWidth);
+
+}  // namespace sdft
