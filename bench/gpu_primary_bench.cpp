@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "gpu_bench_args.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_primary.h"
@@ -28,13 +29,9 @@
 #include "sdftrace/trace/field_tracer.h"
 
 using namespace sdft;
+using bench::median;
 
 namespace {
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
 
 struct Case {
     std::string name;
@@ -114,26 +111,13 @@ double cpuPrimaryMs(const RenderPlan& plan, const Camera& camera, const TraceOpt
 }  // namespace
 
 int main(int argc, char** argv) {
-    int runs = 10, cpuRuns = 3;
-    std::string scenes = "city,jewel,bunny512";
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (a == "--runs" && i + 1 < argc) {
-            runs = std::max(1, std::atoi(argv[++i]));
-        } else if (a == "--cpu-runs" && i + 1 < argc) {
-            cpuRuns = std::max(1, std::atoi(argv[++i]));
-        } else if (a == "--scenes" && i + 1 < argc) {
-            scenes = argv[++i];
-        } else {
-            std::fprintf(stderr,
-                         "usage: sdftrace_gpu_primary_bench [--runs N] [--cpu-runs N] "
-                         "[--scenes city,jewel,bunny512]\n");
-            return 2;
-        }
-    }
+    bench::GpuBenchArgs args;
+    if (!bench::parseGpuBenchArgs(argc, argv, "sdftrace_gpu_primary_bench", args,
+                                  "city,jewel,bunny512"))
+        return 2;
+    const int runs = args.runs, cpuRuns = args.cpuRuns;
     const GpuInfo& gpu = gpuInfo();
-    std::printf("GPU: %s\n", gpu.present ? gpu.name.c_str() : gpu.why.c_str());
-    std::printf("CPU: %d hardware threads\n\n", tbb::this_task_arena::max_concurrency());
+    const std::string scenes = args.scenes;
     std::printf(
         "| scene | pixels | evaluations per ray (GPU / CPU) | GPU kernel ms | GPU frame ms "
         "| G rays/s | CPU ms | GPU / CPU |\n| --- | --- | --- | --- | --- | --- | --- | "

@@ -353,7 +353,13 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     PrepareStats assets;
     std::string taaText;
     if (!comm.distributed()) {
-        taaText = renderFramesInOrder(*job, sink, assets, nullptr);
+        // --device: each frame's plan uploaded to the GPU (or the CPU renders it).
+        std::unique_ptr<GpuDirectRenderer> gpu;
+        taaText = renderFramesInOrder(*job, sink, assets,
+                                      [&](long long i, const RenderPlan& plan) -> FrameRenderFn {
+                                          gpu = deviceRenderer(a, plan, false, i == 0);
+                                          return gpu ? gpuFrames(*gpu) : nullptr;
+                                      });
     } else {
         WorkFarm farm(comm);
         if (ordered) {

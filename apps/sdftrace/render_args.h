@@ -2,6 +2,7 @@
 // share (render_command.cpp); --time ranges render in render_animation.cpp.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -9,6 +10,7 @@
 
 #include "commands.h"
 #include "sdftrace/cluster/communicator.h"
+#include "sdftrace/gpu/gpu_render.h"
 #include "sdftrace/render/film.h"
 #include "sdftrace/render/motion.h"
 #include "sdftrace/render/render_plan.h"
@@ -49,6 +51,7 @@ struct RenderArgs {
     CLI::Option* outputFlag = nullptr;
     bool quiet = false;
     bool listOptions = false;
+    std::string device = "cpu";  // --device cpu|cuda|auto
 };
 
 // --time: one instant T, or the frames of [A, B) at --fps (docs/cli.md, "Animation").
@@ -81,6 +84,14 @@ bool showProgress(const RenderArgs& a);
 RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
                         const std::string& subFramePattern, bool progress,
                         const FrameRenderFn& across = nullptr);
+
+// --device: the GPU renderer of `plan` (null: the CPU renders it). cuda: the GPU or one clear
+// error; auto: the GPU where one is present and renders the plan, else the CPU, saying why on
+// stderr when `note`. Not under mpirun (`distributed`): cuda is refused, auto takes the CPU.
+std::unique_ptr<GpuDirectRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
+                                                  bool distributed, bool note);
+// The frames of `gpu` as renderImage's and renderFrames' per-frame hook.
+FrameRenderFn gpuFrames(const GpuDirectRenderer& gpu);
 
 // The scene of --time: a scene file, or the demo.
 AnimatedScene loadAnimation(const std::string& input);

@@ -17,11 +17,13 @@
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/tape.h"
+#include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/image_io.h"
 #include "sdftrace/io/mesh_file.h"
 #include "sdftrace/io/video_writer.h"
+#include "sdftrace/render/direct_pixel.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/render/temporal.h"
 #include "sdftrace/scene/animated_scene.h"
@@ -207,9 +209,41 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
     return renderFrames(plan, film, t, onFrame, progress, across);
 }
 
+std::unique_ptr<GpuDirectRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
+                                                  bool distributed, bool note) {
+    if (a.device == "cpu") return nullptr;
+    if (a.device == "cuda") {
+        if (distributed) throw InputError("--device cuda: cannot be combined with mpirun yet");
+        return std::make_unique<GpuDirectRenderer>(plan, "--device cuda");
+    }
+    std::string why;
+    if (distributed) {
+        why = "a distributed job renders on its ranks' CPUs";
+    } else if (!gpuInfo().present) {
+        why = gpuInfo().why;
+    } else if (std::string unsupported = directPixelUnsupported(plan); !unsupported.empty()) {
+        why = "the GPU does not render " + unsupported + " yet";
+    }
+    if (why.empty()) return std::make_unique<GpuDirectRenderer>(plan, "--device auto");
+    if (note && !a.quiet)
+        std::fprintf(stderr, "sdftrace render: --device auto: rendering on the CPU (%s)\n",
+                     why.c_str());
+    return nullptr;
+}
+
+FrameRenderFn gpuFrames(const GpuDirectRenderer& gpu) {
+    return [&gpu](const FrameView& view, Film& film, bool) { return gpu.render(view, film); };
+}
+
 namespace {
 
 std::string threadsText(const RenderStats& st) {
+    if (st.gpu) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "%s (GPU kernels %.3f ms, frames %.3f ms)",
+                      gpuInfo().name.c_str(), st.gpuKernelMs, st.gpuFrameMs);
+        return buf;
+    }
     if (st.ranks <= 1) return std::to_string(st.threads) + " threads";
     return std::to_string(st.ranks) + " ranks (" + std::to_string(st.threads) + " threads)";
 }
@@ -303,7 +337,12 @@ StillScene loadStill(const RenderArgs& a, const std::optional<TimeSpan>& span) {
 // The still on this process, or (rank 0 of an mpirun job) its tiles across the ranks.
 RenderStats renderStill(const RenderArgs& a, const RenderPlan& plan, Film& film,
                         Communicator& comm) {
-    if (!comm.distributed()) return renderImage(a, plan, film, a.framePattern, showProgress(a));
+    if (!comm.distributed()) {
+        const std::unique_ptr<GpuDirectRenderer> gpu = deviceRenderer(a, plan, false, true);
+        return renderImage(a, plan, film, a.framePattern, showProgress(a),
+                           gpu ? gpuFrames(*gpu) : nullptr);
+    }
+    deviceRenderer(a, plan, true, comm.root());  // refuses --device cuda
     WorkFarm farm(comm);
     const RenderStats st = renderImage(a, plan, film, a.framePattern, showProgress(a),
                                        [&](const FrameView& view, Film& f, bool progress) {
@@ -333,6 +372,13 @@ int runRender(const RenderArgs& args) {
                              " is not a scene file; only scene files have keyframes "
                              "(docs/scene-format.md, \"Animation\")");
         aovs = validateOutputs(a, span && span->range, comm.root());  // rank 0 writes them
+        if (a.device == "cuda") {                                     // before loading anything
+            if (comm.distributed())
+                throw InputError(
+                    "--device cuda: cannot be combined with mpirun yet (each rank renders its "
+                    "tiles on its CPU); use --device cpu or auto");
+            requireGpu("--device cuda");
+        }
     });
     if (span && span->range) return renderAnimation(a, *span, aovs, comm);
     using Clock = std::chrono::steady_clock;
@@ -511,6 +557,15 @@ void addRenderCommand(CLI::App& app, Action& action) {
     addFrameFlags(cmd, *args);
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));
+    cmd->add_option("--device", args->device,
+                    "Where the frames render: cpu; cuda (the GPU: direct lighting with hard, "
+                    "soft or distributed shadows and AO, plastic materials, any field: analytic, "
+                    "CSG, blends, grids and baked meshes in a scene; an error names what only "
+                    "the CPU renders yet: a lone grid's DDA, triangle primaries, mirrors, glass, "
+                    "textures, shadow maps, the path tracer); auto (the GPU where one is present "
+                    "and renders the scene, else the CPU)")
+        ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+        ->capture_default_str();
     cmd->add_flag("-q,--quiet", args->quiet,
                   "No progress on stderr (the summary line is still printed)");
     cmd->add_flag("--list-options", args->listOptions,

@@ -18,6 +18,10 @@ struct RenderStats {
     // Single-grid scenes traced by DDA (Jamriška): blocks + cells visited, surface cells tested.
     uint64_t traversalSteps = 0, intersectionTests = 0;
     bool gridTracer = false;
+    // Rendered on a GPU (gpu/gpu_render.h): the kernels' time and the whole frame's (launches,
+    // kernels and copies), summed over frames.
+    bool gpu = false;
+    double gpuKernelMs = 0, gpuFrameMs = 0;
 
     // Sums the counters of `o` (per-thread, per-tile or per-frame statistics); not seconds,
     // threads or flags.

@@ -3,6 +3,7 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_primary.h"
+#include "sdftrace/gpu/gpu_render.h"
 #include "sdftrace/gpu/gpu_tape.h"
 
 namespace sdft {
@@ -34,6 +35,19 @@ size_t GpuTape::deviceBytes() const { return 0; }
 
 GpuPrimaryImage tracePrimaryGpu(const GpuTape&, const PrimaryPixelView&, int, int) {
     requireGpu("GPU primary rays");
+    return {};
+}
+
+struct GpuDirectRenderer::Impl {};
+
+GpuDirectRenderer::GpuDirectRenderer(const RenderPlan&, const std::string& what) {
+    requireGpu(what);
+}
+GpuDirectRenderer::~GpuDirectRenderer() = default;
+GpuDirectRenderer::GpuDirectRenderer(GpuDirectRenderer&&) noexcept = default;
+GpuDirectRenderer& GpuDirectRenderer::operator=(GpuDirectRenderer&&) noexcept = default;
+RenderStats GpuDirectRenderer::render(const FrameView&, Film&) const {
+    requireGpu("GPU render");
     return {};
 }
 

@@ -1,6 +1,6 @@
 #include <chrono>
 
-#include "cuda_check.h"
+#include "device_buffer.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_primary.h"
 
@@ -23,27 +23,6 @@ __global__ void primaryKernel(PrimaryPixelView view, int width, int height, floa
     evaluations[i] = px.trace.evaluations;
 }
 
-template <class T>
-struct DeviceArray {
-    T* ptr = nullptr;
-    explicit DeviceArray(size_t n) { SDFT_CUDA_CHECK(cudaMalloc(&ptr, n * sizeof(T))); }
-    ~DeviceArray() { cudaFree(ptr); }
-    DeviceArray(const DeviceArray&) = delete;
-    DeviceArray& operator=(const DeviceArray&) = delete;
-};
-
-struct Events {
-    cudaEvent_t start = nullptr, stop = nullptr;
-    Events() {
-        SDFT_CUDA_CHECK(cudaEventCreate(&start));
-        SDFT_CUDA_CHECK(cudaEventCreate(&stop));
-    }
-    ~Events() {
-        cudaEventDestroy(start);
-        cudaEventDestroy(stop);
-    }
-};
-
 }  // namespace
 
 GpuPrimaryImage tracePrimaryGpu(const GpuTape& tape, const PrimaryPixelView& view, int width,
@@ -54,30 +33,21 @@ GpuPrimaryImage tracePrimaryGpu(const GpuTape& tape, const PrimaryPixelView& vie
     GpuPrimaryImage out;
     out.width = width;
     out.height = height;
-    DeviceArray<float> depth(n), normal(3 * n);
-    DeviceArray<int32_t> evaluations(n);
+    cuda::DeviceArray<float> depth(n), normal(3 * n);
+    cuda::DeviceArray<int32_t> evaluations(n);
     PrimaryPixelView v = view;
     v.field = tape.view();
     const dim3 block(16, 8);
     const dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y);
-    Events ev;
-    SDFT_CUDA_CHECK(cudaEventRecord(ev.start));
-    primaryKernel<<<grid, block>>>(v, width, height, depth.ptr, normal.ptr, evaluations.ptr);
+    cuda::EventTimer timer;
+    SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
+    primaryKernel<<<grid, block>>>(v, width, height, depth.get(), normal.get(), evaluations.get());
     SDFT_CUDA_CHECK(cudaGetLastError());
-    SDFT_CUDA_CHECK(cudaEventRecord(ev.stop));
-    SDFT_CUDA_CHECK(cudaEventSynchronize(ev.stop));
-    float ms = 0;
-    SDFT_CUDA_CHECK(cudaEventElapsedTime(&ms, ev.start, ev.stop));
-    out.kernelMs = ms;
-    out.depth.resize(n);
-    out.normal.resize(3 * n);
-    out.evaluations.resize(n);
-    SDFT_CUDA_CHECK(
-        cudaMemcpy(out.depth.data(), depth.ptr, n * sizeof(float), cudaMemcpyDeviceToHost));
-    SDFT_CUDA_CHECK(
-        cudaMemcpy(out.normal.data(), normal.ptr, 3 * n * sizeof(float), cudaMemcpyDeviceToHost));
-    SDFT_CUDA_CHECK(cudaMemcpy(out.evaluations.data(), evaluations.ptr, n * sizeof(int32_t),
-                               cudaMemcpyDeviceToHost));
+    SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
+    out.kernelMs = timer.elapsedMs();
+    depth.download(out.depth, n);
+    normal.download(out.normal, 3 * n);
+    evaluations.download(out.evaluations, n);
     out.frameMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
     return out;

@@ -87,7 +87,9 @@ TEST(DirectPixel, MatchesTheRenderersDirectLightingOnTheExamples) {
                 }
             }
             EXPECT_GT(hits, 0);
-            if (variant == 4) EXPECT_EQ(shadowed, 0);
+            if (variant == 4) {
+                EXPECT_EQ(shadowed, 0);
+            }
             shadowedPixels += shadowed;
         }
     }

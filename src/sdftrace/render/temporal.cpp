@@ -182,6 +182,9 @@ RenderStats renderFrames(const RenderPlan& plan, Film& film, const TemporalOptio
         total.threads = frameStats.threads;
         total.ranks = frameStats.ranks;
         total.gridTracer = frameStats.gridTracer;
+        total.gpu = frameStats.gpu;
+        total.gpuKernelMs += frameStats.gpuKernelMs;
+        total.gpuFrameMs += frameStats.gpuFrameMs;
         if (moving) {
             const MotionVectors mv =
                 motionVectors(current.depth, s.camera, s.pixelJitter, previous, nullptr);

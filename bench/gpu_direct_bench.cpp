@@ -1,0 +1,107 @@
+// Direct lighting on the GPU against the CPU renderer on the same machine (issue 14, docs/gpu.md):
+// whole frames as `sdftrace render --device cuda` and `--device cpu` render them (primary rays,
+// normals, materials, each light's shadows, AO where asked), at 1280x720. The GPU runs
+// shadeDirectPixel one thread per pixel (gpu/gpu_render.h); the CPU the tile renderer on every
+// hardware thread. Each case: a scene and a shadow method; evaluations per pixel count every
+// field evaluation of the frame. Medians of --runs (GPU, after one untimed warm-up) and
+// --cpu-runs.
+//
+//   sdftrace_gpu_direct_bench [--runs 10] [--cpu-runs 3]
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "gpu_bench_args.h"
+#include "sdftrace/gpu/gpu_device.h"
+#include "sdftrace/gpu/gpu_render.h"
+#include "sdftrace/render/direct_pixel.h"
+#include "sdftrace/render/renderer.h"
+#include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/plan_render.h"
+
+using namespace sdft;
+using bench::median;
+
+namespace {
+
+struct Case {
+    const char* scene;
+    const char* shadows;  // hard, soft, distributed (4 rays), ao (hard shadows and AO)
+};
+
+constexpr Case kCases[] = {{"city", "hard"},    {"city", "soft"},           {"demo", "hard"},
+                           {"shadows", "soft"}, {"shadows", "distributed"}, {"many_blend", "ao"},
+                           {"rock", "hard"}};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    bench::GpuBenchArgs args;
+    if (!bench::parseGpuBenchArgs(argc, argv, "sdftrace_gpu_direct_bench", args)) return 2;
+    const int runs = args.runs, cpuRuns = args.cpuRuns;
+    const GpuInfo& gpu = gpuInfo();
+    std::printf(
+        "| scene | shadows | evaluations per pixel (GPU / CPU) | GPU kernel ms | GPU frame ms | "
+        "CPU ms | CPU / GPU kernel |\n| --- | --- | --- | --- | --- | --- | --- |\n");
+    for (const Case& c : kCases) {
+        try {
+            Scene scene =
+                parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/" + c.scene + ".json");
+            scene.camera.width = 1280;
+            scene.camera.height = 720;
+            const std::string s = c.shadows;
+            scene.settings.shadows = true;
+            scene.settings.shadowMethod = s == "soft"          ? ShadowMethod::Soft
+                                          : s == "distributed" ? ShadowMethod::Distributed
+                                                               : ShadowMethod::Hard;
+            scene.settings.shadowRays = 4;
+            scene.settings.ambientOcclusion = s == "ao";
+            const RenderPlan plan = planRender(scene);
+            if (const std::string why = directPixelUnsupported(plan); !why.empty()) {
+                std::printf("| %s | %s | skipped: %s |\n", c.scene, c.shadows, why.c_str());
+                continue;
+            }
+            const double pixels = 1280.0 * 720.0;
+            std::vector<double> cpuMs;
+            double cpuEvals = 0;
+            for (int r = 0; r < cpuRuns; ++r) {
+                Film film(1280, 720, Film::bit(Aov::Color));
+                const RenderStats st = render(plan, film, false);
+                cpuMs.push_back(st.seconds * 1e3);
+                cpuEvals = static_cast<double>(st.totalEvaluations()) / pixels;
+            }
+            const double cpu = median(cpuMs);
+            if (!gpu.present) {
+                std::printf("| %s | %s | - / %.2f | - | - | %.1f | - |\n", c.scene, c.shadows,
+                            cpuEvals, cpu);
+                continue;
+            }
+            const GpuDirectRenderer renderer(plan, "bench");
+            FrameView frame;
+            frame.camera = plan.camera;
+            std::vector<double> kernel, whole;
+            double gpuEvals = 0;
+            for (int r = 0; r < runs + 1; ++r) {
+                Film film(1280, 720, Film::bit(Aov::Color));
+                const RenderStats st = renderer.render(frame, film);
+                if (r == 0) {  // the first launch loads the module: not timed
+                    gpuEvals = static_cast<double>(st.totalEvaluations()) / pixels;
+                    continue;
+                }
+                kernel.push_back(st.gpuKernelMs);
+                whole.push_back(st.gpuFrameMs);
+            }
+            const double k = median(kernel);
+            std::printf("| %s | %s | %.2f / %.2f | %.3f | %.3f | %.1f | %.0fx |\n", c.scene,
+                        c.shadows, gpuEvals, cpuEvals, k, median(whole), cpu, cpu / k);
+        } catch (const std::exception& e) {
+            std::printf("| %s | %s | error: %s |\n", c.scene, c.shadows, e.what());
+        }
+        std::fflush(stdout);
+    }
+    return 0;
+}

@@ -1,0 +1,36 @@
+// Direct lighting on the GPU (issue 14; `sdftrace render --device cuda`): one thread per pixel
+// runs shadeDirectPixel (render/direct_pixel.h), the function DirectPixel.* holds to the CPU
+// renderer, over device copies of the plan's tape, lights and materials, and the film gets the
+// CPU renderer's colour and AOVs. Plain C++: no CUDA header here; without the CUDA backend every
+// call is one clear error (gpu_absent.cpp).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "sdftrace/render/film.h"
+#include "sdftrace/render/render_plan.h"
+#include "sdftrace/render/render_stats.h"
+
+namespace sdft {
+
+class GpuDirectRenderer {
+  public:
+    // Uploads `plan` (which must outlive this). Throws InputError "<what>: ..." when no GPU can
+    // be used or the plan needs what the GPU path does not render yet (directPixelUnsupported);
+    // `what` names the flag that asked (e.g. "--device cuda").
+    GpuDirectRenderer(const RenderPlan& plan, const std::string& what);
+    ~GpuDirectRenderer();
+    GpuDirectRenderer(GpuDirectRenderer&&) noexcept;
+    GpuDirectRenderer& operator=(GpuDirectRenderer&&) noexcept;
+
+    // One frame into `film` (the plan camera's size): colour, and the depth, normal, steps,
+    // error, shadow and AO AOVs the film keeps. The stats carry the GPU's times.
+    RenderStats render(const FrameView& view, Film& film) const;
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace sdft

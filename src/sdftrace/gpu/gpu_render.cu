@@ -1,0 +1,157 @@
+#include <chrono>
+#include <cstdint>
+
+#include "device_buffer.h"
+#include "sdftrace/core/error.h"
+#include "sdftrace/gpu/gpu_device.h"
+#include "sdftrace/gpu/gpu_render.h"
+#include "sdftrace/gpu/gpu_tape.h"
+#include "sdftrace/render/direct_pixel.h"
+#include "sdftrace/render/normal_stencil.h"
+
+namespace sdft {
+
+namespace {
+
+// The film's arrays on the device, in the film's layout; per pixel the counters a summary needs.
+struct DirectOut {
+    float *color, *depth, *normal, *steps, *error, *shadow, *ao;
+    uint32_t* counters;  // 4 per pixel: shadow and AO evaluations, fallbacks, hit
+};
+
+// One thread per pixel, 16x8 blocks. kMaterialRegs: the material register file of the material
+// blend (1 where the plan has one uniform material: the blend is never evaluated).
+template <int kMaterialRegs>
+__global__ void directKernel(DirectPixelView view, int width, int height, DirectOut out) {
+    const int x = blockIdx.x * blockDim.x + threadIdx.x;
+    const int y = blockIdx.y * blockDim.y + threadIdx.y;
+    if (x >= width || y >= height) return;
+    const DirectPixel px = shadeDirectPixel<kMaterialRegs>(view, x, y);
+    const size_t i = static_cast<size_t>(y) * width + x;
+    const bool hit = px.primary.trace.hit;
+    for (int a = 0; a < 3; ++a) {
+        out.color[3 * i + a] = px.color[a];
+        out.normal[3 * i + a] = hit ? px.primary.normal[a] : 0.0f;
+    }
+    out.depth[i] = hit ? px.primary.trace.t : kInfinity;
+    out.steps[i] = static_cast<float>(px.primary.trace.evaluations);
+    out.error[i] = hit ? px.primary.trace.value : 0.0f;
+    out.shadow[i] = px.shadow;
+    out.ao[i] = px.ao;
+    out.counters[4 * i + 0] = px.shadowEvaluations;
+    out.counters[4 * i + 1] = px.aoEvaluations;
+    out.counters[4 * i + 2] = static_cast<uint32_t>(px.primary.trace.fallbacks);
+    out.counters[4 * i + 3] = hit ? 1u : 0u;
+}
+
+}  // namespace
+
+struct GpuDirectRenderer::Impl {
+    const RenderPlan& plan;
+    GpuTape tape;
+    DirectPixelTables tables;
+    cuda::DeviceArray<Light> lights;
+    cuda::DeviceArray<PhongParams> materials;
+    int materialRegs = 1;
+
+    explicit Impl(const RenderPlan& p)
+        : plan(p),
+          tape(p.tape),
+          tables(directPixelTables(p)),
+          lights(tables.lights),
+          materials(tables.materials) {
+        const TapeView& v = tape.view();
+        if (plan.tape.uniformMaterial() < 0 ||
+            plan.tape.uniformMaterial() >= static_cast<int>(tables.materials.size())) {
+            materialRegs = v.numScalarRegs <= 8    ? 8
+                           : v.numScalarRegs <= 16 ? 16
+                           : v.numScalarRegs <= 32 ? 32
+                                                   : kTapeMaxScalarRegs;
+        }
+    }
+};
+
+GpuDirectRenderer::GpuDirectRenderer(const RenderPlan& plan, const std::string& what) {
+    requireGpu(what);
+    if (const std::string why = directPixelUnsupported(plan); !why.empty())
+        throw InputError(what + ": the GPU does not render " + why +
+                         " yet (docs/gpu.md); use --device cpu");
+    m_impl = std::make_unique<Impl>(plan);
+}
+
+GpuDirectRenderer::~GpuDirectRenderer() = default;
+GpuDirectRenderer::GpuDirectRenderer(GpuDirectRenderer&&) noexcept = default;
+GpuDirectRenderer& GpuDirectRenderer::operator=(GpuDirectRenderer&&) noexcept = default;
+
+RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const {
+    const Impl& m = *m_impl;
+    const auto begin = std::chrono::steady_clock::now();
+    const int w = film.width, h = film.height;
+    const size_t n = film.pixels();
+    DirectPixelView view = directPixelView(m.plan, frame, m.tables, w);
+    view.primary.field = m.tape.view();
+    view.lights = m.lights.get();
+    view.materials = m.materials.get();
+    cuda::DeviceArray<float> color(3 * n), depth(n), normal(3 * n), steps(n), error(n), shadow(n),
+        ao(n);
+    cuda::DeviceArray<uint32_t> counters(4 * n);
+    const DirectOut out{color.get(), depth.get(),  normal.get(), steps.get(),
+                        error.get(), shadow.get(), ao.get(),     counters.get()};
+    const dim3 block(16, 8);
+    const dim3 grid((w + block.x - 1) / block.x, (h + block.y - 1) / block.y);
+    cuda::EventTimer timer;
+    SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
+    switch (m.materialRegs) {
+        case 1:
+            directKernel<1><<<grid, block>>>(view, w, h, out);
+            break;
+        case 8:
+            directKernel<8><<<grid, block>>>(view, w, h, out);
+            break;
+        case 16:
+            directKernel<16><<<grid, block>>>(view, w, h, out);
+            break;
+        case 32:
+            directKernel<32><<<grid, block>>>(view, w, h, out);
+            break;
+        default:
+            directKernel<kTapeMaxScalarRegs><<<grid, block>>>(view, w, h, out);
+            break;
+    }
+    SDFT_CUDA_CHECK(cudaGetLastError());
+    SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
+    RenderStats st;
+    st.gpu = true;
+    st.gpuKernelMs = timer.elapsedMs();
+    color.download(film.color, 3 * n);
+    if (film.has(Aov::Depth)) depth.download(film.depth, n);
+    if (film.has(Aov::Normal)) normal.download(film.normal, 3 * n);
+    if (film.has(Aov::Steps)) steps.download(film.steps, n);
+    if (film.has(Aov::Error)) error.download(film.error, n);
+    if (film.has(Aov::Shadow)) shadow.download(film.shadow, n);
+    if (film.has(Aov::Ao)) ao.download(film.ao, n);
+    std::vector<uint32_t> c;
+    counters.download(c, 4 * n);
+    std::vector<float> s;
+    const std::vector<float>* stepCounts = &film.steps;
+    if (!film.has(Aov::Steps)) {
+        steps.download(s, n);
+        stepCounts = &s;
+    }
+    st.primaryRays = n;
+    for (size_t i = 0; i < n; ++i) {
+        st.primaryEvaluations += static_cast<uint64_t>((*stepCounts)[i]);
+        st.shadowEvaluations += c[4 * i + 0];
+        st.aoEvaluations += c[4 * i + 1];
+        st.fallbacks += c[4 * i + 2];
+        st.hits += c[4 * i + 3];
+    }
+    st.normalEvaluations = st.hits * static_cast<uint64_t>(stencilSize(m.plan.settings.normals));
+    st.threads = 1;
+    st.gpuFrameMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+    st.seconds = st.gpuFrameMs * 1e-3;
+    return st;
+}
+
+}  // namespace sdft

@@ -1,0 +1,90 @@
+// `sdftrace render --device cpu|cuda|auto` as a user runs it (issue 14, docs/gpu.md). Without a
+// GPU (CI, this build without CUDA) cuda is one clear error and auto renders on the CPU, saying
+// why; with one, both render on it and agree with the CPU's image.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cli_runner.h"
+#include "sdftrace/gpu/gpu_device.h"
+
+namespace sdft::e2e {
+namespace {
+
+const std::string kSize = " --width 96 --height 54 -q";
+
+std::string example(const std::string& name) {
+    return std::string(SDFT_SOURCE_DIR) + "/examples/" + name + ".json";
+}
+
+double meanAbsDifference(const std::vector<float>& a, const std::vector<float>& b) {
+    if (a.size() != b.size() || a.empty()) return INFINITY;
+    double sum = 0;
+    for (size_t i = 0; i < a.size(); ++i) sum += std::fabs(a[i] - b[i]);
+    return sum / static_cast<double>(a.size());
+}
+
+TEST(DeviceCli, CudaRendersOnTheGpuOrFailsWithOneLineAndNoOutput) {
+    TempDir dir;
+    const std::string out = dir.file("gpu.pfm");
+    const RunResult r =
+        runCli("render " + example("shadows") + " --device cuda -o " + out + kSize, dir);
+    if (gpuInfo().present) {
+        ASSERT_EQ(r.status, 0) << r.err;
+        EXPECT_NE(r.err.find("GPU kernels"), std::string::npos) << r.err;
+        const RunResult cpu =
+            runCli("render " + example("shadows") + " -o " + dir.file("cpu.pfm") + kSize, dir);
+        ASSERT_EQ(cpu.status, 0) << cpu.err;
+        int w, h, c;
+        EXPECT_LT(meanAbsDifference(readPfm(out, w, h, c), readPfm(dir.file("cpu.pfm"), w, h, c)),
+                  2e-3);
+        return;
+    }
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.err.rfind("sdftrace: error: --device cuda: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(gpuInfo().why), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    EXPECT_EQ(dir.count(), 0);
+}
+
+TEST(DeviceCli, AutoFallsBackToTheCpuAndSaysWhy) {
+    TempDir dir;
+    // Glass needs Whitted rays, which only the CPU renders: auto takes the CPU on any machine.
+    const RunResult glass = runCli("render " + example("glass") + " --device auto -o " +
+                                       dir.file("glass.pfm") + " --width 48 --height 27",
+                                   dir);
+    ASSERT_EQ(glass.status, 0) << glass.err;
+    EXPECT_NE(glass.err.find("--device auto: rendering on the CPU ("), std::string::npos)
+        << glass.err;
+    // Without a GPU the plastic scene is the CPU's image bit for bit.
+    const RunResult a = runCli(
+        "render " + example("shadows") + " --device auto -o " + dir.file("auto.pfm") + kSize, dir);
+    const RunResult c = runCli(
+        "render " + example("shadows") + " --device cpu -o " + dir.file("cpu.pfm") + kSize, dir);
+    ASSERT_EQ(a.status, 0) << a.err;
+    ASSERT_EQ(c.status, 0) << c.err;
+    int w, h, ch;
+    const double mad = meanAbsDifference(readPfm(dir.file("auto.pfm"), w, h, ch),
+                                         readPfm(dir.file("cpu.pfm"), w, h, ch));
+    if (gpuInfo().present) {
+        EXPECT_LT(mad, 2e-3);
+    } else {
+        EXPECT_EQ(mad, 0.0);
+        EXPECT_EQ(readFile(dir.file("auto.pfm")), readFile(dir.file("cpu.pfm")));
+    }
+}
+
+TEST(DeviceCli, CudaNamesWhatTheGpuDoesNotRender) {
+    if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
+    TempDir dir;
+    const RunResult r = runCli(
+        "render " + example("glass") + " --device cuda -o " + dir.file("g.png") + kSize, dir);
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("--device cuda: the GPU does not render material"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(dir.count(), 0);
+}
+
+}  // namespace
+}  // namespace sdft::e2e
