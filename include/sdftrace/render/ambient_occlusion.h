@@ -31,13 +31,13 @@ SDFT_HOST_DEVICE inline AmbientOcclusionResult ambientOcclusionTape(
     for (int i = 1; i <= o.samples; ++i) {
         const float h = static_cast<float>(i) * o.step;
         const float d = evalTape(field, p + n * h) * invL;
-        occlusion += weight * std::fmax(0.0f, h - d);
+        occlusion += weight * maxf(0.0f, h - d);
         weight *= 0.5f;
     }
     r.evaluations = o.samples;
     // Normalized by the step so that `strength` does not depend on the scene's scale.
-    const float ao = 1.0f - o.strength * occlusion / std::fmax(o.step, 1e-30f);
-    r.ao = std::fmin(std::fmax(ao, 0.0f), 1.0f);
+    const float ao = 1.0f - o.strength * occlusion / maxf(o.step, 1e-30f);
+    r.ao = clampf(ao, 0.0f, 1.0f);
     return r;
 }
 

@@ -83,7 +83,7 @@ class SoftShadowMarch {
             } else {
                 clearance = h / std::fmax(m_t, 1e-12f);
             }
-            m_s = std::fmin(m_s, m_k * clearance);
+            m_s = minf(m_s, m_k * clearance);
             if (m_centered && m_s <= -1.0f) return m_active = false;
         } else if (h < o.epsilon) {  // a point light: a hard shadow
             m_s = m_centered ? -1.0f : 0.0f;
@@ -94,21 +94,21 @@ class SoftShadowMarch {
         // small fraction of t so the march gets through.
         float step = std::fabs(h);
         if (m_centered) step = std::fmax(step, std::fmax(o.epsilon, 2e-3f * m_t));
-        m_t += o.maxStep > 0 ? std::fmin(step, o.maxStep) : step;
+        m_t += o.maxStep > 0 ? minf(step, o.maxStep) : step;
         return m_active = m_t < m_tMax && m_evaluations < o.maxSteps;
     }
     SDFT_HOST_DEVICE SoftShadowResult result() const {
         SoftShadowResult r;
         r.evaluations = m_evaluations;
         if (m_inside) return r;
-        r.visibility = m_centered ? diskShare(m_s) : std::fmin(std::fmax(m_s, 0.0f), 1.0f);
+        r.visibility = m_centered ? diskShare(m_s) : clampf(m_s, 0.0f, 1.0f);
         return r;
     }
 
     // The visible share of a disk whose edge-to-centre offset is s radii (s = -1: hidden,
     // 1: clear).
     SDFT_HOST_DEVICE static float diskShare(float s) {
-        s = std::fmin(std::fmax(s, -1.0f), 1.0f);
+        s = clampf(s, -1.0f, 1.0f);
         return 0.5f + (s * std::sqrt(1.0f - s * s) + std::asin(s)) / kPi;
     }
 
