@@ -561,7 +561,7 @@ void addRenderCommand(CLI::App& app, Action& action) {
                     "Where the frames render: cpu; cuda (the GPU: direct lighting with hard, "
                     "soft or distributed shadows and AO, plastic materials, any field: analytic, "
                     "CSG, blends, grids and baked meshes in a scene; an error names what only "
-                    "the CPU renders yet: a lone grid's DDA, triangle primaries, mirrors, glass, "
+                    "the CPU renders yet: triangle primaries, mirrors, glass, "
                     "textures, shadow maps, the path tracer); auto (the GPU where one is present "
                     "and renders the scene, else the CPU)")
         ->check(CLI::IsMember({"cpu", "cuda", "auto"}))

@@ -45,7 +45,8 @@ struct DirectPixelView {
     TraceOptions shadowRay;  // hard and distributed rays: hit or miss only
     SoftShadowOptions soft;  // with the renderer's epsilon and step budget
     int shadowRays = 64;
-    float shadowOffsetMin = 1e-3f;
+    float shadowOffsetMin = 1e-3f;  // eps_min (a DDA grid's: at least half a voxel)
+    int occluderThreshold = 0;      // DDA shadow rays: Jamriška §7's restart threshold
     bool ambientOcclusion = false;
     AmbientOcclusionOptions ao;
     int filmWidth = 0;   // pixel (x, y) seeds its random numbers with y * filmWidth + x
@@ -53,7 +54,8 @@ struct DirectPixelView {
 };
 
 struct DirectPixel {
-    PrimaryPixel primary;
+    PrimaryPixel primary;  // its DDA counters include the shadow rays'
+
     Vec3 color{0, 0, 0};  // finite: the background on a miss, 0 where shading overflowed
     float shadow = 1;     // the first shadow-casting light's visibility
     float ao = 1;
@@ -85,11 +87,26 @@ SDFT_HOST_DEVICE inline PhongParams materialAt(const DirectPixelView& v, Vec3 p)
     return m;
 }
 
-// A ray to the light: blocked or not.
+// Counters of one pixel's shadow rays.
+struct ShadowCounters {
+    uint32_t evaluations = 0;
+    int traversalSteps = 0, intersectionTests = 0;  // DDA
+};
+
+// A ray to the light: blocked or not (a lone grid's by its DDA, Jamriška §7).
 SDFT_HOST_DEVICE inline bool occluded(const DirectPixelView& v, Vec3 origin, Vec3 dir, float tMax,
-                                      uint32_t& evaluations) {
+                                      ShadowCounters& c) {
+    if (v.primary.ddaGrid >= 0) {
+        const GridTraceResult r =
+            grid_dda::traceShadow(v.primary.field.grids[v.primary.ddaGrid], {origin, dir}, 0.0f,
+                                  tMax, v.primary.gridTrace, v.occluderThreshold);
+        c.evaluations += static_cast<uint32_t>(r.interpolations);
+        c.traversalSteps += r.traversalSteps;
+        c.intersectionTests += r.intersectionTests;
+        return r.hit;
+    }
     const TraceResult r = traceTapeRay(v.primary.field, {{origin, dir}, 0.0f, tMax}, v.shadowRay);
-    evaluations += static_cast<uint32_t>(r.evaluations);
+    c.evaluations += static_cast<uint32_t>(r.evaluations);
     return r.hit;
 }
 
@@ -97,19 +114,19 @@ SDFT_HOST_DEVICE inline bool occluded(const DirectPixelView& v, Vec3 origin, Vec
 // ray's origin offset along n.
 SDFT_HOST_DEVICE inline float visibility(const DirectPixelView& v, const Light& light, int li,
                                          Vec3 p, Vec3 n, float offset, uint32_t pixel,
-                                         uint32_t& evaluations) {
+                                         ShadowCounters& counters) {
     const Vec3 origin = p + n * offset;
     const bool hard = v.shadowMethod == ShadowMethod::Hard ||
                       (v.shadowMethod == ShadowMethod::Distributed && !light.hasSize());
     if (hard || v.shadowMethod == ShadowMethod::Soft) {
         const LightDirection to = towardLight(light, p);
         if (dot(n, to.dir) <= 0) return 0.0f;  // facing away: the light is below the horizon
-        if (hard) return occluded(v, origin, to.dir, to.dist, evaluations) ? 0.0f : 1.0f;
+        if (hard) return occluded(v, origin, to.dir, to.dist, counters) ? 0.0f : 1.0f;
         Rng rng(pixel, v.frame, 0x50F7u + static_cast<uint32_t>(li));
         const SoftShadowResult s = softShadowTape(v.primary.field, origin, to.dir, 0.0f,
                                                   std::fmin(to.dist, v.primary.maxDistance),
                                                   lightTanRadius(light, p), v.soft, rng.uniform());
-        evaluations += static_cast<uint32_t>(s.evaluations);
+        counters.evaluations += static_cast<uint32_t>(s.evaluations);
         return s.visibility;
     }
     // Distributed: a per-pixel rotated Halton sequence continued from frame to frame.
@@ -125,7 +142,7 @@ SDFT_HOST_DEVICE inline float visibility(const DirectPixelView& v, const Light& 
         if (ls.dist <= 0) {  // inside the light
             ++seen;
         } else if (dot(n, ls.dir) > 0) {
-            seen += !occluded(v, origin, ls.dir, ls.dist, evaluations);
+            seen += !occluded(v, origin, ls.dir, ls.dist, counters);
         }
     }
     return static_cast<float>(seen) / static_cast<float>(rays);
@@ -158,12 +175,12 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
     const uint32_t pixel =
         static_cast<uint32_t>(y) * static_cast<uint32_t>(v.filmWidth) + static_cast<uint32_t>(x);
     bool firstShadow = true;
+    direct_pixel::ShadowCounters counters;
     for (int li = 0; li < v.lightCount; ++li) {
         const Light& light = v.lights[li];
         float visible = 1;
         if (v.shadows && light.castShadows) {
-            visible =
-                direct_pixel::visibility(v, light, li, p, n, offset, pixel, out.shadowEvaluations);
+            visible = direct_pixel::visibility(v, light, li, p, n, offset, pixel, counters);
             if (firstShadow) out.shadow = visible;
             firstShadow = false;
         }
@@ -175,6 +192,9 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
         radiance += c * light.color * (to.scale * visible);
     }
     out.color = isFinite(radiance) ? radiance : Vec3(0.0f);
+    out.shadowEvaluations = counters.evaluations;
+    out.primary.traversalSteps += counters.traversalSteps;
+    out.primary.intersectionTests += counters.intersectionTests;
     return out;
 }
 

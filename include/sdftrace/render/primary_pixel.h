@@ -11,6 +11,7 @@
 #include "sdftrace/field/tape_view.h"
 #include "sdftrace/math/camera.h"
 #include "sdftrace/render/normal_stencil.h"
+#include "sdftrace/trace/grid_dda.h"
 #include "sdftrace/trace/trace_tape.h"
 
 namespace sdft {
@@ -26,11 +27,18 @@ struct PrimaryPixelView {
     float maxDistance = kInfinity;
     float jitter[2] = {0, 0};
     NormalEstimator normals = NormalEstimator::Tetrahedral;
+    // A lone grid traced by Jamriška's two-level DDA (§4) instead of sphere tracing: its index in
+    // field.grids, -1 for none; the cell intersection and bit masks, and the gradient estimator
+    // of §5 for its normals.
+    int ddaGrid = -1;
+    GridTraceOptions gridTrace;
+    GridNormal gridNormals = GridNormal::InterpolationOfDifferences;
 };
 
 struct PrimaryPixel {
-    TraceResult trace;
+    TraceResult trace;     // DDA: evaluations are trilinear reconstructions, value f at the hit
     Vec3 normal{0, 0, 0};  // unit on a hit (facing the viewer where the gradient vanishes)
+    int traversalSteps = 0, intersectionTests = 0;  // DDA: blocks + cells visited, cells tested
 };
 
 // The primary ray of pixel (x, y): through (x + 0.5 + jx, y + 0.5 + jy) (FrameView's jitter).
@@ -41,6 +49,22 @@ SDFT_HOST_DEVICE inline Ray primaryRay(const Camera& camera, int x, int y, const
 SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v, int x, int y) {
     PrimaryPixel out;
     const RaySegment seg{primaryRay(v.camera, x, y, v.jitter), 0.0f, v.maxDistance};
+    if (v.ddaGrid >= 0) {
+        const GridView& g = v.field.grids[v.ddaGrid];
+        const GridTraceResult r = grid_dda::traceRay(g, seg.ray, seg.tMin, seg.tMax, v.gridTrace);
+        out.trace.hit = r.hit;
+        out.trace.t = r.t;
+        out.trace.evaluations = r.interpolations;
+        out.traversalSteps = r.traversalSteps;
+        out.intersectionTests = r.intersectionTests;
+        if (r.hit) {
+            const Vec3 p = seg.ray.at(r.t);
+            out.trace.value = g.interpolate(p);
+            out.normal =
+                normalOrFacing(grid_dda::gradientNormal(g, p, v.gridNormals), seg.ray.direction);
+        }
+        return out;
+    }
     out.trace = traceTapeRay(v.field, seg, v.options);
     if (out.trace.hit) {
         const float h = primaryNormalSpacing(out.trace.t, v.options.pixelRadius);
@@ -50,8 +74,9 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
     return out;
 }
 
-// Why `plan` cannot be traced by tracePrimaryPixel (empty when it can): a single-grid scene
-// traced by the DDA, and meshes whose primary rays hit triangles, have primary paths of their own.
+// Why `plan` cannot be traced by tracePrimaryPixel (empty when it can): meshes whose primary rays
+// hit triangles have a primary path of their own. (A lone grid's DDA is traced here without the
+// CPU renderer's min/max buffer, Jamriška §6, which only narrows where each ray starts and ends.)
 std::string primaryPixelUnsupported(const RenderPlan& plan);
 
 // The view of `plan`'s field, camera and primary-ray options for one frame. The plan must outlive

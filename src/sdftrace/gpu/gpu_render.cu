@@ -15,7 +15,7 @@ namespace {
 
 // The film's arrays on the device, in the film's layout; per pixel the counters a summary needs.
 struct DirectOut {
-    float *color, *depth, *normal, *steps, *error, *shadow, *ao;
+    float *color, *depth, *normal, *steps, *error, *shadow, *ao, *travSteps, *isectTests;
     uint32_t* counters;  // 4 per pixel: shadow and AO evaluations, fallbacks, hit
 };
 
@@ -38,6 +38,8 @@ __global__ void directKernel(DirectPixelView view, int width, int height, Direct
     out.error[i] = hit ? px.primary.trace.value : 0.0f;
     out.shadow[i] = px.shadow;
     out.ao[i] = px.ao;
+    out.travSteps[i] = static_cast<float>(px.primary.traversalSteps);
+    out.isectTests[i] = static_cast<float>(px.primary.intersectionTests);
     out.counters[4 * i + 0] = px.shadowEvaluations;
     out.counters[4 * i + 1] = px.aoEvaluations;
     out.counters[4 * i + 2] = static_cast<uint32_t>(px.primary.trace.fallbacks);
@@ -93,10 +95,11 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     view.lights = m.lights.get();
     view.materials = m.materials.get();
     cuda::DeviceArray<float> color(3 * n), depth(n), normal(3 * n), steps(n), error(n), shadow(n),
-        ao(n);
+        ao(n), travSteps(n), isectTests(n);
     cuda::DeviceArray<uint32_t> counters(4 * n);
-    const DirectOut out{color.get(), depth.get(),  normal.get(), steps.get(),
-                        error.get(), shadow.get(), ao.get(),     counters.get()};
+    const DirectOut out{color.get(),      depth.get(),   normal.get(), steps.get(),
+                        error.get(),      shadow.get(),  ao.get(),     travSteps.get(),
+                        isectTests.get(), counters.get()};
     const dim3 block(16, 8);
     const dim3 grid((w + block.x - 1) / block.x, (h + block.y - 1) / block.y);
     cuda::EventTimer timer;
@@ -130,6 +133,11 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     if (film.has(Aov::Error)) error.download(film.error, n);
     if (film.has(Aov::Shadow)) shadow.download(film.shadow, n);
     if (film.has(Aov::Ao)) ao.download(film.ao, n);
+    std::vector<float> trav, isect;
+    travSteps.download(trav, n);
+    isectTests.download(isect, n);
+    if (film.has(Aov::TravSteps)) film.travSteps = trav;
+    if (film.has(Aov::IsectTests)) film.isectTests = isect;
     std::vector<uint32_t> c;
     counters.download(c, 4 * n);
     std::vector<float> s;
@@ -145,8 +153,14 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
         st.aoEvaluations += c[4 * i + 1];
         st.fallbacks += c[4 * i + 2];
         st.hits += c[4 * i + 3];
+        st.traversalSteps += static_cast<uint64_t>(trav[i]);
+        st.intersectionTests += static_cast<uint64_t>(isect[i]);
     }
-    st.normalEvaluations = st.hits * static_cast<uint64_t>(stencilSize(m.plan.settings.normals));
+    st.gridTracer = m.plan.ddaGrid != nullptr;
+    // The DDA's normals read the grid, not the tape (not counted, as on the CPU).
+    if (!st.gridTracer)
+        st.normalEvaluations =
+            st.hits * static_cast<uint64_t>(stencilSize(m.plan.settings.normals));
     st.threads = 1;
     st.gpuFrameMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();

@@ -9,6 +9,7 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/render/direct_pixel.h"
+#include "sdftrace/render/grid_test_scenes.h"
 #include "sdftrace/render/primary_test_scenes.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/parse_scene.h"
@@ -30,10 +31,50 @@ TEST(GpuRender, AbsenceIsOneClearError) {
     }
 }
 
-// The GPU's film against the CPU renderer's (issue 14's bar): identical hit and miss off
+// The GPU's film of `plan` against the CPU renderer's (issue 14's bar): identical hit and miss off
 // silhouettes, depth within 1e-4 t on 99.5% of the hits there, colour mean absolute difference
-// below 2e-3; every example the per-pixel path renders, with hard, soft and distributed shadows
-// and AO.
+// below 2e-3.
+void matchesTheCpu(const std::string& name, int variant, const RenderPlan& plan) {
+    const int W = plan.camera.width, H = plan.camera.height;
+    FrameView frame;
+    frame.camera = plan.camera;
+    Film cpu(W, H), gpu(W, H);
+    render(plan, frame, cpu, false);
+    const GpuDirectRenderer renderer(plan, "test");
+    const RenderStats st = renderer.render(frame, gpu);
+    int interior = 0, hitMismatch = 0, hits = 0, depthOff = 0;
+    double colourDiff = 0;
+    for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+            const size_t i = static_cast<size_t>(y) * W + x;
+            for (int a = 0; a < 3; ++a)
+                colourDiff += std::fabs(cpu.color[3 * i + a] - gpu.color[3 * i + a]);
+            if (testing::nearDepthEdge(cpu.depth, W, H, x, y)) continue;
+            ++interior;
+            const bool ch = std::isfinite(cpu.depth[i]), gh = std::isfinite(gpu.depth[i]);
+            if (ch != gh) {
+                ++hitMismatch;
+                continue;
+            }
+            if (!ch) continue;
+            ++hits;
+            if (std::fabs(cpu.depth[i] - gpu.depth[i]) > 1e-4f * cpu.depth[i]) ++depthOff;
+        }
+    }
+    const double mad = colourDiff / (3.0 * W * H);
+    std::printf(
+        "%-15s variant %d: %d interior, %d hits, depth off %d, colour MAD %.2e, "
+        "%.2f evaluations per pixel, kernel %.3f ms, frame %.3f ms\n",
+        name.c_str(), variant, interior, hits, depthOff, mad,
+        static_cast<double>(st.totalEvaluations()) / (W * H), st.gpuKernelMs, st.gpuFrameMs);
+    EXPECT_EQ(hitMismatch, 0);
+    EXPECT_LE(depthOff, hits / 200);
+    EXPECT_LT(mad, 2e-3);
+    EXPECT_TRUE(st.gpu);
+    EXPECT_EQ(st.primaryRays, static_cast<uint64_t>(W * H));
+}
+
+// Every example the per-pixel path renders, with hard, soft and distributed shadows and AO.
 TEST(GpuRender, DirectLightingMatchesTheCpuOnTheExamples) {
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
     constexpr int W = 160, H = 90;
@@ -56,46 +97,25 @@ TEST(GpuRender, DirectLightingMatchesTheCpuOnTheExamples) {
             const RenderPlan plan = planRender(scene);
             if (!directPixelUnsupported(plan).empty()) break;
             ++rendered;
-            FrameView frame;
-            frame.camera = plan.camera;
-            Film cpu(W, H), gpu(W, H);
-            render(plan, frame, cpu, false);
-            const GpuDirectRenderer renderer(plan, "test");
-            const RenderStats st = renderer.render(frame, gpu);
-            int interior = 0, hitMismatch = 0, hits = 0, depthOff = 0;
-            double colourDiff = 0;
-            for (int y = 0; y < H; ++y) {
-                for (int x = 0; x < W; ++x) {
-                    const size_t i = static_cast<size_t>(y) * W + x;
-                    for (int a = 0; a < 3; ++a)
-                        colourDiff += std::fabs(cpu.color[3 * i + a] - gpu.color[3 * i + a]);
-                    if (testing::nearDepthEdge(cpu.depth, W, H, x, y)) continue;
-                    ++interior;
-                    const bool ch = std::isfinite(cpu.depth[i]), gh = std::isfinite(gpu.depth[i]);
-                    if (ch != gh) {
-                        ++hitMismatch;
-                        continue;
-                    }
-                    if (!ch) continue;
-                    ++hits;
-                    if (std::fabs(cpu.depth[i] - gpu.depth[i]) > 1e-4f * cpu.depth[i]) ++depthOff;
-                }
-            }
-            const double mad = colourDiff / (3.0 * W * H);
-            std::printf(
-                "%-11s variant %d: %d interior, %d hits, depth off %d, colour MAD %.2e, "
-                "%.2f evaluations per pixel, kernel %.3f ms, frame %.3f ms\n",
-                name, variant, interior, hits, depthOff, mad,
-                static_cast<double>(st.totalEvaluations()) / (W * H), st.gpuKernelMs,
-                st.gpuFrameMs);
-            EXPECT_EQ(hitMismatch, 0);
-            EXPECT_LE(depthOff, hits / 200);
-            EXPECT_LT(mad, 2e-3);
-            EXPECT_TRUE(st.gpu);
-            EXPECT_EQ(st.primaryRays, static_cast<uint64_t>(W * H));
+            matchesTheCpu(name, variant, plan);
         }
     }
     EXPECT_GE(rendered, 40);
+}
+
+// Lone grids by the DDA on the GPU (Jamriška §4, §5, §7), hard and soft shadows, against the CPU
+// renderer without its min/max buffer.
+TEST(GpuRender, GridDdaMatchesTheCpu) {
+    if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
+    for (auto& [name, original] : testing::ddaTestScenes(160, 90)) {
+        SCOPED_TRACE(name);
+        for (int variant = 0; variant < 3; ++variant) {
+            Scene scene = original;
+            if (variant == 1) scene.settings.occluderThreshold = 4;
+            if (variant == 2) scene.settings.shadowMethod = ShadowMethod::Soft;
+            matchesTheCpu(name, variant, planRender(scene));
+        }
+    }
 }
 
 }  // namespace

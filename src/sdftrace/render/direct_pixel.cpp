@@ -47,11 +47,16 @@ DirectPixelView directPixelView(const RenderPlan& plan, const FrameView& frame,
     v.shadowRay = s.trace.occlusion();
     // The renderer's soft-shadow march (renderer.cpp): no closer than the primary rays' tau, and
     // at least their step budget.
+    // A DDA hit has f = 0 by construction, but the trilinear field can stay <= 0 for a fraction
+    // of a voxel along the gradient estimate near creases: grids need eps_min of half a voxel.
+    v.shadowOffsetMin = plan.ddaGrid
+                            ? std::fmax(s.shadowOffsetMin, 0.5f * plan.ddaGrid->shape().voxelSize)
+                            : s.shadowOffsetMin;
+    v.occluderThreshold = s.occluderThreshold;
     v.soft = s.soft;
-    v.soft.epsilon = std::fmax(s.soft.epsilon, s.trace.tau);
+    v.soft.epsilon = plan.ddaGrid ? v.shadowOffsetMin : std::fmax(s.soft.epsilon, s.trace.tau);
     v.soft.maxSteps = std::max(s.soft.maxSteps, s.trace.maxSteps);
     v.shadowRays = s.shadowRays;
-    v.shadowOffsetMin = s.shadowOffsetMin;
     v.ambientOcclusion = s.ambientOcclusion;
     v.ao = s.ao;
     v.filmWidth = filmWidth;

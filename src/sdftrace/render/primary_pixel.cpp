@@ -5,10 +5,28 @@
 namespace sdft {
 
 std::string primaryPixelUnsupported(const RenderPlan& plan) {
-    if (plan.ddaGrid) return "a single-grid scene traced by the two-level DDA";
     if (plan.meshPrimary) return "meshes whose primary rays hit their triangles";
     return {};
 }
+
+namespace {
+
+// The index in the tape's grids of the plan's DDA grid: the tape of a lone grid has one grid leaf.
+int ddaGridIndex(const RenderPlan& plan) {
+    if (!plan.ddaGrid) return -1;
+    const TapeView t = plan.tape.view();
+    for (uint32_t i = 0; i < t.count; ++i) {
+        if (t.instrs[i].op != Op::Grid) continue;
+        const int g = static_cast<int>(t.consts[t.instrs[i].k]);
+        SDFT_CHECK(t.grids[g].samples == plan.ddaGrid->view().samples &&
+                   t.grids[g].blockSamples == plan.ddaGrid->view().blockSamples);
+        return g;
+    }
+    SDFT_CHECK(!"a DDA grid without a grid leaf in the tape");
+    return -1;
+}
+
+}  // namespace
 
 PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame) {
     PrimaryPixelView v;
@@ -20,6 +38,9 @@ PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame
     v.jitter[0] = frame.pixelJitter[0];
     v.jitter[1] = frame.pixelJitter[1];
     v.normals = plan.settings.normals;
+    v.ddaGrid = ddaGridIndex(plan);
+    v.gridTrace = plan.settings.gridTrace;
+    v.gridNormals = plan.settings.gridNormals;
     return v;
 }
 

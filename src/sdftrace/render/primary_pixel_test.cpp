@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "sdftrace/render/grid_test_scenes.h"
 #include "sdftrace/render/primary_test_scenes.h"
 #include "sdftrace/render/render_plan.h"
 #include "sdftrace/render/renderer.h"
@@ -13,6 +14,37 @@
 
 namespace sdft {
 namespace {
+
+// Renders `plan` with the CPU renderer and holds tracePrimaryPixel to its film; the hits.
+int matchesTheRenderer(const RenderPlan& plan) {
+    const int w = plan.camera.width, h = plan.camera.height;
+    Film film(w, h);
+    render(plan, film);
+    FrameView frame;
+    frame.camera = plan.camera;
+    const PrimaryPixelView view = primaryPixelView(plan, frame);
+    const bool failedBefore = ::testing::Test::HasFailure();  // report this plan's first
+    int hits = 0;
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y) * w + x;
+            const PrimaryPixel px = tracePrimaryPixel(view, x, y);
+            EXPECT_EQ(px.trace.hit, std::isfinite(film.depth[i])) << x << "," << y;
+            EXPECT_EQ(px.trace.evaluations, film.steps[i]) << x << "," << y;
+            if (plan.ddaGrid && !plan.settings.shadows) {  // shadow rays add to these
+                EXPECT_EQ(px.traversalSteps, film.travSteps[i]) << x << "," << y;
+                EXPECT_EQ(px.intersectionTests, film.isectTests[i]) << x << "," << y;
+            }
+            if (!failedBefore && ::testing::Test::HasFailure()) return hits;
+            if (!px.trace.hit) continue;
+            ++hits;
+            EXPECT_EQ(px.trace.t, film.depth[i]) << x << "," << y;
+            for (int a = 0; a < 3; ++a)
+                EXPECT_NEAR(px.normal[a], film.normal[3 * i + a], 1e-5f) << x << "," << y;
+        }
+    }
+    return hits;
+}
 
 // The device path's per-pixel function, run here on the CPU, against the CPU renderer's tiles of
 // packets: the same hits, depths, evaluation counts and normals on every example scene it
@@ -39,29 +71,41 @@ TEST(PrimaryPixel, MatchesTheRenderersPrimaryRaysOnTheExamples) {
             const RenderPlan plan = planRender(scene);
             if (!primaryPixelUnsupported(plan).empty()) break;
             if (variant == 0) ++scenes;
-            Film film(72, 40);
-            render(plan, film);
-            FrameView frame;
-            frame.camera = plan.camera;
-            const PrimaryPixelView view = primaryPixelView(plan, frame);
-            int hits = 0;
-            for (int y = 0; y < 40; ++y) {
-                for (int x = 0; x < 72; ++x) {
-                    const size_t i = static_cast<size_t>(y) * 72 + x;
-                    const PrimaryPixel px = tracePrimaryPixel(view, x, y);
-                    ASSERT_EQ(px.trace.hit, std::isfinite(film.depth[i])) << x << "," << y;
-                    ASSERT_EQ(px.trace.evaluations, film.steps[i]) << x << "," << y;
-                    if (!px.trace.hit) continue;
-                    ++hits;
-                    ASSERT_EQ(px.trace.t, film.depth[i]) << x << "," << y;
-                    for (int a = 0; a < 3; ++a)
-                        ASSERT_NEAR(px.normal[a], film.normal[3 * i + a], 1e-5f) << x << "," << y;
-                }
-            }
-            EXPECT_GT(hits, 0);
+            EXPECT_GT(matchesTheRenderer(plan), 0);
         }
     }
     EXPECT_EQ(scenes, static_cast<int>(testing::kPrimaryTestScenes.size()));
+}
+
+// Lone grids by Jamriška's DDA (§4): the same hits, depths, reconstruction counts, traversal
+// counters and §5 normals as the renderer's DDA, sparse (4- and 8-blocks) and dense, with false
+// position and midpoint cell hits, bit masks on and off, the three gradient estimators.
+TEST(PrimaryPixel, MatchesTheRenderersGridDdaOnLoneGrids) {
+    for (auto& [name, original] : testing::ddaTestScenes(64, 36)) {
+        SCOPED_TRACE(name);
+        for (int variant = 0; variant < 4; ++variant) {
+            SCOPED_TRACE(variant);
+            Scene scene = original;
+            scene.settings.threads = 1;
+            scene.settings.shadows = false;
+            if (variant == 1) {
+                scene.settings.gridTrace.cellMethod = CellIntersection::Midpoint;
+                scene.settings.gridNormals = GridNormal::AnalyticTrilinear;
+            }
+            if (variant == 2) {
+                scene.settings.gridTrace.bitMasks = false;
+                scene.settings.gridTrace.falsiIters = 3;
+                scene.settings.gridNormals = GridNormal::DifferenceOfInterpolations;
+            }
+            if (variant == 3)  // far
+                scene.camera.eye =
+                    original.camera.target + (original.camera.eye - original.camera.target) * 2.0f;
+            const RenderPlan plan = planRender(scene);
+            ASSERT_TRUE(plan.ddaGrid);
+            ASSERT_EQ(primaryPixelUnsupported(plan), "");
+            EXPECT_GT(matchesTheRenderer(plan), 40);
+        }
+    }
 }
 
 }  // namespace
