@@ -203,6 +203,15 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
 // maps stay on the CPU renderer for now.
 std::string directPixelUnsupported(const RenderPlan& plan);
 
+// The shadow rays' eps_min of `plan` (Keinert et al. 2014, §3.3): the settings', and at least
+// half a voxel for a lone grid traced by the DDA, whose trilinear field can stay <= 0 for a
+// fraction of a voxel along the gradient near creases. Shared by the CPU renderer.
+float shadowOffsetMin(const RenderPlan& plan);
+// The soft-shadow march of `plan`'s shadow rays (RTSDF §2.4-2.5): the settings' with an epsilon
+// no finer than the primary rays' tau (eps_min for a DDA grid) and at least their step budget.
+// Shared by the CPU renderer.
+SoftShadowOptions softShadowOptions(const RenderPlan& plan);
+
 // The host side of a view: the plan's lights and its materials' Blinn-Phong parameters.
 struct DirectPixelTables {
     std::vector<Light> lights;

@@ -54,23 +54,13 @@ struct GpuDirectRenderer::Impl {
     DirectPixelTables tables;
     cuda::DeviceArray<Light> lights;
     cuda::DeviceArray<PhongParams> materials;
-    int materialRegs = 1;
 
     explicit Impl(const RenderPlan& p)
         : plan(p),
           tape(p.tape),
           tables(directPixelTables(p)),
           lights(tables.lights),
-          materials(tables.materials) {
-        const TapeView& v = tape.view();
-        if (plan.tape.uniformMaterial() < 0 ||
-            plan.tape.uniformMaterial() >= static_cast<int>(tables.materials.size())) {
-            materialRegs = v.numScalarRegs <= 8    ? 8
-                           : v.numScalarRegs <= 16 ? 16
-                           : v.numScalarRegs <= 32 ? 32
-                                                   : kTapeMaxScalarRegs;
-        }
-    }
+          materials(tables.materials) {}
 };
 
 GpuDirectRenderer::GpuDirectRenderer(const RenderPlan& plan, const std::string& what) {
@@ -104,7 +94,14 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     const dim3 grid((w + block.x - 1) / block.x, (h + block.y - 1) / block.y);
     cuda::EventTimer timer;
     SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
-    switch (m.materialRegs) {
+    // The material register file: none read with a uniform material, else the smallest that
+    // holds the tape's scalar registers.
+    const int regs = view.uniformMaterial >= 0                ? 1
+                     : view.primary.field.numScalarRegs <= 8  ? 8
+                     : view.primary.field.numScalarRegs <= 16 ? 16
+                     : view.primary.field.numScalarRegs <= 32 ? 32
+                                                              : kTapeMaxScalarRegs;
+    switch (regs) {
         case 1:
             directKernel<1><<<grid, block>>>(view, w, h, out);
             break;
@@ -129,26 +126,21 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     color.download(film.color, 3 * n);
     if (film.has(Aov::Depth)) depth.download(film.depth, n);
     if (film.has(Aov::Normal)) normal.download(film.normal, 3 * n);
-    if (film.has(Aov::Steps)) steps.download(film.steps, n);
     if (film.has(Aov::Error)) error.download(film.error, n);
     if (film.has(Aov::Shadow)) shadow.download(film.shadow, n);
     if (film.has(Aov::Ao)) ao.download(film.ao, n);
-    std::vector<float> trav, isect;
+    std::vector<float> stepCounts, trav, isect;  // the summary's counters, and AOVs
+    steps.download(stepCounts, n);
     travSteps.download(trav, n);
     isectTests.download(isect, n);
+    if (film.has(Aov::Steps)) film.steps = stepCounts;
     if (film.has(Aov::TravSteps)) film.travSteps = trav;
     if (film.has(Aov::IsectTests)) film.isectTests = isect;
     std::vector<uint32_t> c;
     counters.download(c, 4 * n);
-    std::vector<float> s;
-    const std::vector<float>* stepCounts = &film.steps;
-    if (!film.has(Aov::Steps)) {
-        steps.download(s, n);
-        stepCounts = &s;
-    }
     st.primaryRays = n;
     for (size_t i = 0; i < n; ++i) {
-        st.primaryEvaluations += static_cast<uint64_t>((*stepCounts)[i]);
+        st.primaryEvaluations += static_cast<uint64_t>(stepCounts[i]);
         st.shadowEvaluations += c[4 * i + 0];
         st.aoEvaluations += c[4 * i + 1];
         st.fallbacks += c[4 * i + 2];

@@ -20,6 +20,19 @@ std::string directPixelUnsupported(const RenderPlan& plan) {
     return {};
 }
 
+float shadowOffsetMin(const RenderPlan& plan) {
+    const float eps = plan.settings.shadowOffsetMin;
+    return plan.ddaGrid ? std::fmax(eps, 0.5f * plan.ddaGrid->shape().voxelSize) : eps;
+}
+
+SoftShadowOptions softShadowOptions(const RenderPlan& plan) {
+    const RenderSettings& s = plan.settings;
+    SoftShadowOptions o = s.soft;
+    o.epsilon = plan.ddaGrid ? shadowOffsetMin(plan) : std::fmax(o.epsilon, s.trace.tau);
+    o.maxSteps = std::max(o.maxSteps, s.trace.maxSteps);
+    return o;
+}
+
 DirectPixelTables directPixelTables(const RenderPlan& plan) {
     DirectPixelTables t;
     t.lights = plan.lighting.lights;
@@ -47,15 +60,9 @@ DirectPixelView directPixelView(const RenderPlan& plan, const FrameView& frame,
     v.shadowRay = s.trace.occlusion();
     // The renderer's soft-shadow march (renderer.cpp): no closer than the primary rays' tau, and
     // at least their step budget.
-    // A DDA hit has f = 0 by construction, but the trilinear field can stay <= 0 for a fraction
-    // of a voxel along the gradient estimate near creases: grids need eps_min of half a voxel.
-    v.shadowOffsetMin = plan.ddaGrid
-                            ? std::fmax(s.shadowOffsetMin, 0.5f * plan.ddaGrid->shape().voxelSize)
-                            : s.shadowOffsetMin;
+    v.shadowOffsetMin = shadowOffsetMin(plan);
     v.occluderThreshold = s.occluderThreshold;
-    v.soft = s.soft;
-    v.soft.epsilon = plan.ddaGrid ? v.shadowOffsetMin : std::fmax(s.soft.epsilon, s.trace.tau);
-    v.soft.maxSteps = std::max(s.soft.maxSteps, s.trace.maxSteps);
+    v.soft = softShadowOptions(plan);
     v.shadowRays = s.shadowRays;
     v.ambientOcclusion = s.ambientOcclusion;
     v.ao = s.ao;

@@ -13,6 +13,7 @@
 #include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/math/camera.h"
 #include "sdftrace/math/sampling.h"
+#include "sdftrace/render/direct_pixel.h"
 #include "sdftrace/render/light_sample.h"
 #include "sdftrace/render/normal_stencil.h"
 #include "sdftrace/render/path_tracer.h"
@@ -62,6 +63,8 @@ class TileRenderer {
         m_primary.pixelRadius = m_camera.pixelRadius();
         // Shadow rays need only a yes/no answer: plain threshold, relaxation kept, no refinement.
         m_shadow = m_settings.trace.occlusion();  // hit or miss only: no root refinement
+        m_shadowOffsetMin = shadowOffsetMin(plan);
+        m_soft = softShadowOptions(plan);
         if (plan.ddaGrid) {
             m_gridView = plan.ddaGrid->view();
             m_grid = &m_gridView;
@@ -139,6 +142,8 @@ class TileRenderer {
     Camera m_camera;
     const RenderSettings& m_settings;
     TraceOptions m_primary, m_shadow;
+    float m_shadowOffsetMin = 0;  // eps_min of shadow-ray offsets (direct_pixel.h)
+    SoftShadowOptions m_soft;     // the soft-shadow march (direct_pixel.h)
     // Set when the scene is a single grid traced by Jamriška's DDA (RenderSettings::gridTracer).
     const GridView* m_grid = nullptr;
     GridView m_gridView;
@@ -504,13 +509,9 @@ void TileRenderer::traceShadowSegments(TileScratch& s) {
 float TileRenderer::shadowOffset(const TileScratch& s, int h) const {
     // Keinert et al. 2014, §3.3: offset the origin by 2 max(eps_min, |f(p)|) along the normal,
     // so it clears the surface however far from it the march stopped.
+    // (A DDA hit has f = 0 by construction: its eps_min is at least half a voxel.)
     const float f = std::fabs(s.results[s.hitPixel[h]].value) / m_tape.lipschitz();
-    // A DDA hit has f = 0 by construction; the trilinear field can stay <= 0 for a fraction of
-    // a voxel along the gradient estimate near creases, so grids need eps_min of half a voxel.
-    const float epsMin = m_grid
-                             ? std::fmax(m_settings.shadowOffsetMin, 0.5f * m_grid->shape.voxelSize)
-                             : m_settings.shadowOffsetMin;
-    return 2.0f * std::fmax(epsMin, f);
+    return 2.0f * std::fmax(m_shadowOffsetMin, f);
 }
 
 void TileRenderer::lightVisibility(TileScratch& s, std::vector<float>& visible, const Light& light,
@@ -547,10 +548,7 @@ void TileRenderer::lightVisibility(TileScratch& s, std::vector<float>& visible, 
 // together.
 void TileRenderer::softShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
                                int lightIndex) {
-    SoftShadowOptions o = m_settings.soft;
-    o.epsilon = m_grid ? std::fmax(m_settings.shadowOffsetMin, 0.5f * m_grid->shape.voxelSize)
-                       : std::fmax(o.epsilon, m_settings.trace.tau);
-    o.maxSteps = std::max(o.maxSteps, m_settings.trace.maxSteps);
+    const SoftShadowOptions& o = m_soft;
     s.softRays.clear();
     s.shadowOwner.clear();
     for (size_t h = 0; h < visible.size(); ++h) {
