@@ -7,7 +7,7 @@
 # Configures with CUDA, builds the unit tests, the CLI with its end-to-end tests and the GPU
 # benches, runs the GPU tests (and the CPU tests of the code the kernels share), `render --device`
 # through the CLI, then the benches; everything goes to OUTDIR: configure.log, build.log,
-# tests.log, cli.log, bench.md, direct.md, summary.txt. Meant to finish in well under 6 minutes
+# tests.log, cli.log, bench.md, direct.md, bake.md, summary.txt. Meant to finish in well under 6 minutes
 # (the build is most of it). Exits non-zero when a step fails; summary.txt says which.
 set -uo pipefail
 out=${1:?usage: scripts/gpu-check.sh OUTDIR}
@@ -31,16 +31,16 @@ cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DSDFT_CUDA=ON -DSDFT_MPI=OFF
     $SDFT_CMAKE_ARGS > "$out/configure.log" 2>&1 || fail "configure (configure.log)"
 step "build"
 cmake --build build-gpu -j"$(nproc)" --target sdftrace_unit_tests sdftrace_e2e_tests \
-    sdftrace_gpu_primary_bench sdftrace_gpu_direct_bench \
+    sdftrace_gpu_primary_bench sdftrace_gpu_direct_bench sdftrace_gpu_bake_bench \
     > "$out/build.log" 2>&1 || { tail -40 "$out/build.log" >> "$summary"; fail "build (build.log)"; }
 
 step "tests"
 status=0
 timeout 120 build-gpu/sdftrace_unit_tests \
-    --gtest_filter='Gpu*:PrimaryPixel.*:DirectPixel.*:SoftShadows.*:AmbientOcclusion.*:Tape.*:FieldTracer.*:GridDistance.*' \
+    --gtest_filter='Gpu*:PrimaryPixel.*:DirectPixel.*:SoftShadows.*:AmbientOcclusion.*:Tape.*:FieldTracer.*:GridDistance.*:Lbvh.*:RtsdfBake.*' \
     > "$out/tests.log" 2>&1 || status=$?
 grep -E "^\[  (PASSED|FAILED|SKIPPED) " "$out/tests.log" >> "$summary"
-grep -E "near:|far :|variant [0-9]:" "$out/tests.log" >> "$summary"
+grep -E "near:|far :|variant [0-9]:|\[ gpu bake \]" "$out/tests.log" >> "$summary"
 [ $status -eq 0 ] || step "FAILED: tests (tests.log), status $status"
 cli=0
 timeout 60 build-gpu/tests/sdftrace_e2e_tests --gtest_filter='DeviceCli.*' > "$out/cli.log" 2>&1 ||
@@ -55,5 +55,8 @@ cat "$out/bench.md" >> "$summary"
 timeout 120 build-gpu/bench/sdftrace_gpu_direct_bench --runs 10 --cpu-runs 3 > "$out/direct.md" 2>&1 ||
     { step "FAILED: direct bench (direct.md)"; status=1; }
 cat "$out/direct.md" >> "$summary"
+timeout 120 build-gpu/bench/sdftrace_gpu_bake_bench --runs 10 --cpu-runs 1 > "$out/bake.md" 2>&1 ||
+    { step "FAILED: bake bench (bake.md)"; status=1; }
+cat "$out/bake.md" >> "$summary"
 step "done"
 exit $status

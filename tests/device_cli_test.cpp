@@ -86,5 +86,73 @@ TEST(DeviceCli, CudaNamesWhatTheGpuDoesNotRender) {
     EXPECT_EQ(dir.count(), 0);
 }
 
+// `sdftrace bake mesh --device cuda|auto` (jfa and rtsdf bake on the GPU).
+const std::string kMesh = std::string(SDFT_SOURCE_DIR) + "/data/meshes/suzanne.obj";
+
+TEST(DeviceCli, BakeCudaRunsOnTheGpuOrFailsWithOneLineAndNoOutput) {
+    TempDir dir;
+    for (const char* method : {"jfa", "rtsdf"}) {
+        SCOPED_TRACE(method);
+        const std::string out = dir.file(std::string(method) + ".sdfg");
+        const RunResult r = runCli("bake " + kMesh + " --method " + method +
+                                       " --res 32 --dense --device cuda -o " + out,
+                                   dir);
+        if (gpuInfo().present) {
+            ASSERT_EQ(r.status, 0) << r.err;
+            EXPECT_NE(r.err.find("(gpu)"), std::string::npos) << r.err;
+            EXPECT_TRUE(std::filesystem::exists(out));
+            continue;
+        }
+        EXPECT_EQ(r.status, 1);
+        EXPECT_EQ(r.err.rfind("sdftrace: error: --device cuda: ", 0), 0u) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_FALSE(std::filesystem::exists(out));
+    }
+    if (!gpuInfo().present) {
+        EXPECT_EQ(dir.count(), 0);
+    }
+}
+
+TEST(DeviceCli, BakeCudaNamesWhatOnlyTheCpuBakes) {
+    TempDir dir;
+    const RunResult exact =
+        runCli("bake " + kMesh + " --res 32 --device cuda -o " + dir.file("e.sdfg"), dir);
+    EXPECT_EQ(exact.status, 1);
+    EXPECT_EQ(exact.err,
+              "sdftrace: error: --device cuda: --method exact runs on the CPU only (the GPU "
+              "bakes jfa and rtsdf)\n");
+    const RunResult parity = runCli("bake " + kMesh + " --method rtsdf --sign parity --res 32 " +
+                                        "--device cuda -o " + dir.file("p.sdfg"),
+                                    dir);
+    EXPECT_EQ(parity.status, 1);
+    EXPECT_NE(parity.err.find("--sign parity runs on the CPU only"), std::string::npos)
+        << parity.err;
+    EXPECT_EQ(dir.count(), 0);
+}
+
+TEST(DeviceCli, BakeAutoFallsBackToTheCpuAndSaysWhy) {
+    TempDir dir;
+    const RunResult exact =
+        runCli("bake " + kMesh + " --res 24 --device auto -o " + dir.file("e.sdfg"), dir);
+    ASSERT_EQ(exact.status, 0) << exact.err;
+    EXPECT_NE(exact.err.find("--device auto: baking on the CPU (--method exact runs on the CPU "
+                             "only"),
+              std::string::npos)
+        << exact.err;
+    if (gpuInfo().present) return;
+    // Without a GPU auto's jfa bake is the CPU's, byte for byte.
+    const RunResult a = runCli("bake " + kMesh + " --method jfa --res 24 --device auto -o " +
+                                   dir.file("auto.sdfg"),
+                               dir);
+    const RunResult c = runCli(
+        "bake " + kMesh + " --method jfa --res 24 -o " + dir.file("cpu.sdfg"), dir);
+    ASSERT_EQ(a.status, 0) << a.err;
+    ASSERT_EQ(c.status, 0) << c.err;
+    EXPECT_NE(a.err.find("--device auto: baking on the CPU (" + gpuInfo().why + ")"),
+              std::string::npos)
+        << a.err;
+    EXPECT_EQ(readFile(dir.file("auto.sdfg")), readFile(dir.file("cpu.sdfg")));
+}
+
 }  // namespace
 }  // namespace sdft::e2e

@@ -30,7 +30,7 @@ const std::map<std::string, std::set<std::string>>& allowedIncludes() {
         {"bake", {"core", "math", "exec", "field"}},
         {"io", {"core", "math", "exec", "field", "render", "bake"}},
         {"scene", {"core", "math", "exec", "field", "trace", "render", "bake", "io"}},
-        {"gpu", {"core", "math", "exec", "field", "trace", "render"}},
+        {"gpu", {"core", "math", "exec", "field", "trace", "render", "bake"}},
         {"view", {"core", "math", "exec", "field", "trace", "render", "bake", "io", "scene"}},
         // Renders and bakes across the ranks of an MPI job.
         {"cluster", {"core", "math", "exec", "field", "trace", "render", "bake", "io", "scene"}},

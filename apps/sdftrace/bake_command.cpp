@@ -21,6 +21,8 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/field/sample_grid.h"
+#include "sdftrace/gpu/gpu_bake.h"
+#include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_file.h"
@@ -51,6 +53,7 @@ struct BakeArgs {
     float mask = 3;
     bool verify = false;
     int threads = 0;
+    std::string device = "cpu";  // cpu, cuda, auto
     std::string texcoords;  // "", sphere, cylinder
     std::string texcoordCenter, texcoordAxis;
     const CLI::App* command = nullptr;  // to ask which flags were given
@@ -79,8 +82,9 @@ void rejectFlagsThatDoNotApply(const BakeArgs& a, bool mesh) {
         if (a.method != "exact" || !a.dense)
             rejectGiven(a, {"--closest"}, "applies to --method exact with --dense only");
     } else {
-        rejectGiven(
-            a, {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays", "--mask"},
+        rejectGiven(a,
+                    {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays",
+                     "--mask", "--device"},
             "applies to meshes only; " + a.scene + " is a scene file, sampled from its own field");
     }
     if (a.dense) rejectGiven(a, {"--block", "--band"}, "applies to sparse grids only (--dense)");
@@ -251,14 +255,37 @@ void printMeshBakeSummary(const BakeArgs& a, const MeshBakeResult& r,
                  r.grid.memoryBytes() / 1048576.0, peakResidentMiB(), stages.c_str());
 }
 
+// Whether the mesh bakes on the GPU: cuda insists (an error names what the GPU lacks, before
+// anything is loaded), auto takes it where a GPU is present and bakes the method, else says why
+// not on stderr.
+bool bakeOnGpu(const BakeArgs& a, const MeshBakeOptions& o, bool distributed) {
+    if (a.device == "cpu") return false;
+    std::string why = gpuBakeUnsupported(o);
+    if (a.device == "cuda") {
+        if (distributed)
+            throw InputError("--device cuda: cannot be combined with mpirun yet; use --device cpu");
+        if (!why.empty()) throw InputError("--device cuda: " + why);
+        requireGpu("--device cuda");
+        return true;
+    }
+    if (distributed) why = "a distributed job bakes on its ranks' CPUs";
+    if (why.empty() && !gpuInfo().present) why = gpuInfo().why;
+    if (why.empty()) return true;
+    if (!a.quiet)
+        std::fprintf(stderr, "sdftrace bake: --device auto: baking on the CPU (%s)\n",
+                     why.c_str());
+    return false;
+}
+
 int bakeMesh(const BakeArgs& a, Communicator& comm) {
     MeshBakeOptions o;
     auto t0 = std::chrono::steady_clock::now();
     MeshReport report;
     TriangleMesh mesh;
-    bool across = false;
+    bool across = false, gpu = false;
     together(comm, [&] {
         o = meshBakeOptions(a);
+        gpu = bakeOnGpu(a, o, comm.distributed());
         across = comm.distributed() && o.method == MeshBakeMethod::Exact &&
                  o.sampling.kind == GridKind::Sparse;
         if (comm.distributed() && !across && !comm.root()) return;  // rank 0 bakes alone
@@ -289,7 +316,7 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
         r = bakeExactAcross(farm, mesh, o);
         farm.end();
     } else {
-        r = bakeMesh(mesh, o);
+        r = gpu ? bakeMeshGpu(mesh, o) : bakeMesh(mesh, o);
     }
     auto t2 = std::chrono::steady_clock::now();
     if (a.verify) {
@@ -458,6 +485,13 @@ void addBakeCommand(CLI::App& app, Action& action) {
                     "Region x0,y0,z0,x1,y1,z1 (default: the scene's bounds)");
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));
+    cmd->add_option("--device", args->device,
+                    "Meshes: where the bake runs: cpu; cuda (the GPU: --method jfa or rtsdf, "
+                    "signs by winding, or beta for jfa; an LBVH built on the GPU for rtsdf's "
+                    "rays); auto (the GPU where one is present and bakes the method, else the "
+                    "CPU)")
+        ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+        ->capture_default_str();
     cmd->add_option("--texcoords", args->texcoords,
                     "Also store texture coordinates (.sdfg): particles traced along the gradient "
                     "to an enclosing sphere or cylinder helper (Liktor §4.2.2, §5.5.2)")

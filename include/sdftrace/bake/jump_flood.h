@@ -20,6 +20,10 @@ struct JfaStats {
     std::vector<double> passSeconds;  // one per offset
 };
 
+// The passes' offsets: N/2, N/4, ..., 1 for the grid's largest vertex count N, with the
+// variant's extra passes.
+std::vector<int> jumpFloodOffsets(const GridShape& shape, JfaVariant variant);
+
 // Closest points propagated from `seeds` (kNoSeed in x: none).
 std::vector<Vec3> jumpFlood(const GridShape& shape, std::vector<Vec3> seeds, JfaVariant variant,
                             int threads = 0, JfaStats* stats = nullptr);

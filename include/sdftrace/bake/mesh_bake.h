@@ -61,6 +61,11 @@ void checkMeshBake(const TriangleMesh& mesh, const MeshBakeOptions& options, dou
 
 MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& options);
 
+// A bake's dense samples as the grid `sampling` asks for (a sparse one marks the "sparsify"
+// stage), into r.grid: what every method (and the GPU's, gpu_bake.h) ends with.
+void finishMeshBake(const GridShape& shape, std::vector<float> samples,
+                    const SampleOptions& sampling, MeshBakeResult& r, StageClock& clock);
+
 // The summary of an exact bake's work (MeshBakeResult::details): distances and signs.
 std::string exactBakeDetails(const ExactBakeStats& stats, const MeshBakeOptions& options,
                              const GridShape& shape);

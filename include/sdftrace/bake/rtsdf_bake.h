@@ -29,12 +29,21 @@ struct RtsdfHistory {
     int frames = 0;           // frames accumulated
 };
 
+// Eq. 1's previous frame: kept when `history` holds frames of `shape`, else started afresh (the
+// first frame, or a grid that changed shape).
+void beginRtsdfFrame(RtsdfHistory& history, const GridShape& shape);
+
+// What the fine rays are cast through: Embree's BVH, or the LBVH (lbvh.h) that the GPU bake
+// traverses, to compare with it on the CPU.
+enum class RtsdfCaster { Embree, Lbvh };
+
 struct RtsdfOptions {
     int rays = 64;         // x, per refined vertex
     float maskVoxels = 3;  // d, in fine voxels
     uint32_t seed = 1;     // of the per-vertex direction sequences (the bake is deterministic)
     SignMethod coarseSign = SignMethod::WindingNumber;
     RtsdfHistory* history = nullptr;  // temporal accumulation across frames (updated in place)
+    RtsdfCaster caster = RtsdfCaster::Embree;
 };
 
 struct RtsdfStats {

@@ -11,36 +11,13 @@
 #include <vector>
 
 #include "sdftrace/bake/triangle_mesh.h"
+#include "sdftrace/bake/winding_view.h"
 
 namespace sdft {
 
 // Exact solid angle of triangle (a, b, c) seen from p, signed by the winding (outward normals give
 // a positive angle from inside).
 double triangleSolidAngle(Vec3 p, Vec3 a, Vec3 b, Vec3 c);
-
-// atan2 in float to 3e-7 rad (measured): Abramowitz & Stegun 4.4.49 for atan on [0, 1], with
-// octant reduction.
-// Branch-free (selects only), so that loops over it vectorize.
-inline float fastAtan2(float y, float x) {
-    float ax = std::fabs(x), ay = std::fabs(y);
-    float hi = ax > ay ? ax : ay, lo = ax > ay ? ay : ax;
-    float a = lo / (hi > 1e-30f ? hi : 1e-30f), s = a * a;
-    float r =
-        ((((((((0.0028662257f * s - 0.0161657367f) * s + 0.0429096138f) * s - 0.0752896400f) * s +
-             0.1065626393f) *
-                s -
-            0.1420889944f) *
-               s +
-           0.1999355085f) *
-              s -
-          0.3333314528f) *
-         s) *
-            a +
-        a;
-    r = ay > ax ? 1.57079637f - r : r;
-    r = x < 0 ? kPi - r : r;
-    return y < 0 ? -r : r;
-}
 
 class WindingNumber {
   public:
@@ -51,21 +28,18 @@ class WindingNumber {
     double exact(Vec3 p) const;  // O(triangles): the reference
     // Hierarchical; leaves sum float solid angles with a polynomial atan2 (fastAtan2).
     double fast(Vec3 p) const { return fast(p, m_beta); }
-    double fast(Vec3 p, double beta) const;
+    double fast(Vec3 p, double beta) const { return windingNumberFast(view(), p, beta); }
     // fast(p) > 1/2, first tried with a coarse beta (1.5, about 4x cheaper near the surface)
     // whose answer is taken when it is more than 0.3 from 1/2.
-    bool inside(Vec3 p) const;
+    bool inside(Vec3 p) const { return windingInside(view(), p, m_beta); }
+    // The tree as plain data (winding_view.h), valid while this object lives.
+    WindingView view() const {
+        return {m_nodes.data(), static_cast<int>(m_nodes.size()), m_corners.data()};
+    }
+    double beta() const { return m_beta; }
 
   private:
-    struct Node {
-        Vec3 lo, hi;        // bounds of the triangles' vertices
-        double cx, cy, cz;  // area-weighted centroid
-        double nx, ny, nz;  // sum of area-weighted normals (the dipole)
-        double area;        // of its triangles
-        double radius;      // bounds the distance from the centroid to a vertex
-        int left = -1, right = -1;
-        int first = 0, count = 0;  // leaf: triangles [first, first + count) of m_order
-    };
+    using Node = WindingNode;
     static int subtreeSize(int count, std::map<int, int>& sizes);
     // What the build reads: nodes per subtree size, and per triangle the sum of its corners (the
     // median split's key, 3x its centroid).

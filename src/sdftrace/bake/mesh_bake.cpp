@@ -174,16 +174,21 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     std::vector<float> samples = o.method == MeshBakeMethod::Rtsdf
                                      ? bakeRtsdf(mesh, o, shape, r, clock)
                                      : bakeFromSeeds(mesh, o, shape, r, clock);
+    finishMeshBake(shape, std::move(samples), so, r, clock);
+    return r;
+}
+
+}  // namespace
+
+void finishMeshBake(const GridShape& shape, std::vector<float> samples, const SampleOptions& so,
+                    MeshBakeResult& r, StageClock& clock) {
     if (so.kind == GridKind::Dense) {
         r.grid = Grid::dense(shape, std::move(samples));
     } else {
         r.grid = Grid::sparseFromDense(shape, samples, so.blockSize, so.bandVoxels);
         clock.mark("sparsify");
     }
-    return r;
 }
-
-}  // namespace
 
 double meshBakeBytes(const TriangleMesh& mesh, const GridShape& shape, const MeshBakeOptions& o,
                      bool verify, double gridShare) {

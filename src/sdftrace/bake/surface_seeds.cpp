@@ -11,20 +11,9 @@
 
 namespace sdft {
 
-VertexRange triangleVertexRange(const GridShape& s, Vec3 a, Vec3 b, Vec3 c, float grow) {
-    Vec3 lo = (min(a, min(b, c)) - s.origin - Vec3(grow)) / s.voxelSize;
-    Vec3 hi = (max(a, max(b, c)) - s.origin + Vec3(grow)) / s.voxelSize;
-    VertexRange r;
-    for (int axis = 0; axis < 3; ++axis) {
-        r.lo[axis] = std::max(0, static_cast<int>(std::ceil(lo[axis])));
-        r.hi[axis] = std::min(s.vertices(axis) - 1, static_cast<int>(std::floor(hi[axis])));
-    }
-    return r;
-}
-
 SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, int threads) {
-    const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
-    const float h = s.voxelSize, reach = 0.87f * h;  // half a cell diagonal, rounded up
+    const int vz = s.vertices(2);
+    const float h = s.voxelSize, reach = seedReach(s);
     SurfaceSeeds seeds;
     assignHuge(seeds.point, s.vertexCount(), Vec3(kNoSeed));
     assignHuge(seeds.triangle, s.vertexCount(), 0u);
@@ -55,10 +44,10 @@ SurfaceSeeds seedSurfaceVertices(const TriangleMesh& mesh, const GridShape& s, i
                 for (int k = std::max(k0, r.lo[2]); k <= std::min(k1, r.hi[2]); ++k)
                     for (int j = r.lo[1]; j <= r.hi[1]; ++j)
                         for (int i = r.lo[0]; i <= r.hi[0]; ++i) {
-                            Vec3 p = s.origin + Vec3(i, j, k) * h;
+                            Vec3 p = vertexPosition(s, i, j, k);
                             Vec3 q = closestPointOnTriangle(p, a, b, c);
                             float d = length(p - q);
-                            size_t idx = (static_cast<size_t>(k) * vy + j) * vx + i;
+                            size_t idx = vertexIndex(s, i, j, k);
                             if (d <= reach && d < best[idx]) {
                                 best[idx] = d;
                                 seeds.point[idx] = q;

@@ -28,20 +28,6 @@ double triangleSolidAngle(Vec3 p, Vec3 va, Vec3 vb, Vec3 vc) {
     return 2.0 * std::atan2(num, den);
 }
 
-namespace {
-
-// The solid angle of Van Oosterom & Strackee in float, for the hierarchical sum's leaves.
-inline float solidAngleFloat(Vec3 p, const float* t) {
-    Vec3 a(t[0] - p.x, t[1] - p.y, t[2] - p.z), b(t[3] - p.x, t[4] - p.y, t[5] - p.z),
-        c(t[6] - p.x, t[7] - p.y, t[8] - p.z);
-    float la = length(a), lb = length(b), lc = length(c);
-    float num = dot(a, cross(b, c));
-    float den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
-    return 2.0f * fastAtan2(num, den);
-}
-
-}  // namespace
-
 WindingNumber::WindingNumber(const TriangleMesh& mesh, double beta) : m_mesh(mesh), m_beta(beta) {
     const size_t count = mesh.triangles.size();
     m_order.resize(count);
@@ -179,38 +165,6 @@ double WindingNumber::exact(Vec3 p) const {
     for (const auto& t : m_mesh.triangles)
         sum += triangleSolidAngle(p, m_mesh.positions[t[0]], m_mesh.positions[t[1]],
                                   m_mesh.positions[t[2]]);
-    return sum / kFourPi;
-}
-
-bool WindingNumber::inside(Vec3 p) const {
-    double coarse = fast(p, 1.5);
-    if (std::fabs(coarse - 0.5) > 0.3) return coarse > 0.5;
-    return fast(p) > 0.5;
-}
-
-double WindingNumber::fast(Vec3 p, double beta) const {
-    if (m_nodes.empty()) return 0;
-    double sum = 0;
-    int stack[128];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-        const Node& n = m_nodes[stack[--top]];
-        double dx = n.cx - p.x, dy = n.cy - p.y, dz = n.cz - p.z;
-        double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 > beta * beta * n.radius * n.radius) {
-            // Far: the dipole term, Omega ~ (c - p).N / |c - p|^3 (Barill et al. 2018, eq. 8).
-            sum += (dx * n.nx + dy * n.ny + dz * n.nz) / (d2 * std::sqrt(d2));
-        } else if (n.left < 0) {
-            float leaf = 0;
-            for (int i = n.first; i < n.first + n.count; ++i)
-                leaf += solidAngleFloat(p, m_corners.data() + 9 * static_cast<size_t>(i));
-            sum += leaf;
-        } else {
-            stack[top++] = n.left;
-            stack[top++] = n.right;
-        }
-    }
     return sum / kFourPi;
 }
 

@@ -1,6 +1,7 @@
 // The GPU entry points of a build without the CUDA backend (CMake's SDFT_CUDA found no nvcc or was
 // OFF): every request for a GPU is one clear error, and gpuInfo() says why.
 #include "sdftrace/core/error.h"
+#include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_primary.h"
 #include "sdftrace/gpu/gpu_render.h"
@@ -50,5 +51,28 @@ RenderStats GpuDirectRenderer::render(const FrameView&, Film&) const {
     requireGpu("GPU render");
     return {};
 }
+
+struct GpuMeshBaker::Impl {};
+
+GpuMeshBaker::GpuMeshBaker(const TriangleMesh&) { requireGpu("GPU bake"); }
+GpuMeshBaker::~GpuMeshBaker() = default;
+GpuMeshBaker::GpuMeshBaker(GpuMeshBaker&&) noexcept = default;
+GpuMeshBaker& GpuMeshBaker::operator=(GpuMeshBaker&&) noexcept = default;
+double GpuMeshBaker::lbvhBuildMs() const { return 0; }
+size_t GpuMeshBaker::deviceBytes() const { return 0; }
+std::vector<float> GpuMeshBaker::jumpFlood(const GridShape&, JfaVariant, SignMethod, float,
+                                           GpuBakeTimes*) const {
+    return {};
+}
+std::vector<float> GpuMeshBaker::rtsdf(const GridShape&, const RtsdfOptions&, RtsdfStats*,
+                                       GpuBakeTimes*) const {
+    return {};
+}
+SurfaceSeeds GpuMeshBaker::seeds(const GridShape&) const { return {}; }
+std::vector<Vec3> GpuMeshBaker::jumpFloodPoints(const GridShape&, const std::vector<Vec3>&,
+                                                JfaVariant, GpuBakeTimes*) const {
+    return {};
+}
+std::vector<LbvhHit> GpuMeshBaker::firstHits(const std::vector<Ray>&, float) const { return {}; }
 
 }  // namespace sdft

@@ -1,0 +1,71 @@
+// Mesh bakes on the GPU (issue 14; RTSDF, Tan et al. 2022, §2.1-2.3): the mesh uploaded once, an
+// LBVH built on the device (Karras 2012; bake/lbvh.h), then per bake the conservative
+// voxelization into seeds, 3D jump flooding, signs by the hierarchical winding number and, for
+// RTSDF, the coarse field's ray mask and the fine rays with the front/back vote, the Lipschitz
+// relaxation or eq. 1's accumulation. Every kernel body is a header function the CPU bake runs
+// too (jump_flood_step.h, surface_seeds.h, winding_view.h, rtsdf_vertex.h, lbvh.h).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "sdftrace/bake/jump_flood.h"
+#include "sdftrace/bake/lbvh.h"
+#include "sdftrace/bake/mesh_bake.h"
+#include "sdftrace/bake/rtsdf_bake.h"
+#include "sdftrace/bake/sign_method.h"
+
+namespace sdft {
+
+// GPU milliseconds of each pass (CUDA events), and the whole call's wall time with its copies.
+struct GpuBakeTimes {
+    double seedMs = 0;             // voxelization: seeds and their closest points
+    double jfaMs = 0;              // every jump-flooding pass
+    std::vector<double> passMs;    // one per pass
+    double signMs = 0;             // distances and signs
+    double rayMs = 0;              // RTSDF's fine rays (inside the mask)
+    double relaxMs = 0;            // RTSDF's Lipschitz relaxation (single bakes)
+    double totalMs = 0;            // wall time of the call, uploads and downloads included
+    double kernelMs() const { return seedMs + jfaMs + signMs + rayMs + relaxMs; }
+};
+
+class GpuMeshBaker {
+  public:
+    // Uploads the mesh, builds its LBVH on the device and its winding-number tree on the host
+    // (uploaded). Throws InputError when no GPU can be used, std::runtime_error naming the CUDA
+    // call that failed.
+    explicit GpuMeshBaker(const TriangleMesh& mesh);
+    ~GpuMeshBaker();
+    GpuMeshBaker(GpuMeshBaker&&) noexcept;
+    GpuMeshBaker& operator=(GpuMeshBaker&&) noexcept;
+
+    double lbvhBuildMs() const;  // keys, sort, nodes and boxes on the device
+    size_t deviceBytes() const;  // the mesh, the LBVH and the winding tree
+
+    // Seeds, jump flooding, distances and signs (winding or beta) at every vertex of `shape`.
+    std::vector<float> jumpFlood(const GridShape& shape, JfaVariant variant, SignMethod sign,
+                                 float betaVoxels, GpuBakeTimes* times = nullptr) const;
+    // RTSDF's fine field (bakeRtsdfSamples on the GPU; options.history accumulates frames, copied
+    // to the device and back each call; options.caster is ignored: rays go through the LBVH).
+    std::vector<float> rtsdf(const GridShape& shape, const RtsdfOptions& options,
+                             RtsdfStats* stats = nullptr, GpuBakeTimes* times = nullptr) const;
+
+    // The pieces alone, for tests: seeds of `shape`, jump flooding of given seeds, first hits.
+    SurfaceSeeds seeds(const GridShape& shape) const;
+    std::vector<Vec3> jumpFloodPoints(const GridShape& shape, const std::vector<Vec3>& seeds,
+                                      JfaVariant variant, GpuBakeTimes* times = nullptr) const;
+    std::vector<LbvhHit> firstHits(const std::vector<Ray>& rays, float tnear) const;
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+// bakeMesh (mesh_bake.h) on the GPU, for the methods it has (jfa and rtsdf); InputError naming
+// the flag for the others, a sign method it lacks, or no GPU.
+MeshBakeResult bakeMeshGpu(const TriangleMesh& mesh, const MeshBakeOptions& options);
+
+// Why `options` cannot bake on the GPU, in one sentence; empty when it can.
+std::string gpuBakeUnsupported(const MeshBakeOptions& options);
+
+}  // namespace sdft

@@ -1,0 +1,383 @@
+#include <chrono>
+#include <memory>
+
+#include "device_buffer.h"
+#include "gpu_lbvh.cuh"
+#include "sdftrace/bake/closest_point.h"
+#include "sdftrace/bake/jump_flood_step.h"
+#include "sdftrace/bake/rtsdf_vertex.h"
+#include "sdftrace/bake/surface_seeds.h"
+#include "sdftrace/bake/winding_number.h"
+#include "sdftrace/gpu/gpu_bake.h"
+#include "sdftrace/core/error.h"
+#include "sdftrace/gpu/gpu_device.h"
+
+namespace sdft {
+
+namespace {
+
+constexpr int kThreads = 256;
+constexpr unsigned long long kNoCandidate = ~0ull;
+
+unsigned blocksFor(size_t n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
+
+__device__ inline void vertexOf(const GridShape& s, size_t idx, int& i, int& j, int& k) {
+    const size_t vx = s.vertices(0), vy = s.vertices(1);
+    i = static_cast<int>(idx % vx);
+    j = static_cast<int>((idx / vx) % vy);
+    k = static_cast<int>(idx / (vx * vy));
+}
+
+// Voxelization (RTSDF §2.2), one thread per triangle: each vertex within the seed reach of it
+// keeps the nearest triangle, ties to the lowest index (the CPU visits triangles in index order
+// and keeps the first of equal distances), as one 64-bit key: distance bits above the index.
+__global__ void seedScatterKernel(const Vec3* positions, const uint32_t* triangles, int count,
+                                  GridShape s, unsigned long long* best) {
+    const int t = blockIdx.x * blockDim.x + threadIdx.x;
+    if (t >= count) return;
+    const uint32_t* tri = triangles + 3 * static_cast<size_t>(t);
+    const Vec3 a = positions[tri[0]], b = positions[tri[1]], c = positions[tri[2]];
+    const float reach = seedReach(s);
+    const VertexRange r = triangleVertexRange(s, a, b, c, s.voxelSize);
+    if (r.empty()) return;
+    for (int k = r.lo[2]; k <= r.hi[2]; ++k)
+        for (int j = r.lo[1]; j <= r.hi[1]; ++j)
+            for (int i = r.lo[0]; i <= r.hi[0]; ++i) {
+                const Vec3 p = vertexPosition(s, i, j, k);
+                const float d = length(p - closestPointOnTriangle(p, a, b, c));
+                if (d > reach) continue;
+                const unsigned long long key =
+                    (static_cast<unsigned long long>(__float_as_uint(d)) << 32) | t;
+                atomicMin(best + vertexIndex(s, i, j, k), key);
+            }
+}
+
+// The winning triangle's closest point at each seed vertex.
+__global__ void seedResolveKernel(const unsigned long long* best, const Vec3* positions,
+                                  const uint32_t* triangles, GridShape s, size_t n, Vec3* points,
+                                  uint32_t* seedTriangle) {
+    const size_t idx = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (idx >= n) return;
+    const unsigned long long key = best[idx];
+    if (key == kNoCandidate) {
+        points[idx] = Vec3(kNoSeed);
+        if (seedTriangle) seedTriangle[idx] = 0;
+        return;
+    }
+    const uint32_t t = static_cast<uint32_t>(key & 0xFFFFFFFFu);
+    const uint32_t* tri = triangles + 3 * static_cast<size_t>(t);
+    int i, j, k;
+    vertexOf(s, idx, i, j, k);
+    points[idx] = closestPointOnTriangle(vertexPosition(s, i, j, k), positions[tri[0]],
+                                         positions[tri[1]], positions[tri[2]]);
+    if (seedTriangle) seedTriangle[idx] = t;
+}
+
+__global__ void jumpFloodKernel(GridShape s, size_t n, const Vec3* in, Vec3* out, int offset) {
+    const size_t idx = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (idx >= n) return;
+    int i, j, k;
+    vertexOf(s, idx, i, j, k);
+    out[idx] = jumpFloodVertex(s, in, i, j, k, offset);
+}
+
+// distancesToPoints, then the sign: the winding number's (beta > 0) or the beta shell's.
+__global__ void signedDistanceKernel(GridShape s, size_t n, const Vec3* points, WindingView w,
+                                     double windingBeta, float shell, float* out) {
+    const size_t idx = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (idx >= n) return;
+    int i, j, k;
+    vertexOf(s, idx, i, j, k);
+    const Vec3 p = vertexPosition(s, i, j, k), q = points[idx];
+    const float d = q.x == kNoSeed ? kNoSeed : length(p - q);
+    if (shell > 0) {
+        out[idx] = d - shell;
+        return;
+    }
+    out[idx] = windingInside(w, p, windingBeta) ? -d : d;
+}
+
+// RTSDF §2.1, §2.3 and §2.5.1 per fine vertex: the coarse value, and inside the mask the rays
+// through the LBVH with their vote, single or accumulated (history non-null).
+__global__ void rtsdfFineKernel(GridShape s, size_t n, GridView coarse, LbvhView bvh, float mask,
+                                float tiny, int rays, uint32_t seed, int frame, float* history,
+                                float alpha, float* out, unsigned long long* counts) {
+    const size_t idx = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    bool refined = false, missed = false;
+    if (idx < n) {
+        int i, j, k;
+        vertexOf(s, idx, i, j, k);
+        const Vec3 p = vertexPosition(s, i, j, k);
+        const float c = coarse.interpolate(p);
+        out[idx] = c;
+        if (fabsf(c) > mask) {
+            if (history) history[idx] = INFINITY;
+        } else {
+            refined = true;
+            const RtsdfRays r = castRtsdfRays(LbvhCaster{bvh}, p,
+                                              rtsdfRayStream(seed, idx, frame), rays, tiny);
+            missed = r.best == INFINITY;
+            out[idx] = history ? rtsdfAccumulate(history[idx], alpha, c, r, s.voxelSize)
+                               : rtsdfSingleValue(c, r);
+        }
+    }
+    const int blockRefined = __syncthreads_count(refined), blockMissed = __syncthreads_count(missed);
+    if (threadIdx.x == 0) {
+        atomicAdd(counts, static_cast<unsigned long long>(blockRefined));
+        atomicAdd(counts + 1, static_cast<unsigned long long>(blockMissed));
+    }
+}
+
+// One thread per line along `axis` (rtsdf_vertex.h's relaxLine).
+__global__ void relaxKernel(float* f, int nx, int ny, int nz, int axis, float h) {
+    const int n[3] = {nx, ny, nz};
+    const size_t stride[3] = {1, static_cast<size_t>(nx), static_cast<size_t>(nx) * ny};
+    const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+    const size_t line = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (line >= static_cast<size_t>(n[a]) * n[b]) return;
+    const size_t ja = line % n[a], jb = line / n[a];
+    relaxLine(f, ja * stride[a] + jb * stride[b], stride[axis], n[axis], h);
+}
+
+__global__ void firstHitKernel(LbvhView bvh, const Ray* rays, size_t n, float tnear,
+                               LbvhHit* out) {
+    const size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < n) out[i] = lbvhFirstHit(bvh, rays[i], tnear);
+}
+
+double since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+struct GpuMeshBaker::Impl {
+    int count = 0;
+    cuda::DeviceArray<Vec3> positions;
+    cuda::DeviceArray<uint32_t> triangles;
+    std::unique_ptr<cuda::DeviceLbvh> lbvh;
+    cuda::DeviceArray<WindingNode> windingNodes;
+    cuda::DeviceArray<float> windingCorners;
+    double windingBeta = 3.0;
+
+    WindingView winding() const {
+        return {windingNodes.get(), static_cast<int>(windingNodes.size()), windingCorners.get()};
+    }
+
+    // Seeds of `s` on the device: closest points (kNoSeed in x where none), and their triangles
+    // when asked.
+    cuda::DeviceArray<Vec3> seeds(const GridShape& s, cuda::DeviceArray<uint32_t>* seedTriangles,
+                                  double* ms) const {
+        const size_t n = s.vertexCount();
+        cuda::DeviceArray<unsigned long long> best(n);
+        cuda::DeviceArray<Vec3> points(n);
+        cuda::EventTimer timer;
+        SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
+        SDFT_CUDA_CHECK(cudaMemset(best.get(), 0xFF, n * sizeof(unsigned long long)));
+        seedScatterKernel<<<blocksFor(count), kThreads>>>(positions.get(), triangles.get(), count,
+                                                          s, best.get());
+        SDFT_CUDA_CHECK(cudaGetLastError());
+        seedResolveKernel<<<blocksFor(n), kThreads>>>(
+            best.get(), positions.get(), triangles.get(), s, n, points.get(),
+            seedTriangles ? seedTriangles->get() : nullptr);
+        SDFT_CUDA_CHECK(cudaGetLastError());
+        SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
+        const double elapsed = timer.elapsedMs();  // and the kernels done before `best` goes
+        if (ms) *ms += elapsed;
+        return points;
+    }
+
+    // Jump flooding in place (ping-pong with a second array).
+    void flood(const GridShape& s, cuda::DeviceArray<Vec3>& points, JfaVariant variant,
+               GpuBakeTimes* times) const {
+        const size_t n = s.vertexCount();
+        cuda::DeviceArray<Vec3> other(n);
+        for (int offset : jumpFloodOffsets(s, variant)) {
+            cuda::EventTimer timer;
+            SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
+            jumpFloodKernel<<<blocksFor(n), kThreads>>>(s, n, points.get(), other.get(), offset);
+            SDFT_CUDA_CHECK(cudaGetLastError());
+            SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
+            std::swap(points, other);
+            const double ms = timer.elapsedMs();
+            if (times) {
+                times->passMs.push_back(ms);
+                times->jfaMs += ms;
+            }
+        }
+    }
+
+    // Seeds, flooding, distances and signs: the signed field at every vertex, on the device.
+    cuda::DeviceArray<float> signedField(const GridShape& s, JfaVariant variant, SignMethod sign,
+                                         float betaVoxels, GpuBakeTimes* times) const {
+        if (sign != SignMethod::WindingNumber && sign != SignMethod::BetaShell)
+            throw InputError(std::string("--sign ") + signMethodName(sign) +
+                             ": the GPU bake signs by winding number or beta shell");
+        const size_t n = s.vertexCount();
+        double seedMs = 0;
+        cuda::DeviceArray<Vec3> points = seeds(s, nullptr, &seedMs);
+        if (times) times->seedMs += seedMs;
+        flood(s, points, variant, times);
+        cuda::DeviceArray<float> out(n);
+        cuda::EventTimer timer;
+        SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
+        const float shell = sign == SignMethod::BetaShell ? betaVoxels * s.voxelSize : 0.0f;
+        signedDistanceKernel<<<blocksFor(n), kThreads>>>(s, n, points.get(), winding(),
+                                                         windingBeta, shell, out.get());
+        SDFT_CUDA_CHECK(cudaGetLastError());
+        SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
+        const double ms = timer.elapsedMs();
+        if (times) times->signMs += ms;
+        return out;
+    }
+};
+
+GpuMeshBaker::GpuMeshBaker(const TriangleMesh& mesh) : m_impl(std::make_unique<Impl>()) {
+    requireGpu("GPU bake");
+    if (mesh.triangles.size() > static_cast<size_t>(kMaxLbvhTriangles))
+        throw InputError("mesh: too many triangles for the GPU bake's LBVH");
+    Impl& m = *m_impl;
+    m.count = static_cast<int>(mesh.triangles.size());
+    m.positions = cuda::DeviceArray<Vec3>(mesh.positions);
+    std::vector<uint32_t> indices(3 * mesh.triangles.size());
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int v = 0; v < 3; ++v) indices[3 * t + v] = mesh.triangles[t][v];
+    m.triangles = cuda::DeviceArray<uint32_t>(indices);
+    m.lbvh = std::make_unique<cuda::DeviceLbvh>(m.positions.get(), m.triangles.get(), m.count,
+                                                lbvhFrame(mesh));
+    // The winding-number tree is built on the host (a median split, the CPU bake's very tree)
+    // and uploaded: the GPU's signs are the CPU's.
+    const WindingNumber winding(mesh);
+    const WindingView w = winding.view();
+    m.windingBeta = winding.beta();
+    m.windingNodes = cuda::DeviceArray<WindingNode>(
+        std::vector<WindingNode>(w.nodes, w.nodes + w.nodeCount));
+    m.windingCorners = cuda::DeviceArray<float>(
+        std::vector<float>(w.corners, w.corners + 9 * mesh.triangles.size()));
+}
+
+GpuMeshBaker::~GpuMeshBaker() = default;
+GpuMeshBaker::GpuMeshBaker(GpuMeshBaker&&) noexcept = default;
+GpuMeshBaker& GpuMeshBaker::operator=(GpuMeshBaker&&) noexcept = default;
+
+double GpuMeshBaker::lbvhBuildMs() const { return m_impl->lbvh->buildMs(); }
+
+size_t GpuMeshBaker::deviceBytes() const {
+    const Impl& m = *m_impl;
+    return m.positions.size() * sizeof(Vec3) + m.triangles.size() * sizeof(uint32_t) +
+           m.lbvh->bytes() + m.windingNodes.size() * sizeof(WindingNode) +
+           m.windingCorners.size() * sizeof(float);
+}
+
+std::vector<float> GpuMeshBaker::jumpFlood(const GridShape& s, JfaVariant variant,
+                                           SignMethod sign, float betaVoxels,
+                                           GpuBakeTimes* times) const {
+    const auto start = std::chrono::steady_clock::now();
+    cuda::DeviceArray<float> field = m_impl->signedField(s, variant, sign, betaVoxels, times);
+    std::vector<float> out;
+    field.download(out, s.vertexCount());
+    if (times) times->totalMs = since(start);
+    return out;
+}
+
+std::vector<float> GpuMeshBaker::rtsdf(const GridShape& s, const RtsdfOptions& o,
+                                       RtsdfStats* stats, GpuBakeTimes* times) const {
+    const Impl& m = *m_impl;
+    const auto start = std::chrono::steady_clock::now();
+    GpuBakeTimes local;
+    GpuBakeTimes& t = times ? *times : local;
+    const double before = t.kernelMs();
+    // The coarse SDF: jump flooding at half the resolution over the same region.
+    const GridShape coarse = rtsdfCoarseShape(s);
+    cuda::DeviceArray<float> coarseField =
+        m.signedField(coarse, JfaVariant::Plain, o.coarseSign, 0.5f, &t);
+    GridView cv;
+    cv.kind = GridKind::Dense;
+    cv.shape = coarse;
+    cv.samples = coarseField.get();
+    const double coarseMs = t.kernelMs() - before;
+
+    const size_t n = s.vertexCount();
+    cuda::DeviceArray<float> out(n);
+    cuda::DeviceArray<unsigned long long> counts(2);
+    SDFT_CUDA_CHECK(cudaMemset(counts.get(), 0, 2 * sizeof(unsigned long long)));
+    RtsdfHistory* h = o.history;
+    cuda::DeviceArray<float> history;
+    if (h) {
+        beginRtsdfFrame(*h, s);
+        history = cuda::DeviceArray<float>(h->fine);
+    }
+    cuda::EventTimer rays;
+    SDFT_CUDA_CHECK(cudaEventRecord(rays.start));
+    rtsdfFineKernel<<<blocksFor(n), kThreads>>>(
+        s, n, cv, m.lbvh->view(), o.maskVoxels * s.voxelSize, 1e-4f * s.voxelSize, o.rays, o.seed,
+        h ? h->frames : 0, h ? history.get() : nullptr, h ? h->alpha : 0.0f, out.get(),
+        counts.get());
+    SDFT_CUDA_CHECK(cudaGetLastError());
+    SDFT_CUDA_CHECK(cudaEventRecord(rays.stop));
+    t.rayMs += rays.elapsedMs();
+    // A single bake is relaxed; accumulated frames are not (rtsdf_bake.cpp says why).
+    if (!h) {
+        cuda::EventTimer relax;
+        SDFT_CUDA_CHECK(cudaEventRecord(relax.start));
+        const int nv[3] = {s.vertices(0), s.vertices(1), s.vertices(2)};
+        for (int axis = 0; axis < 3; ++axis) {
+            const size_t lines =
+                static_cast<size_t>(nv[(axis + 1) % 3]) * static_cast<size_t>(nv[(axis + 2) % 3]);
+            relaxKernel<<<blocksFor(lines), kThreads>>>(out.get(), nv[0], nv[1], nv[2], axis,
+                                                        s.voxelSize);
+            SDFT_CUDA_CHECK(cudaGetLastError());
+        }
+        SDFT_CUDA_CHECK(cudaEventRecord(relax.stop));
+        t.relaxMs += relax.elapsedMs();
+    }
+    std::vector<float> result;
+    out.download(result, n);
+    if (h) {
+        history.download(h->fine, n);
+        ++h->frames;
+    }
+    std::vector<unsigned long long> c;
+    counts.download(c, 2);
+    if (stats) {
+        stats->refined = c[0];
+        stats->rays = c[0] * static_cast<size_t>(o.rays);
+        stats->missed = c[1];
+        stats->coarseSeconds = coarseMs * 1e-3;
+        stats->raySeconds = (t.rayMs + t.relaxMs) * 1e-3;
+    }
+    t.totalMs = since(start);
+    return result;
+}
+
+SurfaceSeeds GpuMeshBaker::seeds(const GridShape& s) const {
+    const size_t n = s.vertexCount();
+    cuda::DeviceArray<uint32_t> triangles(n);
+    cuda::DeviceArray<Vec3> points = m_impl->seeds(s, &triangles, nullptr);
+    SurfaceSeeds out;
+    points.download(out.point, n);
+    triangles.download(out.triangle, n);
+    return out;
+}
+
+std::vector<Vec3> GpuMeshBaker::jumpFloodPoints(const GridShape& s, const std::vector<Vec3>& seeds,
+                                                JfaVariant variant, GpuBakeTimes* times) const {
+    cuda::DeviceArray<Vec3> points(seeds);
+    m_impl->flood(s, points, variant, times);
+    std::vector<Vec3> out;
+    points.download(out, seeds.size());
+    return out;
+}
+
+std::vector<LbvhHit> GpuMeshBaker::firstHits(const std::vector<Ray>& rays, float tnear) const {
+    cuda::DeviceArray<Ray> in(rays);
+    cuda::DeviceArray<LbvhHit> hits(rays.size());
+    firstHitKernel<<<blocksFor(rays.size()), kThreads>>>(m_impl->lbvh->view(), in.get(),
+                                                         rays.size(), tnear, hits.get());
+    SDFT_CUDA_CHECK(cudaGetLastError());
+    std::vector<LbvhHit> out;
+    hits.download(out, rays.size());
+    return out;
+}
+
+}  // namespace sdft
