@@ -75,8 +75,8 @@ void jumpFloodRows(const std::string& name, const TriangleMesh& mesh, const GpuM
     }
 }
 
-void rtsdfRows(const std::string& name, const TriangleMesh& mesh, const GpuMeshBaker* gpu,
-               int runs, int cpuRuns) {
+void rtsdfRows(const std::string& name, const TriangleMesh& mesh, const GpuMeshBaker* gpu, int runs,
+               int cpuRuns) {
     const GridShape fine = cubeOfVertices(mesh, 256);
     for (int x : {1, 5, 10}) {
         RtsdfOptions o;
@@ -120,8 +120,8 @@ void rtsdfRows(const std::string& name, const TriangleMesh& mesh, const GpuMeshB
             "| %s | rtsdf M, x = %d (%zu vertices refined) | %.3f | %.3f | %.3f | %.3f | %.3f | "
             "%.2f | %s |\n",
             name.c_str(), x, refined, median(seed), median(jfa), median(sign), median(ray),
-            median(kernel), median(wall), cpuMs > 0 ? std::to_string(cpuMs).substr(0, 7).c_str()
-                                                    : "-");
+            median(kernel), median(wall),
+            cpuMs > 0 ? std::to_string(cpuMs).substr(0, 7).c_str() : "-");
     }
 }
 
@@ -142,9 +142,9 @@ int main(int argc, char** argv) {
     for (const std::string& n : names) {
         meshes.push_back(loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + n + ".obj"));
         bakers.push_back(present ? std::make_unique<GpuMeshBaker>(meshes.back()) : nullptr);
-        std::printf("| %s | %zu | %s |\n", n.c_str(), meshes.back().triangles.size(),
-                    present ? std::to_string(bakers.back()->lbvhBuildMs()).substr(0, 6).c_str()
-                            : "-");
+        std::printf(
+            "| %s | %zu | %s |\n", n.c_str(), meshes.back().triangles.size(),
+            present ? std::to_string(bakers.back()->lbvhBuildMs()).substr(0, 6).c_str() : "-");
     }
     std::printf(
         "\n| mesh | pass | GPU jfa ms | GPU seeds ms | CPU jfa ms | CPU / GPU |\n| --- | --- | "

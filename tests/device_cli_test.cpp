@@ -94,9 +94,9 @@ TEST(DeviceCli, BakeCudaRunsOnTheGpuOrFailsWithOneLineAndNoOutput) {
     for (const char* method : {"jfa", "rtsdf"}) {
         SCOPED_TRACE(method);
         const std::string out = dir.file(std::string(method) + ".sdfg");
-        const RunResult r = runCli("bake " + kMesh + " --method " + method +
-                                       " --res 32 --dense --device cuda -o " + out,
-                                   dir);
+        const RunResult r = runCli(
+            "bake " + kMesh + " --method " + method + " --res 32 --dense --device cuda -o " + out,
+            dir);
         if (gpuInfo().present) {
             ASSERT_EQ(r.status, 0) << r.err;
             EXPECT_NE(r.err.find("(gpu)"), std::string::npos) << r.err;
@@ -141,11 +141,10 @@ TEST(DeviceCli, BakeAutoFallsBackToTheCpuAndSaysWhy) {
         << exact.err;
     if (gpuInfo().present) return;
     // Without a GPU auto's jfa bake is the CPU's, byte for byte.
-    const RunResult a = runCli("bake " + kMesh + " --method jfa --res 24 --device auto -o " +
-                                   dir.file("auto.sdfg"),
-                               dir);
-    const RunResult c = runCli(
-        "bake " + kMesh + " --method jfa --res 24 -o " + dir.file("cpu.sdfg"), dir);
+    const RunResult a = runCli(
+        "bake " + kMesh + " --method jfa --res 24 --device auto -o " + dir.file("auto.sdfg"), dir);
+    const RunResult c =
+        runCli("bake " + kMesh + " --method jfa --res 24 -o " + dir.file("cpu.sdfg"), dir);
     ASSERT_EQ(a.status, 0) << a.err;
     ASSERT_EQ(c.status, 0) << c.err;
     EXPECT_NE(a.err.find("--device auto: baking on the CPU (" + gpuInfo().why + ")"),

@@ -17,8 +17,8 @@ SDFT_HOST_DEVICE inline size_t vertexIndex(const GridShape& s, int i, int j, int
     return (static_cast<size_t>(k) * s.vertices(1) + j) * s.vertices(0) + i;
 }
 SDFT_HOST_DEVICE inline Vec3 vertexPosition(const GridShape& s, int i, int j, int k) {
-    return s.origin + Vec3(static_cast<float>(i), static_cast<float>(j), static_cast<float>(k)) *
-                          s.voxelSize;
+    return s.origin +
+           Vec3(static_cast<float>(i), static_cast<float>(j), static_cast<float>(k)) * s.voxelSize;
 }
 
 // The closest point vertex (i, j, k) holds after the pass at `offset` over `seed` (kNoSeed in x:

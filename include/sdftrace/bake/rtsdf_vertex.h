@@ -74,8 +74,8 @@ SDFT_HOST_DEVICE inline float rtsdfSingleValue(float c, const RtsdfRays& r) {
 
 // RTSDF §2.5.1, eq. 1 at a vertex inside the mask: this frame's coarse value c and rays; the
 // history magnitude `fine` (inf where none) updated, the signed fine value returned.
-SDFT_HOST_DEVICE inline float rtsdfAccumulate(float& fine, float alpha, float c,
-                                              const RtsdfRays& r, float voxel) {
+SDFT_HOST_DEVICE inline float rtsdfAccumulate(float& fine, float alpha, float c, const RtsdfRays& r,
+                                              float voxel) {
     // The previous magnitude decays towards this frame's coarse value, and the rays' minimum
     // replaces it where it is nearer. Without a previous value (the first frame, or a vertex
     // that just entered the mask) f_{t-1} is taken as c_t: a single ray's distance (often across

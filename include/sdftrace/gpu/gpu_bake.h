@@ -19,13 +19,13 @@ namespace sdft {
 
 // GPU milliseconds of each pass (CUDA events), and the whole call's wall time with its copies.
 struct GpuBakeTimes {
-    double seedMs = 0;             // voxelization: seeds and their closest points
-    double jfaMs = 0;              // every jump-flooding pass
-    std::vector<double> passMs;    // one per pass
-    double signMs = 0;             // distances and signs
-    double rayMs = 0;              // RTSDF's fine rays (inside the mask)
-    double relaxMs = 0;            // RTSDF's Lipschitz relaxation (single bakes)
-    double totalMs = 0;            // wall time of the call, uploads and downloads included
+    double seedMs = 0;           // voxelization: seeds and their closest points
+    double jfaMs = 0;            // every jump-flooding pass
+    std::vector<double> passMs;  // one per pass
+    double signMs = 0;           // distances and signs
+    double rayMs = 0;            // RTSDF's fine rays (inside the mask)
+    double relaxMs = 0;          // RTSDF's Lipschitz relaxation (single bakes)
+    double totalMs = 0;          // wall time of the call, uploads and downloads included
     double kernelMs() const { return seedMs + jfaMs + signMs + rayMs + relaxMs; }
 };
 

@@ -25,8 +25,7 @@ LbvhFrame lbvhFrame(const TriangleMesh& mesh) {
 Lbvh::Lbvh(const TriangleMesh& mesh, int threads) {
     if (mesh.triangles.size() > static_cast<size_t>(kMaxLbvhTriangles))
         throw InputError("mesh: " + std::to_string(mesh.triangles.size()) +
-                         " triangles; the LBVH takes at most " +
-                         std::to_string(kMaxLbvhTriangles));
+                         " triangles; the LBVH takes at most " + std::to_string(kMaxLbvhTriangles));
     const int n = static_cast<int>(mesh.triangles.size());
     if (n == 0) return;
     const LbvhFrame frame = lbvhFrame(mesh);
@@ -36,9 +35,9 @@ Lbvh::Lbvh(const TriangleMesh& mesh, int threads) {
         std::vector<uint64_t> keys(n);
         tbb::parallel_for(0, n, [&](int t) {
             const auto& tri = mesh.triangles[t];
-            keys[t] = lbvhKey(mesh.positions[tri[0]], mesh.positions[tri[1]],
-                              mesh.positions[tri[2]], frame.lo, frame.invExtent,
-                              static_cast<uint32_t>(t));
+            keys[t] =
+                lbvhKey(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]],
+                        frame.lo, frame.invExtent, static_cast<uint32_t>(t));
         });
         tbb::parallel_sort(keys.begin(), keys.end());
         m_triangles.resize(n);
@@ -75,8 +74,7 @@ Lbvh::Lbvh(const TriangleMesh& mesh, int threads) {
         tbb::parallel_for(0, n, [&](int leaf) {
             int32_t node = parentOfLeaf[leaf];
             while (node >= 0) {
-                if (std::atomic_ref<int>(visits[node]).fetch_add(1, std::memory_order_acq_rel) ==
-                    0)
+                if (std::atomic_ref<int>(visits[node]).fetch_add(1, std::memory_order_acq_rel) == 0)
                     return;
                 Vec3 llo, lhi, rlo, rhi;
                 box(m_nodes[node].left, llo, lhi);

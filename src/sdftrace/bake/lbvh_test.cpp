@@ -111,8 +111,7 @@ void expectWellFormed(const Lbvh& bvh, const TriangleMesh& mesh) {
 
 // Same triangle test, so the traversal must find the very same t; the triangle may differ only on
 // a tie (a ray through a shared edge).
-void expectTraversalIsBruteForce(const Lbvh& bvh, const TriangleMesh& mesh, int rays,
-                                 int minHits) {
+void expectTraversalIsBruteForce(const Lbvh& bvh, const TriangleMesh& mesh, int rays, int minHits) {
     int hits = 0;
     for (const TestRay& tr : testRays(mesh, rays, 7)) {
         const LbvhHit a = lbvhFirstHit(bvh.view(), tr.ray, tr.tnear);
@@ -197,9 +196,9 @@ TEST(Lbvh, AgreesWithEmbreesFirstHits) {
             const MeshBvh::Hit b = embree.firstHit(tr.ray, tr.tnear);
             ++rays;
             hits += a.t != kInfinity;
-            const bool same = (a.t == kInfinity) == (b.t == kInfinity) &&
-                              (a.t == kInfinity ||
-                               (std::fabs(a.t - b.t) <= 1e-5f * scale && a.front == b.front));
+            const bool same =
+                (a.t == kInfinity) == (b.t == kInfinity) &&
+                (a.t == kInfinity || (std::fabs(a.t - b.t) <= 1e-5f * scale && a.front == b.front));
             differ += !same;
         }
         EXPECT_GT(hits, rays / 4);

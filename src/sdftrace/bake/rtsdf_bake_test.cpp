@@ -199,8 +199,7 @@ namespace {
 TEST(RtsdfBake, RaysThroughTheLbvhGiveEmbreesField) {
     for (const char* name : {"bunny_npm.obj", "elephant-with-holes.obj"}) {
         SCOPED_TRACE(name);
-        const TriangleMesh mesh =
-            loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name);
+        const TriangleMesh mesh = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name);
         const MeshBvh bvh(mesh);
         SampleOptions so;
         so.resolution = 48;

@@ -8,8 +8,8 @@
 #include "sdftrace/bake/rtsdf_vertex.h"
 #include "sdftrace/bake/surface_seeds.h"
 #include "sdftrace/bake/winding_number.h"
-#include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"
 
 namespace sdft {
@@ -114,14 +114,15 @@ __global__ void rtsdfFineKernel(GridShape s, size_t n, GridView coarse, LbvhView
             if (history) history[idx] = INFINITY;
         } else {
             refined = true;
-            const RtsdfRays r = castRtsdfRays(LbvhCaster{bvh}, p,
-                                              rtsdfRayStream(seed, idx, frame), rays, tiny);
+            const RtsdfRays r =
+                castRtsdfRays(LbvhCaster{bvh}, p, rtsdfRayStream(seed, idx, frame), rays, tiny);
             missed = r.best == INFINITY;
             out[idx] = history ? rtsdfAccumulate(history[idx], alpha, c, r, s.voxelSize)
                                : rtsdfSingleValue(c, r);
         }
     }
-    const int blockRefined = __syncthreads_count(refined), blockMissed = __syncthreads_count(missed);
+    const int blockRefined = __syncthreads_count(refined),
+              blockMissed = __syncthreads_count(missed);
     if (threadIdx.x == 0) {
         atomicAdd(counts, static_cast<unsigned long long>(blockRefined));
         atomicAdd(counts + 1, static_cast<unsigned long long>(blockMissed));
@@ -139,8 +140,7 @@ __global__ void relaxKernel(float* f, int nx, int ny, int nz, int axis, float h)
     relaxLine(f, ja * stride[a] + jb * stride[b], stride[axis], n[axis], h);
 }
 
-__global__ void firstHitKernel(LbvhView bvh, const Ray* rays, size_t n, float tnear,
-                               LbvhHit* out) {
+__global__ void firstHitKernel(LbvhView bvh, const Ray* rays, size_t n, float tnear, LbvhHit* out) {
     const size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i < n) out[i] = lbvhFirstHit(bvh, rays[i], tnear);
 }
@@ -222,8 +222,8 @@ struct GpuMeshBaker::Impl {
         cuda::EventTimer timer;
         SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
         const float shell = sign == SignMethod::BetaShell ? betaVoxels * s.voxelSize : 0.0f;
-        signedDistanceKernel<<<blocksFor(n), kThreads>>>(s, n, points.get(), winding(),
-                                                         windingBeta, shell, out.get());
+        signedDistanceKernel<<<blocksFor(n), kThreads>>>(s, n, points.get(), winding(), windingBeta,
+                                                         shell, out.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
         SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
         const double ms = timer.elapsedMs();
@@ -250,8 +250,8 @@ GpuMeshBaker::GpuMeshBaker(const TriangleMesh& mesh) : m_impl(std::make_unique<I
     const WindingNumber winding(mesh);
     const WindingView w = winding.view();
     m.windingBeta = winding.beta();
-    m.windingNodes = cuda::DeviceArray<WindingNode>(
-        std::vector<WindingNode>(w.nodes, w.nodes + w.nodeCount));
+    m.windingNodes =
+        cuda::DeviceArray<WindingNode>(std::vector<WindingNode>(w.nodes, w.nodes + w.nodeCount));
     m.windingCorners = cuda::DeviceArray<float>(
         std::vector<float>(w.corners, w.corners + 9 * mesh.triangles.size()));
 }
@@ -269,9 +269,8 @@ size_t GpuMeshBaker::deviceBytes() const {
            m.windingCorners.size() * sizeof(float);
 }
 
-std::vector<float> GpuMeshBaker::jumpFlood(const GridShape& s, JfaVariant variant,
-                                           SignMethod sign, float betaVoxels,
-                                           GpuBakeTimes* times) const {
+std::vector<float> GpuMeshBaker::jumpFlood(const GridShape& s, JfaVariant variant, SignMethod sign,
+                                           float betaVoxels, GpuBakeTimes* times) const {
     const auto start = std::chrono::steady_clock::now();
     cuda::DeviceArray<float> field = m_impl->signedField(s, variant, sign, betaVoxels, times);
     std::vector<float> out;
@@ -280,8 +279,8 @@ std::vector<float> GpuMeshBaker::jumpFlood(const GridShape& s, JfaVariant varian
     return out;
 }
 
-std::vector<float> GpuMeshBaker::rtsdf(const GridShape& s, const RtsdfOptions& o,
-                                       RtsdfStats* stats, GpuBakeTimes* times) const {
+std::vector<float> GpuMeshBaker::rtsdf(const GridShape& s, const RtsdfOptions& o, RtsdfStats* stats,
+                                       GpuBakeTimes* times) const {
     const Impl& m = *m_impl;
     const auto start = std::chrono::steady_clock::now();
     GpuBakeTimes local;

@@ -46,7 +46,8 @@ TEST(GpuBake, WhatTheGpuDoesNotBakeIsOneClearError) {
     o.method = MeshBakeMethod::Rtsdf;
     EXPECT_EQ(gpuBakeUnsupported(o), "");
     o.sign = SignMethod::RayParity;
-    EXPECT_EQ(gpuBakeUnsupported(o), "--sign parity runs on the CPU only (the GPU signs by winding)");
+    EXPECT_EQ(gpuBakeUnsupported(o),
+              "--sign parity runs on the CPU only (the GPU signs by winding)");
     o.method = MeshBakeMethod::JumpFlood;
     o.sign = SignMethod::BetaShell;
     EXPECT_EQ(gpuBakeUnsupported(o), "");
@@ -116,8 +117,8 @@ TEST(GpuBake, SeedsAndJumpFloodingMatchTheCpu) {
             const bool a = cpuSeeds.point[i].x != kNoSeed, b = gpuSeeds.point[i].x != kNoSeed;
             seeds += a;
             // Only a vertex at the reach's very edge may differ (its distance rounded apart).
-            differ += a != b || (a && length(cpuSeeds.point[i] - gpuSeeds.point[i]) >
-                                          1e-4f * s.voxelSize);
+            differ += a != b ||
+                      (a && length(cpuSeeds.point[i] - gpuSeeds.point[i]) > 1e-4f * s.voxelSize);
         }
         EXPECT_GT(seeds, 1000u);
         EXPECT_LE(differ, seeds / 10000 + 2) << differ << " of " << seeds << " seeds differ";
@@ -146,8 +147,7 @@ TEST(GpuBake, JfaFieldMatchesTheCpu) {
         const GpuMeshBaker baker(mesh);
         const GridShape s = shapeFor(mesh, 64);
         const SurfaceSeeds seeds = seedSurfaceVertices(mesh, s);
-        std::vector<float> cpu =
-            distancesToPoints(s, jumpFlood(s, seeds.point, JfaVariant::Plain));
+        std::vector<float> cpu = distancesToPoints(s, jumpFlood(s, seeds.point, JfaVariant::Plain));
         signDistances(cpu, mesh, nullptr, s, seeds, SignMethod::WindingNumber);
         const std::vector<float> gpu =
             baker.jumpFlood(s, JfaVariant::Plain, SignMethod::WindingNumber, 0.5f);
@@ -183,10 +183,10 @@ TEST(GpuBake, RtsdfMatchesTheCpuThroughTheSameLbvh) {
             differ += std::fabs(cpu[i] - gpu[i]) > 1e-3f * s.voxelSize;
         EXPECT_LE(differ, cpu.size() / 2000) << differ << " of " << cpu.size() << " differ";
         EXPECT_GT(times.rayMs, 0.0);
-        std::printf("[ gpu bake ] %s at 96: %zu refined; GPU seeds %.2f ms, jfa %.2f ms, signs %.2f "
-                    "ms, rays %.2f ms, relax %.2f ms\n",
-                    name, gs.refined, times.seedMs, times.jfaMs, times.signMs, times.rayMs,
-                    times.relaxMs);
+        std::printf(
+            "[ gpu bake ] %s at 96: %zu refined; GPU seeds %.2f ms, jfa %.2f ms, signs %.2f "
+            "ms, rays %.2f ms, relax %.2f ms\n",
+            name, gs.refined, times.seedMs, times.jfaMs, times.signMs, times.rayMs, times.relaxMs);
     }
 }
 

@@ -10,8 +10,8 @@ constexpr int kThreads = 256;
 
 int blocksFor(int n) { return (n + kThreads - 1) / kThreads; }
 
-__global__ void keyKernel(const Vec3* positions, const uint32_t* triangles, int n,
-                          LbvhFrame frame, uint64_t* keys) {
+__global__ void keyKernel(const Vec3* positions, const uint32_t* triangles, int n, LbvhFrame frame,
+                          uint64_t* keys) {
     const int t = blockIdx.x * blockDim.x + threadIdx.x;
     if (t >= n) return;
     const uint32_t* tri = triangles + 3 * static_cast<size_t>(t);
@@ -19,8 +19,8 @@ __global__ void keyKernel(const Vec3* positions, const uint32_t* triangles, int 
                       frame.invExtent, static_cast<uint32_t>(t));
 }
 
-__global__ void gatherKernel(const uint64_t* keys, const Vec3* positions,
-                             const uint32_t* triangles, int n, LbvhTriangle* out) {
+__global__ void gatherKernel(const uint64_t* keys, const Vec3* positions, const uint32_t* triangles,
+                             int n, LbvhTriangle* out) {
     const int i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= n) return;
     const uint32_t id = static_cast<uint32_t>(keys[i] & 0xFFFFFFFFu);
@@ -92,8 +92,8 @@ DeviceLbvh::DeviceLbvh(const Vec3* positions, const uint32_t* triangles, int n, 
     SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
     keyKernel<<<blocksFor(n), kThreads>>>(positions, triangles, n, frame, keys.get());
     SDFT_CUDA_CHECK(cudaGetLastError());
-    SDFT_CUDA_CHECK(cub::DeviceRadixSort::SortKeys(temp.get(), tempBytes, keys.get(),
-                                                   sorted.get(), n, 0, 62));
+    SDFT_CUDA_CHECK(
+        cub::DeviceRadixSort::SortKeys(temp.get(), tempBytes, keys.get(), sorted.get(), n, 0, 62));
     gatherKernel<<<blocksFor(n), kThreads>>>(sorted.get(), positions, triangles, n,
                                              m_triangles.get());
     SDFT_CUDA_CHECK(cudaGetLastError());
@@ -106,8 +106,7 @@ DeviceLbvh::DeviceLbvh(const Vec3* positions, const uint32_t* triangles, int n, 
                                                    parentOfNode.get(), parentOfLeaf.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
         boxKernel<<<blocksFor(n), kThreads>>>(m_triangles.get(), n, m_nodes.get(),
-                                              parentOfNode.get(), parentOfLeaf.get(),
-                                              visits.get());
+                                              parentOfNode.get(), parentOfLeaf.get(), visits.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
         SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
         m_buildMs = timer.elapsedMs();  // waits for the kernels before the arrays go

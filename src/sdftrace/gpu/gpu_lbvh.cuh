@@ -14,9 +14,7 @@ class DeviceLbvh {
     // positions and triangles are device arrays of the mesh; frame from lbvhFrame(mesh).
     DeviceLbvh(const Vec3* positions, const uint32_t* triangles, int count, LbvhFrame frame);
 
-    LbvhView view() const {
-        return {m_nodes.get(), m_triangles.get(), m_count};
-    }
+    LbvhView view() const { return {m_nodes.get(), m_triangles.get(), m_count}; }
     double buildMs() const { return m_buildMs; }
     size_t bytes() const {
         return m_nodes.size() * sizeof(LbvhNode) + m_triangles.size() * sizeof(LbvhTriangle);
