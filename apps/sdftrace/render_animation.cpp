@@ -144,6 +144,7 @@ struct Animation {
     FrameTimes frames;
     unsigned kept = 0;
     bool motion = false;  // motion vectors: the motion AOV or --taa
+    bool distributed = false;  // an mpirun job: meshes bake on the CPU
 
     struct Instant {
         Scene scene;
@@ -153,7 +154,7 @@ struct Animation {
         auto in = std::make_unique<Instant>();
         AnimatedScene::InstantAssets used;
         in->scene =
-            anim.at(frames.at(i), cache, {.progress = !a.quiet && stderrIsTerminal()}, &used);
+            anim.at(frames.at(i), cache, prepareOptions(a, distributed), &used);
         cache.keepOnly(used.keys);  // what this frame needs stays cached, the rest goes
         assets.add(used.stats);
         applyOverrides(a, in->scene);
@@ -333,6 +334,7 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     if (job->motion) kept |= Film::bit(Aov::Depth);
     if (a.taa) kept |= Film::bit(Aov::Shadow);  // moving shadows reject their history
     job->kept = kept;
+    job->distributed = comm.distributed();
     bool ordered = false;
     together(comm, [&] { ordered = job->sequential(); });
     if (comm.distributed() && !comm.root()) {

@@ -90,6 +90,10 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
 // stderr when `note`. Not under mpirun (`distributed`): cuda is refused, auto takes the CPU.
 std::unique_ptr<GpuDirectRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
                                                   bool distributed, bool note);
+// How the scene's meshes bake under --device (prepare_scene.h): cuda, or auto with a GPU present,
+// bake on the GPU what it bakes (jfa and rtsdf: RTSDF's per-frame regeneration of dynamic meshes),
+// the rest on the CPU; cpu, mpirun or no GPU: empty (bakeMesh on the CPU).
+PrepareOptions prepareOptions(const RenderArgs& a, bool distributed);
 // The frames of `gpu` as renderImage's and renderFrames' per-frame hook.
 FrameRenderFn gpuFrames(const GpuDirectRenderer& gpu);
 

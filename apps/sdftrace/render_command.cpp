@@ -17,6 +17,7 @@
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/tape.h"
+#include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
@@ -209,6 +210,15 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
     return renderFrames(plan, film, t, onFrame, progress, across);
 }
 
+PrepareOptions prepareOptions(const RenderArgs& a, bool distributed) {
+    PrepareOptions o{.progress = !a.quiet && stderrIsTerminal()};
+    if (a.device == "cpu" || distributed || !gpuInfo().present) return o;
+    o.bakeMesh = [](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
+        return gpuBakeUnsupported(bake).empty() ? bakeMeshGpu(mesh, bake) : bakeMesh(mesh, bake);
+    };
+    return o;
+}
+
 std::unique_ptr<GpuDirectRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
                                                   bool distributed, bool note) {
     if (a.device == "cpu") return nullptr;
@@ -317,15 +327,15 @@ struct StillScene {
     std::optional<AnimatedScene> anim;
 };
 
-StillScene loadStill(const RenderArgs& a, const std::optional<TimeSpan>& span) {
+StillScene loadStill(const RenderArgs& a, const std::optional<TimeSpan>& span, bool distributed) {
     StillScene still;
     if (span) {
         still.anim.emplace(loadAnimation(a.scene));
         AssetCache cache;
-        still.scene =
-            still.anim->at(span->from, cache, {.progress = !a.quiet && stderrIsTerminal()});
+        still.scene = still.anim->at(span->from, cache, prepareOptions(a, distributed));
     } else {
-        LoadedInput input = loadSceneInput(a.scene, !a.quiet && stderrIsTerminal());
+        LoadedInput input = loadSceneInput(a.scene, !a.quiet && stderrIsTerminal(),
+                                           prepareOptions(a, distributed).bakeMesh);
         if (!a.quiet && !input.note.empty())
             std::fprintf(stderr, "sdftrace render: %s\n", input.note.c_str());
         still.scene = std::move(input.scene);
@@ -387,7 +397,7 @@ int runRender(const RenderArgs& args) {
     std::optional<RenderPlan> planned;
     auto t1 = t0;
     together(comm, [&] {
-        still = loadStill(a, span);
+        still = loadStill(a, span, comm.distributed());
         t1 = Clock::now();
         planned.emplace(planRender(still.scene));
     });
@@ -563,7 +573,8 @@ void addRenderCommand(CLI::App& app, Action& action) {
                     "CSG, blends, grids and baked meshes in a scene; an error names what only "
                     "the CPU renders yet: triangle primaries, mirrors, glass, "
                     "textures, shadow maps, the path tracer); auto (the GPU where one is present "
-                    "and renders the scene, else the CPU)")
+                    "and renders the scene, else the CPU). With a GPU, meshes baked by jfa or "
+                    "rtsdf (dynamic rtsdf meshes every frame) bake on it too")
         ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
         ->capture_default_str();
     cmd->add_flag("-q,--quiet", args->quiet,

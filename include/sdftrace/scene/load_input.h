@@ -5,6 +5,7 @@
 #pragma once
 #include <string>
 
+#include "sdftrace/scene/prepare_scene.h"
 #include "sdftrace/scene/scene.h"
 
 namespace sdft {
@@ -15,7 +16,9 @@ struct LoadedInput {
     std::string note;
 };
 
-// Throws InputError naming the file.
-LoadedInput loadSceneInput(const std::string& input, bool progress = false);
+// Throws InputError naming the file. `meshBaker`: how a scene file's meshes bake
+// (prepare_scene.h).
+LoadedInput loadSceneInput(const std::string& input, bool progress = false,
+                           const MeshBaker& meshBaker = {});
 
 }  // namespace sdft

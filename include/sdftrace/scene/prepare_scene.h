@@ -5,11 +5,13 @@
 // of the request.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/rtsdf_bake.h"
 #include "sdftrace/field/grid.h"
 #include "sdftrace/io/mesh_animation.h"
@@ -68,8 +70,13 @@ class AssetCache {
     std::map<std::string, AnimatedMesh> m_animated;
 };
 
+// How a scene's meshes are baked (bakeMesh when empty): `render --device cuda|auto` passes one
+// that bakes on the GPU what the GPU bakes (gpu/gpu_bake.h), which this module cannot include.
+using MeshBaker = std::function<MeshBakeResult(const TriangleMesh&, const MeshBakeOptions&)>;
+
 struct PrepareOptions {
     bool progress = false;  // one line per asset on stderr, and the bakes' percentages
+    MeshBaker bakeMesh;     // every mesh asset's bake, RTSDF's per-frame regeneration included
 };
 
 struct PrepareStats {

@@ -13,7 +13,8 @@
 
 namespace sdft {
 
-LoadedInput loadSceneInput(const std::string& input, bool progress) {
+LoadedInput loadSceneInput(const std::string& input, bool progress,
+                           const MeshBaker& meshBaker) {
     if (input.empty()) return {demoScene(), ""};
     if (isMeshFile(input)) {
         MeshReport report;
@@ -33,7 +34,7 @@ LoadedInput loadSceneInput(const std::string& input, bool progress) {
         return {sceneForObject(node::grid(grid), frame), ""};
     }
     LoadedInput out{describeSceneFile(input), ""};
-    prepareScene(out.scene, PrepareOptions{.progress = progress});
+    prepareScene(out.scene, PrepareOptions{.progress = progress, .bakeMesh = meshBaker});
     return out;
 }
 

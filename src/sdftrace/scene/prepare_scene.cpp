@@ -120,9 +120,10 @@ Bounds3 clipBounds(const AssetRequest& q, AssetCache& cache) {
 }
 
 // Loads or bakes one request; file and bake errors get the request's JSON path.
-std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subtree, bool progress,
-                                      AssetCache& cache,
+std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subtree,
+                                      const PrepareOptions& options, AssetCache& cache,
                                       std::shared_ptr<const TriangleMesh>& triangles) {
+    const bool progress = options.progress;
     try {
         switch (q.kind) {
             case AssetRequest::Kind::GridFile:
@@ -154,7 +155,8 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
                     // few rays' noisy distances, a wrong sign) slows only that block.
                     bake.sampling.bandVoxels = 1e6f;
                 }
-                return std::make_shared<const Grid>(bakeMesh(mesh, bake).grid);
+                return std::make_shared<const Grid>(
+                    (options.bakeMesh ? options.bakeMesh(mesh, bake) : bakeMesh(mesh, bake)).grid);
             }
             case AssetRequest::Kind::Subtree:
                 return std::make_shared<const Grid>(sampleSubtree(q, subtree));
@@ -197,7 +199,7 @@ PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions&
         }
         const NodePtr subtree = q.subtree ? substitute(q.subtree, grids, done) : nullptr;
         std::shared_ptr<const TriangleMesh> triangles;
-        grids[i] = loadAsset(q, subtree, options.progress, cache, triangles);
+        grids[i] = loadAsset(q, subtree, options, cache, triangles);
         cache.insert(q.key, grids[i]);
         cache.insertMesh(q.key, triangles);
         if (triangles) scene.meshes[grids[i].get()] = triangles;

@@ -72,6 +72,33 @@ TEST(PrepareScene, DescribingReadsNoAssetAndPreparingLoadsEachOnce) {
     EXPECT_LT(plan.tape.eval({0, 0, 0}), 0.0f);
 }
 
+// The baker PrepareOptions names (render --device's GPU bakes) bakes every mesh asset, with the
+// options the scene gives it, and its grid is the one the scene holds.
+TEST(PrepareScene, MeshAssetsBakeThroughTheGivenBaker) {
+    const std::string text = R"({"objects": [
+        {"mesh": ")" + kMeshes +
+                             R"(teapot.obj", "resolution": 16, "method": "jfa"},
+        {"mesh": ")" + kMeshes +
+                             R"(suzanne.obj", "resolution": 12, "translate": [3, 0, 0]}]})";
+    Scene scene = describeSceneText(text, "t.json", kMeshes);
+    std::vector<MeshBakeMethod> methods;
+    std::vector<const Grid*> made;
+    PrepareOptions o;
+    o.bakeMesh = [&](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
+        methods.push_back(bake.method);
+        MeshBakeResult r = bakeMesh(mesh, bake);
+        r.grid = Grid::dense(r.grid.shape(), std::vector<float>(r.grid.shape().vertexCount(), -1));
+        return r;
+    };
+    const PrepareStats stats = prepareScene(scene, o);
+    EXPECT_EQ(stats.baked, 2u);
+    ASSERT_EQ(methods.size(), 2u);
+    EXPECT_EQ(methods[0], MeshBakeMethod::JumpFlood);
+    EXPECT_EQ(methods[1], MeshBakeMethod::Exact);
+    // The baker's grids (-1 everywhere) are what the prepared scene evaluates.
+    EXPECT_EQ(planRender(scene).tape.eval({0, 0, 0}), -1.0f);
+}
+
 TEST(PrepareScene, AMissingFileIsAnErrorOfPreparationWithItsJsonPath) {
     Scene scene = describeSceneText(R"({"objects": [{"type": "sphere", "radius": 1},
         {"type": "grid", "file": "nowhere.sdfg"}]})",
