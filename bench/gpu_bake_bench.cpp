@@ -53,7 +53,7 @@ void jumpFloodRows(const std::string& name, const TriangleMesh& mesh, const GpuM
             cpu.push_back(msSince(t));
         }
         double gpuMs = 0, seedMs = 0;
-        size_t passes = 0;
+        const size_t passes = jumpFloodOffsets(s, JfaVariant::Plain).size();
         if (gpu) {
             std::vector<double> jfa, seed;
             for (int r = 0; r <= runs; ++r) {
@@ -64,14 +64,17 @@ void jumpFloodRows(const std::string& name, const TriangleMesh& mesh, const GpuM
                 if (r == 0) continue;  // warm-up
                 jfa.push_back(t.jfaMs);
                 seed.push_back(all.seedMs);
-                passes = t.passMs.size();
             }
             gpuMs = median(jfa);
             seedMs = median(seed);
         }
-        std::printf("| %s | jump flooding %d^3 (%zu passes) | %.3f | %.3f | %.1f | %s |\n",
-                    name.c_str(), n, passes, gpuMs, seedMs, median(cpu),
-                    gpu ? std::to_string(median(cpu) / gpuMs).substr(0, 6).c_str() : "-");
+        if (!gpu) {
+            std::printf("| %s | jump flooding %d^3 (%zu passes) | - | - | %.1f | - |\n",
+                        name.c_str(), n, passes, median(cpu));
+            continue;
+        }
+        std::printf("| %s | jump flooding %d^3 (%zu passes) | %.3f | %.3f | %.1f | %.0f |\n",
+                    name.c_str(), n, passes, gpuMs, seedMs, median(cpu), median(cpu) / gpuMs);
     }
 }
 
@@ -95,8 +98,8 @@ void rtsdfRows(const std::string& name, const TriangleMesh& mesh, const GpuMeshB
             cpuMs = median(cpu);
         }
         if (!gpu) {
-            std::printf("| %s | rtsdf M, x = %d | - | - | - | - | - | - | %.0f |\n", name.c_str(),
-                        x, cpuMs);
+            std::printf("| %s | rtsdf M, x = %d | - | - | - | - | - | - | %s |\n", name.c_str(), x,
+                        cpuMs > 0 ? std::to_string(cpuMs).substr(0, 7).c_str() : "-");
             continue;
         }
         RtsdfHistory h;

@@ -569,9 +569,9 @@ void addRenderCommand(CLI::App& app, Action& action) {
         ->check(CLI::Range(1, 1024));
     cmd->add_option("--device", args->device,
                     "Where the frames render: cpu; cuda (the GPU: direct lighting with hard, "
-                    "soft or distributed shadows and AO, plastic materials, any field: analytic, "
-                    "CSG, blends, grids and baked meshes in a scene; an error names what only "
-                    "the CPU renders yet: triangle primaries, mirrors, glass, "
+                    "soft or distributed shadows and AO, plastic materials, mirrors and glass by "
+                    "Whitted rays, any field: analytic, CSG, blends, grids and baked meshes in a "
+                    "scene; an error names what only the CPU renders yet: triangle primaries, "
                     "textures, shadow maps, the path tracer); auto (the GPU where one is present "
                     "and renders the scene, else the CPU). With a GPU, meshes baked by jfa or "
                     "rtsdf (dynamic rtsdf meshes every frame) bake on it too")

@@ -23,11 +23,14 @@
 
 namespace sdft {
 
-// A plastic material's Blinn-Phong parameters: Material without its name and the kinds and
-// textures the per-pixel path does not shade.
-struct PhongParams {
+// A material as the per-pixel path shades it: Material (lighting.h) without its name and
+// textures. Mirrors and dielectrics are shaded by Whitted rays (whitted_pixel.h).
+struct PixelMaterial {
     Vec3 color{0.8f, 0.8f, 0.8f};
     float diffuse = 1, specular = 0.2f, shininess = 32;
+    Material::Kind kind = Material::Kind::Plastic;
+    float ior = 1.5f;
+    Vec3 absorption{0, 0, 0};
 };
 
 // Plain data: a kernel takes it by value. The light and material arrays are the caller's
@@ -36,7 +39,7 @@ struct DirectPixelView {
     PrimaryPixelView primary;
     const Light* lights = nullptr;
     int lightCount = 0;
-    const PhongParams* materials = nullptr;
+    const PixelMaterial* materials = nullptr;
     int materialCount = 0;
     int uniformMaterial = -1;  // >= 0: every point's material (Tape::uniformMaterial)
     Vec3 ambient{0, 0, 0}, background{0, 0, 0};
@@ -54,35 +57,49 @@ struct DirectPixelView {
 };
 
 struct DirectPixel {
-    PrimaryPixel primary;  // its DDA counters include the shadow rays'
+    PrimaryPixel primary;    // its DDA counters include the shadow rays'
+    PixelMaterial material;  // at the hit
 
     Vec3 color{0, 0, 0};  // finite: the background on a miss, 0 where shading overflowed
     float shadow = 1;     // the first shadow-casting light's visibility
     float ao = 1;
     uint32_t shadowEvaluations = 0, aoEvaluations = 0;
+    // Whitted rays from a mirror or dielectric hit (whitted_pixel.h): rays, their evaluations
+    // (secondary hits' shadow rays included) and self-intersections.
+    uint32_t secondaryRays = 0, secondaryEvaluations = 0, selfIntersections = 0;
 };
 
 namespace direct_pixel {
 
-// The blend of the plastic materials at p (material_at.cpp's sums, in its order).
+// The blend of the materials at p (material_at.cpp's sums, in its order; the heaviest weight's
+// kind).
 template <int kMaterialRegs>
-SDFT_HOST_DEVICE inline PhongParams materialAt(const DirectPixelView& v, Vec3 p) {
+SDFT_HOST_DEVICE inline PixelMaterial materialAt(const DirectPixelView& v, Vec3 p) {
     if (v.uniformMaterial >= 0 && v.uniformMaterial < v.materialCount)
         return v.materials[v.uniformMaterial];
     MaterialBlend b;
     evalTapeAt<kMaterialRegs>(v.primary.field, p, &b);
-    PhongParams m;
+    PixelMaterial m;
     m.color = Vec3(0.0f);
     m.diffuse = m.specular = m.shininess = 0;
+    m.ior = 0;
+    m.absorption = Vec3(0.0f);
+    float heaviest = -1;
     for (int i = 0; i < b.count; ++i) {
         int id = b.id[i] < 0 ? 0 : b.id[i];
         if (id > v.materialCount - 1) id = v.materialCount - 1;
-        const PhongParams& src = v.materials[id];
+        const PixelMaterial& src = v.materials[id];
         const float w = b.weight[i];
         m.color += src.color * w;
         m.diffuse += src.diffuse * w;
         m.specular += src.specular * w;
         m.shininess += src.shininess * w;
+        m.ior += src.ior * w;
+        m.absorption += src.absorption * w;
+        if (w > heaviest) {
+            heaviest = w;
+            m.kind = src.kind;
+        }
     }
     return m;
 }
@@ -161,7 +178,8 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
     const Ray ray = primaryRay(v.primary.camera, x, y, v.primary.jitter);
     const Vec3 p = ray.at(out.primary.trace.t);
     const Vec3 n = out.primary.normal;
-    const PhongParams m = direct_pixel::materialAt<kMaterialRegs>(v, p);
+    const PixelMaterial m = direct_pixel::materialAt<kMaterialRegs>(v, p);
+    out.material = m;
     Vec3 radiance = v.ambient * m.color;
     if (v.ambientOcclusion) {
         const AmbientOcclusionResult ao = ambientOcclusionTape(v.primary.field, p, n, v.ao);
@@ -198,9 +216,10 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
     return out;
 }
 
-// Why `plan` cannot be shaded by shadeDirectPixel (empty when it can): what primaryPixelUnsupported
-// names, the path tracer, mirrors and dielectrics (Whitted rays), textured materials and shadow
-// maps stay on the CPU renderer for now.
+// Why `plan` cannot be shaded per pixel (empty when it can; mirrors and dielectrics by
+// shadePixel, whitted_pixel.h): what primaryPixelUnsupported names, the path tracer, textured
+// materials, shadow maps and Whitted budgets deeper than its stack stay on the CPU renderer for
+// now.
 std::string directPixelUnsupported(const RenderPlan& plan);
 
 // The shadow rays' eps_min of `plan` (Keinert et al. 2014, §3.3): the settings', and at least
@@ -215,7 +234,7 @@ SoftShadowOptions softShadowOptions(const RenderPlan& plan);
 // The host side of a view: the plan's lights and its materials' Blinn-Phong parameters.
 struct DirectPixelTables {
     std::vector<Light> lights;
-    std::vector<PhongParams> materials;
+    std::vector<PixelMaterial> materials;
 };
 DirectPixelTables directPixelTables(const RenderPlan& plan);
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "sdftrace/field/tape.h"
+#include "sdftrace/render/optics.h"
 #include "sdftrace/render/render_plan.h"
 
 namespace sdft {
@@ -60,15 +61,5 @@ class WhittedTracer {
     Visibility m_visibility;
     TraceOptions m_trace;
 };
-
-// Fresnel reflectance of unpolarized light from a medium of index n1 into n2 at incidence cosine
-// cosI (1 under total internal reflection).
-float fresnelDielectric(float cosI, float n1, float n2);
-
-// Refraction of unit d through unit n (facing against d) with eta = n1 / n2; false under total
-// internal reflection.
-bool refract(Vec3 d, Vec3 n, float eta, Vec3& out);
-// Mirror reflection of d about unit n.
-inline Vec3 reflect(Vec3 d, Vec3 n) { return d - n * (2.0f * dot(d, n)); }
 
 }  // namespace sdft

@@ -8,6 +8,7 @@
 #include "sdftrace/gpu/gpu_tape.h"
 #include "sdftrace/render/direct_pixel.h"
 #include "sdftrace/render/normal_stencil.h"
+#include "sdftrace/render/whitted_pixel.h"
 
 namespace sdft {
 
@@ -16,17 +17,21 @@ namespace {
 // The film's arrays on the device, in the film's layout; per pixel the counters a summary needs.
 struct DirectOut {
     float *color, *depth, *normal, *steps, *error, *shadow, *ao, *travSteps, *isectTests;
-    uint32_t* counters;  // 4 per pixel: shadow and AO evaluations, fallbacks, hit
+    uint32_t* counters;  // kCounters per pixel: shadow and AO evaluations, fallbacks, hit,
+                         // Whitted rays, their evaluations, self-intersections
 };
+constexpr int kCounters = 7;
 
 // One thread per pixel, 16x8 blocks. kMaterialRegs: the material register file of the material
-// blend (1 where the plan has one uniform material: the blend is never evaluated).
-template <int kMaterialRegs>
-__global__ void directKernel(DirectPixelView view, int width, int height, DirectOut out) {
+// blend (1 where the plan has one uniform material: the blend is never evaluated). kWhitted: the
+// plan has mirrors or dielectrics (Whitted rays and their stack are compiled in).
+template <int kMaterialRegs, bool kWhitted>
+__global__ void directKernel(DirectPixelView view, WhittedPixelView whitted, int width, int height,
+                             DirectOut out) {
     const int x = blockIdx.x * blockDim.x + threadIdx.x;
     const int y = blockIdx.y * blockDim.y + threadIdx.y;
     if (x >= width || y >= height) return;
-    const DirectPixel px = shadeDirectPixel<kMaterialRegs>(view, x, y);
+    const DirectPixel px = shadePixel<kMaterialRegs, kWhitted>(view, whitted, x, y);
     const size_t i = static_cast<size_t>(y) * width + x;
     const bool hit = px.primary.trace.hit;
     for (int a = 0; a < 3; ++a) {
@@ -40,10 +45,36 @@ __global__ void directKernel(DirectPixelView view, int width, int height, Direct
     out.ao[i] = px.ao;
     out.travSteps[i] = static_cast<float>(px.primary.traversalSteps);
     out.isectTests[i] = static_cast<float>(px.primary.intersectionTests);
-    out.counters[4 * i + 0] = px.shadowEvaluations;
-    out.counters[4 * i + 1] = px.aoEvaluations;
-    out.counters[4 * i + 2] = static_cast<uint32_t>(px.primary.trace.fallbacks);
-    out.counters[4 * i + 3] = hit ? 1u : 0u;
+    uint32_t* c = out.counters + kCounters * i;
+    c[0] = px.shadowEvaluations;
+    c[1] = px.aoEvaluations;
+    c[2] = static_cast<uint32_t>(px.primary.trace.fallbacks);
+    c[3] = hit ? 1u : 0u;
+    c[4] = px.secondaryRays;
+    c[5] = px.secondaryEvaluations;
+    c[6] = px.selfIntersections;
+}
+
+template <bool kWhitted>
+void launchDirect(int regs, dim3 grid, dim3 block, const DirectPixelView& view,
+                  const WhittedPixelView& whitted, int w, int h, const DirectOut& out) {
+    switch (regs) {
+        case 1:
+            directKernel<1, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
+            break;
+        case 8:
+            directKernel<8, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
+            break;
+        case 16:
+            directKernel<16, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
+            break;
+        case 32:
+            directKernel<32, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
+            break;
+        default:
+            directKernel<kTapeMaxScalarRegs, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
+            break;
+    }
 }
 
 }  // namespace
@@ -53,14 +84,27 @@ struct GpuDirectRenderer::Impl {
     GpuTape tape;
     DirectPixelTables tables;
     cuda::DeviceArray<Light> lights;
-    cuda::DeviceArray<PhongParams> materials;
+    cuda::DeviceArray<PixelMaterial> materials;
+    // Whitted rays: the convex objects' tapes (Keinert §3.5) on the device, and their views.
+    bool whitted;
+    std::vector<GpuTape> convexTapes;
+    cuda::DeviceArray<ConvexView> convex;
 
     explicit Impl(const RenderPlan& p)
         : plan(p),
           tape(p.tape),
           tables(directPixelTables(p)),
           lights(tables.lights),
-          materials(tables.materials) {}
+          materials(tables.materials),
+          whitted(planHasWhitted(p)) {
+        if (!whitted) return;
+        std::vector<ConvexView> views;
+        for (const ConvexObject& c : p.convexObjects) {
+            convexTapes.emplace_back(c.tape);
+            views.push_back({convexTapes.back().view(), c.bounds});
+        }
+        convex = cuda::DeviceArray<ConvexView>(views);
+    }
 };
 
 GpuDirectRenderer::GpuDirectRenderer(const RenderPlan& plan, const std::string& what) {
@@ -84,9 +128,13 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     view.primary.field = m.tape.view();
     view.lights = m.lights.get();
     view.materials = m.materials.get();
+    const WhittedPixelTables noTables;
+    WhittedPixelView whitted = whittedPixelView(m.plan, noTables);
+    whitted.convex = m.convex.get();
+    whitted.convexCount = static_cast<int>(m.convex.size());
     cuda::DeviceArray<float> color(3 * n), depth(n), normal(3 * n), steps(n), error(n), shadow(n),
         ao(n), travSteps(n), isectTests(n);
-    cuda::DeviceArray<uint32_t> counters(4 * n);
+    cuda::DeviceArray<uint32_t> counters(kCounters * n);
     const DirectOut out{color.get(),      depth.get(),   normal.get(), steps.get(),
                         error.get(),      shadow.get(),  ao.get(),     travSteps.get(),
                         isectTests.get(), counters.get()};
@@ -101,23 +149,10 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
                      : view.primary.field.numScalarRegs <= 16 ? 16
                      : view.primary.field.numScalarRegs <= 32 ? 32
                                                               : kTapeMaxScalarRegs;
-    switch (regs) {
-        case 1:
-            directKernel<1><<<grid, block>>>(view, w, h, out);
-            break;
-        case 8:
-            directKernel<8><<<grid, block>>>(view, w, h, out);
-            break;
-        case 16:
-            directKernel<16><<<grid, block>>>(view, w, h, out);
-            break;
-        case 32:
-            directKernel<32><<<grid, block>>>(view, w, h, out);
-            break;
-        default:
-            directKernel<kTapeMaxScalarRegs><<<grid, block>>>(view, w, h, out);
-            break;
-    }
+    if (m.whitted)
+        launchDirect<true>(regs, grid, block, view, whitted, w, h, out);
+    else
+        launchDirect<false>(regs, grid, block, view, whitted, w, h, out);
     SDFT_CUDA_CHECK(cudaGetLastError());
     SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
     RenderStats st;
@@ -137,14 +172,18 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     if (film.has(Aov::TravSteps)) film.travSteps = trav;
     if (film.has(Aov::IsectTests)) film.isectTests = isect;
     std::vector<uint32_t> c;
-    counters.download(c, 4 * n);
+    counters.download(c, kCounters * n);
     st.primaryRays = n;
     for (size_t i = 0; i < n; ++i) {
         st.primaryEvaluations += static_cast<uint64_t>(stepCounts[i]);
-        st.shadowEvaluations += c[4 * i + 0];
-        st.aoEvaluations += c[4 * i + 1];
-        st.fallbacks += c[4 * i + 2];
-        st.hits += c[4 * i + 3];
+        const uint32_t* p = c.data() + kCounters * i;
+        st.shadowEvaluations += p[0];
+        st.aoEvaluations += p[1];
+        st.fallbacks += p[2];
+        st.hits += p[3];
+        st.secondaryRays += p[4];
+        st.secondaryEvaluations += p[5];
+        st.selfIntersections += p[6];
         st.traversalSteps += static_cast<uint64_t>(trav[i]);
         st.intersectionTests += static_cast<uint64_t>(isect[i]);
     }

@@ -39,7 +39,7 @@ void matchesTheCpu(const std::string& name, int variant, const RenderPlan& plan)
     FrameView frame;
     frame.camera = plan.camera;
     Film cpu(W, H), gpu(W, H);
-    render(plan, frame, cpu, false);
+    const RenderStats cst = render(plan, frame, cpu, false);
     const GpuDirectRenderer renderer(plan, "test");
     const RenderStats st = renderer.render(frame, gpu);
     int interior = 0, hitMismatch = 0, hits = 0, depthOff = 0;
@@ -72,9 +72,13 @@ void matchesTheCpu(const std::string& name, int variant, const RenderPlan& plan)
     EXPECT_LT(mad, 2e-3);
     EXPECT_TRUE(st.gpu);
     EXPECT_EQ(st.primaryRays, static_cast<uint64_t>(W * H));
+    // Whitted rays (mirrors, glass): the same ray trees but where rounding moved a bounce.
+    EXPECT_NEAR(double(st.secondaryRays), double(cst.secondaryRays),
+                0.01 * double(cst.secondaryRays) + 10);
 }
 
-// Every example the per-pixel path renders, with hard, soft and distributed shadows and AO.
+// Every example the per-pixel path renders (glass and glass_shapes by Whitted rays), with hard,
+// soft and distributed shadows and AO.
 TEST(GpuRender, DirectLightingMatchesTheCpuOnTheExamples) {
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
     constexpr int W = 160, H = 90;
@@ -101,6 +105,17 @@ TEST(GpuRender, DirectLightingMatchesTheCpuOnTheExamples) {
         }
     }
     EXPECT_GE(rendered, 40);
+}
+
+// Mirrors on the GPU: every material of the demo a mirror, three reflections deep.
+TEST(GpuRender, MirrorsMatchTheCpu) {
+    if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
+    Scene scene = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/demo.json");
+    scene.camera.width = 160;
+    scene.camera.height = 90;
+    for (Material& m : scene.materials) m.kind = Material::Kind::Mirror;
+    scene.settings.maxReflections = 3;
+    matchesTheCpu("demo mirrors", 0, planRender(scene));
 }
 
 // Lone grids by the DDA on the GPU (Jamriška §4, §5, §7), hard and soft shadows, against the CPU

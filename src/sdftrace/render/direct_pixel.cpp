@@ -1,6 +1,10 @@
 #include "sdftrace/render/direct_pixel.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "sdftrace/render/render_plan.h"
+#include "sdftrace/render/whitted_pixel.h"
 
 namespace sdft {
 
@@ -11,11 +15,11 @@ std::string directPixelUnsupported(const RenderPlan& plan) {
     if (s.pathTracing) return "the path tracer";
     if (s.shadows && (s.shadowMethod == ShadowMethod::Pcf || s.shadowMethod == ShadowMethod::Evsm))
         return "shadow maps (pcf, evsm)";
-    for (const Material& m : plan.materials) {
-        if (m.kind != Material::Kind::Plastic)
-            return "material '" + m.name + "': mirrors and dielectrics (Whitted rays)";
+    for (const Material& m : plan.materials)
         if (m.colorTexture >= 0) return "material '" + m.name + "': textures";
-    }
+    if (s.maxReflections + s.maxRefractions > kWhittedMaxBounces)
+        return "Whitted budgets above " + std::to_string(kWhittedMaxBounces) +
+               " bounces in all (max_reflections + max_refractions)";
     if (plan.materials.empty()) return "a plan without materials";
     return {};
 }
@@ -38,7 +42,8 @@ DirectPixelTables directPixelTables(const RenderPlan& plan) {
     t.lights = plan.lighting.lights;
     t.materials.reserve(plan.materials.size());
     for (const Material& m : plan.materials)
-        t.materials.push_back({m.color, m.diffuse, m.specular, m.shininess});
+        t.materials.push_back(
+            {m.color, m.diffuse, m.specular, m.shininess, m.kind, m.ior, m.absorption});
     return t;
 }
 
@@ -69,6 +74,47 @@ DirectPixelView directPixelView(const RenderPlan& plan, const FrameView& frame,
     v.filmWidth = filmWidth;
     v.frame = frame.frame;
     return v;
+}
+
+WhittedPixelTables whittedPixelTables(const RenderPlan& plan) {
+    WhittedPixelTables t;
+    for (const ConvexObject& c : plan.convexObjects) t.convex.push_back({c.tape.view(), c.bounds});
+    return t;
+}
+
+WhittedPixelView whittedPixelView(const RenderPlan& plan, const WhittedPixelTables& tables) {
+    const RenderSettings& s = plan.settings;
+    WhittedPixelView w;
+    w.convex = tables.convex.data();
+    w.convexCount = static_cast<int>(tables.convex.size());
+    w.maxReflections = s.maxReflections;
+    w.maxRefractions = s.maxRefractions;
+    w.dynamicEpsilon = s.dynamicEpsilon;
+    w.globalEpsilon = s.globalEpsilon;
+    w.offsetMin = s.shadowOffsetMin;
+    w.secondary = s.trace.secondary();
+    w.shadows = secondaryShadows(s);
+    return w;
+}
+
+SecondaryShadows secondaryShadows(const RenderSettings& s) {
+    SecondaryShadows o;
+    o.enabled = s.shadows;
+    o.method = s.shadowMethod;
+    o.rays = std::max(1, s.shadowRays);
+    o.offsetMin = s.shadowOffsetMin;
+    o.maxDistance = s.maxDistance;
+    o.ray = s.trace.occlusion();
+    o.soft = s.soft;
+    o.soft.epsilon = std::fmax(o.soft.epsilon, s.trace.tau);
+    o.soft.jitter = false;
+    return o;
+}
+
+bool planHasWhitted(const RenderPlan& plan) {
+    for (const Material& m : plan.materials)
+        if (m.kind != Material::Kind::Plastic) return true;
+    return false;
 }
 
 }  // namespace sdft

@@ -10,6 +10,7 @@
 #include "sdftrace/render/primary_test_scenes.h"
 #include "sdftrace/render/render_plan.h"
 #include "sdftrace/render/renderer.h"
+#include "sdftrace/render/whitted_pixel.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
 
@@ -101,7 +102,8 @@ TEST(DirectPixel, MatchesTheRenderersDirectLightingOnTheExamples) {
                     break;
             }
             const RenderPlan plan = planRender(scene);
-            if (!directPixelUnsupported(plan).empty()) break;
+            // Mirrors and glass: shadePixel's Whitted rays, whitted_pixel_test.cpp.
+            if (!directPixelUnsupported(plan).empty() || planHasWhitted(plan)) break;
             shaded.insert(name);
             int shadowed = 0;
             EXPECT_GT(shadesLikeTheRenderer(plan, frameNumber, shadowed, penumbraPixels), 0);
@@ -156,8 +158,8 @@ TEST(DirectPixel, MatchesTheRenderersDirectLightingOnLoneGrids) {
 
 // What the per-pixel path refuses names the feature.
 TEST(DirectPixel, NamesWhatItCannotShade) {
-    Scene scene = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/glass.json");
-    EXPECT_NE(directPixelUnsupported(planRender(scene)).find("dielectric"), std::string::npos);
+    Scene scene = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/textures.json");
+    EXPECT_NE(directPixelUnsupported(planRender(scene)).find("textures"), std::string::npos);
     scene = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/demo.json");
     scene.settings.pathTracing = true;
     EXPECT_EQ(directPixelUnsupported(planRender(scene)), "the path tracer");

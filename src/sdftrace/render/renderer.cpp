@@ -19,6 +19,7 @@
 #include "sdftrace/render/path_tracer.h"
 #include "sdftrace/render/primary_pixel.h"
 #include "sdftrace/render/whitted.h"
+#include "sdftrace/render/whitted_pixel.h"
 #include "sdftrace/trace/field_tracer.h"
 #include "sdftrace/trace/grid_tracer.h"
 #include "sdftrace/trace/minmax_buffer.h"
@@ -78,6 +79,7 @@ class TileRenderer {
                 m_useMinMax = true;
             }
         }
+        m_secondaryShadows = secondaryShadows(m_settings);
         m_whitted = std::make_unique<WhittedTracer>(
             plan, [this](Vec3 p, Vec3 n, const Light& light, int li) {
                 return visibilityAt(p, n, light, li);
@@ -153,48 +155,18 @@ class TileRenderer {
     std::vector<std::unique_ptr<ShadowMap>> m_maps;  // per light, shadow-map methods
     uint64_t m_mapEvaluations = 0;
     std::unique_ptr<WhittedTracer> m_whitted;  // mirrors and dielectrics (Keinert §4)
+    SecondaryShadows m_secondaryShadows;       // how its secondary hits see the lights
 };
 
 float TileRenderer::visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex) const {
-    const LightDirection to = towardLight(light, p);
-    if (dot(n, to.dir) <= 0) return 0.0f;
-    const float eps = 2.0f * m_settings.shadowOffsetMin;
-    const Vec3 origin = p + n * eps;
-    const float tMax = std::fmin(to.dist, m_settings.maxDistance);
-    switch (m_settings.shadowMethod) {
-        case ShadowMethod::Hard:
-            return traceRay(m_tape, {{origin, to.dir}, 0.0f, tMax}, m_shadow).hit ? 0.0f : 1.0f;
-        case ShadowMethod::Soft: {
-            SoftShadowOptions o = m_settings.soft;
-            o.epsilon = std::fmax(o.epsilon, m_settings.trace.tau);
-            o.jitter = false;
-            return softShadow(m_tape, origin, to.dir, 0.0f, tMax, lightTanRadius(light, p), o, 0)
-                .visibility;
-        }
-        case ShadowMethod::Distributed: {
-            if (!light.hasSize())
-                return traceRay(m_tape, {{origin, to.dir}, 0.0f, tMax}, m_shadow).hit ? 0.0f : 1.0f;
-            const int rays = std::max(1, m_settings.shadowRays);
-            int seen = 0;
-            for (int k = 0; k < rays; ++k) {
-                float u1, u2;
-                rotatedHalton(static_cast<uint32_t>(k), 0.5f, 0.5f, u1, u2);
-                const LightSample ls = sampleLight(light, p, u1, u2);
-                if (ls.dist <= 0) {
-                    ++seen;
-                } else if (dot(n, ls.dir) > 0) {
-                    seen += !traceRay(m_tape, {{origin, ls.dir}, 0.0f, ls.dist}, m_shadow).hit;
-                }
-            }
-            return static_cast<float>(seen) / rays;
-        }
-        case ShadowMethod::Pcf:
-        case ShadowMethod::Evsm: {
-            const ShadowMap* map = m_maps[lightIndex].get();
-            return map ? map->visibility(p, n) : 1.0f;
-        }
+    if (m_settings.shadowMethod == ShadowMethod::Pcf ||
+        m_settings.shadowMethod == ShadowMethod::Evsm) {
+        const LightDirection to = towardLight(light, p);
+        if (dot(n, to.dir) <= 0) return 0.0f;
+        const ShadowMap* map = m_maps[lightIndex].get();
+        return map ? map->visibility(p, n) : 1.0f;
     }
-    return 1.0f;
+    return secondaryVisibility(m_tape.view(), m_secondaryShadows, p, n, light);
 }
 
 Bounds3 TileRenderer::shadowRegion() const {

@@ -10,24 +10,6 @@
 
 namespace sdft {
 
-float fresnelDielectric(float cosI, float n1, float n2) {
-    cosI = std::clamp(cosI, 0.0f, 1.0f);
-    const float sinT = n1 / n2 * std::sqrt(std::max(0.0f, 1.0f - cosI * cosI));
-    if (sinT >= 1.0f) return 1.0f;
-    const float cosT = std::sqrt(std::max(0.0f, 1.0f - sinT * sinT));
-    const float rs = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
-    const float rp = (n1 * cosT - n2 * cosI) / (n1 * cosT + n2 * cosI);
-    return 0.5f * (rs * rs + rp * rp);
-}
-
-bool refract(Vec3 d, Vec3 n, float eta, Vec3& out) {
-    const float cosI = -dot(d, n);
-    const float k = 1.0f - eta * eta * (1.0f - cosI * cosI);
-    if (k < 0) return false;
-    out = normalize(d * eta + n * (eta * cosI - std::sqrt(k)));
-    return true;
-}
-
 WhittedTracer::WhittedTracer(const RenderPlan& plan, Visibility visibility)
     : m_plan(plan), m_tape(plan.tape), m_visibility(std::move(visibility)) {
     m_trace = plan.settings.trace.secondary();  // a secondary ray has no pixel footprint
