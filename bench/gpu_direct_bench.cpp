@@ -32,7 +32,8 @@ struct Case {
     const char* scene;
     // hard, soft, distributed (4 rays), ao (hard shadows and AO), whitted (hard shadows; the
     // scene's gems made glass: Keinert et al. 2014's jewel with 2 reflection and 8 refraction
-    // bounces and 3 discontinuity-reduction iterations)
+    // bounces and 3 discontinuity-reduction iterations), path (the path tracer, 1 spp, 10
+    // bounces: Keinert's path-traced jewel)
     const char* shadows;
 };
 
@@ -79,6 +80,11 @@ int main(int argc, char** argv) {
             scene.settings.shadowRays = 4;
             scene.settings.ambientOcclusion = s == "ao";
             if (s == "whitted") makeGemsGlass(scene);
+            if (s == "path") {
+                scene.settings.pathTracing = true;
+                scene.settings.samplesPerPixel = 1;
+                scene.settings.maxDepth = 10;
+            }
             const RenderPlan plan = planRender(scene);
             if (const std::string why = directPixelUnsupported(plan); !why.empty()) {
                 std::printf("| %s | %s | skipped: %s |\n", c.scene, c.shadows, why.c_str());

@@ -567,14 +567,15 @@ void addRenderCommand(CLI::App& app, Action& action) {
     addFrameFlags(cmd, *args);
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));
-    cmd->add_option("--device", args->device,
-                    "Where the frames render: cpu; cuda (the GPU: direct lighting with hard, "
-                    "soft or distributed shadows and AO, plastic materials, mirrors and glass by "
-                    "Whitted rays, any field: analytic, CSG, blends, grids and baked meshes in a "
-                    "scene; an error names what only the CPU renders yet: triangle primaries, "
-                    "textures, shadow maps, the path tracer); auto (the GPU where one is present "
-                    "and renders the scene, else the CPU). With a GPU, meshes baked by jfa or "
-                    "rtsdf (dynamic rtsdf meshes every frame) bake on it too")
+    cmd->add_option(
+           "--device", args->device,
+           "Where the frames render: cpu; cuda (the GPU: direct lighting with hard, "
+           "soft or distributed shadows and AO, plastic materials, mirrors and glass by "
+           "Whitted rays, the path tracer, any field: analytic, CSG, blends, grids and "
+           "baked meshes in a scene; an error names what only the CPU renders yet: "
+           "triangle primaries, textures, shadow maps); auto (the GPU where one is present "
+           "and renders the scene, else the CPU). With a GPU, meshes baked by jfa or "
+           "rtsdf (dynamic rtsdf meshes every frame) bake on it too")
         ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
         ->capture_default_str();
     cmd->add_flag("-q,--quiet", args->quiet,

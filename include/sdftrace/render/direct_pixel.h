@@ -31,7 +31,13 @@ struct PixelMaterial {
     Material::Kind kind = Material::Kind::Plastic;
     float ior = 1.5f;
     Vec3 absorption{0, 0, 0};
+    float roughness = -1;  // the path tracer's GGX alpha; < 0: from the shininess
 };
+
+// A material without its name and textures.
+inline PixelMaterial pixelMaterial(const Material& m) {
+    return {m.color, m.diffuse, m.specular, m.shininess, m.kind, m.ior, m.absorption, m.roughness};
+}
 
 // Plain data: a kernel takes it by value. The light and material arrays are the caller's
 // (DirectPixelTables on the CPU, device copies on a GPU).
@@ -84,7 +90,8 @@ SDFT_HOST_DEVICE inline PixelMaterial materialAt(const DirectPixelView& v, Vec3 
     m.diffuse = m.specular = m.shininess = 0;
     m.ior = 0;
     m.absorption = Vec3(0.0f);
-    float heaviest = -1;
+    m.roughness = 0;
+    float heaviest = -1, roughWeight = 0;
     for (int i = 0; i < b.count; ++i) {
         int id = b.id[i] < 0 ? 0 : b.id[i];
         if (id > v.materialCount - 1) id = v.materialCount - 1;
@@ -96,11 +103,16 @@ SDFT_HOST_DEVICE inline PixelMaterial materialAt(const DirectPixelView& v, Vec3 
         m.shininess += src.shininess * w;
         m.ior += src.ior * w;
         m.absorption += src.absorption * w;
+        if (src.roughness >= 0) {
+            m.roughness += src.roughness * w;
+            roughWeight += w;
+        }
         if (w > heaviest) {
             heaviest = w;
             m.kind = src.kind;
         }
     }
+    m.roughness = roughWeight > 0 ? m.roughness / roughWeight : -1;
     return m;
 }
 
@@ -217,9 +229,9 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
 }
 
 // Why `plan` cannot be shaded per pixel (empty when it can; mirrors and dielectrics by
-// shadePixel, whitted_pixel.h): what primaryPixelUnsupported names, the path tracer, textured
-// materials, shadow maps and Whitted budgets deeper than its stack stay on the CPU renderer for
-// now.
+// shadePixel, whitted_pixel.h, the path tracer by pathRadiance, path_pixel.h): what
+// primaryPixelUnsupported names, textured materials, shadow maps and Whitted budgets deeper than
+// its stack stay on the CPU renderer for now.
 std::string directPixelUnsupported(const RenderPlan& plan);
 
 // The shadow rays' eps_min of `plan` (Keinert et al. 2014, §3.3): the settings', and at least

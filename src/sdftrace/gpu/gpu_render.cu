@@ -8,6 +8,7 @@
 #include "sdftrace/gpu/gpu_tape.h"
 #include "sdftrace/render/direct_pixel.h"
 #include "sdftrace/render/normal_stencil.h"
+#include "sdftrace/render/path_pixel.h"
 #include "sdftrace/render/whitted_pixel.h"
 
 namespace sdft {
@@ -17,10 +18,11 @@ namespace {
 // The film's arrays on the device, in the film's layout; per pixel the counters a summary needs.
 struct DirectOut {
     float *color, *depth, *normal, *steps, *error, *shadow, *ao, *travSteps, *isectTests;
-    uint32_t* counters;  // kCounters per pixel: shadow and AO evaluations, fallbacks, hit,
-                         // Whitted rays, their evaluations, self-intersections
+    uint32_t* counters;  // kCounters per pixel: shadow and AO evaluations, fallbacks, hits,
+                         // secondary rays, their evaluations, self-intersections; paths: primary
+                         // evaluations, shadow rays, normal evaluations of every sample
 };
-constexpr int kCounters = 7;
+constexpr int kCounters = 10;
 
 // One thread per pixel, 16x8 blocks. kMaterialRegs: the material register file of the material
 // blend (1 where the plan has one uniform material: the blend is never evaluated). kWhitted: the
@@ -53,6 +55,77 @@ __global__ void directKernel(DirectPixelView view, WhittedPixelView whitted, int
     c[4] = px.secondaryRays;
     c[5] = px.secondaryEvaluations;
     c[6] = px.selfIntersections;
+}
+
+// The per-pixel material table as pathRadiance's material lookup (no textures).
+template <int kMaterialRegs>
+struct TableMaterial {
+    const DirectPixelView* view;
+    SDFT_HOST_DEVICE PixelMaterial operator()(Vec3 p, Vec3) const {
+        return direct_pixel::materialAt<kMaterialRegs>(*view, p);
+    }
+};
+
+// The path tracer, one thread per pixel running its samples (path_pixel.h): colour the samples'
+// mean, depth, normal and steps the first sample's.
+template <int kMaterialRegs>
+__global__ void pathKernel(PathPixelView view, int width, int height, DirectOut out) {
+    const int x = blockIdx.x * blockDim.x + threadIdx.x;
+    const int y = blockIdx.y * blockDim.y + threadIdx.y;
+    if (x >= width || y >= height) return;
+    const TableMaterial<kMaterialRegs> materials{&view.direct};
+    PathCounters pc;
+    Vec3 sum(0.0f), normal(0.0f);
+    float depth = kInfinity;
+    int steps = 0;
+    for (int k = 0; k < view.samplesPerPixel; ++k)
+        sum += pathRadiance(view, materials, x, y, k, pc, k == 0 ? &depth : nullptr,
+                            k == 0 ? &normal : nullptr, k == 0 ? &steps : nullptr);
+    const Vec3 color = sum / static_cast<float>(view.samplesPerPixel);
+    const size_t i = static_cast<size_t>(y) * width + x;
+    for (int a = 0; a < 3; ++a) {
+        out.color[3 * i + a] = color[a];
+        out.normal[3 * i + a] = normal[a];
+    }
+    out.depth[i] = depth;
+    out.steps[i] = static_cast<float>(steps);
+    out.error[i] = 0;
+    out.shadow[i] = 1;
+    out.ao[i] = 1;
+    out.travSteps[i] = 0;
+    out.isectTests[i] = 0;
+    uint32_t* c = out.counters + kCounters * i;
+    c[0] = static_cast<uint32_t>(pc.shadowEvaluations);
+    c[1] = 0;
+    c[2] = 0;
+    c[3] = static_cast<uint32_t>(pc.hits);
+    c[4] = static_cast<uint32_t>(pc.secondaryRays);
+    c[5] = static_cast<uint32_t>(pc.secondaryEvaluations);
+    c[6] = 0;
+    c[7] = static_cast<uint32_t>(pc.primaryEvaluations);
+    c[8] = static_cast<uint32_t>(pc.shadowRays);
+    c[9] = static_cast<uint32_t>(pc.normalEvaluations);
+}
+
+void launchPaths(int regs, dim3 grid, dim3 block, const PathPixelView& view, int w, int h,
+                 const DirectOut& out) {
+    switch (regs) {
+        case 1:
+            pathKernel<1><<<grid, block>>>(view, w, h, out);
+            break;
+        case 8:
+            pathKernel<8><<<grid, block>>>(view, w, h, out);
+            break;
+        case 16:
+            pathKernel<16><<<grid, block>>>(view, w, h, out);
+            break;
+        case 32:
+            pathKernel<32><<<grid, block>>>(view, w, h, out);
+            break;
+        default:
+            pathKernel<kTapeMaxScalarRegs><<<grid, block>>>(view, w, h, out);
+            break;
+    }
 }
 
 template <bool kWhitted>
@@ -149,7 +222,15 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
                      : view.primary.field.numScalarRegs <= 16 ? 16
                      : view.primary.field.numScalarRegs <= 32 ? 32
                                                               : kTapeMaxScalarRegs;
-    if (m.whitted)
+    const bool paths = m.plan.settings.pathTracing;
+    PathPixelView pathView;
+    if (paths) {
+        pathView = pathPixelView(m.plan, frame, m.tables);
+        pathView.direct = view;
+    }
+    if (paths)
+        launchPaths(regs, grid, block, pathView, w, h, out);
+    else if (m.whitted)
         launchDirect<true>(regs, grid, block, view, whitted, w, h, out);
     else
         launchDirect<false>(regs, grid, block, view, whitted, w, h, out);
@@ -173,9 +254,8 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     if (film.has(Aov::IsectTests)) film.isectTests = isect;
     std::vector<uint32_t> c;
     counters.download(c, kCounters * n);
-    st.primaryRays = n;
+    st.primaryRays = paths ? n * static_cast<uint64_t>(pathView.samplesPerPixel) : n;
     for (size_t i = 0; i < n; ++i) {
-        st.primaryEvaluations += static_cast<uint64_t>(stepCounts[i]);
         const uint32_t* p = c.data() + kCounters * i;
         st.shadowEvaluations += p[0];
         st.aoEvaluations += p[1];
@@ -184,12 +264,18 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
         st.secondaryRays += p[4];
         st.secondaryEvaluations += p[5];
         st.selfIntersections += p[6];
+        if (!paths) st.primaryEvaluations += static_cast<uint64_t>(stepCounts[i]);
+        if (paths) {
+            st.primaryEvaluations += p[7];  // every sample's
+            st.shadowRays += p[8];
+            st.normalEvaluations += p[9];
+        }
         st.traversalSteps += static_cast<uint64_t>(trav[i]);
         st.intersectionTests += static_cast<uint64_t>(isect[i]);
     }
-    st.gridTracer = m.plan.ddaGrid != nullptr;
+    st.gridTracer = m.plan.ddaGrid != nullptr && !paths;
     // The DDA's normals read the grid, not the tape (not counted, as on the CPU).
-    if (!st.gridTracer)
+    if (!st.gridTracer && !paths)
         st.normalEvaluations =
             st.hits * static_cast<uint64_t>(stencilSize(m.plan.settings.normals));
     st.threads = 1;

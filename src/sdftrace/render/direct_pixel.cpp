@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sdftrace/render/path_pixel.h"
 #include "sdftrace/render/render_plan.h"
 #include "sdftrace/render/whitted_pixel.h"
 
@@ -12,12 +13,12 @@ std::string directPixelUnsupported(const RenderPlan& plan) {
     std::string why = primaryPixelUnsupported(plan);
     if (!why.empty()) return why;
     const RenderSettings& s = plan.settings;
-    if (s.pathTracing) return "the path tracer";
     if (s.shadows && (s.shadowMethod == ShadowMethod::Pcf || s.shadowMethod == ShadowMethod::Evsm))
         return "shadow maps (pcf, evsm)";
     for (const Material& m : plan.materials)
         if (m.colorTexture >= 0) return "material '" + m.name + "': textures";
-    if (s.maxReflections + s.maxRefractions > kWhittedMaxBounces)
+    if (!s.pathTracing && planHasWhitted(plan) &&
+        s.maxReflections + s.maxRefractions > kWhittedMaxBounces)
         return "Whitted budgets above " + std::to_string(kWhittedMaxBounces) +
                " bounces in all (max_reflections + max_refractions)";
     if (plan.materials.empty()) return "a plan without materials";
@@ -41,9 +42,7 @@ DirectPixelTables directPixelTables(const RenderPlan& plan) {
     DirectPixelTables t;
     t.lights = plan.lighting.lights;
     t.materials.reserve(plan.materials.size());
-    for (const Material& m : plan.materials)
-        t.materials.push_back(
-            {m.color, m.diffuse, m.specular, m.shininess, m.kind, m.ior, m.absorption});
+    for (const Material& m : plan.materials) t.materials.push_back(pixelMaterial(m));
     return t;
 }
 
@@ -73,6 +72,21 @@ DirectPixelView directPixelView(const RenderPlan& plan, const FrameView& frame,
     v.ao = s.ao;
     v.filmWidth = filmWidth;
     v.frame = frame.frame;
+    return v;
+}
+
+PathPixelView pathPixelView(const RenderPlan& plan, const FrameView& frame,
+                            const DirectPixelTables& tables) {
+    const RenderSettings& s = plan.settings;
+    PathPixelView v;
+    v.direct = directPixelView(plan, frame, tables, frame.camera.width);
+    v.secondary = s.trace.secondary();
+    v.occlusion = s.trace.occlusion();
+    v.offsetMin = s.shadowOffsetMin;
+    v.environment = plan.lighting.environment;
+    v.maxDepth = s.maxDepth;
+    v.samplesPerPixel = std::max(1, s.samplesPerPixel);
+    v.seedWidth = frame.camera.width;
     return v;
 }
 
