@@ -38,9 +38,9 @@ struct Case {
 };
 
 constexpr Case kCases[] = {
-    {"city", "hard"},           {"city", "soft"},        {"demo", "hard"}, {"shadows", "soft"},
-    {"shadows", "distributed"}, {"many_blend", "ao"},    {"rock", "hard"}, {"jewel", "hard"},
-    {"jewel", "whitted"},       {"glass_shapes", "hard"}};
+    {"city", "hard"},           {"city", "soft"},         {"demo", "hard"},  {"shadows", "soft"},
+    {"shadows", "distributed"}, {"many_blend", "ao"},     {"rock", "hard"},  {"jewel", "hard"},
+    {"jewel", "whitted"},       {"glass_shapes", "hard"}, {"jewel", "path"}, {"path", "path"}};
 
 // Keinert's jewel scene: its gems as absorbing dielectrics (diamond's and ruby's indices).
 void makeGemsGlass(Scene& scene) {
