@@ -26,12 +26,15 @@ struct WhittedStats {
     uint64_t rays = 0, evaluations = 0;
     // Secondary rays that struck the surface they left within twice their offset.
     uint64_t selfIntersections = 0;
+    uint64_t shadowEvaluations = 0;  // of the secondary hits' shadow rays
 };
 
 class WhittedTracer {
   public:
-    // How much of a light a point sees (the renderer's shadow method).
-    using Visibility = std::function<float(Vec3 p, Vec3 n, const Light& light, int lightIndex)>;
+    // How much of a light a point sees (the renderer's shadow method), adding the field
+    // evaluations it took to `evaluations`.
+    using Visibility = std::function<float(Vec3 p, Vec3 n, const Light& light, int lightIndex,
+                                           uint64_t& evaluations)>;
     WhittedTracer(const RenderPlan& plan, Visibility visibility);
 
     // Radiance leaving a mirror or dielectric hit p (unit normal n, field value f) against the
@@ -52,7 +55,7 @@ class WhittedTracer {
     bool exitDistance(Vec3 origin, Vec3 d, float& dist, float& value, WhittedStats& stats) const;
     Vec3 shade(Vec3 p, Vec3 n, float f, Vec3 d, const Material& m, int reflections, int refractions,
                WhittedStats& stats) const;
-    Vec3 shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m) const;
+    Vec3 shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m, WhittedStats& stats) const;
     float offset(float f) const;
     Vec3 normalAt(Vec3 p) const;
 

@@ -49,21 +49,28 @@ struct SecondaryShadows {
 SecondaryShadows secondaryShadows(const RenderSettings& settings);
 
 // How much of `light` the secondary hit p (unit normal n) on `field` sees, in [0, 1]: the CPU
-// renderer's visibilityAt for its Whitted rays, and the per-pixel path's. Their evaluations are
-// not counted (the CPU renderer never did).
+// renderer's visibilityAt for its Whitted rays, and the per-pixel path's; the field evaluations
+// are added to `evaluations` (the summary's shadow evaluations).
 SDFT_HOST_DEVICE inline float secondaryVisibility(const TapeView& field, const SecondaryShadows& s,
-                                                  Vec3 p, Vec3 n, const Light& light) {
+                                                  Vec3 p, Vec3 n, const Light& light,
+                                                  uint32_t& evaluations) {
     const LightDirection to = towardLight(light, p);
     if (dot(n, to.dir) <= 0) return 0.0f;
     const Vec3 origin = p + n * (2.0f * s.offsetMin);
     const float tMax = minf(to.dist, s.maxDistance);
+    auto blocked = [&](Vec3 dir, float t) {
+        const TraceResult r = traceTapeRay(field, {{origin, dir}, 0.0f, t}, s.ray);
+        evaluations += static_cast<uint32_t>(r.evaluations);
+        return r.hit;
+    };
     if (s.method == ShadowMethod::Soft) {
-        return softShadowTape(field, origin, to.dir, 0.0f, tMax, lightTanRadius(light, p), s.soft,
-                              0.0f)
-            .visibility;
+        const SoftShadowResult r = softShadowTape(field, origin, to.dir, 0.0f, tMax,
+                                                  lightTanRadius(light, p), s.soft, 0.0f);
+        evaluations += static_cast<uint32_t>(r.evaluations);
+        return r.visibility;
     }
     if (s.method != ShadowMethod::Distributed || !light.hasSize())
-        return traceTapeRay(field, {{origin, to.dir}, 0.0f, tMax}, s.ray).hit ? 0.0f : 1.0f;
+        return blocked(to.dir, tMax) ? 0.0f : 1.0f;
     int seen = 0;
     for (int k = 0; k < s.rays; ++k) {
         float u1, u2;
@@ -72,7 +79,7 @@ SDFT_HOST_DEVICE inline float secondaryVisibility(const TapeView& field, const S
         if (ls.dist <= 0) {
             ++seen;
         } else if (dot(n, ls.dir) > 0) {
-            seen += !traceTapeRay(field, {{origin, ls.dir}, 0.0f, ls.dist}, s.ray).hit;
+            seen += !blocked(ls.dir, ls.dist);
         }
     }
     return static_cast<float>(seen) / static_cast<float>(s.rays);
@@ -93,6 +100,7 @@ struct WhittedPixelView {
 struct WhittedCounters {
     uint32_t rays = 0, evaluations = 0;
     uint32_t selfIntersections = 0;  // rays that struck the surface they left within 2 offsets
+    uint32_t shadowEvaluations = 0;  // of the secondary hits' shadow rays
 };
 
 namespace whitted_pixel {
@@ -119,7 +127,8 @@ SDFT_HOST_DEVICE inline Vec3 normalAt(const DirectPixelView& v, Vec3 p) {
 
 // Ambient + Lambert + Blinn-Phong at a secondary hit on plastic (WhittedTracer::shadeDirect).
 SDFT_HOST_DEVICE inline Vec3 shadeDirect(const DirectPixelView& v, const WhittedPixelView& w,
-                                         Vec3 p, Vec3 n, Vec3 d, const PixelMaterial& m) {
+                                         Vec3 p, Vec3 n, Vec3 d, const PixelMaterial& m,
+                                         WhittedCounters& c) {
     Vec3 color = v.ambient * m.color;
     for (int li = 0; li < v.lightCount; ++li) {
         const Light& light = v.lights[li];
@@ -127,7 +136,7 @@ SDFT_HOST_DEVICE inline Vec3 shadeDirect(const DirectPixelView& v, const Whitted
         if (dot(n, to.dir) <= 0) continue;
         float vis = 1;
         if (w.shadows.enabled && light.castShadows)
-            vis = secondaryVisibility(v.primary.field, w.shadows, p, n, light);
+            vis = secondaryVisibility(v.primary.field, w.shadows, p, n, light, c.shadowEvaluations);
         if (vis <= 0) continue;
         color += blinnPhong(m.color, m.diffuse, m.specular, maxf(m.shininess, 1.0f), n, to.dir, d) *
                  light.color * (to.scale * vis);
@@ -199,7 +208,7 @@ SDFT_HOST_DEVICE inline void shadeHit(const DirectPixelView& v, const WhittedPix
     const float eps = offset(v, w, f);
     const int8_t refl = static_cast<int8_t>(reflections), refr = static_cast<int8_t>(refractions);
     if (m.kind == Material::Kind::Plastic) {
-        radiance += weight * shadeDirect(v, w, p, n, d, m);
+        radiance += weight * shadeDirect(v, w, p, n, d, m, c);
     } else if (m.kind == Material::Kind::Mirror) {
         if (reflections > 0)
             stack.push({p + n * eps, reflect(d, n), weight * m.color, Vec3(0.0f), 1.0f, eps,
@@ -287,6 +296,7 @@ SDFT_HOST_DEVICE inline DirectPixel shadePixel(const DirectPixelView& v, const W
         px.secondaryRays = c.rays;
         px.secondaryEvaluations = c.evaluations;
         px.selfIntersections = c.selfIntersections;
+        px.shadowEvaluations += c.shadowEvaluations;
     }
     return px;
 }

@@ -81,8 +81,8 @@ class TileRenderer {
         }
         m_secondaryShadows = secondaryShadows(m_settings);
         m_whitted = std::make_unique<WhittedTracer>(
-            plan, [this](Vec3 p, Vec3 n, const Light& light, int li) {
-                return visibilityAt(p, n, light, li);
+            plan, [this](Vec3 p, Vec3 n, const Light& light, int li, uint64_t& evaluations) {
+                return visibilityAt(p, n, light, li, evaluations);
             });
         const ShadowMethod method = m_settings.shadowMethod;
         if (m_settings.shadows && (method == ShadowMethod::Pcf || method == ShadowMethod::Evsm)) {
@@ -119,7 +119,8 @@ class TileRenderer {
     void distributedShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
                             int lightIndex);
     // One point's visibility of a light by the shadow method (secondary hits of Whitted rays).
-    float visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex) const;
+    float visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex,
+                       uint64_t& evaluations) const;
     // The shadow ray's origin offset along the normal (Keinert et al. 2014, §3.3).
     float shadowOffset(const TileScratch& s, int h) const;
     // A pixel's index in the film, for seeding its random numbers.
@@ -158,7 +159,8 @@ class TileRenderer {
     SecondaryShadows m_secondaryShadows;       // how its secondary hits see the lights
 };
 
-float TileRenderer::visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex) const {
+float TileRenderer::visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex,
+                                 uint64_t& evaluations) const {
     if (m_settings.shadowMethod == ShadowMethod::Pcf ||
         m_settings.shadowMethod == ShadowMethod::Evsm) {
         const LightDirection to = towardLight(light, p);
@@ -166,7 +168,11 @@ float TileRenderer::visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIn
         const ShadowMap* map = m_maps[lightIndex].get();
         return map ? map->visibility(p, n) : 1.0f;
     }
-    return secondaryVisibility(m_tape.view(), m_secondaryShadows, p, n, light);
+    uint32_t count = 0;
+    const float visible =
+        secondaryVisibility(m_tape.view(), m_secondaryShadows, p, n, light, count);
+    evaluations += count;
+    return visible;
 }
 
 Bounds3 TileRenderer::shadowRegion() const {
@@ -322,6 +328,7 @@ void TileRenderer::shadeSpecular(TileScratch& s) {
     s.stats.secondaryRays += ws.rays;
     s.stats.secondaryEvaluations += ws.evaluations;
     s.stats.selfIntersections += ws.selfIntersections;
+    s.stats.shadowEvaluations += ws.shadowEvaluations;
 }
 
 // Colour and AOVs of the tile: the background where rays missed; no NaN or Inf pixel.

@@ -29,7 +29,8 @@ Vec3 WhittedTracer::normalAt(Vec3 p) const {
     return length(n) > 0 ? n : Vec3(0, 1, 0);
 }
 
-Vec3 WhittedTracer::shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m) const {
+Vec3 WhittedTracer::shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m,
+                                WhittedStats& stats) const {
     Vec3 c = m_plan.lighting.ambient * m.color;
     const auto& lights = m_plan.lighting.lights;
     for (size_t li = 0; li < lights.size(); ++li) {
@@ -37,7 +38,7 @@ Vec3 WhittedTracer::shadeDirect(Vec3 p, Vec3 n, Vec3 d, const Material& m) const
         if (dot(n, to.dir) <= 0) continue;
         float vis = 1;
         if (m_plan.settings.shadows && lights[li].castShadows)
-            vis = m_visibility(p, n, lights[li], static_cast<int>(li));
+            vis = m_visibility(p, n, lights[li], static_cast<int>(li), stats.shadowEvaluations);
         if (vis <= 0) continue;
         c +=
             blinnPhong(m.color, m.diffuse, m.specular, std::fmax(m.shininess, 1.0f), n, to.dir, d) *
@@ -58,7 +59,7 @@ Vec3 WhittedTracer::shade(Vec3 p, Vec3 n, float f, Vec3 d, const Material& m, in
     const float eps = offset(f);
     switch (m.kind) {
         case Material::Kind::Plastic:
-            return shadeDirect(p, n, d, m);
+            return shadeDirect(p, n, d, m, stats);
         case Material::Kind::Mirror:
             if (reflections <= 0) return Vec3(0.0f);
             return m.color * traceOutside(p + n * eps, reflect(d, n), reflections - 1, refractions,

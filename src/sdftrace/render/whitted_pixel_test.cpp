@@ -1,8 +1,8 @@
 // Whitted rays per pixel (whitted_pixel.h), the device path's mirrors and glass, run here on the
 // CPU against the CPU renderer's WhittedTracer: the same ray tree (secondary rays, their field
-// evaluations and self-intersections counted alike, pixel by pixel summed over the film) and the
-// same colours to float rounding (the stack adds the paths' contributions in another order than
-// the recursion: 1e-4 on colours of order 1).
+// evaluations, self-intersections and the shadow evaluations of primary and secondary hits counted
+// alike, pixel by pixel summed over the film) and the same colours to float rounding (the stack
+// adds the paths' contributions in another order than the recursion: 1e-4 on colours of order 1).
 #include "sdftrace/render/whitted_pixel.h"
 
 #include <gtest/gtest.h>
@@ -19,7 +19,7 @@ namespace sdft {
 namespace {
 
 struct Totals {
-    uint64_t rays = 0, evaluations = 0, selfIntersections = 0;
+    uint64_t rays = 0, evaluations = 0, selfIntersections = 0, shadowEvaluations = 0;
     int specularPixels = 0;
 };
 
@@ -48,6 +48,7 @@ Totals whittedLikeTheRenderer(const RenderPlan& plan) {
             t.rays += px.secondaryRays;
             t.evaluations += px.secondaryEvaluations;
             t.selfIntersections += px.selfIntersections;
+            t.shadowEvaluations += px.shadowEvaluations;
             t.specularPixels += px.primary.trace.hit && px.material.kind != Material::Kind::Plastic;
             if (!failedBefore && ::testing::Test::HasFailure()) return t;
         }
@@ -55,6 +56,8 @@ Totals whittedLikeTheRenderer(const RenderPlan& plan) {
     EXPECT_EQ(t.rays, stats.secondaryRays);
     EXPECT_EQ(t.evaluations, stats.secondaryEvaluations);
     EXPECT_EQ(t.selfIntersections, stats.selfIntersections);
+    // The primary hits' shadow rays and the secondary hits' (whose evaluations count too).
+    EXPECT_EQ(t.shadowEvaluations, stats.shadowEvaluations);
     return t;
 }
 
