@@ -54,7 +54,7 @@ struct BakeArgs {
     bool verify = false;
     int threads = 0;
     std::string device = "cpu";  // cpu, cuda, auto
-    std::string texcoords;  // "", sphere, cylinder
+    std::string texcoords;       // "", sphere, cylinder
     std::string texcoordCenter, texcoordAxis;
     const CLI::App* command = nullptr;  // to ask which flags were given
 };
@@ -82,9 +82,10 @@ void rejectFlagsThatDoNotApply(const BakeArgs& a, bool mesh) {
         if (a.method != "exact" || !a.dense)
             rejectGiven(a, {"--closest"}, "applies to --method exact with --dense only");
     } else {
-        rejectGiven(a,
-                    {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays",
-                     "--mask", "--device"},
+        rejectGiven(
+            a,
+            {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays", "--mask",
+             "--device"},
             "applies to meshes only; " + a.scene + " is a scene file, sampled from its own field");
     }
     if (a.dense) rejectGiven(a, {"--block", "--band"}, "applies to sparse grids only (--dense)");
@@ -272,8 +273,7 @@ bool bakeOnGpu(const BakeArgs& a, const MeshBakeOptions& o, bool distributed) {
     if (why.empty() && !gpuInfo().present) why = gpuInfo().why;
     if (why.empty()) return true;
     if (!a.quiet)
-        std::fprintf(stderr, "sdftrace bake: --device auto: baking on the CPU (%s)\n",
-                     why.c_str());
+        std::fprintf(stderr, "sdftrace bake: --device auto: baking on the CPU (%s)\n", why.c_str());
     return false;
 }
 

@@ -143,7 +143,7 @@ struct Animation {
     double fps = 30;
     FrameTimes frames;
     unsigned kept = 0;
-    bool motion = false;  // motion vectors: the motion AOV or --taa
+    bool motion = false;       // motion vectors: the motion AOV or --taa
     bool distributed = false;  // an mpirun job: meshes bake on the CPU
 
     struct Instant {
@@ -153,8 +153,7 @@ struct Animation {
     std::unique_ptr<Instant> prepare(long long i, AssetCache& cache, PrepareStats& assets) const {
         auto in = std::make_unique<Instant>();
         AnimatedScene::InstantAssets used;
-        in->scene =
-            anim.at(frames.at(i), cache, prepareOptions(a, distributed), &used);
+        in->scene = anim.at(frames.at(i), cache, prepareOptions(a, distributed), &used);
         cache.keepOnly(used.keys);  // what this frame needs stays cached, the rest goes
         assets.add(used.stats);
         applyOverrides(a, in->scene);

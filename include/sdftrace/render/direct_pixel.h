@@ -75,45 +75,62 @@ struct DirectPixel {
     uint32_t secondaryRays = 0, secondaryEvaluations = 0, selfIntersections = 0;
 };
 
+// A weighted sum of materials (a material blend, Keinert et al. 2014 §4): every parameter summed
+// by weight, the roughness over the materials that set one, the kind the heaviest weight's. The
+// CPU's materialAt (textured colours) and the per-pixel lookup below both sum with it.
+class MaterialMix {
+  public:
+    SDFT_HOST_DEVICE MaterialMix() {
+        m_sum.color = Vec3(0.0f);
+        m_sum.diffuse = m_sum.specular = m_sum.shininess = 0;
+        m_sum.ior = 0;
+        m_sum.absorption = Vec3(0.0f);
+        m_sum.roughness = 0;
+    }
+    // `src` with weight w (its colour the textured one where the caller has textures).
+    SDFT_HOST_DEVICE void add(const PixelMaterial& src, float w) {
+        m_sum.color += src.color * w;
+        m_sum.diffuse += src.diffuse * w;
+        m_sum.specular += src.specular * w;
+        m_sum.shininess += src.shininess * w;
+        m_sum.ior += src.ior * w;
+        m_sum.absorption += src.absorption * w;
+        if (src.roughness >= 0) {
+            m_sum.roughness += src.roughness * w;
+            m_roughWeight += w;
+        }
+        if (w > m_heaviest) {
+            m_heaviest = w;
+            m_sum.kind = src.kind;
+        }
+    }
+    SDFT_HOST_DEVICE PixelMaterial result() const {
+        PixelMaterial m = m_sum;
+        m.roughness = m_roughWeight > 0 ? m_sum.roughness / m_roughWeight : -1;
+        return m;
+    }
+
+  private:
+    PixelMaterial m_sum;
+    float m_heaviest = -1, m_roughWeight = 0;
+};
+
 namespace direct_pixel {
 
-// The blend of the materials at p (material_at.cpp's sums, in its order; the heaviest weight's
-// kind).
+// The blend of the materials at p (untextured).
 template <int kMaterialRegs>
 SDFT_HOST_DEVICE inline PixelMaterial materialAt(const DirectPixelView& v, Vec3 p) {
     if (v.uniformMaterial >= 0 && v.uniformMaterial < v.materialCount)
         return v.materials[v.uniformMaterial];
     MaterialBlend b;
     evalTapeAt<kMaterialRegs>(v.primary.field, p, &b);
-    PixelMaterial m;
-    m.color = Vec3(0.0f);
-    m.diffuse = m.specular = m.shininess = 0;
-    m.ior = 0;
-    m.absorption = Vec3(0.0f);
-    m.roughness = 0;
-    float heaviest = -1, roughWeight = 0;
+    MaterialMix mix;
     for (int i = 0; i < b.count; ++i) {
         int id = b.id[i] < 0 ? 0 : b.id[i];
         if (id > v.materialCount - 1) id = v.materialCount - 1;
-        const PixelMaterial& src = v.materials[id];
-        const float w = b.weight[i];
-        m.color += src.color * w;
-        m.diffuse += src.diffuse * w;
-        m.specular += src.specular * w;
-        m.shininess += src.shininess * w;
-        m.ior += src.ior * w;
-        m.absorption += src.absorption * w;
-        if (src.roughness >= 0) {
-            m.roughness += src.roughness * w;
-            roughWeight += w;
-        }
-        if (w > heaviest) {
-            heaviest = w;
-            m.kind = src.kind;
-        }
+        mix.add(v.materials[id], b.weight[i]);
     }
-    m.roughness = roughWeight > 0 ? m.roughness / roughWeight : -1;
-    return m;
+    return mix.result();
 }
 
 // Counters of one pixel's shadow rays.

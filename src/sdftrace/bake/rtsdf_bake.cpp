@@ -55,7 +55,6 @@ void beginRtsdfFrame(RtsdfHistory& h, const GridShape& s) {
     h.frames = 0;
 }
 
-
 std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh,
                                     const GridShape& s, const RtsdfOptions& o, int threads,
                                     RtsdfStats* stats) {

@@ -1,6 +1,9 @@
 #include "sdftrace/render/material_at.h"
 
 #include <algorithm>
+#include <string>
+
+#include "sdftrace/render/direct_pixel.h"
 
 namespace sdft {
 
@@ -13,13 +16,9 @@ Material materialAt(const RenderPlan& plan, Vec3 p, Vec3 n) {
     if (only >= 0 && only < static_cast<int>(table.size()) && table[only].colorTexture < 0)
         return table[only];
     const MaterialBlend b = tape.evalMaterial(p);
-    Material m;
-    m.color = Vec3(0.0f);
-    m.diffuse = m.specular = m.shininess = 0;
-    m.absorption = Vec3(0.0f);
-    m.ior = 0;
-    m.roughness = 0;
-    float heaviest = -1, roughWeight = 0;
+    MaterialMix mix;
+    const std::string* name = nullptr;  // the heaviest weight's
+    float heaviest = -1;
     MaterialBlend offset;  // the blend a step along n: the object frame's normal
     bool haveOffset = false;
     for (int i = 0; i < b.count; ++i) {
@@ -47,23 +46,25 @@ Material materialAt(const RenderPlan& plan, Vec3 p, Vec3 n) {
             }
             color = evalTexture(t, plan.images, in);
         }
-        m.color += color * w;
-        m.diffuse += src.diffuse * w;
-        m.specular += src.specular * w;
-        m.shininess += src.shininess * w;
-        m.ior += src.ior * w;
-        m.absorption += src.absorption * w;
-        if (src.roughness >= 0) {
-            m.roughness += src.roughness * w;
-            roughWeight += w;
-        }
+        PixelMaterial mixed = pixelMaterial(src);
+        mixed.color = color;
+        mix.add(mixed, w);
         if (w > heaviest) {
             heaviest = w;
-            m.kind = src.kind;
-            m.name = src.name;
+            name = &src.name;
         }
     }
-    m.roughness = roughWeight > 0 ? m.roughness / roughWeight : -1;
+    Material m;
+    if (name) m.name = *name;
+    const PixelMaterial r = mix.result();
+    m.color = r.color;
+    m.diffuse = r.diffuse;
+    m.specular = r.specular;
+    m.shininess = r.shininess;
+    m.kind = r.kind;
+    m.ior = r.ior;
+    m.absorption = r.absorption;
+    m.roughness = r.roughness;
     return m;
 }
 

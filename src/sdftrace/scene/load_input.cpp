@@ -13,8 +13,7 @@
 
 namespace sdft {
 
-LoadedInput loadSceneInput(const std::string& input, bool progress,
-                           const MeshBaker& meshBaker) {
+LoadedInput loadSceneInput(const std::string& input, bool progress, const MeshBaker& meshBaker) {
     if (input.empty()) return {demoScene(), ""};
     if (isMeshFile(input)) {
         MeshReport report;
