@@ -1,5 +1,6 @@
 #include <chrono>
 #include <cstdint>
+#include <type_traits>
 
 #include "device_buffer.h"
 #include "sdftrace/core/error.h"
@@ -107,46 +108,21 @@ __global__ void pathKernel(PathPixelView view, int width, int height, DirectOut 
     c[9] = static_cast<uint32_t>(pc.normalEvaluations);
 }
 
-void launchPaths(int regs, dim3 grid, dim3 block, const PathPixelView& view, int w, int h,
-                 const DirectOut& out) {
+// Calls launch(std::integral_constant<int, R>) for the material register file R that `regs`
+// names (1, 8, 16, 32, else kTapeMaxScalarRegs): one switch for every kernel's instantiations.
+template <class Launch>
+void withMaterialRegs(int regs, Launch&& launch) {
     switch (regs) {
         case 1:
-            pathKernel<1><<<grid, block>>>(view, w, h, out);
-            break;
+            return launch(std::integral_constant<int, 1>{});
         case 8:
-            pathKernel<8><<<grid, block>>>(view, w, h, out);
-            break;
+            return launch(std::integral_constant<int, 8>{});
         case 16:
-            pathKernel<16><<<grid, block>>>(view, w, h, out);
-            break;
+            return launch(std::integral_constant<int, 16>{});
         case 32:
-            pathKernel<32><<<grid, block>>>(view, w, h, out);
-            break;
+            return launch(std::integral_constant<int, 32>{});
         default:
-            pathKernel<kTapeMaxScalarRegs><<<grid, block>>>(view, w, h, out);
-            break;
-    }
-}
-
-template <bool kWhitted>
-void launchDirect(int regs, dim3 grid, dim3 block, const DirectPixelView& view,
-                  const WhittedPixelView& whitted, int w, int h, const DirectOut& out) {
-    switch (regs) {
-        case 1:
-            directKernel<1, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
-            break;
-        case 8:
-            directKernel<8, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
-            break;
-        case 16:
-            directKernel<16, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
-            break;
-        case 32:
-            directKernel<32, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
-            break;
-        default:
-            directKernel<kTapeMaxScalarRegs, kWhitted><<<grid, block>>>(view, whitted, w, h, out);
-            break;
+            return launch(std::integral_constant<int, kTapeMaxScalarRegs>{});
     }
 }
 
@@ -228,12 +204,15 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
         pathView = pathPixelView(m.plan, frame, m.tables);
         pathView.direct = view;
     }
-    if (paths)
-        launchPaths(regs, grid, block, pathView, w, h, out);
-    else if (m.whitted)
-        launchDirect<true>(regs, grid, block, view, whitted, w, h, out);
-    else
-        launchDirect<false>(regs, grid, block, view, whitted, w, h, out);
+    withMaterialRegs(regs, [&](auto r) {
+        constexpr int kRegs = decltype(r)::value;
+        if (paths)
+            pathKernel<kRegs><<<grid, block>>>(pathView, w, h, out);
+        else if (m.whitted)
+            directKernel<kRegs, true><<<grid, block>>>(view, whitted, w, h, out);
+        else
+            directKernel<kRegs, false><<<grid, block>>>(view, whitted, w, h, out);
+    });
     SDFT_CUDA_CHECK(cudaGetLastError());
     SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
     RenderStats st;
