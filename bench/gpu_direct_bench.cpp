@@ -40,7 +40,8 @@ struct Case {
 constexpr Case kCases[] = {
     {"city", "hard"},           {"city", "soft"},         {"demo", "hard"},  {"shadows", "soft"},
     {"shadows", "distributed"}, {"many_blend", "ao"},     {"rock", "hard"},  {"jewel", "hard"},
-    {"jewel", "whitted"},       {"glass_shapes", "hard"}, {"jewel", "path"}, {"path", "path"}};
+    {"jewel", "whitted"},       {"glass_shapes", "hard"}, {"jewel", "path"}, {"path", "path"},
+    {"textures", "soft"},       {"projected", "soft"}};
 
 // Keinert's jewel scene: its gems as absorbing dielectrics (diamond's and ruby's indices).
 void makeGemsGlass(Scene& scene) {

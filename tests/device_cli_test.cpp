@@ -50,13 +50,17 @@ TEST(DeviceCli, CudaRendersOnTheGpuOrFailsWithOneLineAndNoOutput) {
 
 TEST(DeviceCli, AutoFallsBackToTheCpuAndSaysWhy) {
     TempDir dir;
-    // Textures only the CPU renders yet: auto takes the CPU on any machine.
-    const RunResult textured = runCli("render " + example("textures") + " --device auto -o " +
-                                          dir.file("textures.pfm") + " --width 48 --height 27",
-                                      dir);
-    ASSERT_EQ(textured.status, 0) << textured.err;
-    EXPECT_NE(textured.err.find("--device auto: rendering on the CPU ("), std::string::npos)
-        << textured.err;
+    // Shadow maps only the CPU renders: auto takes the CPU on any machine.
+    const RunResult mapped =
+        runCli("render " + example("shadows") + " --shadow-method pcf --device auto -o " +
+                   dir.file("pcf.pfm") + " --width 48 --height 27",
+               dir);
+    ASSERT_EQ(mapped.status, 0) << mapped.err;
+    EXPECT_NE(mapped.err.find("--device auto: rendering on the CPU ("), std::string::npos)
+        << mapped.err;
+    if (gpuInfo().present)
+        EXPECT_NE(mapped.err.find("the GPU does not render shadow maps"), std::string::npos)
+            << mapped.err;
     // Without a GPU the plastic scene is the CPU's image bit for bit.
     const RunResult a = runCli(
         "render " + example("shadows") + " --device auto -o " + dir.file("auto.pfm") + kSize, dir);
@@ -78,10 +82,12 @@ TEST(DeviceCli, AutoFallsBackToTheCpuAndSaysWhy) {
 TEST(DeviceCli, CudaNamesWhatTheGpuDoesNotRender) {
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
     TempDir dir;
-    const RunResult r = runCli(
-        "render " + example("textures") + " --device cuda -o " + dir.file("g.png") + kSize, dir);
+    const RunResult r =
+        runCli("render " + example("shadows") + " --shadow-method evsm --device cuda -o " +
+                   dir.file("g.png") + kSize,
+               dir);
     EXPECT_EQ(r.status, 1);
-    EXPECT_NE(r.err.find("--device cuda: the GPU does not render material"), std::string::npos)
+    EXPECT_NE(r.err.find("--device cuda: the GPU does not render shadow maps"), std::string::npos)
         << r.err;
     EXPECT_EQ(dir.count(), 0);
 }

@@ -20,23 +20,26 @@
 #include "sdftrace/render/primary_pixel.h"
 #include "sdftrace/render/render_settings.h"
 #include "sdftrace/render/soft_shadow.h"
+#include "sdftrace/render/texture.h"
 
 namespace sdft {
 
-// A material as the per-pixel path shades it: Material (lighting.h) without its name and
-// textures. Mirrors and dielectrics are shaded by Whitted rays (whitted_pixel.h).
+// A material as the per-pixel path shades it: Material (lighting.h) without its name. Mirrors
+// and dielectrics are shaded by Whitted rays (whitted_pixel.h).
 struct PixelMaterial {
     Vec3 color{0.8f, 0.8f, 0.8f};
     float diffuse = 1, specular = 0.2f, shininess = 32;
     Material::Kind kind = Material::Kind::Plastic;
     float ior = 1.5f;
     Vec3 absorption{0, 0, 0};
-    float roughness = -1;  // the path tracer's GGX alpha; < 0: from the shininess
+    float roughness = -1;   // the path tracer's GGX alpha; < 0: from the shininess
+    int colorTexture = -1;  // >= 0: the colour is this texture's (DirectPixelView::textures)
 };
 
-// A material without its name and textures.
+// A material without its name.
 inline PixelMaterial pixelMaterial(const Material& m) {
-    return {m.color, m.diffuse, m.specular, m.shininess, m.kind, m.ior, m.absorption, m.roughness};
+    return {m.color, m.diffuse,    m.specular,  m.shininess,   m.kind,
+            m.ior,   m.absorption, m.roughness, m.colorTexture};
 }
 
 // Plain data: a kernel takes it by value. The light and material arrays are the caller's
@@ -47,7 +50,10 @@ struct DirectPixelView {
     int lightCount = 0;
     const PixelMaterial* materials = nullptr;
     int materialCount = 0;
-    int uniformMaterial = -1;  // >= 0: every point's material (Tape::uniformMaterial)
+    int uniformMaterial = -1;  // >= 0: every point's material (Tape::uniformMaterial, untextured)
+    const TextureParams* textures = nullptr;  // the materials' colour textures
+    int textureCount = 0;
+    ImageTable images;  // the textures' images
     Vec3 ambient{0, 0, 0}, background{0, 0, 0};
     bool shadows = true;
     ShadowMethod shadowMethod = ShadowMethod::Hard;
@@ -77,7 +83,8 @@ struct DirectPixel {
 
 // A weighted sum of materials (a material blend, Keinert et al. 2014 §4): every parameter summed
 // by weight, the roughness over the materials that set one, the kind the heaviest weight's. The
-// CPU's materialAt (textured colours) and the per-pixel lookup below both sum with it.
+// CPU's materialAt and the per-pixel lookup below both sum with it (colours already textured; the
+// sum has no texture).
 class MaterialMix {
   public:
     SDFT_HOST_DEVICE MaterialMix() {
@@ -87,7 +94,7 @@ class MaterialMix {
         m_sum.absorption = Vec3(0.0f);
         m_sum.roughness = 0;
     }
-    // `src` with weight w (its colour the textured one where the caller has textures).
+    // `src` with weight w (its colour the textured one where it has a texture).
     SDFT_HOST_DEVICE void add(const PixelMaterial& src, float w) {
         m_sum.color += src.color * w;
         m_sum.diffuse += src.diffuse * w;
@@ -117,18 +124,44 @@ class MaterialMix {
 
 namespace direct_pixel {
 
-// The blend of the materials at p (untextured).
+// The material table's entry of a blend's id (clamped: a tape's ids index the plan's table).
+SDFT_HOST_DEVICE inline int materialIndex(const DirectPixelView& v, int id) {
+    return id < 0 ? 0 : id > v.materialCount - 1 ? v.materialCount - 1 : id;
+}
+
+// Whether a texture of a material in blend b reads the surface normal.
+SDFT_HOST_DEVICE inline bool textureNeedsNormal(const DirectPixelView& v, const MaterialBlend& b) {
+    for (int i = 0; i < b.count; ++i) {
+        const int t = v.materials[materialIndex(v, b.id[i])].colorTexture;
+        if (t >= 0 && t < v.textureCount && textureNeedsNormal(v.textures[t])) return true;
+    }
+    return false;
+}
+
+// The blend of the materials at the surface point p (n its unit world normal), colour textures
+// looked up in each material's object frame (texture.h) as the CPU's materialAt does.
 template <int kMaterialRegs>
-SDFT_HOST_DEVICE inline PixelMaterial materialAt(const DirectPixelView& v, Vec3 p) {
+SDFT_HOST_DEVICE inline PixelMaterial materialAt(const DirectPixelView& v, Vec3 p, Vec3 n) {
     if (v.uniformMaterial >= 0 && v.uniformMaterial < v.materialCount)
         return v.materials[v.uniformMaterial];
-    MaterialBlend b;
-    evalTapeAt<kMaterialRegs>(v.primary.field, p, &b);
+    // The blend at p and, where a texture needs the normal, a step along n (one call site: one
+    // register file on a device's stack).
+    MaterialBlend blends[2];
+    for (int pass = 0; pass < 2; ++pass) {
+        evalTapeAt<kMaterialRegs>(v.primary.field, pass ? p + n * textureNormalStep(p) : p,
+                                  &blends[pass]);
+        if (pass == 0 && !textureNeedsNormal(v, blends[0])) break;
+    }
+    const MaterialBlend& b = blends[0];
     MaterialMix mix;
     for (int i = 0; i < b.count; ++i) {
-        int id = b.id[i] < 0 ? 0 : b.id[i];
-        if (id > v.materialCount - 1) id = v.materialCount - 1;
-        mix.add(v.materials[id], b.weight[i]);
+        PixelMaterial src = v.materials[materialIndex(v, b.id[i])];
+        if (src.colorTexture >= 0 && src.colorTexture < v.textureCount) {
+            const TextureParams& t = v.textures[src.colorTexture];
+            src.color = evalTexture(
+                t, v.images, textureInputs(b, i, textureNeedsNormal(t) ? &blends[1] : nullptr));
+        }
+        mix.add(src, b.weight[i]);
     }
     return mix.result();
 }
@@ -207,7 +240,7 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
     const Ray ray = primaryRay(v.primary.camera, x, y, v.primary.jitter);
     const Vec3 p = ray.at(out.primary.trace.t);
     const Vec3 n = out.primary.normal;
-    const PixelMaterial m = direct_pixel::materialAt<kMaterialRegs>(v, p);
+    const PixelMaterial m = direct_pixel::materialAt<kMaterialRegs>(v, p, n);
     out.material = m;
     Vec3 radiance = v.ambient * m.color;
     if (v.ambientOcclusion) {
@@ -247,8 +280,8 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
 
 // Why `plan` cannot be shaded per pixel (empty when it can; mirrors and dielectrics by
 // shadePixel, whitted_pixel.h, the path tracer by pathRadiance, path_pixel.h): what
-// primaryPixelUnsupported names, textured materials, shadow maps and Whitted budgets deeper than
-// its stack stay on the CPU renderer for now.
+// primaryPixelUnsupported names, shadow maps and Whitted budgets deeper than its stack stay on
+// the CPU renderer for now.
 std::string directPixelUnsupported(const RenderPlan& plan);
 
 // The shadow rays' eps_min of `plan` (Keinert et al. 2014, §3.3): the settings', and at least
@@ -260,10 +293,13 @@ float shadowOffsetMin(const RenderPlan& plan);
 // Shared by the CPU renderer.
 SoftShadowOptions softShadowOptions(const RenderPlan& plan);
 
-// The host side of a view: the plan's lights and its materials' Blinn-Phong parameters.
+// The host side of a view: the plan's lights, its materials' parameters, their textures and the
+// textures' images (views of the plan's pixels).
 struct DirectPixelTables {
     std::vector<Light> lights;
     std::vector<PixelMaterial> materials;
+    std::vector<TextureParams> textures;
+    std::vector<ImageView> images;
 };
 DirectPixelTables directPixelTables(const RenderPlan& plan);
 

@@ -1,9 +1,10 @@
 // One path of the progressive path tracer (path_tracer.h; Kajiya 1986, Keinert et al. 2014 fig. 1
 // right) as a header function over plain data: the CPU's PathFrame and the GPU's kernel
-// (gpu/gpu_render.cu) both run pathRadiance, the CPU with its full materials (textures), the GPU
-// with the per-pixel material table. Next-event estimation at every non-specular vertex, plastic
-// as Lambert + GGX (Schlick F0 = 0.04), mirrors, dielectrics with Fresnel and Beer-Lambert
-// absorption, a constant environment, Russian roulette after three bounces.
+// (gpu/gpu_render.cu) both run pathRadiance, the CPU with the plan's materialAt, the GPU with the
+// per-pixel material table (both texture colours with render/texture.h). Next-event estimation at
+// every non-specular vertex, plastic as Lambert + GGX (Schlick F0 = 0.04), mirrors, dielectrics
+// with Fresnel and Beer-Lambert absorption, a constant environment, Russian roulette after three
+// bounces.
 #pragma once
 
 #include <cmath>

@@ -252,9 +252,10 @@ SDFT_HOST_DEVICE inline Vec3 shadeWhitted(const DirectPixelView& v, const Whitte
             }
             if (hit.t <= 2 * r.eps) ++c.selfIntersections;
             const Vec3 q = r.origin + r.dir * hit.t;
-            const PixelMaterial mq = direct_pixel::materialAt<kMaterialRegs>(v, q);
-            shadeHit(v, w, q, normalAt(v, q), hit.value, r.dir, mq, r.weight, r.reflections,
-                     r.refractions, radiance, stack, c);
+            const Vec3 nq = normalAt(v, q);
+            const PixelMaterial mq = direct_pixel::materialAt<kMaterialRegs>(v, q, nq);
+            shadeHit(v, w, q, nq, hit.value, r.dir, mq, r.weight, r.reflections, r.refractions,
+                     radiance, stack, c);
             continue;
         }
         // Inside a dielectric: the exit, attenuated, splits into the refracted ray out and the

@@ -58,12 +58,12 @@ __global__ void directKernel(DirectPixelView view, WhittedPixelView whitted, int
     c[6] = px.selfIntersections;
 }
 
-// The per-pixel material table as pathRadiance's material lookup (no textures).
+// The per-pixel material table (textures included) as pathRadiance's material lookup.
 template <int kMaterialRegs>
 struct TableMaterial {
     const DirectPixelView* view;
-    SDFT_HOST_DEVICE PixelMaterial operator()(Vec3 p, Vec3) const {
-        return direct_pixel::materialAt<kMaterialRegs>(*view, p);
+    SDFT_HOST_DEVICE PixelMaterial operator()(Vec3 p, Vec3 n) const {
+        return direct_pixel::materialAt<kMaterialRegs>(*view, p, n);
     }
 };
 
@@ -134,6 +134,10 @@ struct GpuDirectRenderer::Impl {
     DirectPixelTables tables;
     cuda::DeviceArray<Light> lights;
     cuda::DeviceArray<PixelMaterial> materials;
+    // Colour textures and their images' pixels on the device, and the images' views of them.
+    cuda::DeviceArray<TextureParams> textures;
+    std::vector<cuda::DeviceArray<float>> pixels;
+    cuda::DeviceArray<ImageView> images;
     // Whitted rays: the convex objects' tapes (Keinert §3.5) on the device, and their views.
     bool whitted;
     std::vector<GpuTape> convexTapes;
@@ -145,7 +149,14 @@ struct GpuDirectRenderer::Impl {
           tables(directPixelTables(p)),
           lights(tables.lights),
           materials(tables.materials),
+          textures(tables.textures),
           whitted(planHasWhitted(p)) {
+        std::vector<ImageView> imageViews;
+        for (const TextureImage& image : p.images) {
+            pixels.emplace_back(image.rgb);
+            imageViews.push_back({pixels.back().get(), image.width, image.height});
+        }
+        images = cuda::DeviceArray<ImageView>(imageViews);
         if (!whitted) return;
         std::vector<ConvexView> views;
         for (const ConvexObject& c : p.convexObjects) {
@@ -177,6 +188,8 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     view.primary.field = m.tape.view();
     view.lights = m.lights.get();
     view.materials = m.materials.get();
+    view.textures = m.textures.get();
+    view.images = {m.images.get(), static_cast<int>(m.images.size())};
     const WhittedPixelTables noTables;
     WhittedPixelView whitted = whittedPixelView(m.plan, noTables);
     whitted.convex = m.convex.get();

@@ -77,8 +77,9 @@ void matchesTheCpu(const std::string& name, int variant, const RenderPlan& plan)
                 0.01 * double(cst.secondaryRays) + 10);
 }
 
-// Every example the per-pixel path renders (glass and glass_shapes by Whitted rays), with hard,
-// soft and distributed shadows and AO.
+// Every example the per-pixel path renders (glass and glass_shapes by Whitted rays; textures and
+// projected with procedural, image and grid (u, v) textures), with hard, soft and distributed
+// shadows and AO.
 TEST(GpuRender, DirectLightingMatchesTheCpuOnTheExamples) {
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
     constexpr int W = 160, H = 90;
@@ -124,7 +125,7 @@ TEST(GpuRender, MirrorsMatchTheCpu) {
 // rays are the same.
 TEST(GpuRender, PathsMatchTheCpu) {
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
-    for (const char* name : {"path", "glass_shapes", "demo"}) {
+    for (const char* name : {"path", "glass_shapes", "demo", "textures"}) {
         SCOPED_TRACE(name);
         Scene scene = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/" + name + ".json");
         scene.camera.width = 160;

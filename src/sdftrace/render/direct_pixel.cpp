@@ -15,8 +15,6 @@ std::string directPixelUnsupported(const RenderPlan& plan) {
     const RenderSettings& s = plan.settings;
     if (s.shadows && (s.shadowMethod == ShadowMethod::Pcf || s.shadowMethod == ShadowMethod::Evsm))
         return "shadow maps (pcf, evsm)";
-    for (const Material& m : plan.materials)
-        if (m.colorTexture >= 0) return "material '" + m.name + "': textures";
     if (!s.pathTracing && planHasWhitted(plan) &&
         s.maxReflections + s.maxRefractions > kWhittedMaxBounces)
         return "Whitted budgets above " + std::to_string(kWhittedMaxBounces) +
@@ -43,6 +41,8 @@ DirectPixelTables directPixelTables(const RenderPlan& plan) {
     t.lights = plan.lighting.lights;
     t.materials.reserve(plan.materials.size());
     for (const Material& m : plan.materials) t.materials.push_back(pixelMaterial(m));
+    for (const Texture& x : plan.textures) t.textures.push_back(x);
+    for (const TextureImage& image : plan.images) t.images.push_back(image.view());
     return t;
 }
 
@@ -55,8 +55,12 @@ DirectPixelView directPixelView(const RenderPlan& plan, const FrameView& frame,
     v.lightCount = static_cast<int>(tables.lights.size());
     v.materials = tables.materials.data();
     v.materialCount = static_cast<int>(tables.materials.size());
+    v.textures = tables.textures.data();
+    v.textureCount = static_cast<int>(tables.textures.size());
+    v.images = {tables.images.data(), static_cast<int>(tables.images.size())};
     const int only = plan.tape.uniformMaterial();
-    v.uniformMaterial = only < v.materialCount ? only : -1;
+    v.uniformMaterial =
+        only >= 0 && only < v.materialCount && tables.materials[only].colorTexture < 0 ? only : -1;
     v.ambient = plan.lighting.ambient;
     v.background = plan.lighting.background;
     v.shadows = s.shadows;

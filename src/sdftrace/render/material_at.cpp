@@ -19,7 +19,7 @@ Material materialAt(const RenderPlan& plan, Vec3 p, Vec3 n) {
     MaterialMix mix;
     const std::string* name = nullptr;  // the heaviest weight's
     float heaviest = -1;
-    MaterialBlend offset;  // the blend a step along n: the object frame's normal
+    MaterialBlend offset;  // the blend a step along n, once a texture needs the normal
     bool haveOffset = false;
     for (int i = 0; i < b.count; ++i) {
         const Material& src = table[std::clamp(b.id[i], 0, static_cast<int>(table.size()) - 1)];
@@ -27,24 +27,12 @@ Material materialAt(const RenderPlan& plan, Vec3 p, Vec3 n) {
         Vec3 color = src.color;
         if (src.colorTexture >= 0 && src.colorTexture < static_cast<int>(plan.textures.size())) {
             const Texture& t = plan.textures[static_cast<size_t>(src.colorTexture)];
-            TextureInputs in;
-            in.point = b.local[i];
-            in.hasUv = b.hasUv[i];
-            in.u = b.u[i];
-            in.v = b.v[i];
-            if (t.projection != Texture::Projection::Solid || t.kind == Texture::Kind::Image) {
-                // The normal in the object's frame: where its frame maps a small step along n.
-                // Exact under rotation and uniform scale; a non-uniform scale tilts it toward
-                // the squashed axis (only the projection's blend weights see that).
-                const float h = 1e-3f * std::max(1.0f, length(p));
-                if (!haveOffset) offset = tape.evalMaterial(p + n * h);
+            if (textureNeedsNormal(t) && !haveOffset) {
+                offset = tape.evalMaterial(p + n * textureNormalStep(p));
                 haveOffset = true;
-                in.normal = Vec3(0, 1, 0);
-                for (int j = 0; j < offset.count; ++j)
-                    if (offset.id[j] == b.id[i] && length(offset.local[j] - b.local[i]) > 0)
-                        in.normal = normalize(offset.local[j] - b.local[i]);
             }
-            color = evalTexture(t, plan.images, in);
+            color = evalTexture(t, plan.images,
+                                textureInputs(b, i, textureNeedsNormal(t) ? &offset : nullptr));
         }
         PixelMaterial mixed = pixelMaterial(src);
         mixed.color = color;

@@ -26,8 +26,8 @@ void tableMaterialsTraceTheCpusPaths(const RenderPlan& plan) {
     const RenderStats stats = render(plan, frame, film, false);
     const DirectPixelTables tables = directPixelTables(plan);
     const PathPixelView view = pathPixelView(plan, frame, tables);
-    const auto table = [&](Vec3 p, Vec3) {
-        return direct_pixel::materialAt<kTapeMaxScalarRegs>(view.direct, p);
+    const auto table = [&](Vec3 p, Vec3 n) {
+        return direct_pixel::materialAt<kTapeMaxScalarRegs>(view.direct, p, n);
     };
     PathCounters c;
     int hits = 0;
@@ -54,9 +54,10 @@ void tableMaterialsTraceTheCpusPaths(const RenderPlan& plan) {
 }
 
 // The path example (mirror, glass, plastic of several roughnesses), glass_shapes and the demo
-// path traced, and blended materials (many_blend).
+// path traced, blended materials (many_blend) and textures (procedural, image, grid (u, v)).
 TEST(PathPixel, TableMaterialsTraceTheCpusPaths) {
-    for (const char* name : {"path", "glass_shapes", "demo", "many_blend"}) {
+    for (const char* name :
+         {"path", "glass_shapes", "demo", "many_blend", "textures", "projected"}) {
         SCOPED_TRACE(name);
         Scene scene = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/" + name + ".json");
         scene.camera.width = 32;

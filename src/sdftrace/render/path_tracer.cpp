@@ -22,8 +22,8 @@ namespace sdft {
 
 namespace {
 
-// The CPU's paths: pathRadiance (path_pixel.h) with the plan's full materials (textures
-// included), its counters added to the frame's.
+// The CPU's paths: pathRadiance (path_pixel.h) with the plan's materialAt (textures included),
+// its counters added to the frame's.
 class PathTracer {
   public:
     PathTracer(const RenderPlan& plan, const FrameView& view)

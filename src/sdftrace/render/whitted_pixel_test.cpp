@@ -129,6 +129,24 @@ TEST(WhittedPixel, MatchesTheRenderersMirrors) {
     EXPECT_GT(t.rays, static_cast<uint64_t>(t.specularPixels));  // second bounces happen
 }
 
+// Whitted rays that land on textured surfaces: the textures example's turbulence sphere a mirror
+// and its noise torus glass, so reflected and refracted rays see the checker floor, the marble,
+// the wood and the image-textured box.
+TEST(WhittedPixel, SecondaryHitsOnTexturesMatchTheRenderer) {
+    Scene scene = example("textures", 48, 28);
+    int specular = 0;
+    for (Material& m : scene.materials) {
+        if (m.name == "turbulence") m.kind = Material::Kind::Mirror, ++specular;
+        if (m.name == "noise") m.kind = Material::Kind::Dielectric, ++specular;
+    }
+    ASSERT_EQ(specular, 2);
+    const RenderPlan plan = planRender(scene);
+    ASSERT_EQ(directPixelUnsupported(plan), "");
+    const Totals t = whittedLikeTheRenderer(plan);
+    EXPECT_GT(t.specularPixels, 20);
+    EXPECT_GT(t.rays, static_cast<uint64_t>(t.specularPixels));
+}
+
 // Budgets deeper than the stack stay on the CPU, named.
 TEST(WhittedPixel, DeeperBudgetsThanTheStackAreNamed) {
     Scene scene = example("glass", 16, 9);
