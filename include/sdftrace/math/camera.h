@@ -48,13 +48,13 @@ class Camera {
     }
 
     // Radius of half a pixel at distance 1 (Keinert et al. 2014, Listing 2's pixelRadius).
-    float pixelRadius() const { return m_tanHalf / m_desc.height; }
-    const CameraDesc& desc() const { return m_desc; }
+    SDFT_HOST_DEVICE float pixelRadius() const { return m_tanHalf / m_desc.height; }
+    SDFT_HOST_DEVICE const CameraDesc& desc() const { return m_desc; }
     // The orthonormal frame (forward towards the target) and tan(fov / 2).
-    Vec3 forward() const { return m_forward; }
-    Vec3 right() const { return m_right; }
-    Vec3 up() const { return m_up; }
-    float tanHalfFov() const { return m_tanHalf; }
+    SDFT_HOST_DEVICE Vec3 forward() const { return m_forward; }
+    SDFT_HOST_DEVICE Vec3 right() const { return m_right; }
+    SDFT_HOST_DEVICE Vec3 up() const { return m_up; }
+    SDFT_HOST_DEVICE float tanHalfFov() const { return m_tanHalf; }
 
   private:
     CameraDesc m_desc;

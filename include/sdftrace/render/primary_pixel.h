@@ -12,6 +12,7 @@
 #include "sdftrace/math/camera.h"
 #include "sdftrace/render/normal_stencil.h"
 #include "sdftrace/trace/grid_dda.h"
+#include "sdftrace/trace/minmax_buffer.h"
 #include "sdftrace/trace/trace_tape.h"
 
 namespace sdft {
@@ -33,6 +34,9 @@ struct PrimaryPixelView {
     int ddaGrid = -1;
     GridTraceOptions gridTrace;
     GridNormal gridNormals = GridNormal::InterpolationOfDifferences;
+    // The DDA's primary rays narrowed to their min/max-buffer interval (Jamriška §6), where the
+    // caller built one for this frame's camera (primaryMinMax); none: the whole ray.
+    MinMaxView minMax;
 };
 
 struct PrimaryPixel {
@@ -51,7 +55,11 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
     const RaySegment seg{primaryRay(v.camera, x, y, v.jitter), 0.0f, v.maxDistance};
     if (v.ddaGrid >= 0) {
         const GridView& g = v.field.grids[v.ddaGrid];
-        const GridTraceResult r = grid_dda::traceRay(g, seg.ray, seg.tMin, seg.tMax, v.gridTrace);
+        float t0, t1;
+        v.minMax.range(x, y, t0, t1);
+        const float tMin = fmaxf(seg.tMin, t0), tMax = fminf(seg.tMax, t1);
+        if (!(tMin <= tMax)) return out;  // no surface block projects here: a miss
+        const GridTraceResult r = grid_dda::traceRay(g, seg.ray, tMin, tMax, v.gridTrace);
         out.trace.hit = r.hit;
         out.trace.t = r.t;
         out.trace.evaluations = r.interpolations;
@@ -75,12 +83,18 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
 }
 
 // Why `plan` cannot be traced by tracePrimaryPixel (empty when it can): meshes whose primary rays
-// hit triangles have a primary path of their own. (A lone grid's DDA is traced here without the
-// CPU renderer's min/max buffer, Jamriška §6, which only narrows where each ray starts and ends.)
+// hit triangles have a primary path of their own.
 std::string primaryPixelUnsupported(const RenderPlan& plan);
 
-// The view of `plan`'s field, camera and primary-ray options for one frame. The plan must outlive
-// it (the field's arrays are the plan's tape's).
+// The min/max buffer (Jamriška §6) of `plan`'s DDA grid for a camera, built on the host as the CPU
+// renderer builds it; an empty buffer (its view: none) where the plan has no DDA grid or its
+// settings turn the buffer off. Set PrimaryPixelView::minMax to its view.
+MinMaxBuffer primaryMinMax(const RenderPlan& plan, const Camera& camera);
+// Whether `plan`'s primary rays use a min/max buffer.
+bool usesMinMax(const RenderPlan& plan);
+
+// The view of `plan`'s field, camera and primary-ray options for one frame, without a min/max
+// buffer (primaryMinMax). The plan must outlive it (the field's arrays are the plan's tape's).
 PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame);
 
 }  // namespace sdft

@@ -39,6 +39,11 @@ GpuPrimaryImage tracePrimaryGpu(const GpuTape&, const PrimaryPixelView&, int, in
     return {};
 }
 
+GpuMinMax buildMinMaxGpu(const GpuTape&, int, const GridView&, const Camera&, int) {
+    requireGpu("GPU min/max buffer");
+    return {};
+}
+
 struct GpuDirectRenderer::Impl {};
 
 GpuDirectRenderer::GpuDirectRenderer(const RenderPlan&, const std::string& what) {

@@ -1,4 +1,5 @@
 #include <chrono>
+#include <vector>
 
 #include "device_buffer.h"
 #include "sdftrace/gpu/gpu_device.h"
@@ -37,6 +38,14 @@ GpuPrimaryImage tracePrimaryGpu(const GpuTape& tape, const PrimaryPixelView& vie
     cuda::DeviceArray<int32_t> evaluations(n);
     PrimaryPixelView v = view;
     v.field = tape.view();
+    cuda::DeviceArray<float> lo, hi;  // the view's min/max buffer, uploaded
+    if (view.minMax.min) {
+        const size_t cells = static_cast<size_t>(view.minMax.shape.w) * view.minMax.shape.h;
+        lo = cuda::DeviceArray<float>(std::vector<float>(view.minMax.min, view.minMax.min + cells));
+        hi = cuda::DeviceArray<float>(std::vector<float>(view.minMax.max, view.minMax.max + cells));
+        v.minMax.min = lo.get();
+        v.minMax.max = hi.get();
+    }
     const dim3 block(16, 8);
     const dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y);
     cuda::EventTimer timer;

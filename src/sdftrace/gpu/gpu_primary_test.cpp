@@ -8,6 +8,7 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
+#include "sdftrace/render/grid_test_scenes.h"
 #include "sdftrace/render/primary_test_scenes.h"
 #include "sdftrace/render/render_plan.h"
 #include "sdftrace/scene/parse_scene.h"
@@ -105,6 +106,45 @@ TEST(Gpu, PrimaryRaysMatchTheCpuOnTheExamples) {
         }
     }
     EXPECT_EQ(scenes, static_cast<int>(testing::kPrimaryTestScenes.size()));
+}
+
+}  // namespace
+}  // namespace sdft
+
+namespace sdft {
+namespace {
+
+// Jamriška §6's min/max buffer built on the device equals MinMaxBuffer::build bit for bit (the
+// same squares, min and max being exact) on the lone-grid scenes, from a far, the framing and a
+// near camera (whose blocks may reach the camera plane), at 64 and 128 buffer pixels.
+TEST(Gpu, MinMaxBufferEqualsTheCpus) {
+    if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
+    int covered = 0;
+    for (auto& [name, scene] : testing::ddaTestScenes(160, 90)) {
+        SCOPED_TRACE(name);
+        const RenderPlan plan = planRender(scene);
+        ASSERT_TRUE(plan.ddaGrid);
+        const GpuTape tape(plan.tape);
+        const GridView host = plan.ddaGrid->view();
+        for (float scale : {3.0f, 1.0f, 0.4f}) {
+            CameraDesc d = plan.camera;
+            d.eye = d.target + (d.eye - d.target) * scale;
+            const Camera camera(d);
+            for (int resolution : {64, 128}) {
+                SCOPED_TRACE(resolution);
+                const MinMaxBuffer cpu = MinMaxBuffer::build(host, camera, resolution);
+                const GpuMinMax gpu = buildMinMaxGpu(tape, 0, host, camera, resolution);
+                ASSERT_EQ(gpu.shape.w, cpu.width());
+                ASSERT_EQ(gpu.shape.h, cpu.height());
+                EXPECT_EQ(gpu.everything, cpu.everything());
+                EXPECT_EQ(gpu.squares, cpu.squares());
+                EXPECT_EQ(gpu.min, cpu.minimum());
+                EXPECT_EQ(gpu.max, cpu.maximum());
+                for (float t : cpu.minimum()) covered += std::isfinite(t);
+            }
+        }
+    }
+    EXPECT_GT(covered, 1000);
 }
 
 }  // namespace

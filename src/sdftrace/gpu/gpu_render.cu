@@ -1,8 +1,10 @@
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <type_traits>
 
 #include "device_buffer.h"
+#include "gpu_minmax.cuh"
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_render.h"
@@ -204,6 +206,15 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     const dim3 grid((w + block.x - 1) / block.x, (h + block.y - 1) / block.y);
     cuda::EventTimer timer;
     SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
+    // A lone grid's primary rays narrowed by Jamriška §6's min/max buffer, built on the device
+    // for this frame's camera (timed with the kernels).
+    std::optional<cuda::DeviceMinMax> minMax;
+    const bool paths = m.plan.settings.pathTracing;  // per-sample primary rays, no DDA
+    if (usesMinMax(m.plan) && view.primary.ddaGrid >= 0 && !paths) {
+        minMax.emplace(view.primary.field, view.primary.ddaGrid, m.plan.ddaGrid->view(),
+                       view.primary.camera, m.plan.settings.minMaxResolution);
+        view.primary.minMax = minMax->view();
+    }
     // The material register file: none read with a uniform material, else the smallest that
     // holds the tape's scalar registers.
     const int regs = view.uniformMaterial >= 0                ? 1
@@ -211,7 +222,6 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
                      : view.primary.field.numScalarRegs <= 16 ? 16
                      : view.primary.field.numScalarRegs <= 32 ? 32
                                                               : kTapeMaxScalarRegs;
-    const bool paths = m.plan.settings.pathTracing;
     PathPixelView pathView;
     if (paths) {
         pathView = pathPixelView(m.plan, frame, m.tables);

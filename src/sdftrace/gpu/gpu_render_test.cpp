@@ -157,15 +157,16 @@ TEST(GpuRender, PathsMatchTheCpu) {
 }
 
 // Lone grids by the DDA on the GPU (Jamriška §4, §5, §7), hard and soft shadows, against the CPU
-// renderer without its min/max buffer.
+// renderer, without and with §6's min/max buffer (the GPU's built on the device).
 TEST(GpuRender, GridDdaMatchesTheCpu) {
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
     for (auto& [name, original] : testing::ddaTestScenes(160, 90)) {
         SCOPED_TRACE(name);
-        for (int variant = 0; variant < 3; ++variant) {
+        for (int variant = 0; variant < 4; ++variant) {
             Scene scene = original;
             if (variant == 1) scene.settings.occluderThreshold = 4;
             if (variant == 2) scene.settings.shadowMethod = ShadowMethod::Soft;
+            if (variant == 3) scene.settings.minMaxResolution = 128;  // built on the device
             matchesTheCpu(name, variant, planRender(scene));
         }
     }

@@ -29,7 +29,9 @@ int shadesLikeTheRenderer(const RenderPlan& plan, uint32_t frameNumber, int& sha
     Film film(w, h);
     render(plan, frame, film, false);
     const DirectPixelTables tables = directPixelTables(plan);
-    const DirectPixelView view = directPixelView(plan, frame, tables, w);
+    DirectPixelView view = directPixelView(plan, frame, tables, w);
+    const MinMaxBuffer minMax = primaryMinMax(plan, view.primary.camera);
+    view.primary.minMax = minMax.view();
     const bool failedBefore = ::testing::Test::HasFailure();  // report this plan's first
     int hits = 0;
     for (int y = 0; y < h; ++y) {
@@ -126,17 +128,19 @@ TEST(DirectPixel, MatchesTheRenderersDirectLightingOnTheExamples) {
 }
 
 // Lone grids by Jamriška's DDA: shadow rays by the DDA (plain and with §7's occluder restart),
-// soft shadows and AO marching the grid's tape, with the renderer's half-voxel offsets.
+// soft shadows and AO marching the grid's tape, with the renderer's half-voxel offsets; primary
+// rays narrowed by §6's min/max buffer.
 TEST(DirectPixel, MatchesTheRenderersDirectLightingOnLoneGrids) {
     int shadowedPixels = 0, penumbraPixels = 0;
     for (auto& [name, original] : testing::ddaTestScenes(96, 54)) {
         SCOPED_TRACE(name);
-        for (int variant = 0; variant < 4; ++variant) {
+        for (int variant = 0; variant < 5; ++variant) {
             SCOPED_TRACE(variant);
             Scene scene = original;
             scene.settings.threads = 1;
             uint32_t frameNumber = 0;
             if (variant == 1) scene.settings.occluderThreshold = 4;
+            if (variant == 4) scene.settings.minMaxResolution = 96;  // Jamriška §6
             if (variant == 2) scene.settings.shadowMethod = ShadowMethod::Soft;
             if (variant == 3) {
                 scene.settings.shadowMethod = ShadowMethod::Distributed;

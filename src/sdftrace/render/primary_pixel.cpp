@@ -9,6 +9,15 @@ std::string primaryPixelUnsupported(const RenderPlan& plan) {
     return {};
 }
 
+bool usesMinMax(const RenderPlan& plan) {
+    return plan.ddaGrid && plan.settings.minMaxResolution > 0;
+}
+
+MinMaxBuffer primaryMinMax(const RenderPlan& plan, const Camera& camera) {
+    if (!usesMinMax(plan)) return {};
+    return MinMaxBuffer::build(plan.ddaGrid->view(), camera, plan.settings.minMaxResolution);
+}
+
 namespace {
 
 // The index in the tape's grids of the plan's DDA grid: the tape of a lone grid has one grid leaf.

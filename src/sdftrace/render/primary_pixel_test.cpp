@@ -22,7 +22,9 @@ int matchesTheRenderer(const RenderPlan& plan) {
     render(plan, film);
     FrameView frame;
     frame.camera = plan.camera;
-    const PrimaryPixelView view = primaryPixelView(plan, frame);
+    PrimaryPixelView view = primaryPixelView(plan, frame);
+    const MinMaxBuffer minMax = primaryMinMax(plan, view.camera);  // Jamriška §6, as render() has
+    view.minMax = minMax.view();
     const bool failedBefore = ::testing::Test::HasFailure();  // report this plan's first
     int hits = 0;
     for (int y = 0; y < h; ++y) {
@@ -79,15 +81,23 @@ TEST(PrimaryPixel, MatchesTheRenderersPrimaryRaysOnTheExamples) {
 
 // Lone grids by Jamriška's DDA (§4): the same hits, depths, reconstruction counts, traversal
 // counters and §5 normals as the renderer's DDA, sparse (4- and 8-blocks) and dense, with false
-// position and midpoint cell hits, bit masks on and off, the three gradient estimators.
+// position and midpoint cell hits, bit masks on and off, the three gradient estimators, and rays
+// narrowed by §6's min/max buffer (64 and 128 pixels, a near camera whose blocks may reach the
+// camera plane).
 TEST(PrimaryPixel, MatchesTheRenderersGridDdaOnLoneGrids) {
     for (auto& [name, original] : testing::ddaTestScenes(64, 36)) {
         SCOPED_TRACE(name);
-        for (int variant = 0; variant < 4; ++variant) {
+        for (int variant = 0; variant < 6; ++variant) {
             SCOPED_TRACE(variant);
             Scene scene = original;
             scene.settings.threads = 1;
             scene.settings.shadows = false;
+            if (variant == 4) scene.settings.minMaxResolution = 64;
+            if (variant == 5) {  // near
+                scene.settings.minMaxResolution = 128;
+                scene.camera.eye =
+                    original.camera.target + (original.camera.eye - original.camera.target) * 0.6f;
+            }
             if (variant == 1) {
                 scene.settings.gridTrace.cellMethod = CellIntersection::Midpoint;
                 scene.settings.gridNormals = GridNormal::AnalyticTrilinear;
@@ -104,6 +114,19 @@ TEST(PrimaryPixel, MatchesTheRenderersGridDdaOnLoneGrids) {
             ASSERT_TRUE(plan.ddaGrid);
             ASSERT_EQ(primaryPixelUnsupported(plan), "");
             EXPECT_GT(matchesTheRenderer(plan), 40);
+            // A sparse grid's buffer narrows: some pixels' rays are not traced at all (a dense
+            // grid is one block, one square over its whole image).
+            if (variant == 4 && name.find("sparse") != std::string::npos) {
+                const MinMaxBuffer b = primaryMinMax(plan, Camera(plan.camera));
+                int empty = 0;
+                for (int y = 0; y < plan.camera.height; ++y)
+                    for (int x = 0; x < plan.camera.width; ++x) {
+                        float t0, t1;
+                        b.range(x, y, t0, t1);
+                        empty += t0 > t1;
+                    }
+                EXPECT_GT(empty, 100);
+            }
         }
     }
 }

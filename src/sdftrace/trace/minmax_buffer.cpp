@@ -17,117 +17,72 @@ struct LocalBuffers {
     bool everything = false;
 };
 
-// Jamriška §6: the square a block's bounding sphere (centre c, radius r) covers on the image,
-// widened conservatively, takes min(t_enter) and max(t_exit) of the sphere.
-void splatBlock(const Camera& cam, Vec3 c, float radius, int w, int h, float scaleX, float scaleY,
-                LocalBuffers& L) {
-    const CameraDesc& d = cam.desc();
-    const Vec3 rel = c - d.eye;
-    const float dist = length(rel), z = dot(rel, cam.forward());
-    const float cx = dot(rel, cam.right()), cy = dot(rel, cam.up());
-    // A primary ray leaves the eye into the view frustum (|x| <= z tx, |y| <= z ty): a sphere
-    // behind the camera plane or outside one of the frustum's four side planes is never met.
-    const float ty = cam.tanHalfFov(), tx = ty * static_cast<float>(d.width) / d.height;
-    if (z + radius < 0 || (std::fabs(cx) - z * tx) > radius * std::sqrt(1 + tx * tx) ||
-        (std::fabs(cy) - z * ty) > radius * std::sqrt(1 + ty * ty))
-        return;
+void splat(const BlockSquare& sq, int w, LocalBuffers& L) {
+    if (sq.kind == BlockSquare::Kind::Unseen) return;
     ++L.squares;
-    if (z - radius <= 1e-6f * dist || dist <= radius) {
-        L.everything = true;  // the sphere reaches the camera plane: no bound
+    if (sq.kind == BlockSquare::Kind::Everything) {
+        L.everything = true;
         return;
     }
-    // Centre in image pixels and a conservative half-width per axis. A sphere point q = c + e
-    // (|e| <= r) projects to q_x / q_z; |q_x/q_z - c_x/c_z| = |e_x c_z - c_x e_z| / (q_z c_z)
-    // <= r (c_z + |c_x|) / ((c_z - r) c_z).
-    float px = 0, py = 0;  // z > r > 0: the centre projects
-    cam.project(c, px, py);
-    const float pixelsPerUnit = 0.5f * d.height / cam.tanHalfFov();  // image plane to pixels
-    const float halfX = radius * (z + std::fabs(cx)) / ((z - radius) * z) * pixelsPerUnit;
-    const float halfY = radius * (z + std::fabs(cy)) / ((z - radius) * z) * pixelsPerUnit;
-    const int x0 = std::max(0, static_cast<int>(std::floor((px - halfX) * scaleX)));
-    const int x1 = std::min(w - 1, static_cast<int>(std::floor((px + halfX) * scaleX)));
-    const int y0 = std::max(0, static_cast<int>(std::floor((py - halfY) * scaleY)));
-    const int y1 = std::min(h - 1, static_cast<int>(std::floor((py + halfY) * scaleY)));
-    const float tEnter = dist - radius, tExit = dist + radius;
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
+    for (int y = sq.y0; y <= sq.y1; ++y)
+        for (int x = sq.x0; x <= sq.x1; ++x) {
             const size_t p = static_cast<size_t>(y) * w + x;
-            L.lo[p] = std::min(L.lo[p], tEnter);
-            L.hi[p] = std::max(L.hi[p], tExit);
+            L.lo[p] = std::min(L.lo[p], sq.tEnter);
+            L.hi[p] = std::max(L.hi[p], sq.tExit);
         }
 }
 
 }  // namespace
 
+MinMaxShape minMaxShape(const CameraDesc& d, int resolution) {
+    MinMaxShape s;
+    const float longer = static_cast<float>(std::max(d.width, d.height));
+    s.w = std::max(1, static_cast<int>(std::ceil(d.width * resolution / longer)));
+    s.h = std::max(1, static_cast<int>(std::ceil(d.height * resolution / longer)));
+    s.scaleX = static_cast<float>(s.w) / d.width;
+    s.scaleY = static_cast<float>(s.h) / d.height;
+    return s;
+}
+
 MinMaxBuffer MinMaxBuffer::build(const GridView& g, const Camera& cam, int resolution) {
-    const CameraDesc& d = cam.desc();
     MinMaxBuffer b;
-    float longer = static_cast<float>(std::max(d.width, d.height));
-    b.m_w = std::max(1, static_cast<int>(std::ceil(d.width * resolution / longer)));
-    b.m_h = std::max(1, static_cast<int>(std::ceil(d.height * resolution / longer)));
-    b.m_scaleX = static_cast<float>(b.m_w) / d.width;
-    b.m_scaleY = static_cast<float>(b.m_h) / d.height;
-    b.m_min.assign(static_cast<size_t>(b.m_w) * b.m_h, kInfinity);
-    b.m_max.assign(static_cast<size_t>(b.m_w) * b.m_h, -kInfinity);
-    const bool sparse = g.kind == GridKind::Sparse;
-    const int B =
-        sparse ? g.blockSize : std::max({g.shape.cells[0], g.shape.cells[1], g.shape.cells[2]});
-    const int nb[3] = {sparse ? g.blocks[0] : 1, sparse ? g.blocks[1] : 1,
-                       sparse ? g.blocks[2] : 1};
-    const float h = g.shape.voxelSize;
-    const float radius = 0.5f * std::sqrt(3.0f) * B * h;  // bounding sphere of a block
-    // Surface blocks are splatted in parallel slices into thread-local buffers.
+    b.m_shape = minMaxShape(cam.desc(), resolution);
+    const size_t n = static_cast<size_t>(b.m_shape.w) * b.m_shape.h;
+    b.m_min.assign(n, kInfinity);
+    b.m_max.assign(n, -kInfinity);
+    const float radius = minmax::blockRadius(g);
+    int nb[3];
+    minmax::blockCounts(g, nb);
+    // Surface blocks are splatted in parallel slices of tiles into thread-local buffers; a tile
+    // without a page of its own holds none.
     tbb::enumerable_thread_specific<LocalBuffers> locals([&] {
-        return LocalBuffers{std::vector<float>(b.m_min.size(), kInfinity),
-                            std::vector<float>(b.m_max.size(), -kInfinity)};
+        return LocalBuffers{std::vector<float>(n, kInfinity), std::vector<float>(n, -kInfinity)};
     });
-    // Only blocks a ray can hit in (the DDA walks no other): the blocks of a dense grid's one
-    // block, or of a sparse grid's own pages (block_table.h).
-    const size_t tiles = sparse ? static_cast<size_t>(g.tiles[0]) * g.tiles[1] * g.tiles[2] : 1;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles, 64), [&](const auto& range) {
+    const bool sparse = g.kind == GridKind::Sparse;
+    const size_t tx = sparse ? g.tiles[0] : 1, ty = sparse ? g.tiles[1] : 1,
+                 tz = sparse ? g.tiles[2] : 1;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tx * ty * tz, 64), [&](const auto& range) {
         LocalBuffers& L = locals.local();
         for (size_t tile = range.begin(); tile != range.end(); ++tile) {
-            if (!sparse) {
-                const Vec3 c = g.shape.origin + Vec3(0.5f) * (B * h);
-                splatBlock(cam, c, radius, b.m_w, b.m_h, b.m_scaleX, b.m_scaleY, L);
-                continue;
-            }
-            const int32_t page = g.tilePage[tile];
-            if (page < kFirstOwnPage) continue;
-            const int t[3] = {
-                static_cast<int>(tile % g.tiles[0]),
-                static_cast<int>(tile / g.tiles[0] % g.tiles[1]),
-                static_cast<int>(tile / (static_cast<size_t>(g.tiles[0]) * g.tiles[1]))};
+            if (sparse && g.tilePage[tile] < kFirstOwnPage) continue;
+            const int t[3] = {static_cast<int>(tile % tx), static_cast<int>(tile / tx % ty),
+                              static_cast<int>(tile / (tx * ty))};
             forEachBlockOfTile(nb, t[0], t[1], t[2], [&](int i, int j, int k) {
-                if (!g.mayHoldHit(static_cast<size_t>(page) * kPageEntries + pageLocal(i, j, k)))
-                    return;
-                const Vec3 c = g.shape.origin + (Vec3(i, j, k) + Vec3(0.5f)) * (B * h);
-                splatBlock(cam, c, radius, b.m_w, b.m_h, b.m_scaleX, b.m_scaleY, L);
+                Vec3 c;
+                if (minmax::splattedBlock(g, i, j, k, c))
+                    splat(minmax::blockSquare(cam, c, radius, b.m_shape), b.m_shape.w, L);
             });
         }
     });
     for (const LocalBuffers& L : locals) {
         b.m_squares += L.squares;
         b.m_everything |= L.everything;
-        for (size_t p = 0; p < b.m_min.size(); ++p) {
+        for (size_t p = 0; p < n; ++p) {
             b.m_min[p] = std::min(b.m_min[p], L.lo[p]);
             b.m_max[p] = std::max(b.m_max[p], L.hi[p]);
         }
     }
     return b;
-}
-
-void MinMaxBuffer::range(int x, int y, float& t0, float& t1) const {
-    if (m_everything) {
-        t0 = 0;
-        t1 = kInfinity;
-        return;
-    }
-    int bx = std::min(m_w - 1, static_cast<int>((x + 0.5f) * m_scaleX));
-    int by = std::min(m_h - 1, static_cast<int>((y + 0.5f) * m_scaleY));
-    size_t p = static_cast<size_t>(by) * m_w + bx;
-    t0 = std::max(0.0f, m_min[p]);
-    t1 = m_max[p];
 }
 
 }  // namespace sdft
