@@ -33,15 +33,17 @@ struct Case {
     // hard, soft, distributed (4 rays), ao (hard shadows and AO), whitted (hard shadows; the
     // scene's gems made glass: Keinert et al. 2014's jewel with 2 reflection and 8 refraction
     // bounces and 3 discontinuity-reduction iterations), path (the path tracer, 1 spp, 10
-    // bounces: Keinert's path-traced jewel)
+    // bounces: Keinert's path-traced jewel), triangles (RTSDF's hybrid mode: primary rays on the
+    // meshes' triangles, soft shadows in their SDFs)
     const char* shadows;
 };
 
 constexpr Case kCases[] = {
-    {"city", "hard"},           {"city", "soft"},         {"demo", "hard"},  {"shadows", "soft"},
-    {"shadows", "distributed"}, {"many_blend", "ao"},     {"rock", "hard"},  {"jewel", "hard"},
-    {"jewel", "whitted"},       {"glass_shapes", "hard"}, {"jewel", "path"}, {"path", "path"},
-    {"textures", "soft"},       {"projected", "soft"}};
+    {"city", "hard"},         {"city", "soft"},           {"demo", "hard"},
+    {"shadows", "soft"},      {"shadows", "distributed"}, {"many_blend", "ao"},
+    {"rock", "hard"},         {"jewel", "hard"},          {"jewel", "whitted"},
+    {"glass_shapes", "hard"}, {"jewel", "path"},          {"path", "path"},
+    {"textures", "soft"},     {"projected", "soft"},      {"hybrid", "triangles"}};
 
 // Keinert's jewel scene: its gems as absorbing dielectrics (diamond's and ruby's indices).
 void makeGemsGlass(Scene& scene) {
@@ -75,7 +77,8 @@ int main(int argc, char** argv) {
             scene.camera.height = 720;
             const std::string s = c.shadows;
             scene.settings.shadows = true;
-            scene.settings.shadowMethod = s == "soft"          ? ShadowMethod::Soft
+            scene.settings.primaryTriangles = s == "triangles";
+            scene.settings.shadowMethod = s == "soft" || s == "triangles" ? ShadowMethod::Soft
                                           : s == "distributed" ? ShadowMethod::Distributed
                                                                : ShadowMethod::Hard;
             scene.settings.shadowRays = 4;

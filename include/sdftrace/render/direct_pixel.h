@@ -238,8 +238,10 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
     out.color = v.background;
     if (!out.primary.trace.hit) return out;
     const Ray ray = primaryRay(v.primary.camera, x, y, v.primary.jitter);
-    const Vec3 p = ray.at(out.primary.trace.t);
     const Vec3 n = out.primary.normal;
+    // On a triangle (hybrid mode) the shading point lies a voxel of the mesh's grid off it
+    // (RTSDF §2.5.3), as the renderer's placeTriangleHits puts it.
+    const Vec3 p = ray.at(out.primary.trace.t) + n * out.primary.bias;
     const PixelMaterial m = direct_pixel::materialAt<kMaterialRegs>(v, p, n);
     out.material = m;
     Vec3 radiance = v.ambient * m.color;
@@ -279,9 +281,9 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
 }
 
 // Why `plan` cannot be shaded per pixel (empty when it can; mirrors and dielectrics by
-// shadePixel, whitted_pixel.h, the path tracer by pathRadiance, path_pixel.h): what
-// primaryPixelUnsupported names, shadow maps and Whitted budgets deeper than its stack stay on
-// the CPU renderer for now.
+// shadePixel, whitted_pixel.h, the path tracer by pathRadiance, path_pixel.h, triangle primaries
+// by tracePrimaryPixel): shadow maps and Whitted budgets deeper than its stack stay on the CPU
+// renderer for now.
 std::string directPixelUnsupported(const RenderPlan& plan);
 
 // The shadow rays' eps_min of `plan` (Keinert et al. 2014, §3.3): the settings', and at least
@@ -294,12 +296,22 @@ float shadowOffsetMin(const RenderPlan& plan);
 SoftShadowOptions softShadowOptions(const RenderPlan& plan);
 
 // The host side of a view: the plan's lights, its materials' parameters, their textures and the
-// textures' images (views of the plan's pixels).
+// textures' images (views of the plan's pixels), and its triangle-primary meshes.
 struct DirectPixelTables {
     std::vector<Light> lights;
     std::vector<PixelMaterial> materials;
     std::vector<TextureParams> textures;
     std::vector<ImageView> images;
+    // Triangle primaries: the plan's meshes with their LBVHs, and the view of them (pointing into
+    // `meshes`: the tables move but are not copied).
+    MeshPrimaryTables meshes;
+    MeshPrimaryView meshView;
+
+    DirectPixelTables() = default;
+    DirectPixelTables(DirectPixelTables&&) = default;
+    DirectPixelTables& operator=(DirectPixelTables&&) = default;
+    DirectPixelTables(const DirectPixelTables&) = delete;
+    DirectPixelTables& operator=(const DirectPixelTables&) = delete;
 };
 DirectPixelTables directPixelTables(const RenderPlan& plan);
 

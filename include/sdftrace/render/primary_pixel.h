@@ -5,11 +5,10 @@
 // discontinuity reduction) and the root refinement come from trace/sphere_tracer.h unchanged.
 #pragma once
 
-#include <string>
-
 #include "sdftrace/core/macros.h"
 #include "sdftrace/field/tape_view.h"
 #include "sdftrace/math/camera.h"
+#include "sdftrace/render/mesh_primary.h"
 #include "sdftrace/render/normal_stencil.h"
 #include "sdftrace/trace/grid_dda.h"
 #include "sdftrace/trace/minmax_buffer.h"
@@ -22,7 +21,13 @@ struct FrameView;
 
 // Plain data: a kernel takes it by value.
 struct PrimaryPixelView {
-    TapeView field;
+    TapeView field;  // the whole field: normals (and shading, shadows, secondary rays)
+    // RTSDF's hybrid mode (RenderSettings::primaryTriangles): primary rays trace `primaryField`
+    // (the field without the meshes; none when the scene is only meshes) and the meshes'
+    // triangles, the nearer hit winning. Without meshes primaryField is `field`.
+    TapeView primaryField;
+    bool meshesOnly = false;
+    MeshPrimaryView meshes;
     Camera camera{CameraDesc{}};
     TraceOptions options;  // the plan's primary-ray options, pixelRadius set from the camera
     float maxDistance = kInfinity;
@@ -43,6 +48,9 @@ struct PrimaryPixel {
     TraceResult trace;     // DDA: evaluations are trilinear reconstructions, value f at the hit
     Vec3 normal{0, 0, 0};  // unit on a hit (facing the viewer where the gradient vanishes)
     int traversalSteps = 0, intersectionTests = 0;  // DDA: blocks + cells visited, cells tested
+    // A triangle hit (hybrid mode): the normal is the triangle's, and the shading point lies
+    // `bias` off it along the normal (MeshPrimaryHit::bias); 0 elsewhere.
+    float bias = 0;
 };
 
 // The primary ray of pixel (x, y): through (x + 0.5 + jx, y + 0.5 + jy) (FrameView's jitter).
@@ -73,7 +81,19 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
         }
         return out;
     }
-    out.trace = traceTapeRay(v.field, seg, v.options);
+    if (!v.meshesOnly) out.trace = traceTapeRay(v.primaryField, seg, v.options);
+    if (v.meshes.count > 0) {
+        const float tMax = out.trace.hit ? out.trace.t : seg.tMax;
+        const MeshPrimaryHit h = meshPrimaryHit(v.meshes, seg.ray, tMax);
+        if (h.t < tMax) {
+            out.trace.hit = true;
+            out.trace.t = h.t;
+            out.trace.value = 0;
+            out.normal = h.normal;
+            out.bias = h.bias;
+            return out;
+        }
+    }
     if (out.trace.hit) {
         const float h = primaryNormalSpacing(out.trace.t, v.options.pixelRadius);
         const Vec3 n = estimateTapeNormal(v.field, seg.ray.at(out.trace.t), h, v.normals);
@@ -81,10 +101,6 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
     }
     return out;
 }
-
-// Why `plan` cannot be traced by tracePrimaryPixel (empty when it can): meshes whose primary rays
-// hit triangles have a primary path of their own.
-std::string primaryPixelUnsupported(const RenderPlan& plan);
 
 // The min/max buffer (Jamriška §6) of `plan`'s DDA grid for a camera, built on the host as the CPU
 // renderer builds it; an empty buffer (its view: none) where the plan has no DDA grid or its
@@ -95,6 +111,9 @@ bool usesMinMax(const RenderPlan& plan);
 
 // The view of `plan`'s field, camera and primary-ray options for one frame, without a min/max
 // buffer (primaryMinMax). The plan must outlive it (the field's arrays are the plan's tape's).
-PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame);
+// A plan with triangle primaries needs its meshes' view (MeshPrimaryTables::view of
+// plan.meshPrimary->tables(), or their device copies).
+PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame,
+                                  MeshPrimaryView meshes = {});
 
 }  // namespace sdft

@@ -290,9 +290,9 @@ SDFT_HOST_DEVICE inline DirectPixel shadePixel(const DirectPixelView& v, const W
     if (kWhitted && px.primary.trace.hit && px.material.kind != Material::Kind::Plastic) {
         const Ray ray = primaryRay(v.primary.camera, x, y, v.primary.jitter);
         WhittedCounters c;
-        const Vec3 radiance =
-            shadeWhitted<kMaterialRegs>(v, w, ray.at(px.primary.trace.t), px.primary.normal,
-                                        px.primary.trace.value, ray.direction, px.material, c);
+        const Vec3 radiance = shadeWhitted<kMaterialRegs>(
+            v, w, ray.at(px.primary.trace.t) + px.primary.normal * px.primary.bias,
+            px.primary.normal, px.primary.trace.value, ray.direction, px.material, c);
         px.color = isFinite(radiance) ? radiance : Vec3(0.0f);
         px.secondaryRays = c.rays;
         px.secondaryEvaluations = c.evaluations;

@@ -2,6 +2,7 @@
 #include <vector>
 
 #include "device_buffer.h"
+#include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_primary.h"
 
@@ -36,8 +37,11 @@ GpuPrimaryImage tracePrimaryGpu(const GpuTape& tape, const PrimaryPixelView& vie
     out.height = height;
     cuda::DeviceArray<float> depth(n), normal(3 * n);
     cuda::DeviceArray<int32_t> evaluations(n);
+    if (view.meshes.count > 0)
+        throw InputError("GPU primary rays: triangle primaries render through GpuDirectRenderer");
     PrimaryPixelView v = view;
     v.field = tape.view();
+    v.primaryField = v.field;
     cuda::DeviceArray<float> lo, hi;  // the view's min/max buffer, uploaded
     if (view.minMax.min) {
         const size_t cells = static_cast<size_t>(view.minMax.shape.w) * view.minMax.shape.h;

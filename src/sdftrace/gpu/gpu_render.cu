@@ -140,6 +140,14 @@ struct GpuDirectRenderer::Impl {
     cuda::DeviceArray<TextureParams> textures;
     std::vector<cuda::DeviceArray<float>> pixels;
     cuda::DeviceArray<ImageView> images;
+    // Triangle primaries (RTSDF's hybrid mode): the field without the meshes, and each mesh's
+    // LBVH, normals and indices with the views of them.
+    std::optional<GpuTape> primaryTape;
+    std::vector<cuda::DeviceArray<LbvhNode>> meshNodes;
+    std::vector<cuda::DeviceArray<LbvhTriangle>> meshTriangles;
+    std::vector<cuda::DeviceArray<Vec3>> meshNormals;
+    std::vector<cuda::DeviceArray<uint32_t>> meshIndices;
+    cuda::DeviceArray<MeshPrimaryMesh> meshes;
     // Whitted rays: the convex objects' tapes (Keinert §3.5) on the device, and their views.
     bool whitted;
     std::vector<GpuTape> convexTapes;
@@ -159,6 +167,22 @@ struct GpuDirectRenderer::Impl {
             imageViews.push_back({pixels.back().get(), image.width, image.height});
         }
         images = cuda::DeviceArray<ImageView>(imageViews);
+        if (p.primaryField) primaryTape.emplace(*p.primaryField);
+        std::vector<MeshPrimaryMesh> meshViews;
+        for (const MeshPrimaryTables::Mesh& mesh : tables.meshes.meshes) {
+            meshNodes.emplace_back(mesh.nodes);
+            meshTriangles.emplace_back(mesh.triangles);
+            meshNormals.emplace_back(mesh.normals);
+            meshIndices.emplace_back(mesh.indices);
+            meshViews.push_back({{meshNodes.back().get(), meshTriangles.back().get(),
+                                  static_cast<int>(mesh.triangles.size())},
+                                 meshNormals.back().get(),
+                                 meshIndices.back().get(),
+                                 mesh.toLocal,
+                                 mesh.normalToWorld,
+                                 mesh.bias});
+        }
+        meshes = cuda::DeviceArray<MeshPrimaryMesh>(meshViews);
         if (!whitted) return;
         std::vector<ConvexView> views;
         for (const ConvexObject& c : p.convexObjects) {
@@ -188,6 +212,8 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     const size_t n = film.pixels();
     DirectPixelView view = directPixelView(m.plan, frame, m.tables, w);
     view.primary.field = m.tape.view();
+    view.primary.primaryField = m.primaryTape ? m.primaryTape->view() : view.primary.field;
+    view.primary.meshes = {m.meshes.get(), static_cast<int>(m.meshes.size())};
     view.lights = m.lights.get();
     view.materials = m.materials.get();
     view.textures = m.textures.get();

@@ -32,9 +32,10 @@ TEST(GpuRender, AbsenceIsOneClearError) {
 }
 
 // The GPU's film of `plan` against the CPU renderer's (issue 14's bar): identical hit and miss off
-// silhouettes, depth within 1e-4 t on 99.5% of the hits there, colour mean absolute difference
-// below 2e-3.
-void matchesTheCpu(const std::string& name, int variant, const RenderPlan& plan) {
+// silhouettes (but for `mismatchShare` of those pixels), depth within 1e-4 t on 99.5% of the hits
+// there, colour mean absolute difference below 2e-3.
+void matchesTheCpu(const std::string& name, int variant, const RenderPlan& plan,
+                   double mismatchShare = 0) {
     const int W = plan.camera.width, H = plan.camera.height;
     FrameView frame;
     frame.camera = plan.camera;
@@ -67,7 +68,7 @@ void matchesTheCpu(const std::string& name, int variant, const RenderPlan& plan)
         "%.2f evaluations per pixel, kernel %.3f ms, frame %.3f ms\n",
         name.c_str(), variant, interior, hits, depthOff, mad,
         static_cast<double>(st.totalEvaluations()) / (W * H), st.gpuKernelMs, st.gpuFrameMs);
-    EXPECT_EQ(hitMismatch, 0);
+    EXPECT_LE(hitMismatch, mismatchShare * interior);
     EXPECT_LE(depthOff, hits / 200);
     EXPECT_LT(mad, 2e-3);
     EXPECT_TRUE(st.gpu);
@@ -106,6 +107,23 @@ TEST(GpuRender, DirectLightingMatchesTheCpuOnTheExamples) {
         }
     }
     EXPECT_GE(rendered, 40);
+}
+
+// RTSDF's hybrid mode on the GPU: primary rays on the meshes' triangles through their LBVHs on
+// the device, against the CPU renderer's Embree hits (the two triangle tests may disagree on
+// triangle edges: 0.2 % of the pixels off silhouettes), soft and hard shadows in the SDF.
+TEST(GpuRender, TrianglePrimariesMatchTheCpu) {
+    if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
+    Scene scene = parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/hybrid.json");
+    scene.camera.width = 160;
+    scene.camera.height = 90;
+    scene.settings.primaryTriangles = true;
+    for (int variant = 0; variant < 2; ++variant) {
+        if (variant == 1) scene.settings.shadowMethod = ShadowMethod::Hard;
+        const RenderPlan plan = planRender(scene);
+        ASSERT_TRUE(plan.meshPrimary);
+        matchesTheCpu("hybrid triangles", variant, plan, 0.002);
+    }
 }
 
 // Mirrors on the GPU: every material of the demo a mirror, three reflections deep.

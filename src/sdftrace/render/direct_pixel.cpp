@@ -10,8 +10,6 @@
 namespace sdft {
 
 std::string directPixelUnsupported(const RenderPlan& plan) {
-    std::string why = primaryPixelUnsupported(plan);
-    if (!why.empty()) return why;
     const RenderSettings& s = plan.settings;
     if (s.shadows && (s.shadowMethod == ShadowMethod::Pcf || s.shadowMethod == ShadowMethod::Evsm))
         return "shadow maps (pcf, evsm)";
@@ -43,6 +41,10 @@ DirectPixelTables directPixelTables(const RenderPlan& plan) {
     for (const Material& m : plan.materials) t.materials.push_back(pixelMaterial(m));
     for (const Texture& x : plan.textures) t.textures.push_back(x);
     for (const TextureImage& image : plan.images) t.images.push_back(image.view());
+    if (plan.meshPrimary) {
+        t.meshes = plan.meshPrimary->tables();
+        t.meshView = t.meshes.view();
+    }
     return t;
 }
 
@@ -50,7 +52,7 @@ DirectPixelView directPixelView(const RenderPlan& plan, const FrameView& frame,
                                 const DirectPixelTables& tables, int filmWidth) {
     const RenderSettings& s = plan.settings;
     DirectPixelView v;
-    v.primary = primaryPixelView(plan, frame);
+    v.primary = primaryPixelView(plan, frame, tables.meshView);
     v.lights = tables.lights.data();
     v.lightCount = static_cast<int>(tables.lights.size());
     v.materials = tables.materials.data();

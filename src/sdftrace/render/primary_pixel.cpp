@@ -4,11 +4,6 @@
 
 namespace sdft {
 
-std::string primaryPixelUnsupported(const RenderPlan& plan) {
-    if (plan.meshPrimary) return "meshes whose primary rays hit their triangles";
-    return {};
-}
-
 bool usesMinMax(const RenderPlan& plan) {
     return plan.ddaGrid && plan.settings.minMaxResolution > 0;
 }
@@ -37,9 +32,14 @@ int ddaGridIndex(const RenderPlan& plan) {
 
 }  // namespace
 
-PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame) {
+PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame,
+                                  MeshPrimaryView meshes) {
+    SDFT_CHECK(!plan.meshPrimary || meshes.count > 0);  // the triangles must come with the plan
     PrimaryPixelView v;
     v.field = plan.tape.view();
+    v.primaryField = plan.primaryField ? plan.primaryField->view() : v.field;
+    v.meshesOnly = plan.meshPrimary && !plan.primaryField;
+    if (plan.meshPrimary) v.meshes = meshes;
     v.camera = Camera(frame.camera);
     v.options = plan.settings.trace;
     v.options.pixelRadius = v.camera.pixelRadius();

@@ -1,5 +1,7 @@
 #include "placed_meshes.h"
 
+#include "sdftrace/bake/lbvh.h"
+
 namespace sdft {
 
 std::vector<Vec3> smoothNormals(const TriangleMesh& mesh) {
@@ -32,6 +34,44 @@ MeshPrimary::Hit PlacedMeshes::firstHit(const Ray& ray, float tMax) const {
     }
     if (!(best.t < tMax)) best.t = INFINITY;
     return best;
+}
+
+namespace {
+
+// The affine map p -> f(p) of a placement's map f, from the images of the origin and the axes.
+template <class Map>
+Affine affineOf(Map&& f) {
+    Affine a;
+    a.offset = f(Vec3(0.0f));
+    for (int j = 0; j < 3; ++j) {
+        Vec3 e(0.0f);
+        e[j] = 1;
+        const Vec3 c = f(e) - a.offset;
+        for (int i = 0; i < 3; ++i) a.linear.m[i][j] = c[i];
+    }
+    return a;
+}
+
+}  // namespace
+
+MeshPrimaryTables PlacedMeshes::tables() const {
+    MeshPrimaryTables t;
+    for (const PlacedMesh& m : m_meshes) {
+        MeshPrimaryTables::Mesh out;
+        const Lbvh bvh(*m.mesh);
+        out.nodes = bvh.nodes();
+        out.triangles = bvh.triangles();
+        out.normals = m.normals;
+        out.indices.reserve(3 * m.mesh->triangles.size());
+        for (const auto& tri : m.mesh->triangles)
+            out.indices.insert(out.indices.end(), tri.begin(), tri.end());
+        out.toLocal = affineOf([&](Vec3 p) { return m.placement.toLocal(p); });
+        // The inverse transpose of mesh-to-world's linear part: world-to-mesh's, transposed.
+        out.normalToWorld = out.toLocal.linear.transposed();
+        out.bias = m.bias;
+        t.meshes.push_back(std::move(out));
+    }
+    return t;
 }
 
 }  // namespace sdft

@@ -28,6 +28,7 @@ class PlacedMeshes : public MeshPrimary {
   public:
     explicit PlacedMeshes(std::vector<PlacedMesh> meshes) : m_meshes(std::move(meshes)) {}
     Hit firstHit(const Ray& ray, float tMax) const override;
+    MeshPrimaryTables tables() const override;
 
   private:
     std::vector<PlacedMesh> m_meshes;

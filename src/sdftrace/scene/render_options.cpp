@@ -319,8 +319,9 @@ std::vector<RenderOption> makeTable() {
          .flags = "--primary-triangles",
          .group = "Tracer",
          .type = T::Bool,
-         .doc = "RTSDF's hybrid mode: primary rays hit mesh objects' triangles (Embree), shadows "
-                "and AO march their SDFs, the shading point biased one voxel off the triangle "
+         .doc = "RTSDF's hybrid mode: primary rays hit mesh objects' triangles (Embree on the "
+                "CPU, an LBVH per mesh under `--device cuda`), shadows and AO march their SDFs, "
+                "the shading point biased one voxel off the triangle "
                 "(RTSDF §2.5.3); meshes under operators other than union and transforms stay SDFs",
          SDFT_MEMBER(primaryTriangles)},
         // The integrator.
