@@ -79,6 +79,28 @@ TEST(DeviceCli, AutoFallsBackToTheCpuAndSaysWhy) {
     }
 }
 
+// Textures and RTSDF's hybrid mode (--primary-triangles) render on the GPU from the command
+// line: no fallback line under auto, and the CPU's image within 2e-3 mean absolute difference.
+TEST(DeviceCli, TexturesAndTrianglePrimariesRenderOnTheGpu) {
+    if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
+    TempDir dir;
+    for (const std::string args :
+         {example("textures"), example("hybrid") + " --primary-triangles"}) {
+        SCOPED_TRACE(args);
+        const RunResult g = runCli(
+            "render " + args + " --device auto -o " + dir.file("g.pfm") + " --width 96 --height 54",
+            dir);
+        ASSERT_EQ(g.status, 0) << g.err;
+        EXPECT_EQ(g.err.find("rendering on the CPU"), std::string::npos) << g.err;
+        const RunResult c = runCli("render " + args + " -o " + dir.file("c.pfm") + kSize, dir);
+        ASSERT_EQ(c.status, 0) << c.err;
+        int w, h, ch;
+        EXPECT_LT(meanAbsDifference(readPfm(dir.file("g.pfm"), w, h, ch),
+                                    readPfm(dir.file("c.pfm"), w, h, ch)),
+                  2e-3);
+    }
+}
+
 TEST(DeviceCli, CudaNamesWhatTheGpuDoesNotRender) {
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
     TempDir dir;
