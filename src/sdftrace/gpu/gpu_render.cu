@@ -22,7 +22,8 @@ namespace {
 struct DirectOut {
     float *color, *depth, *normal, *steps, *error, *shadow, *ao, *travSteps, *isectTests;
     uint32_t* counters;  // kCounters per pixel: shadow and AO evaluations, fallbacks, hits,
-                         // secondary rays, their evaluations, self-intersections; paths: primary
+                         // secondary rays, their evaluations, self-intersections; then direct: a
+                         // triangle hit (its normal is the triangle's); paths: primary
                          // evaluations, shadow rays, normal evaluations of every sample
 };
 constexpr int kCounters = 10;
@@ -58,6 +59,7 @@ __global__ void directKernel(DirectPixelView view, WhittedPixelView whitted, int
     c[4] = px.secondaryRays;
     c[5] = px.secondaryEvaluations;
     c[6] = px.selfIntersections;
+    c[7] = hit && px.primary.bias > 0 ? 1u : 0u;
 }
 
 // The per-pixel material table (textures included) as pathRadiance's material lookup.
@@ -128,6 +130,33 @@ void withMaterialRegs(int regs, Launch&& launch) {
     }
 }
 
+// The summary's counters of a frame from the kernel's per-pixel counters `c` and the steps,
+// traversal and intersection AOVs.
+void addCounters(const std::vector<uint32_t>& c, const std::vector<float>& steps,
+                 const std::vector<float>& trav, const std::vector<float>& isect, bool paths,
+                 RenderStats& st, uint64_t& triangleHits) {
+    for (size_t i = 0; i < steps.size(); ++i) {
+        const uint32_t* p = c.data() + kCounters * i;
+        st.shadowEvaluations += p[0];
+        st.aoEvaluations += p[1];
+        st.fallbacks += p[2];
+        st.hits += p[3];
+        st.secondaryRays += p[4];
+        st.secondaryEvaluations += p[5];
+        st.selfIntersections += p[6];
+        if (paths) {
+            st.primaryEvaluations += p[7];  // every sample's
+            st.shadowRays += p[8];
+            st.normalEvaluations += p[9];
+        } else {
+            st.primaryEvaluations += static_cast<uint64_t>(steps[i]);
+            triangleHits += p[7];
+        }
+        st.traversalSteps += static_cast<uint64_t>(trav[i]);
+        st.intersectionTests += static_cast<uint64_t>(isect[i]);
+    }
+}
+
 }  // namespace
 
 struct GpuDirectRenderer::Impl {
@@ -191,6 +220,19 @@ struct GpuDirectRenderer::Impl {
         }
         convex = cuda::DeviceArray<ConvexView>(views);
     }
+
+    // The plan's view for a frame `width` pixels wide, its arrays the device copies.
+    DirectPixelView deviceView(const FrameView& frame, int width) const {
+        DirectPixelView view = directPixelView(plan, frame, tables, width);
+        view.primary.field = tape.view();
+        view.primary.primaryField = primaryTape ? primaryTape->view() : view.primary.field;
+        view.primary.meshes = {meshes.get(), static_cast<int>(meshes.size())};
+        view.lights = lights.get();
+        view.materials = materials.get();
+        view.textures = textures.get();
+        view.images = {images.get(), static_cast<int>(images.size())};
+        return view;
+    }
 };
 
 GpuDirectRenderer::GpuDirectRenderer(const RenderPlan& plan, const std::string& what) {
@@ -210,14 +252,7 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     const auto begin = std::chrono::steady_clock::now();
     const int w = film.width, h = film.height;
     const size_t n = film.pixels();
-    DirectPixelView view = directPixelView(m.plan, frame, m.tables, w);
-    view.primary.field = m.tape.view();
-    view.primary.primaryField = m.primaryTape ? m.primaryTape->view() : view.primary.field;
-    view.primary.meshes = {m.meshes.get(), static_cast<int>(m.meshes.size())};
-    view.lights = m.lights.get();
-    view.materials = m.materials.get();
-    view.textures = m.textures.get();
-    view.images = {m.images.get(), static_cast<int>(m.images.size())};
+    DirectPixelView view = m.deviceView(frame, w);
     const WhittedPixelTables noTables;
     WhittedPixelView whitted = whittedPixelView(m.plan, noTables);
     whitted.convex = m.convex.get();
@@ -283,29 +318,14 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     std::vector<uint32_t> c;
     counters.download(c, kCounters * n);
     st.primaryRays = paths ? n * static_cast<uint64_t>(pathView.samplesPerPixel) : n;
-    for (size_t i = 0; i < n; ++i) {
-        const uint32_t* p = c.data() + kCounters * i;
-        st.shadowEvaluations += p[0];
-        st.aoEvaluations += p[1];
-        st.fallbacks += p[2];
-        st.hits += p[3];
-        st.secondaryRays += p[4];
-        st.secondaryEvaluations += p[5];
-        st.selfIntersections += p[6];
-        if (!paths) st.primaryEvaluations += static_cast<uint64_t>(stepCounts[i]);
-        if (paths) {
-            st.primaryEvaluations += p[7];  // every sample's
-            st.shadowRays += p[8];
-            st.normalEvaluations += p[9];
-        }
-        st.traversalSteps += static_cast<uint64_t>(trav[i]);
-        st.intersectionTests += static_cast<uint64_t>(isect[i]);
-    }
+    uint64_t triangleHits = 0;
+    addCounters(c, stepCounts, trav, isect, paths, st, triangleHits);
     st.gridTracer = m.plan.ddaGrid != nullptr && !paths;
-    // The DDA's normals read the grid, not the tape (not counted, as on the CPU).
+    // The DDA's normals read the grid, not the tape, and a triangle's are its own (neither
+    // counted, as on the CPU).
     if (!st.gridTracer && !paths)
         st.normalEvaluations =
-            st.hits * static_cast<uint64_t>(stencilSize(m.plan.settings.normals));
+            (st.hits - triangleHits) * static_cast<uint64_t>(stencilSize(m.plan.settings.normals));
     st.threads = 1;
     st.gpuFrameMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
