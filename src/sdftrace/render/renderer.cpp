@@ -74,10 +74,7 @@ class TileRenderer {
             m_gridHitValue = m_settings.shadows || m_film.has(Aov::Error);
             for (const Material& m : plan.materials)
                 m_gridHitValue |= m.kind != Material::Kind::Plastic;
-            if (m_settings.minMaxResolution > 0) {
-                m_minMax = MinMaxBuffer::build(m_gridView, m_camera, m_settings.minMaxResolution);
-                m_useMinMax = true;
-            }
+            m_minMax = primaryMinMax(plan, m_camera);  // none where the settings turn it off
         }
         m_secondaryShadows = secondaryShadows(m_settings);
         m_whitted = std::make_unique<WhittedTracer>(
@@ -150,9 +147,8 @@ class TileRenderer {
     // Set when the scene is a single grid traced by Jamriška's DDA (RenderSettings::gridTracer).
     const GridView* m_grid = nullptr;
     GridView m_gridView;
-    bool m_useMinMax = false;
     bool m_gridHitValue = true;
-    MinMaxBuffer m_minMax;                           // Jamriška §6, built once per render
+    MinMaxBuffer m_minMax;  // Jamriška §6, built once per render; an empty view without one
     std::vector<std::unique_ptr<ShadowMap>> m_maps;  // per light, shadow-map methods
     uint64_t m_mapEvaluations = 0;
     std::unique_ptr<WhittedTracer> m_whitted;  // mirrors and dielectrics (Keinert §4)
@@ -407,13 +403,9 @@ void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
     const bool trav = m_film.has(Aov::TravSteps), isect = m_film.has(Aov::IsectTests);
     for (size_t i = 0; i < s.segments.size(); ++i) {
         const RaySegment& seg = s.segments[i];
-        float tMin = seg.tMin, tMax = seg.tMax;
-        if (m_useMinMax) {
-            float t0, t1;
-            m_minMax.range(x0 + static_cast<int>(i) % tw, y0 + static_cast<int>(i) / tw, t0, t1);
-            tMin = std::max(tMin, t0);
-            tMax = std::min(tMax, t1);
-        }
+        float t0, t1;  // [0, inf) without a buffer
+        m_minMax.range(x0 + static_cast<int>(i) % tw, y0 + static_cast<int>(i) / tw, t0, t1);
+        const float tMin = std::max(seg.tMin, t0), tMax = std::min(seg.tMax, t1);
         GridTraceResult g = tMin <= tMax
                                 ? traceGridRay(*m_grid, seg.ray, tMin, tMax, m_settings.gridTrace)
                                 : GridTraceResult{};
