@@ -3,11 +3,13 @@
 // (N = 128, 256; RTSDF on an RTX 2080 Ti: 2.34 and 21.89 ms), and RTSDF's whole per-frame field at
 // size M (coarse 128^3, fine 256^3) with x = 1, 5 and 10 rays per vertex and frame, accumulated
 // (eq. 1): voxelization, jump flooding, signs, rays, each pass timed by CUDA events. Beside each,
-// the CPU's run of the same bake on every hardware thread. Medians of --runs (GPU, after one
+// the CPU's run of the same bake on every hardware thread. Then a moving mesh's frames with the
+// history kept on the device against copied to it and back. Medians of --runs (GPU, after one
 // untimed warm-up) and --cpu-runs.
 //
 //   sdftrace_gpu_bake_bench [--runs 10] [--cpu-runs 3] [--scenes stanford-bunny,teapot]
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -128,6 +130,49 @@ void rtsdfRows(const std::string& name, const TriangleMesh& mesh, const GpuMeshB
     }
 }
 
+// RTSDF §2.5's per-frame regeneration of a moving mesh (fig. 5's teapot on a circle, here each
+// mesh, a tenth of its size per frame around a circle of a quarter of its size) at size M, x = 1:
+// per frame the mesh posed on the device (positions uploaded, LBVH rebuilt there, winding tree
+// on the host) and the field accumulated with f_{t-1} kept on the device (accumulate), beside the
+// same frame with the history copied up and back (rtsdf with a host history).
+void movingRows(const std::string& name, const TriangleMesh& rest, GpuMeshBaker* gpu, int runs) {
+    if (!gpu) {
+        std::printf("| %s | moving, M, x = 1 | - | - | - | - | - |\n", name.c_str());
+        return;
+    }
+    const Bounds3 b = rest.bounds();
+    const float radius = 0.25f * maxComponent(b.extent());
+    const Bounds3 region{b.lo - Vec3(radius * 1.2f), b.hi + Vec3(radius * 1.2f)};
+    TriangleMesh span = rest;
+    span.positions = {region.lo, region.hi};
+    const GridShape fine = cubeOfVertices(span, 256);
+    RtsdfOptions o;
+    o.rays = 1;
+    RtsdfHistory host;
+    host.alpha = 0.95f;
+    std::vector<double> pose, kernel, device, copied;
+    for (int f = 0; f <= runs; ++f) {
+        const float a = 0.1f * static_cast<float>(f);
+        TriangleMesh mesh = rest;
+        for (Vec3& p : mesh.positions) p += Vec3(radius * std::cos(a), 0, radius * std::sin(a));
+        GpuBakeTimes t;
+        gpu->pose(mesh, &t);
+        gpu->accumulate(fine, o, host.alpha, f == 0 ? &host : nullptr, nullptr, &t);
+        GpuBakeTimes c;
+        o.history = &host;
+        gpu->rtsdf(fine, o, nullptr, &c);
+        o.history = nullptr;
+        if (f == 0) continue;
+        pose.push_back(t.poseMs);
+        kernel.push_back(t.kernelMs());
+        device.push_back(t.totalMs);
+        copied.push_back(c.totalMs);
+    }
+    std::printf("| %s | moving, M, x = 1 | %.3f | %.3f | %.2f | %.2f | %.2f |\n", name.c_str(),
+                median(pose), median(kernel), median(device), median(copied),
+                median(pose) + median(device));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -160,5 +205,11 @@ int main(int argc, char** argv) {
         "--- | --- |\n");
     for (size_t i = 0; i < names.size(); ++i)
         rtsdfRows(names[i], meshes[i], bakers[i].get(), args.runs, args.cpuRuns);
+    std::printf(
+        "\n| mesh | frame | pose ms (wall: winding tree, upload, LBVH) | GPU kernels ms | field, "
+        "history on the device, call ms | field, history copied, call ms | pose + field ms |\n"
+        "| --- | --- | --- | --- | --- | --- | --- |\n");
+    for (size_t i = 0; i < names.size(); ++i)
+        movingRows(names[i], meshes[i], bakers[i].get(), args.runs);
     return 0;
 }

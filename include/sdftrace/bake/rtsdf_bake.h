@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "sdftrace/bake/mesh_bvh.h"
@@ -22,15 +23,19 @@ namespace sdft {
 // it, nearer the frame's own front / back vote (the coarse sign where all its rays missed); no
 // vote is carried over. Empty before the first frame; bound to one grid shape (a new shape starts
 // afresh).
+struct RtsdfDeviceState;  // gpu/gpu_bake.h
 struct RtsdfHistory {
     float alpha = 0.95f;
     GridShape shape;
     std::vector<float> fine;  // |f_{t-1}| per vertex, inf where none was refined
     int frames = 0;           // frames accumulated
+    // Where the GPU regenerates the field (bakeMeshGpu), the mesh, its LBVH and f_{t-1} stay on
+    // the device between frames: `fine` is then empty and `frames` counts the device's frames.
+    std::shared_ptr<RtsdfDeviceState> device;
 };
 
-// Eq. 1's previous frame: kept when `history` holds frames of `shape`, else started afresh (the
-// first frame, or a grid that changed shape).
+// Eq. 1's previous frame: kept when `history` holds frames of `shape` on the host, else started
+// afresh (the first frame, a grid that changed shape, or an accumulation the GPU kept).
 void beginRtsdfFrame(RtsdfHistory& history, const GridShape& shape);
 
 // What the fine rays are cast through: Embree's BVH, or the LBVH (lbvh.h) that the GPU bake

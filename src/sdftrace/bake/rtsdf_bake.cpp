@@ -45,10 +45,11 @@ double since(std::chrono::steady_clock::time_point t) {
 }  // namespace
 
 void beginRtsdfFrame(RtsdfHistory& h, const GridShape& s) {
-    const bool carried = h.frames > 0 && h.shape.cells[0] == s.cells[0] &&
-                         h.shape.cells[1] == s.cells[1] && h.shape.cells[2] == s.cells[2] &&
-                         h.shape.origin.x == s.origin.x && h.shape.origin.y == s.origin.y &&
-                         h.shape.origin.z == s.origin.z && h.shape.voxelSize == s.voxelSize;
+    const bool carried = h.frames > 0 && h.fine.size() == s.vertexCount() &&
+                         h.shape.cells[0] == s.cells[0] && h.shape.cells[1] == s.cells[1] &&
+                         h.shape.cells[2] == s.cells[2] && h.shape.origin.x == s.origin.x &&
+                         h.shape.origin.y == s.origin.y && h.shape.origin.z == s.origin.z &&
+                         h.shape.voxelSize == s.voxelSize;
     if (carried) return;
     h.shape = s;
     h.fine.assign(s.vertexCount(), INFINITY);

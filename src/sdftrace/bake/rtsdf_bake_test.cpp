@@ -161,6 +161,25 @@ TEST(RtsdfAccumulation, AnotherGridShapeStartsAfresh) {
     EXPECT_EQ(history.fine.size(), s2.vertexCount());
 }
 
+// A history whose f_{t-1} the GPU kept (bakeMeshGpu leaves `fine` empty and counts the device's
+// frames) starts afresh on the CPU rather than reading a host array it does not have.
+TEST(RtsdfAccumulation, AnAccumulationKeptOnTheGpuStartsAfreshOnTheCpu) {
+    const TriangleMesh mesh = box(0);
+    const MeshBvh bvh(mesh);
+    RtsdfHistory history;
+    history.shape = shape();
+    history.frames = 3;  // as the GPU leaves it
+    RtsdfOptions o;
+    o.rays = 2;
+    o.history = &history;
+    const std::vector<float> f = bakeRtsdfSamples(mesh, bvh, shape(), o);
+    EXPECT_EQ(history.frames, 1);
+    ASSERT_EQ(history.fine.size(), shape().vertexCount());
+    RtsdfHistory fresh;
+    o.history = &fresh;
+    EXPECT_EQ(bakeRtsdfSamples(mesh, bvh, shape(), o), f);
+}
+
 // Signs follow a moved mesh at once, whatever the history holds: the frame after a box moved by
 // 2.5 voxels has as few wrong signs near its surface as a first frame of the moved box (none: from
 // inside a closed surface every ray hits a back face, and a vertex whose rays all missed takes the

@@ -36,6 +36,17 @@ class DeviceArray {
         return *this;
     }
 
+    // `host` copied in, into this allocation where the sizes agree, else a new one.
+    void upload(const std::vector<T>& host) {
+        if (host.size() != m_size) {
+            *this = DeviceArray(host);
+            return;
+        }
+        if (m_size)
+            SDFT_CUDA_CHECK(
+                cudaMemcpy(m_ptr, host.data(), m_size * sizeof(T), cudaMemcpyHostToDevice));
+    }
+
     T* get() const { return m_ptr; }
     size_t size() const { return m_size; }
     // The first `n` elements back into `host` (resized to n).

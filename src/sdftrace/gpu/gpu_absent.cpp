@@ -73,6 +73,12 @@ std::vector<float> GpuMeshBaker::rtsdf(const GridShape&, const RtsdfOptions&, Rt
                                        GpuBakeTimes*) const {
     return {};
 }
+void GpuMeshBaker::pose(const TriangleMesh&, GpuBakeTimes*) {}
+std::vector<float> GpuMeshBaker::accumulate(const GridShape&, const RtsdfOptions&, float,
+                                            const RtsdfHistory*, RtsdfStats*, GpuBakeTimes*) {
+    return {};
+}
+int GpuMeshBaker::accumulatedFrames() const { return 0; }
 SurfaceSeeds GpuMeshBaker::seeds(const GridShape&) const { return {}; }
 std::vector<Vec3> GpuMeshBaker::jumpFloodPoints(const GridShape&, const std::vector<Vec3>&,
                                                 JfaVariant, GpuBakeTimes*) const {

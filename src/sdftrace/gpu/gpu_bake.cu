@@ -1,5 +1,6 @@
 #include <chrono>
 #include <memory>
+#include <vector>
 
 #include "device_buffer.h"
 #include "gpu_lbvh.cuh"
@@ -140,6 +141,11 @@ __global__ void relaxKernel(float* f, int nx, int ny, int nz, int axis, float h)
     relaxLine(f, ja * stride[a] + jb * stride[b], stride[axis], n[axis], h);
 }
 
+__global__ void fillKernel(float* a, size_t n, float value) {
+    const size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < n) a[i] = value;
+}
+
 __global__ void firstHitKernel(LbvhView bvh, const Ray* rays, size_t n, float tnear, LbvhHit* out) {
     const size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i < n) out[i] = lbvhFirstHit(bvh, rays[i], tnear);
@@ -149,16 +155,55 @@ double since(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
+bool sameShape(const GridShape& a, const GridShape& b) {
+    return a.cells[0] == b.cells[0] && a.cells[1] == b.cells[1] && a.cells[2] == b.cells[2] &&
+           a.origin.x == b.origin.x && a.origin.y == b.origin.y && a.origin.z == b.origin.z &&
+           a.voxelSize == b.voxelSize;
+}
+
+std::vector<uint32_t> triangleIndices(const TriangleMesh& mesh) {
+    std::vector<uint32_t> indices(3 * mesh.triangles.size());
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int v = 0; v < 3; ++v) indices[3 * t + v] = mesh.triangles[t][v];
+    return indices;
+}
+
 }  // namespace
 
 struct GpuMeshBaker::Impl {
     int count = 0;
+    std::vector<uint32_t> indices;  // the host's copy of `triangles`, for pose()
     cuda::DeviceArray<Vec3> positions;
     cuda::DeviceArray<uint32_t> triangles;
     std::unique_ptr<cuda::DeviceLbvh> lbvh;
     cuda::DeviceArray<WindingNode> windingNodes;
     cuda::DeviceArray<float> windingCorners;
     double windingBeta = 3.0;
+    // accumulate()'s f_{t-1} (RTSDF eq. 1) on the device, of `accumulatedShape`.
+    cuda::DeviceArray<float> accumulation;
+    GridShape accumulatedShape;
+    int accumulated = 0;
+
+    // The mesh on the device: positions, triangles (unless `sameTriangles`), the LBVH built
+    // there, and the winding-number tree built on the host (a median split, the CPU bake's very
+    // tree) and uploaded, so that the GPU's signs are the CPU's.
+    void build(const TriangleMesh& mesh, bool sameTriangles) {
+        if (mesh.triangles.size() > static_cast<size_t>(kMaxLbvhTriangles))
+            throw InputError("mesh: too many triangles for the GPU bake's LBVH");
+        count = static_cast<int>(mesh.triangles.size());
+        positions.upload(mesh.positions);
+        if (!sameTriangles) {
+            indices = triangleIndices(mesh);
+            triangles = cuda::DeviceArray<uint32_t>(indices);
+        }
+        lbvh = std::make_unique<cuda::DeviceLbvh>(positions.get(), triangles.get(), count,
+                                                  lbvhFrame(mesh));
+        const WindingNumber w(mesh);
+        const WindingView v = w.view();
+        windingBeta = w.beta();
+        windingNodes.upload(std::vector<WindingNode>(v.nodes, v.nodes + v.nodeCount));
+        windingCorners.upload(std::vector<float>(v.corners, v.corners + 9 * mesh.triangles.size()));
+    }
 
     WindingView winding() const {
         return {windingNodes.get(), static_cast<int>(windingNodes.size()), windingCorners.get()};
@@ -230,30 +275,65 @@ struct GpuMeshBaker::Impl {
         if (times) times->signMs += ms;
         return out;
     }
+
+    // RTSDF's fine field of `s` on the device (§2.1, §2.3): the coarse SDF by jump flooding at
+    // half the resolution over the same region, then the fine vertices within the mask, single
+    // and relaxed (history null) or accumulated into `history` (eq. 1, frame `frame`).
+    cuda::DeviceArray<float> fine(const GridShape& s, const RtsdfOptions& o, float* history,
+                                  int frame, float alpha, RtsdfStats* stats,
+                                  GpuBakeTimes& t) const {
+        const double before = t.kernelMs();
+        const GridShape coarse = rtsdfCoarseShape(s);
+        cuda::DeviceArray<float> coarseField =
+            signedField(coarse, JfaVariant::Plain, o.coarseSign, 0.5f, &t);
+        GridView cv;
+        cv.kind = GridKind::Dense;
+        cv.shape = coarse;
+        cv.samples = coarseField.get();
+        const double coarseMs = t.kernelMs() - before;
+        const size_t n = s.vertexCount();
+        cuda::DeviceArray<float> out(n);
+        cuda::DeviceArray<unsigned long long> counts(2);
+        SDFT_CUDA_CHECK(cudaMemset(counts.get(), 0, 2 * sizeof(unsigned long long)));
+        cuda::EventTimer rays;
+        SDFT_CUDA_CHECK(cudaEventRecord(rays.start));
+        rtsdfFineKernel<<<blocksFor(n), kThreads>>>(
+            s, n, cv, lbvh->view(), o.maskVoxels * s.voxelSize, 1e-4f * s.voxelSize, o.rays, o.seed,
+            frame, history, alpha, out.get(), counts.get());
+        SDFT_CUDA_CHECK(cudaGetLastError());
+        SDFT_CUDA_CHECK(cudaEventRecord(rays.stop));
+        t.rayMs += rays.elapsedMs();
+        // A single bake is relaxed; accumulated frames are not (rtsdf_bake.cpp says why).
+        if (!history) {
+            cuda::EventTimer relax;
+            SDFT_CUDA_CHECK(cudaEventRecord(relax.start));
+            const int nv[3] = {s.vertices(0), s.vertices(1), s.vertices(2)};
+            for (int axis = 0; axis < 3; ++axis) {
+                const size_t lines = static_cast<size_t>(nv[(axis + 1) % 3]) *
+                                     static_cast<size_t>(nv[(axis + 2) % 3]);
+                relaxKernel<<<blocksFor(lines), kThreads>>>(out.get(), nv[0], nv[1], nv[2], axis,
+                                                            s.voxelSize);
+                SDFT_CUDA_CHECK(cudaGetLastError());
+            }
+            SDFT_CUDA_CHECK(cudaEventRecord(relax.stop));
+            t.relaxMs += relax.elapsedMs();
+        }
+        std::vector<unsigned long long> c;
+        counts.download(c, 2);
+        if (stats) {
+            stats->refined = c[0];
+            stats->rays = c[0] * static_cast<size_t>(o.rays);
+            stats->missed = c[1];
+            stats->coarseSeconds = coarseMs * 1e-3;
+            stats->raySeconds = (t.rayMs + t.relaxMs) * 1e-3;
+        }
+        return out;
+    }
 };
 
 GpuMeshBaker::GpuMeshBaker(const TriangleMesh& mesh) : m_impl(std::make_unique<Impl>()) {
     requireGpu("GPU bake");
-    if (mesh.triangles.size() > static_cast<size_t>(kMaxLbvhTriangles))
-        throw InputError("mesh: too many triangles for the GPU bake's LBVH");
-    Impl& m = *m_impl;
-    m.count = static_cast<int>(mesh.triangles.size());
-    m.positions = cuda::DeviceArray<Vec3>(mesh.positions);
-    std::vector<uint32_t> indices(3 * mesh.triangles.size());
-    for (size_t t = 0; t < mesh.triangles.size(); ++t)
-        for (int v = 0; v < 3; ++v) indices[3 * t + v] = mesh.triangles[t][v];
-    m.triangles = cuda::DeviceArray<uint32_t>(indices);
-    m.lbvh = std::make_unique<cuda::DeviceLbvh>(m.positions.get(), m.triangles.get(), m.count,
-                                                lbvhFrame(mesh));
-    // The winding-number tree is built on the host (a median split, the CPU bake's very tree)
-    // and uploaded: the GPU's signs are the CPU's.
-    const WindingNumber winding(mesh);
-    const WindingView w = winding.view();
-    m.windingBeta = winding.beta();
-    m.windingNodes =
-        cuda::DeviceArray<WindingNode>(std::vector<WindingNode>(w.nodes, w.nodes + w.nodeCount));
-    m.windingCorners = cuda::DeviceArray<float>(
-        std::vector<float>(w.corners, w.corners + 9 * mesh.triangles.size()));
+    m_impl->build(mesh, false);
 }
 
 GpuMeshBaker::~GpuMeshBaker() = default;
@@ -281,73 +361,66 @@ std::vector<float> GpuMeshBaker::jumpFlood(const GridShape& s, JfaVariant varian
 
 std::vector<float> GpuMeshBaker::rtsdf(const GridShape& s, const RtsdfOptions& o, RtsdfStats* stats,
                                        GpuBakeTimes* times) const {
-    const Impl& m = *m_impl;
     const auto start = std::chrono::steady_clock::now();
     GpuBakeTimes local;
     GpuBakeTimes& t = times ? *times : local;
-    const double before = t.kernelMs();
-    // The coarse SDF: jump flooding at half the resolution over the same region.
-    const GridShape coarse = rtsdfCoarseShape(s);
-    cuda::DeviceArray<float> coarseField =
-        m.signedField(coarse, JfaVariant::Plain, o.coarseSign, 0.5f, &t);
-    GridView cv;
-    cv.kind = GridKind::Dense;
-    cv.shape = coarse;
-    cv.samples = coarseField.get();
-    const double coarseMs = t.kernelMs() - before;
-
-    const size_t n = s.vertexCount();
-    cuda::DeviceArray<float> out(n);
-    cuda::DeviceArray<unsigned long long> counts(2);
-    SDFT_CUDA_CHECK(cudaMemset(counts.get(), 0, 2 * sizeof(unsigned long long)));
     RtsdfHistory* h = o.history;
     cuda::DeviceArray<float> history;
     if (h) {
         beginRtsdfFrame(*h, s);
         history = cuda::DeviceArray<float>(h->fine);
     }
-    cuda::EventTimer rays;
-    SDFT_CUDA_CHECK(cudaEventRecord(rays.start));
-    rtsdfFineKernel<<<blocksFor(n), kThreads>>>(
-        s, n, cv, m.lbvh->view(), o.maskVoxels * s.voxelSize, 1e-4f * s.voxelSize, o.rays, o.seed,
-        h ? h->frames : 0, h ? history.get() : nullptr, h ? h->alpha : 0.0f, out.get(),
-        counts.get());
-    SDFT_CUDA_CHECK(cudaGetLastError());
-    SDFT_CUDA_CHECK(cudaEventRecord(rays.stop));
-    t.rayMs += rays.elapsedMs();
-    // A single bake is relaxed; accumulated frames are not (rtsdf_bake.cpp says why).
-    if (!h) {
-        cuda::EventTimer relax;
-        SDFT_CUDA_CHECK(cudaEventRecord(relax.start));
-        const int nv[3] = {s.vertices(0), s.vertices(1), s.vertices(2)};
-        for (int axis = 0; axis < 3; ++axis) {
-            const size_t lines =
-                static_cast<size_t>(nv[(axis + 1) % 3]) * static_cast<size_t>(nv[(axis + 2) % 3]);
-            relaxKernel<<<blocksFor(lines), kThreads>>>(out.get(), nv[0], nv[1], nv[2], axis,
-                                                        s.voxelSize);
-            SDFT_CUDA_CHECK(cudaGetLastError());
-        }
-        SDFT_CUDA_CHECK(cudaEventRecord(relax.stop));
-        t.relaxMs += relax.elapsedMs();
-    }
+    const cuda::DeviceArray<float> out = m_impl->fine(
+        s, o, h ? history.get() : nullptr, h ? h->frames : 0, h ? h->alpha : 0.0f, stats, t);
     std::vector<float> result;
-    out.download(result, n);
+    out.download(result, s.vertexCount());
     if (h) {
-        history.download(h->fine, n);
+        history.download(h->fine, s.vertexCount());
         ++h->frames;
-    }
-    std::vector<unsigned long long> c;
-    counts.download(c, 2);
-    if (stats) {
-        stats->refined = c[0];
-        stats->rays = c[0] * static_cast<size_t>(o.rays);
-        stats->missed = c[1];
-        stats->coarseSeconds = coarseMs * 1e-3;
-        stats->raySeconds = (t.rayMs + t.relaxMs) * 1e-3;
     }
     t.totalMs = since(start);
     return result;
 }
+
+void GpuMeshBaker::pose(const TriangleMesh& mesh, GpuBakeTimes* times) {
+    const auto start = std::chrono::steady_clock::now();
+    Impl& m = *m_impl;
+    const bool sameTriangles =
+        3 * mesh.triangles.size() == m.indices.size() && triangleIndices(mesh) == m.indices;
+    m.build(mesh, sameTriangles);
+    if (times) times->poseMs += since(start);
+}
+
+std::vector<float> GpuMeshBaker::accumulate(const GridShape& s, const RtsdfOptions& o, float alpha,
+                                            const RtsdfHistory* from, RtsdfStats* stats,
+                                            GpuBakeTimes* times) {
+    const auto start = std::chrono::steady_clock::now();
+    Impl& m = *m_impl;
+    GpuBakeTimes local;
+    GpuBakeTimes& t = times ? *times : local;
+    const size_t n = s.vertexCount();
+    if (from && from->frames > 0 && from->fine.size() == n && sameShape(from->shape, s)) {
+        m.accumulation.upload(from->fine);  // the host's f_{t-1}
+        m.accumulated = from->frames;
+        m.accumulatedShape = s;
+    } else if (from || m.accumulated == 0 || !sameShape(m.accumulatedShape, s)) {
+        // Eq. 1's f_{t-1} before the first frame: none anywhere (beginRtsdfFrame's infinities).
+        if (m.accumulation.size() != n) m.accumulation = cuda::DeviceArray<float>(n);
+        fillKernel<<<blocksFor(n), kThreads>>>(m.accumulation.get(), n, INFINITY);
+        SDFT_CUDA_CHECK(cudaGetLastError());
+        m.accumulatedShape = s;
+        m.accumulated = 0;
+    }
+    const cuda::DeviceArray<float> out =
+        m.fine(s, o, m.accumulation.get(), m.accumulated, alpha, stats, t);
+    std::vector<float> result;
+    out.download(result, n);
+    ++m.accumulated;
+    t.totalMs = since(start);
+    return result;
+}
+
+int GpuMeshBaker::accumulatedFrames() const { return m_impl->accumulated; }
 
 SurfaceSeeds GpuMeshBaker::seeds(const GridShape& s) const {
     const size_t n = s.vertexCount();

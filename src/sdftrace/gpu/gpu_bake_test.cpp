@@ -35,6 +35,13 @@ GridShape shapeFor(const TriangleMesh& mesh, int resolution) {
 // Meshes of different kinds: closed (bunny_npm), open with holes (elephant), thin parts (teapot).
 const char* const kMeshes[] = {"bunny_npm.obj", "elephant-with-holes.obj", "teapot.obj"};
 
+// Entries of two fields of one grid further apart than `tolerance`.
+size_t differing(const std::vector<float>& a, const std::vector<float>& b, float tolerance) {
+    size_t n = 0;
+    for (size_t i = 0; i < a.size(); ++i) n += std::fabs(a[i] - b[i]) > tolerance;
+    return n;
+}
+
 #define SKIP_WITHOUT_GPU() \
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why
 
@@ -152,9 +159,7 @@ TEST(GpuBake, JfaFieldMatchesTheCpu) {
         const std::vector<float> gpu =
             baker.jumpFlood(s, JfaVariant::Plain, SignMethod::WindingNumber, 0.5f);
         ASSERT_EQ(gpu.size(), cpu.size());
-        size_t differ = 0;
-        for (size_t i = 0; i < cpu.size(); ++i)
-            differ += std::fabs(cpu[i] - gpu[i]) > 1e-4f * s.voxelSize;
+        const size_t differ = differing(cpu, gpu, 1e-4f * s.voxelSize);
         EXPECT_LE(differ, cpu.size() / 5000) << differ << " of " << cpu.size() << " differ";
     }
 }
@@ -178,9 +183,7 @@ TEST(GpuBake, RtsdfMatchesTheCpuThroughTheSameLbvh) {
         const std::vector<float> gpu = baker.rtsdf(s, o, &gs, &times);
         ASSERT_EQ(gpu.size(), cpu.size());
         EXPECT_NEAR(double(gs.refined), double(cs.refined), 1e-3 * double(cs.refined) + 2);
-        size_t differ = 0;
-        for (size_t i = 0; i < cpu.size(); ++i)
-            differ += std::fabs(cpu[i] - gpu[i]) > 1e-3f * s.voxelSize;
+        const size_t differ = differing(cpu, gpu, 1e-3f * s.voxelSize);
         EXPECT_LE(differ, cpu.size() / 2000) << differ << " of " << cpu.size() << " differ";
         EXPECT_GT(times.rayMs, 0.0);
         std::printf(
@@ -208,10 +211,105 @@ TEST(GpuBake, RtsdfAccumulatesLikeTheCpu) {
         o.history = &gpuHistory;
         const std::vector<float> gpu = baker.rtsdf(s, o);
         EXPECT_EQ(gpuHistory.frames, cpuHistory.frames);
-        size_t differ = 0;
-        for (size_t i = 0; i < cpu.size(); ++i)
-            differ += std::fabs(cpu[i] - gpu[i]) > 1e-3f * s.voxelSize;
+        const size_t differ = differing(cpu, gpu, 1e-3f * s.voxelSize);
         EXPECT_LE(differ, cpu.size() / 2000) << differ << " of " << cpu.size() << " differ";
+    }
+}
+
+// RTSDF's per-frame regeneration with f_{t-1} kept on the device (accumulate) and the mesh posed
+// there (pose), against the CPU's frames with a host history through the same LBVH code: a
+// rigidly moving and a deforming mesh, then a restart that equals a fresh first frame.
+TEST(GpuBake, DeviceAccumulationFollowsAMovingMeshAsTheCpu) {
+    SKIP_WITHOUT_GPU();
+    const TriangleMesh rest = load("bunny_npm.obj");
+    const Bounds3 b = rest.bounds();
+    SampleOptions so;
+    so.resolution = 64;
+    so.kind = GridKind::Dense;
+    const GridShape s = gridShapeFor({b.lo - b.extent() * 0.25f, b.hi + b.extent() * 0.25f}, so);
+    for (const bool deform : {false, true}) {
+        SCOPED_TRACE(deform ? "deforming" : "moving");
+        GpuMeshBaker baker(rest);
+        RtsdfHistory cpuHistory;
+        RtsdfOptions o;
+        o.rays = 2;
+        o.caster = RtsdfCaster::Lbvh;
+        o.history = &cpuHistory;
+        cpuHistory.alpha = 0.9f;
+        for (int frame = 0; frame < 4; ++frame) {
+            SCOPED_TRACE(frame);
+            TriangleMesh mesh = rest;
+            const Vec3 c = b.center();
+            for (Vec3& p : mesh.positions)
+                p = deform ? c + (p - c) * Vec3(1 + 0.04f * frame, 1 - 0.03f * frame, 1)
+                           : p + Vec3(0.7f * frame * s.voxelSize, 0, 0.3f * frame * s.voxelSize);
+            GpuBakeTimes times;
+            if (frame > 0) baker.pose(mesh, &times);
+            const std::vector<float> gpu = baker.accumulate(s, o, 0.9f, nullptr, nullptr, &times);
+            const std::vector<float> cpu = bakeRtsdfSamples(mesh, MeshBvh(mesh), s, o);
+            EXPECT_EQ(baker.accumulatedFrames(), cpuHistory.frames);
+            if (frame > 0) EXPECT_GT(times.poseMs, 0.0);
+            ASSERT_EQ(gpu.size(), cpu.size());
+            const size_t differ = differing(cpu, gpu, 1e-3f * s.voxelSize);
+            EXPECT_LE(differ, cpu.size() / 2000) << differ << " of " << cpu.size() << " differ";
+        }
+        // Starting from an empty host history forgets the frames: a fresh baker's first frame.
+        const RtsdfHistory none{};
+        const std::vector<float> restarted = baker.accumulate(s, o, 0.9f, &none);
+        EXPECT_EQ(baker.accumulatedFrames(), 1);
+        GpuMeshBaker fresh(rest);
+        TriangleMesh last = rest;
+        for (Vec3& p : last.positions)
+            p = deform ? b.center() + (p - b.center()) * Vec3(1.12f, 0.91f, 1)
+                       : p + Vec3(2.1f * s.voxelSize, 0, 0.9f * s.voxelSize);
+        fresh.pose(last);
+        const std::vector<float> first = fresh.accumulate(s, o, 0.9f);
+        const size_t differ = differing(first, restarted, 1e-5f * s.voxelSize);
+        EXPECT_LE(differ, first.size() / 10000) << differ << " of " << first.size() << " differ";
+    }
+}
+
+// bakeMeshGpu's frames of an rtsdf mesh with a history keep the baker and f_{t-1} on the device
+// (RtsdfHistory::device, `fine` empty) and give the CPU bake's grids through the same LBVH code;
+// a frame the CPU bakes in between finds no host f_{t-1}, and the GPU continues from the host's.
+TEST(GpuBake, RtsdfFramesOfBakeMeshGpuStayOnTheDevice) {
+    SKIP_WITHOUT_GPU();
+    const TriangleMesh rest = load("teapot.obj");
+    MeshBakeOptions o;
+    o.method = MeshBakeMethod::Rtsdf;
+    o.sampling.resolution = 48;
+    o.sampling.bandVoxels = 1e6f;
+    o.rtsdf.rays = 3;
+    o.rtsdf.caster = RtsdfCaster::Lbvh;
+    const Bounds3 b = rest.bounds();
+    o.shape = gridShapeFor({b.lo - b.extent() * 0.25f, b.hi + b.extent() * 0.25f}, o.sampling);
+    RtsdfHistory gpuHistory, cpuHistory;
+    gpuHistory.alpha = cpuHistory.alpha = 0.8f;
+    for (int frame = 0; frame < 5; ++frame) {
+        SCOPED_TRACE(frame);
+        TriangleMesh mesh = rest;
+        for (Vec3& p : mesh.positions) p.y += 0.5f * frame * o.shape->voxelSize;
+        o.rtsdf.history = &gpuHistory;
+        if (frame == 2) {
+            // A frame on the CPU finds no host f_{t-1} and starts afresh, as does the CPU's
+            // history here; the GPU's next frame continues from the host's.
+            bakeMesh(mesh, o);
+            EXPECT_EQ(gpuHistory.frames, 1);
+            cpuHistory = RtsdfHistory{0.8f};
+            o.rtsdf.history = &cpuHistory;
+            bakeMesh(mesh, o);
+            continue;
+        }
+        const Grid gpu = bakeMeshGpu(mesh, o).grid;
+        o.rtsdf.history = &cpuHistory;
+        const Grid cpu = bakeMesh(mesh, o).grid;
+        EXPECT_EQ(gpuHistory.frames, cpuHistory.frames);
+        EXPECT_TRUE(gpuHistory.fine.empty());
+        EXPECT_NE(gpuHistory.device, nullptr);
+        const std::vector<float> g = gpu.vertexSamples(), c = cpu.vertexSamples();
+        ASSERT_EQ(g.size(), c.size());
+        const size_t differ = differing(c, g, 1e-3f * o.shape->voxelSize);
+        EXPECT_LE(differ, c.size() / 2000) << differ << " of " << c.size() << " differ";
     }
 }
 

@@ -3,6 +3,8 @@
 // it, GpuMeshBaker answers with gpu_absent.cpp's one line.
 #include <chrono>
 #include <cstdio>
+#include <memory>
+#include <optional>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_bake.h"
@@ -39,23 +41,47 @@ MeshBakeResult bakeMeshGpu(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     const GridShape shape = o.shape ? *o.shape : gridShapeFor(mesh.bounds(), so);
     MeshBakeResult r;
     StageClock clock(r.stages);
-    GpuMeshBaker baker(mesh);
-    clock.mark("upload + lbvh (gpu)");
+    // An rtsdf bake with a history is a frame of RTSDF's per-frame regeneration (§2.5): its baker
+    // and f_{t-1} stay on the device in the history, and the next frame poses the mesh there.
+    // Where the CPU accumulated last (the host holds f_{t-1}), the GPU continues from the host's.
+    RtsdfHistory* h = o.method == MeshBakeMethod::Rtsdf ? o.rtsdf.history : nullptr;
+    const bool onDevice = h && h->device && h->frames > 0 && h->fine.empty();
     GpuBakeTimes t;
+    std::optional<GpuMeshBaker> own;
+    if (h && h->device) {
+        h->device->baker.pose(mesh, &t);
+        clock.mark("pose (gpu)");
+    } else if (h) {
+        h->device = std::make_shared<RtsdfDeviceState>(RtsdfDeviceState{GpuMeshBaker(mesh)});
+        clock.mark("upload + lbvh (gpu)");
+    } else {
+        own.emplace(mesh);
+        clock.mark("upload + lbvh (gpu)");
+    }
+    GpuMeshBaker& baker = h ? h->device->baker : *own;
     std::vector<float> samples;
     if (o.method == MeshBakeMethod::Rtsdf) {
         RtsdfOptions ro = o.rtsdf;
         ro.coarseSign = o.sign;
         RtsdfStats st;
-        samples = baker.rtsdf(shape, ro, &st, &t);
+        if (h) {
+            samples = baker.accumulate(shape, ro, h->alpha, onDevice ? nullptr : h, &st, &t);
+            h->shape = shape;
+            h->fine.clear();
+            h->frames = baker.accumulatedFrames();
+        } else {
+            samples = baker.rtsdf(shape, ro, &st, &t);
+        }
         clock.mark("rtsdf (gpu)");
+        const std::string frame =
+            h ? "; frame " + std::to_string(h->frames) + " accumulated on the GPU" : "";
         char line[400];
         std::snprintf(line, sizeof line,
                       "%zu vertices refined by %d rays each (%zu rays), %zu with no hit; GPU: "
-                      "lbvh %s, seeds %s, jfa %s, signs %s, rays %s, relax %s",
+                      "lbvh %s, seeds %s, jfa %s, signs %s, rays %s, relax %s%s",
                       st.refined, ro.rays, st.rays, st.missed, millis(baker.lbvhBuildMs()).c_str(),
                       millis(t.seedMs).c_str(), millis(t.jfaMs).c_str(), millis(t.signMs).c_str(),
-                      millis(t.rayMs).c_str(), millis(t.relaxMs).c_str());
+                      millis(t.rayMs).c_str(), millis(t.relaxMs).c_str(), frame.c_str());
         r.details = line;
     } else {
         samples = baker.jumpFlood(shape, o.jfaVariant, o.sign, o.betaVoxels, &t);
