@@ -131,46 +131,50 @@ void rtsdfRows(const std::string& name, const TriangleMesh& mesh, const GpuMeshB
 }
 
 // RTSDF §2.5's per-frame regeneration of a moving mesh (fig. 5's teapot on a circle, here each
-// mesh, a tenth of its size per frame around a circle of a quarter of its size) at size M, x = 1:
-// per frame the mesh posed on the device (positions uploaded, LBVH rebuilt there, winding tree
-// on the host) and the field accumulated with f_{t-1} kept on the device (accumulate), beside the
-// same frame with the history copied up and back (rtsdf with a host history).
-void movingRows(const std::string& name, const TriangleMesh& rest, GpuMeshBaker* gpu, int runs) {
-    if (!gpu) {
-        std::printf("| %s | moving, M, x = 1 | - | - | - | - | - |\n", name.c_str());
-        return;
+// mesh, a tenth of a radian per frame around a circle of a quarter of its size) at size M, x = 1:
+// per frame the mesh posed on the device (positions uploaded, LBVH rebuilt there, the winding tree
+// on the host or over the LBVH on the device) and the field accumulated with f_{t-1} kept on the
+// device (accumulate), beside the same frame with the history copied up and back (rtsdf with a
+// host history).
+void movingRows(const std::string& name, const TriangleMesh& rest, bool present, int runs) {
+    for (const GpuWinding winding : {GpuWinding::MedianTree, GpuWinding::Lbvh}) {
+        const char* tree = winding == GpuWinding::Lbvh ? "LBVH dipoles (device)" : "median (host)";
+        if (!present) {
+            std::printf("| %s | moving, M, x = 1 | %s | - | - | - | - | - |\n", name.c_str(), tree);
+            continue;
+        }
+        GpuMeshBaker gpu(rest, winding);
+        const Bounds3 b = rest.bounds();
+        const float radius = 0.25f * maxComponent(b.extent());
+        TriangleMesh span = rest;
+        span.positions = {b.lo - Vec3(radius * 1.2f), b.hi + Vec3(radius * 1.2f)};
+        const GridShape fine = cubeOfVertices(span, 256);
+        RtsdfOptions o;
+        o.rays = 1;
+        RtsdfHistory host;
+        host.alpha = 0.95f;
+        std::vector<double> pose, kernel, device, copied;
+        for (int f = 0; f <= runs; ++f) {
+            const float a = 0.1f * static_cast<float>(f);
+            TriangleMesh mesh = rest;
+            for (Vec3& p : mesh.positions) p += Vec3(radius * std::cos(a), 0, radius * std::sin(a));
+            GpuBakeTimes t;
+            gpu.pose(mesh, &t);
+            gpu.accumulate(fine, o, host.alpha, f == 0 ? &host : nullptr, nullptr, &t);
+            GpuBakeTimes c;
+            o.history = &host;
+            gpu.rtsdf(fine, o, nullptr, &c);
+            o.history = nullptr;
+            if (f == 0) continue;
+            pose.push_back(t.poseMs);
+            kernel.push_back(t.kernelMs());
+            device.push_back(t.totalMs);
+            copied.push_back(c.totalMs);
+        }
+        std::printf("| %s | moving, M, x = 1 | %s | %.3f | %.3f | %.2f | %.2f | %.2f |\n",
+                    name.c_str(), tree, median(pose), median(kernel), median(device),
+                    median(copied), median(pose) + median(device));
     }
-    const Bounds3 b = rest.bounds();
-    const float radius = 0.25f * maxComponent(b.extent());
-    const Bounds3 region{b.lo - Vec3(radius * 1.2f), b.hi + Vec3(radius * 1.2f)};
-    TriangleMesh span = rest;
-    span.positions = {region.lo, region.hi};
-    const GridShape fine = cubeOfVertices(span, 256);
-    RtsdfOptions o;
-    o.rays = 1;
-    RtsdfHistory host;
-    host.alpha = 0.95f;
-    std::vector<double> pose, kernel, device, copied;
-    for (int f = 0; f <= runs; ++f) {
-        const float a = 0.1f * static_cast<float>(f);
-        TriangleMesh mesh = rest;
-        for (Vec3& p : mesh.positions) p += Vec3(radius * std::cos(a), 0, radius * std::sin(a));
-        GpuBakeTimes t;
-        gpu->pose(mesh, &t);
-        gpu->accumulate(fine, o, host.alpha, f == 0 ? &host : nullptr, nullptr, &t);
-        GpuBakeTimes c;
-        o.history = &host;
-        gpu->rtsdf(fine, o, nullptr, &c);
-        o.history = nullptr;
-        if (f == 0) continue;
-        pose.push_back(t.poseMs);
-        kernel.push_back(t.kernelMs());
-        device.push_back(t.totalMs);
-        copied.push_back(c.totalMs);
-    }
-    std::printf("| %s | moving, M, x = 1 | %.3f | %.3f | %.2f | %.2f | %.2f |\n", name.c_str(),
-                median(pose), median(kernel), median(device), median(copied),
-                median(pose) + median(device));
 }
 
 }  // namespace
@@ -206,10 +210,9 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < names.size(); ++i)
         rtsdfRows(names[i], meshes[i], bakers[i].get(), args.runs, args.cpuRuns);
     std::printf(
-        "\n| mesh | frame | pose ms (wall: winding tree, upload, LBVH) | GPU kernels ms | field, "
-        "history on the device, call ms | field, history copied, call ms | pose + field ms |\n"
-        "| --- | --- | --- | --- | --- | --- | --- |\n");
-    for (size_t i = 0; i < names.size(); ++i)
-        movingRows(names[i], meshes[i], bakers[i].get(), args.runs);
+        "\n| mesh | frame | winding tree | pose ms (wall: upload, LBVH, winding tree) | GPU "
+        "kernels ms | field, history on the device, call ms | field, history copied, call ms | "
+        "pose + field ms |\n| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+    for (size_t i = 0; i < names.size(); ++i) movingRows(names[i], meshes[i], present, args.runs);
     return 0;
 }

@@ -54,6 +54,38 @@ struct WindingNode {
     int first = 0, count = 0;  // leaf: triangles [first, first + count) in tree order
 };
 
+// An inner node from its children l and r (at node indices `left`, `right`): moments added, the
+// centroid area-weighted (their midpoint without area), the radius the tighter of the children's
+// spheres and the farthest corner of the box (WindingNumber's median-split tree and LbvhWinding's
+// tree alike).
+SDFT_HOST_DEVICE inline WindingNode windingInner(const WindingNode& l, const WindingNode& r,
+                                                 int left, int right) {
+    WindingNode n;
+    n.left = left;
+    n.right = right;
+    n.first = l.first < r.first ? l.first : r.first;
+    n.count = l.count + r.count;
+    n.lo = min(l.lo, r.lo);
+    n.hi = max(l.hi, r.hi);
+    n.area = l.area + r.area;
+    if (n.area > 0) {
+        n.cx = (l.area * l.cx + r.area * r.cx) / n.area;
+        n.cy = (l.area * l.cy + r.area * r.cy) / n.area;
+        n.cz = (l.area * l.cz + r.area * r.cz) / n.area;
+    } else {
+        n.cx = 0.5 * (l.cx + r.cx), n.cy = 0.5 * (l.cy + r.cy), n.cz = 0.5 * (l.cz + r.cz);
+    }
+    n.nx = l.nx + r.nx, n.ny = l.ny + r.ny, n.nz = l.nz + r.nz;
+    const double ldx = l.cx - n.cx, ldy = l.cy - n.cy, ldz = l.cz - n.cz;
+    const double rdx = r.cx - n.cx, rdy = r.cy - n.cy, rdz = r.cz - n.cz;
+    const double reach = fmax(std::sqrt(ldx * ldx + ldy * ldy + ldz * ldz) + l.radius,
+                              std::sqrt(rdx * rdx + rdy * rdy + rdz * rdz) + r.radius);
+    const double fx = fmax(n.cx - n.lo.x, n.hi.x - n.cx), fy = fmax(n.cy - n.lo.y, n.hi.y - n.cy),
+                 fz = fmax(n.cz - n.lo.z, n.hi.z - n.cz);
+    n.radius = fmin(reach, std::sqrt(fx * fx + fy * fy + fz * fz));
+    return n;
+}
+
 struct WindingView {
     const WindingNode* nodes = nullptr;  // the root first; none for an empty mesh
     int nodeCount = 0;

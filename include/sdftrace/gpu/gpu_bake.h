@@ -14,6 +14,7 @@
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/rtsdf_bake.h"
 #include "sdftrace/bake/sign_method.h"
+#include "sdftrace/bake/winding_view.h"
 
 namespace sdft {
 
@@ -26,16 +27,20 @@ struct GpuBakeTimes {
     double rayMs = 0;            // RTSDF's fine rays (inside the mask)
     double relaxMs = 0;          // RTSDF's Lipschitz relaxation (single bakes)
     double totalMs = 0;          // wall time of the call, uploads and downloads included
-    double poseMs = 0;  // GpuMeshBaker::pose (wall): winding tree on the host, uploads, LBVH
+    double poseMs = 0;           // GpuMeshBaker::pose (wall): uploads, LBVH, winding tree
     double kernelMs() const { return seedMs + jfaMs + signMs + rayMs + relaxMs; }
 };
 
+// Where the winding-number tree of the signs comes from: the CPU bake's median-split tree, built
+// on the host and uploaded (the GPU's signs are the CPU's), or the dipoles over the LBVH, built on
+// the device (bake/winding_lbvh.h: no host work when a mesh is posed every frame).
+enum class GpuWinding { MedianTree, Lbvh };
+
 class GpuMeshBaker {
   public:
-    // Uploads the mesh, builds its LBVH on the device and its winding-number tree on the host
-    // (uploaded). Throws InputError when no GPU can be used, std::runtime_error naming the CUDA
-    // call that failed.
-    explicit GpuMeshBaker(const TriangleMesh& mesh);
+    // Uploads the mesh, builds its LBVH on the device and its winding-number tree. Throws
+    // InputError when no GPU can be used, std::runtime_error naming the CUDA call that failed.
+    explicit GpuMeshBaker(const TriangleMesh& mesh, GpuWinding winding = GpuWinding::MedianTree);
     ~GpuMeshBaker();
     GpuMeshBaker(GpuMeshBaker&&) noexcept;
     GpuMeshBaker& operator=(GpuMeshBaker&&) noexcept;
@@ -53,8 +58,8 @@ class GpuMeshBaker {
 
     // The mesh at this frame's pose (RTSDF §2.5: deforming and moving meshes regenerated every
     // frame). With the triangles of the mesh before, only the positions are uploaded, and the
-    // LBVH (on the device) and the winding-number tree (on the host) are rebuilt; other
-    // triangles are uploaded anew. The accumulation of `accumulate` is kept. Wall ms into
+    // LBVH and the winding-number tree (of the constructor's kind) are rebuilt; other triangles
+    // are uploaded anew. The accumulation of `accumulate` is kept. Wall ms into
     // times->poseMs.
     void pose(const TriangleMesh& mesh, GpuBakeTimes* times = nullptr);
     // RTSDF's per-frame fine field with eq. 1's accumulation (decay `alpha`) kept on the device
@@ -72,6 +77,10 @@ class GpuMeshBaker {
     std::vector<Vec3> jumpFloodPoints(const GridShape& shape, const std::vector<Vec3>& seeds,
                                       JfaVariant variant, GpuBakeTimes* times = nullptr) const;
     std::vector<LbvhHit> firstHits(const std::vector<Ray>& rays, float tnear) const;
+    // The winding-number tree the signs use, copied back: its nodes and corners (9 per triangle
+    // in tree order), for WindingView.
+    std::vector<WindingNode> windingNodes() const;
+    std::vector<float> windingCorners() const;
 
   private:
     struct Impl;

@@ -94,27 +94,7 @@ void WindingNumber::build(int first, int count, int index, const BuildInput& in)
             tbb::parallel_invoke(left, right);
         else
             left(), right();
-        const Node &l = m_nodes[n.left], &r = m_nodes[n.right];
-        n.lo = min(l.lo, r.lo);
-        n.hi = max(l.hi, r.hi);
-        n.area = l.area + r.area;
-        if (n.area > 0) {
-            n.cx = (l.area * l.cx + r.area * r.cx) / n.area;
-            n.cy = (l.area * l.cy + r.area * r.cy) / n.area;
-            n.cz = (l.area * l.cz + r.area * r.cz) / n.area;
-        } else {
-            n.cx = 0.5 * (l.cx + r.cx), n.cy = 0.5 * (l.cy + r.cy), n.cz = 0.5 * (l.cz + r.cz);
-        }
-        n.nx = l.nx + r.nx, n.ny = l.ny + r.ny, n.nz = l.nz + r.nz;
-        auto reach = [&](const Node& c) {
-            const double dx = c.cx - n.cx, dy = c.cy - n.cy, dz = c.cz - n.cz;
-            return std::sqrt(dx * dx + dy * dy + dz * dz) + c.radius;
-        };
-        // The tighter of: the children's spheres, and the farthest corner of the node's box.
-        const double fx = std::max(n.cx - n.lo.x, n.hi.x - n.cx),
-                     fy = std::max(n.cy - n.lo.y, n.hi.y - n.cy),
-                     fz = std::max(n.cz - n.lo.z, n.hi.z - n.cz);
-        n.radius = std::min(std::max(reach(l), reach(r)), std::sqrt(fx * fx + fy * fy + fz * fz));
+        n = windingInner(m_nodes[n.left], m_nodes[n.right], n.left, n.right);
         m_nodes[index] = n;
         return;
     }

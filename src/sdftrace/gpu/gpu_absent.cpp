@@ -59,7 +59,7 @@ RenderStats GpuDirectRenderer::render(const FrameView&, Film&) const {
 
 struct GpuMeshBaker::Impl {};
 
-GpuMeshBaker::GpuMeshBaker(const TriangleMesh&) { requireGpu("GPU bake"); }
+GpuMeshBaker::GpuMeshBaker(const TriangleMesh&, GpuWinding) { requireGpu("GPU bake"); }
 GpuMeshBaker::~GpuMeshBaker() = default;
 GpuMeshBaker::GpuMeshBaker(GpuMeshBaker&&) noexcept = default;
 GpuMeshBaker& GpuMeshBaker::operator=(GpuMeshBaker&&) noexcept = default;
@@ -85,5 +85,7 @@ std::vector<Vec3> GpuMeshBaker::jumpFloodPoints(const GridShape&, const std::vec
     return {};
 }
 std::vector<LbvhHit> GpuMeshBaker::firstHits(const std::vector<Ray>&, float) const { return {}; }
+std::vector<WindingNode> GpuMeshBaker::windingNodes() const { return {}; }
+std::vector<float> GpuMeshBaker::windingCorners() const { return {}; }
 
 }  // namespace sdft

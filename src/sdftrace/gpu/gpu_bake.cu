@@ -8,6 +8,7 @@
 #include "sdftrace/bake/jump_flood_step.h"
 #include "sdftrace/bake/rtsdf_vertex.h"
 #include "sdftrace/bake/surface_seeds.h"
+#include "sdftrace/bake/winding_lbvh.h"
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_bake.h"
@@ -146,6 +147,56 @@ __global__ void fillKernel(float* a, size_t n, float value) {
     if (i < n) a[i] = value;
 }
 
+// The dipole tree over the LBVH (bake/winding_lbvh.h): its leaves and corners in key order, the
+// parents of the radix tree's nodes, then from each leaf up the second thread to reach a node
+// fills it (the LBVH's box pass).
+__global__ void windingLeafKernel(const LbvhTriangle* tris, int n, WindingNode* nodes,
+                                  float* corners) {
+    const int j = blockIdx.x * blockDim.x + threadIdx.x;
+    if (j >= n) return;
+    nodes[n - 1 + j] = windingLeaf(tris[j], j);
+    windingCorners(tris[j], corners + 9 * static_cast<size_t>(j));
+}
+
+__global__ void lbvhParentKernel(const LbvhNode* lbvh, int n, int32_t* parentOfNode,
+                                 int32_t* parentOfLeaf) {
+    const int i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= n - 1) return;
+    const int32_t children[2] = {lbvh[i].left, lbvh[i].right};
+    for (const int32_t child : children) {
+        if (child < 0)
+            parentOfLeaf[~child] = i;
+        else
+            parentOfNode[child] = i;
+    }
+}
+
+// A node read past the L1 cache: another block may have written it.
+__device__ WindingNode loadWindingNode(const WindingNode* p) {
+    static_assert(sizeof(WindingNode) % sizeof(unsigned) == 0);
+    WindingNode n;
+    const unsigned* from = reinterpret_cast<const unsigned*>(p);
+    unsigned* to = reinterpret_cast<unsigned*>(&n);
+    for (size_t k = 0; k < sizeof(WindingNode) / sizeof(unsigned); ++k) to[k] = __ldcg(from + k);
+    return n;
+}
+
+__global__ void windingUpKernel(const LbvhNode* lbvh, int n, const int32_t* parentOfNode,
+                                const int32_t* parentOfLeaf, WindingNode* nodes, int* visits) {
+    const int leaf = blockIdx.x * blockDim.x + threadIdx.x;
+    if (leaf >= n) return;
+    int32_t node = parentOfLeaf[leaf];
+    while (node >= 0) {
+        __threadfence();  // this thread's node (if any) visible before the count
+        if (atomicAdd(visits + node, 1) == 0) return;
+        __threadfence();
+        const int l = windingNodeOfLbvhChild(lbvh[node].left, n),
+                  r = windingNodeOfLbvhChild(lbvh[node].right, n);
+        nodes[node] = windingInner(loadWindingNode(nodes + l), loadWindingNode(nodes + r), l, r);
+        node = parentOfNode[node];
+    }
+}
+
 __global__ void firstHitKernel(LbvhView bvh, const Ray* rays, size_t n, float tnear, LbvhHit* out) {
     const size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i < n) out[i] = lbvhFirstHit(bvh, rays[i], tnear);
@@ -172,6 +223,7 @@ std::vector<uint32_t> triangleIndices(const TriangleMesh& mesh) {
 
 struct GpuMeshBaker::Impl {
     int count = 0;
+    GpuWinding windingSource = GpuWinding::MedianTree;
     std::vector<uint32_t> indices;  // the host's copy of `triangles`, for pose()
     cuda::DeviceArray<Vec3> positions;
     cuda::DeviceArray<uint32_t> triangles;
@@ -185,8 +237,8 @@ struct GpuMeshBaker::Impl {
     int accumulated = 0;
 
     // The mesh on the device: positions, triangles (unless `sameTriangles`), the LBVH built
-    // there, and the winding-number tree built on the host (a median split, the CPU bake's very
-    // tree) and uploaded, so that the GPU's signs are the CPU's.
+    // there, and the winding-number tree: the median split built on the host and uploaded (the
+    // CPU bake's very tree: the GPU's signs are the CPU's), or the dipoles over the LBVH.
     void build(const TriangleMesh& mesh, bool sameTriangles) {
         if (mesh.triangles.size() > static_cast<size_t>(kMaxLbvhTriangles))
             throw InputError("mesh: too many triangles for the GPU bake's LBVH");
@@ -198,11 +250,46 @@ struct GpuMeshBaker::Impl {
         }
         lbvh = std::make_unique<cuda::DeviceLbvh>(positions.get(), triangles.get(), count,
                                                   lbvhFrame(mesh));
+        if (windingSource == GpuWinding::Lbvh) {
+            windingOverLbvh();
+            return;
+        }
         const WindingNumber w(mesh);
         const WindingView v = w.view();
         windingBeta = w.beta();
         windingNodes.upload(std::vector<WindingNode>(v.nodes, v.nodes + v.nodeCount));
         windingCorners.upload(std::vector<float>(v.corners, v.corners + 9 * mesh.triangles.size()));
+    }
+
+    // bake/winding_lbvh.h's tree on the device (WindingNumber's default beta).
+    void windingOverLbvh() {
+        const int n = count;
+        windingBeta = 3.0;
+        if (n == 0) {
+            windingNodes = {};
+            windingCorners = {};
+            return;
+        }
+        if (windingNodes.size() != 2 * static_cast<size_t>(n) - 1)
+            windingNodes = cuda::DeviceArray<WindingNode>(2 * static_cast<size_t>(n) - 1);
+        if (windingCorners.size() != 9 * static_cast<size_t>(n))
+            windingCorners = cuda::DeviceArray<float>(9 * static_cast<size_t>(n));
+        const LbvhView v = lbvh->view();
+        windingLeafKernel<<<blocksFor(n), kThreads>>>(v.triangles, n, windingNodes.get(),
+                                                      windingCorners.get());
+        SDFT_CUDA_CHECK(cudaGetLastError());
+        if (n < 2) return;
+        cuda::DeviceArray<int32_t> parentOfNode(n - 1), parentOfLeaf(n);
+        cuda::DeviceArray<int> visits(n - 1);
+        SDFT_CUDA_CHECK(cudaMemset(parentOfNode.get(), 0xFF, (n - 1) * sizeof(int32_t)));
+        SDFT_CUDA_CHECK(cudaMemset(visits.get(), 0, (n - 1) * sizeof(int)));
+        lbvhParentKernel<<<blocksFor(n - 1), kThreads>>>(v.nodes, n, parentOfNode.get(),
+                                                         parentOfLeaf.get());
+        SDFT_CUDA_CHECK(cudaGetLastError());
+        windingUpKernel<<<blocksFor(n), kThreads>>>(
+            v.nodes, n, parentOfNode.get(), parentOfLeaf.get(), windingNodes.get(), visits.get());
+        SDFT_CUDA_CHECK(cudaGetLastError());
+        SDFT_CUDA_CHECK(cudaDeviceSynchronize());  // before the parents and counts go
     }
 
     WindingView winding() const {
@@ -331,8 +418,10 @@ struct GpuMeshBaker::Impl {
     }
 };
 
-GpuMeshBaker::GpuMeshBaker(const TriangleMesh& mesh) : m_impl(std::make_unique<Impl>()) {
+GpuMeshBaker::GpuMeshBaker(const TriangleMesh& mesh, GpuWinding winding)
+    : m_impl(std::make_unique<Impl>()) {
     requireGpu("GPU bake");
+    m_impl->windingSource = winding;
     m_impl->build(mesh, false);
 }
 
@@ -421,6 +510,18 @@ std::vector<float> GpuMeshBaker::accumulate(const GridShape& s, const RtsdfOptio
 }
 
 int GpuMeshBaker::accumulatedFrames() const { return m_impl->accumulated; }
+
+std::vector<WindingNode> GpuMeshBaker::windingNodes() const {
+    std::vector<WindingNode> out;
+    m_impl->windingNodes.download(out, m_impl->windingNodes.size());
+    return out;
+}
+
+std::vector<float> GpuMeshBaker::windingCorners() const {
+    std::vector<float> out;
+    m_impl->windingCorners.download(out, m_impl->windingCorners.size());
+    return out;
+}
 
 SurfaceSeeds GpuMeshBaker::seeds(const GridShape& s) const {
     const size_t n = s.vertexCount();

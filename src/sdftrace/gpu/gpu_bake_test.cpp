@@ -14,6 +14,8 @@
 #include "sdftrace/bake/mesh_bvh.h"
 #include "sdftrace/bake/seed_signs.h"
 #include "sdftrace/bake/surface_seeds.h"
+#include "sdftrace/bake/winding_lbvh.h"
+#include "sdftrace/bake/winding_number.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/io/mesh_io.h"
@@ -145,23 +147,70 @@ TEST(GpuBake, SeedsAndJumpFloodingMatchTheCpu) {
     }
 }
 
-// The whole jfa bake (seeds, flooding, winding-number signs) against the CPU's pipeline.
-TEST(GpuBake, JfaFieldMatchesTheCpu) {
+// The dipole tree built over the device's LBVH (winding_lbvh.h): the mesh's moments at the root,
+// one triangle per leaf, and on the CPU its winding numbers within the dipoles' bound of the
+// exact sum and its signs the median-split tree's (as LbvhWinding's on the CPU).
+TEST(GpuBake, WindingTreeOverTheLbvhMatchesTheMedianTree) {
     SKIP_WITHOUT_GPU();
     for (const char* name : kMeshes) {
         SCOPED_TRACE(name);
         const TriangleMesh mesh = load(name);
-        const GpuMeshBaker baker(mesh);
-        const GridShape s = shapeFor(mesh, 64);
-        const SurfaceSeeds seeds = seedSurfaceVertices(mesh, s);
-        std::vector<float> cpu = distancesToPoints(s, jumpFlood(s, seeds.point, JfaVariant::Plain));
-        signDistances(cpu, mesh, nullptr, s, seeds, SignMethod::WindingNumber);
-        const std::vector<float> gpu =
-            baker.jumpFlood(s, JfaVariant::Plain, SignMethod::WindingNumber, 0.5f);
-        ASSERT_EQ(gpu.size(), cpu.size());
-        const size_t differ = differing(cpu, gpu, 1e-4f * s.voxelSize);
-        EXPECT_LE(differ, cpu.size() / 5000) << differ << " of " << cpu.size() << " differ";
+        const GpuMeshBaker baker(mesh, GpuWinding::Lbvh);
+        const std::vector<WindingNode> nodes = baker.windingNodes();
+        const std::vector<float> corners = baker.windingCorners();
+        ASSERT_EQ(nodes.size(), 2 * mesh.triangles.size() - 1);
+        ASSERT_EQ(corners.size(), 9 * mesh.triangles.size());
+        const LbvhWinding cpu(Lbvh(mesh).view());
+        const WindingNode &root = nodes[0], &cpuRoot = cpu.nodes()[0];
+        EXPECT_EQ(root.count, static_cast<int>(mesh.triangles.size()));
+        EXPECT_NEAR(root.area, cpuRoot.area, 1e-9 * cpuRoot.area);
+        EXPECT_NEAR(root.nx, cpuRoot.nx, 1e-9 * cpuRoot.area);
+        EXPECT_NEAR(root.ny, cpuRoot.ny, 1e-9 * cpuRoot.area);
+        EXPECT_NEAR(root.nz, cpuRoot.nz, 1e-9 * cpuRoot.area);
+        for (size_t j = mesh.triangles.size() - 1; j < nodes.size(); ++j)
+            ASSERT_EQ(nodes[j].count, 1);
+        const WindingView gpu{nodes.data(), static_cast<int>(nodes.size()), corners.data()};
+        const WindingNumber median(mesh);
+        const Bounds3 b = mesh.bounds().expanded(0.1f * maxComponent(mesh.bounds().extent()));
+        const int n = 20;
+        int differ = 0;
+        double worst = 0;
+        for (int k = 0; k <= n; ++k)
+            for (int j = 0; j <= n; ++j)
+                for (int i = 0; i <= n; ++i) {
+                    const Vec3 p = b.lo + b.extent() * Vec3(i, j, k) / static_cast<float>(n);
+                    differ += windingInside(gpu, p, median.beta()) != median.inside(p);
+                    if ((i + j + k) % 7 == 0)
+                        worst = std::fmax(
+                            worst,
+                            std::fabs(windingNumberFast(gpu, p, median.beta()) - median.exact(p)));
+                }
+        EXPECT_LT(worst, 0.03);
+        EXPECT_LE(differ, (n + 1) * (n + 1) * (n + 1) / 2000) << differ << " signs differ";
     }
+}
+
+// The whole jfa bake (seeds, flooding, winding-number signs) against the CPU's pipeline, with
+// either winding tree on the device.
+TEST(GpuBake, JfaFieldMatchesTheCpu) {
+    SKIP_WITHOUT_GPU();
+    for (const char* name : kMeshes)
+        for (const GpuWinding winding : {GpuWinding::MedianTree, GpuWinding::Lbvh}) {
+            SCOPED_TRACE(name);
+            SCOPED_TRACE(winding == GpuWinding::Lbvh ? "lbvh dipoles" : "median tree");
+            const TriangleMesh mesh = load(name);
+            const GpuMeshBaker baker(mesh, winding);
+            const GridShape s = shapeFor(mesh, 64);
+            const SurfaceSeeds seeds = seedSurfaceVertices(mesh, s);
+            std::vector<float> cpu =
+                distancesToPoints(s, jumpFlood(s, seeds.point, JfaVariant::Plain));
+            signDistances(cpu, mesh, nullptr, s, seeds, SignMethod::WindingNumber);
+            const std::vector<float> gpu =
+                baker.jumpFlood(s, JfaVariant::Plain, SignMethod::WindingNumber, 0.5f);
+            ASSERT_EQ(gpu.size(), cpu.size());
+            const size_t differ = differing(cpu, gpu, 1e-4f * s.voxelSize);
+            EXPECT_LE(differ, cpu.size() / 5000) << differ << " of " << cpu.size() << " differ";
+        }
 }
 
 // RTSDF's fine field on the GPU against the CPU bake with its rays through the same LBVH code:
@@ -229,7 +278,8 @@ TEST(GpuBake, DeviceAccumulationFollowsAMovingMeshAsTheCpu) {
     const GridShape s = gridShapeFor({b.lo - b.extent() * 0.25f, b.hi + b.extent() * 0.25f}, so);
     for (const bool deform : {false, true}) {
         SCOPED_TRACE(deform ? "deforming" : "moving");
-        GpuMeshBaker baker(rest);
+        // The deforming mesh as bakeMeshGpu poses it: dipoles over the LBVH on the device.
+        GpuMeshBaker baker(rest, deform ? GpuWinding::Lbvh : GpuWinding::MedianTree);
         RtsdfHistory cpuHistory;
         RtsdfOptions o;
         o.rays = 2;
@@ -257,7 +307,7 @@ TEST(GpuBake, DeviceAccumulationFollowsAMovingMeshAsTheCpu) {
         const RtsdfHistory none{};
         const std::vector<float> restarted = baker.accumulate(s, o, 0.9f, &none);
         EXPECT_EQ(baker.accumulatedFrames(), 1);
-        GpuMeshBaker fresh(rest);
+        GpuMeshBaker fresh(rest, deform ? GpuWinding::Lbvh : GpuWinding::MedianTree);
         TriangleMesh last = rest;
         for (Vec3& p : last.positions)
             p = deform ? b.center() + (p - b.center()) * Vec3(1.12f, 0.91f, 1)

@@ -52,7 +52,9 @@ MeshBakeResult bakeMeshGpu(const TriangleMesh& mesh, const MeshBakeOptions& o) {
         h->device->baker.pose(mesh, &t);
         clock.mark("pose (gpu)");
     } else if (h) {
-        h->device = std::make_shared<RtsdfDeviceState>(RtsdfDeviceState{GpuMeshBaker(mesh)});
+        // Signs by the dipoles over the LBVH: no host work when the mesh is posed.
+        h->device = std::make_shared<RtsdfDeviceState>(
+            RtsdfDeviceState{GpuMeshBaker(mesh, GpuWinding::Lbvh)});
         clock.mark("upload + lbvh (gpu)");
     } else {
         own.emplace(mesh);
