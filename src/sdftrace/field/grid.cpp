@@ -49,38 +49,64 @@ Grid Grid::sparseFromDense(const GridShape& shape, const std::vector<float>& sam
     for (int a = 0; a < 3; ++a) blocks[a] = (shape.cells[a] + B - 1) / B;
     const float band = bandVoxels * shape.voxelSize;
     const size_t numBlocks = static_cast<size_t>(blocks[0]) * blocks[1] * blocks[2];
-    std::vector<uint8_t> flags(numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
-    std::vector<float> blockSamples;
     const int V = B + 1;
-    GridView dense;
-    dense.kind = GridKind::Dense;
-    dense.shape = shape;
-    dense.samples = samples.data();
-    std::vector<float> local(static_cast<size_t>(V) * V * V);
-    for (int bk = 0; bk < blocks[2]; ++bk)
-        for (int bj = 0; bj < blocks[1]; ++bj)
-            for (int bi = 0; bi < blocks[0]; ++bi) {
-                bool anyNeg = false, anyPos = false, near = false;
-                for (int k = 0; k < V; ++k)
-                    for (int j = 0; j < V; ++j)
-                        for (int i = 0; i < V; ++i) {
-                            float v = dense.vertex(bi * B + i, bj * B + j, bk * B + k);
-                            // Clamped to the band, as a narrow-band level set stores them.
-                            v = v < 0 ? -std::fmin(-v, band) : std::fmin(v, band);
-                            local[(static_cast<size_t>(k) * V + j) * V + i] = v;
-                            anyNeg |= v < 0;
-                            anyPos |= v >= 0;
-                            near |= std::fabs(v) < band;
-                        }
-                size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
-                if (near || (anyNeg && anyPos)) {
-                    flags[block] = static_cast<uint8_t>(BlockFlag::Surface);
-                    blockSamples.insert(blockSamples.end(), local.begin(), local.end());
-                } else {
-                    flags[block] =
-                        static_cast<uint8_t>(anyNeg ? BlockFlag::Inside : BlockFlag::Outside);
-                }
+    const size_t per = static_cast<size_t>(V) * V * V;
+    const size_t vx = static_cast<size_t>(shape.cells[0]) + 1,
+                 vy = static_cast<size_t>(shape.cells[1]) + 1;
+    // Block (bi, bj, bk)'s (B+1)^3 vertex indices into `samples`, clamped to the grid (blocks at
+    // the far faces reach past it) as GridView::vertex clamps.
+    auto blockIndices = [&](int bi, int bj, int bk, size_t* out) {
+        int c[3][9];
+        const int b[3] = {bi, bj, bk};
+        for (int a = 0; a < 3; ++a)
+            for (int i = 0; i < V; ++i) c[a][i] = std::min(b[a] * B + i, shape.cells[a]);
+        for (int k = 0; k < V; ++k)
+            for (int j = 0; j < V; ++j)
+                for (int i = 0; i < V; ++i)
+                    *out++ =
+                        (static_cast<size_t>(c[2][k]) * vy + static_cast<size_t>(c[1][j])) * vx +
+                        static_cast<size_t>(c[0][i]);
+    };
+    // Clamped to the band, as a narrow-band level set stores them.
+    auto clamped = [band](float v) { return v < 0 ? -std::fmin(-v, band) : std::fmin(v, band); };
+    // Each block's flag, in parallel over rows of blocks; a block is a surface block at its first
+    // sample within the band (RTSDF's per-frame grids keep every block: one read each).
+    std::vector<uint8_t> flags(numBlocks, static_cast<uint8_t>(BlockFlag::Outside));
+    tbb::parallel_for(0, blocks[1] * blocks[2], [&](int row) {
+        const int bj = row % blocks[1], bk = row / blocks[1];
+        std::vector<size_t> index(per);
+        for (int bi = 0; bi < blocks[0]; ++bi) {
+            blockIndices(bi, bj, bk, index.data());
+            bool anyNeg = false, anyPos = false, near = false;
+            for (size_t e = 0; e < per && !near; ++e) {
+                const float v = clamped(samples[index[e]]);
+                anyNeg |= v < 0;
+                anyPos |= v >= 0;
+                near |= std::fabs(v) < band;
             }
+            const size_t block = (static_cast<size_t>(bk) * blocks[1] + bj) * blocks[0] + bi;
+            flags[block] = static_cast<uint8_t>(near || (anyNeg && anyPos) ? BlockFlag::Surface
+                                                : anyNeg                   ? BlockFlag::Inside
+                                                                           : BlockFlag::Outside);
+        }
+    });
+    // The surface blocks' samples in block order, copied in parallel.
+    std::vector<size_t> surface;
+    for (size_t b = 0; b < numBlocks; ++b)
+        if (flags[b] == static_cast<uint8_t>(BlockFlag::Surface)) surface.push_back(b);
+    std::vector<float> blockSamples(surface.size() * per);
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, surface.size()), [&](const tbb::blocked_range<size_t>& r) {
+            std::vector<size_t> index(per);
+            for (size_t d = r.begin(); d != r.end(); ++d) {
+                const size_t block = surface[d];
+                blockIndices(static_cast<int>(block % blocks[0]),
+                             static_cast<int>(block / blocks[0] % blocks[1]),
+                             static_cast<int>(block / blocks[0] / blocks[1]), index.data());
+                float* out = blockSamples.data() + d * per;
+                for (size_t e = 0; e < per; ++e) out[e] = clamped(samples[index[e]]);
+            }
+        });
     // Samples of non-surface blocks are all at least band voxels from the surface; a point in such
     // a block is within half a cell diagonal (< 1 voxel) of one, so (band - 1) voxels is a lower
     // bound of its distance.
