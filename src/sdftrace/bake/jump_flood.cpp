@@ -22,6 +22,63 @@ std::vector<int> jumpFloodOffsets(const GridShape& s, JfaVariant variant) {
     return offsets;
 }
 
+namespace {
+
+// Scratch of one row: the best point's coordinates and squared distance per vertex.
+struct RowScratch {
+    std::vector<float> x, y, z, d;
+    explicit RowScratch(int n) : x(n), y(n), z(n), d(n) {}
+};
+
+// jumpFloodVertex for a whole row of vertices (j, k) at once, the CPU's sweep: each neighbour row
+// in jumpFloodVertex's order (z, y, x ascending) is offered to every vertex of the row, so that
+// each vertex sees its candidates in the same order and keeps the same one (strictly nearer
+// wins). The bounds are tested once per row, and the inner loop is branch-free over the row's
+// scratch (a point-less neighbour, x = kNoSeed, is at an infinite squared distance and never
+// wins), so that it vectorizes.
+void jumpFloodRow(const GridShape& s, const Vec3* seed, int j, int k, int offset, Vec3* out,
+                  RowScratch& r) {
+    const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
+    const Vec3 row = vertexPosition(s, 0, j, k);
+    const float h = s.voxelSize;
+    const Vec3* own = seed + vertexIndex(s, 0, j, k);
+    float *bx = r.x.data(), *by = r.y.data(), *bz = r.z.data(), *bd = r.d.data();
+    for (int i = 0; i < vx; ++i) {
+        const Vec3 p(row.x + static_cast<float>(i) * h, row.y, row.z);
+        bx[i] = own[i].x, by[i] = own[i].y, bz[i] = own[i].z;
+        bd[i] = own[i].x == kNoSeed ? kNoSeed : dot(p - own[i], p - own[i]);
+    }
+    for (int dk = -offset; dk <= offset; dk += offset) {
+        const int kk = k + dk;
+        if (kk < 0 || kk >= vz) continue;
+        for (int dj = -offset; dj <= offset; dj += offset) {
+            const int jj = j + dj;
+            if (jj < 0 || jj >= vy) continue;
+            const float* other = &seed[vertexIndex(s, 0, jj, kk)].x;
+            for (int di = -offset; di <= offset; di += offset) {
+                // The vertices whose neighbour i + di lies in the row.
+                const int lo = std::max(0, -di), hi = std::min(vx, vx - di);
+                const float* q = other + 3 * di;
+#pragma omp simd
+                for (int i = lo; i < hi; ++i) {
+                    const float qx = q[3 * i], qy = q[3 * i + 1], qz = q[3 * i + 2];
+                    const float dx = row.x + static_cast<float>(i) * h - qx, dy = row.y - qy,
+                                dz = row.z - qz;
+                    const float d = dx * dx + dy * dy + dz * dz;
+                    const bool nearer = d < bd[i];
+                    bd[i] = nearer ? d : bd[i];
+                    bx[i] = nearer ? qx : bx[i];
+                    by[i] = nearer ? qy : by[i];
+                    bz[i] = nearer ? qz : bz[i];
+                }
+            }
+        }
+    }
+    for (int i = 0; i < vx; ++i) out[i] = Vec3(bx[i], by[i], bz[i]);
+}
+
+}  // namespace
+
 std::vector<Vec3> jumpFlood(const GridShape& s, std::vector<Vec3> seed, JfaVariant variant,
                             int threads, JfaStats* stats) {
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
@@ -33,10 +90,10 @@ std::vector<Vec3> jumpFlood(const GridShape& s, std::vector<Vec3> seed, JfaVaria
         auto start = std::chrono::steady_clock::now();
         arena.execute([&] {
             tbb::parallel_for(0, vz, [&](int k) {
+                RowScratch scratch(vx);
                 for (int j = 0; j < vy; ++j)
-                    for (int i = 0; i < vx; ++i)
-                        next[vertexIndex(s, i, j, k)] =
-                            jumpFloodVertex(s, seed.data(), i, j, k, off);
+                    jumpFloodRow(s, seed.data(), j, k, off, next.data() + vertexIndex(s, 0, j, k),
+                                 scratch);
             });
         });
         seed.swap(next);
