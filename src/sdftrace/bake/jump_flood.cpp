@@ -3,10 +3,14 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
+#include <cstdint>
 
 #include "sdftrace/bake/jump_flood_step.h"
+#include "sdftrace/core/macros.h"
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/exec/simd.h"
 #include "sdftrace/exec/thread_arena.h"
 
 namespace sdft {
@@ -30,14 +34,20 @@ struct RowScratch {
     explicit RowScratch(int n) : x(n), y(n), z(n), d(n) {}
 };
 
+// a where the mask m is all ones, else b.
+inline float blend(uint32_t m, float a, float b) {
+    return std::bit_cast<float>((std::bit_cast<uint32_t>(a) & m) |
+                                (std::bit_cast<uint32_t>(b) & ~m));
+}
+
 // jumpFloodVertex for a whole row of vertices (j, k) at once, the CPU's sweep: each neighbour row
 // in jumpFloodVertex's order (z, y, x ascending) is offered to every vertex of the row, so that
 // each vertex sees its candidates in the same order and keeps the same one (strictly nearer
 // wins). The bounds are tested once per row, and the inner loop is branch-free over the row's
 // scratch (a point-less neighbour, x = kNoSeed, is at an infinite squared distance and never
 // wins), so that it vectorizes.
-void jumpFloodRow(const GridShape& s, const Vec3* seed, int j, int k, int offset, Vec3* out,
-                  RowScratch& r) {
+inline void jumpFloodRow(const GridShape& s, const Vec3* seed, int j, int k, int offset, Vec3* out,
+                         RowScratch& r) {
     const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
     const Vec3 row = vertexPosition(s, 0, j, k);
     const float h = s.voxelSize;
@@ -65,16 +75,28 @@ void jumpFloodRow(const GridShape& s, const Vec3* seed, int j, int k, int offset
                     const float dx = row.x + static_cast<float>(i) * h - qx, dy = row.y - qy,
                                 dz = row.z - qz;
                     const float d = dx * dx + dy * dy + dz * dz;
-                    const bool nearer = d < bd[i];
-                    bd[i] = nearer ? d : bd[i];
-                    bx[i] = nearer ? qx : bx[i];
-                    by[i] = nearer ? qy : by[i];
-                    bz[i] = nearer ? qz : bz[i];
+                    // Selected by a bit mask: GCC's if-conversion leaves ?: as branches here.
+                    const uint32_t m = 0u - static_cast<uint32_t>(d < bd[i]);
+                    bd[i] = blend(m, d, bd[i]);
+                    bx[i] = blend(m, qx, bx[i]);
+                    by[i] = blend(m, qy, by[i]);
+                    bz[i] = blend(m, qz, bz[i]);
                 }
             }
         }
     }
     for (int i = 0; i < vx; ++i) out[i] = Vec3(bx[i], by[i], bz[i]);
+}
+
+// The row built for AVX2 and for the baseline (core/macros.h); exec/simd.h picks. AVX2 loads the
+// interleaved points 8 at a time, SSE2 2 at a time; both round alike.
+SDFT_TARGET_AVX2 void jumpFloodRowAvx2(const GridShape& s, const Vec3* seed, int j, int k,
+                                       int offset, Vec3* out, RowScratch& r) {
+    jumpFloodRow(s, seed, j, k, offset, out, r);
+}
+SDFT_TARGET_BASELINE void jumpFloodRowBaseline(const GridShape& s, const Vec3* seed, int j, int k,
+                                               int offset, Vec3* out, RowScratch& r) {
+    jumpFloodRow(s, seed, j, k, offset, out, r);
 }
 
 }  // namespace
@@ -91,9 +113,9 @@ std::vector<Vec3> jumpFlood(const GridShape& s, std::vector<Vec3> seed, JfaVaria
         arena.execute([&] {
             tbb::parallel_for(0, vz, [&](int k) {
                 RowScratch scratch(vx);
+                const auto row = useAvx2() ? jumpFloodRowAvx2 : jumpFloodRowBaseline;
                 for (int j = 0; j < vy; ++j)
-                    jumpFloodRow(s, seed.data(), j, k, off, next.data() + vertexIndex(s, 0, j, k),
-                                 scratch);
+                    row(s, seed.data(), j, k, off, next.data() + vertexIndex(s, 0, j, k), scratch);
             });
         });
         seed.swap(next);

@@ -1,5 +1,5 @@
-// The CPU's jump flooding sweeps rows (jump_flood.cpp) where the GPU runs jumpFloodVertex per
-// vertex (jump_flood_step.h): the two must keep the same points, ties included.
+// The CPU's jump flooding sweeps rows (jump_flood.cpp, built for SSE2 and AVX2) where the GPU runs
+// jumpFloodVertex per vertex (jump_flood_step.h): they must keep the same points, ties included.
 #include "sdftrace/bake/jump_flood.h"
 
 #include <gtest/gtest.h>
@@ -8,6 +8,7 @@
 #include <random>
 
 #include "sdftrace/bake/jump_flood_step.h"
+#include "sdftrace/exec/simd.h"
 
 namespace sdft {
 namespace {
@@ -44,13 +45,20 @@ TEST(JumpFlood, RowSweepKeepsThePerVertexStepsPoints) {
                         seed[vertexIndex(s, i, j, k)] =
                             lattice ? p : p + Vec3(u(rng), u(rng), u(rng)) * 0.05f;
                 }
-        for (JfaVariant v : {JfaVariant::Plain, JfaVariant::OnePlusJfa, JfaVariant::JfaPlusTwo}) {
-            const std::vector<Vec3> rows = jumpFlood(s, seed, v), ref = perVertex(s, seed, v);
-            ASSERT_EQ(rows.size(), ref.size());
-            ASSERT_EQ(std::memcmp(rows.data(), ref.data(), ref.size() * sizeof(Vec3)), 0)
-                << (lattice ? "lattice" : "random") << ", variant " << static_cast<int>(v);
-            EXPECT_NE(rows[0].x, kNoSeed);  // flooded everywhere
+        const SimdLevel level = simdLevel();
+        for (const SimdLevel simd : {SimdLevel::Baseline, SimdLevel::Avx2}) {
+            setSimdLevel(simd);  // the AVX2 row where the CPU has it
+            for (JfaVariant v :
+                 {JfaVariant::Plain, JfaVariant::OnePlusJfa, JfaVariant::JfaPlusTwo}) {
+                const std::vector<Vec3> rows = jumpFlood(s, seed, v), ref = perVertex(s, seed, v);
+                ASSERT_EQ(rows.size(), ref.size());
+                EXPECT_EQ(std::memcmp(rows.data(), ref.data(), ref.size() * sizeof(Vec3)), 0)
+                    << (lattice ? "lattice" : "random") << ", variant " << static_cast<int>(v)
+                    << ", " << simdLevelName(simdLevel());
+                EXPECT_NE(rows[0].x, kNoSeed);  // flooded everywhere
+            }
         }
+        setSimdLevel(level);
     }
 }
 
