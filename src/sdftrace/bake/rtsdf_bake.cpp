@@ -66,8 +66,12 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
     std::vector<float> coarseSamples = distancesToPoints(
         coarse, jumpFlood(coarse, seeds.point, JfaVariant::Plain, threads), threads);
     signDistances(coarseSamples, mesh, &bvh, coarse, seeds, o.coarseSign, 0.5f, threads);
-    Grid coarseGrid = Grid::dense(coarse, std::move(coarseSamples));
-    GridView cv = coarseGrid.view();
+    // Read by trilinear interpolation only: a view, no Grid (whose Lipschitz scan of every cell
+    // nothing here reads).
+    GridView cv;
+    cv.kind = GridKind::Dense;
+    cv.shape = coarse;
+    cv.samples = coarseSamples.data();
     double coarseSeconds = since(start);
 
     // The fine SDF: rays from the vertices inside the mask.
