@@ -11,6 +11,7 @@
 #include "sdftrace/bake/lbvh.h"
 #include "sdftrace/bake/rtsdf_vertex.h"
 #include "sdftrace/bake/seed_signs.h"
+#include "sdftrace/core/macros.h"
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/exec/thread_arena.h"
 
@@ -42,7 +43,37 @@ double since(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
+inline void interpolateRow(const GridView& cv, const GridShape& s, int j, int k, float* out) {
+    const Vec3 row = vertexPosition(s, 0, j, k);
+    const GridShape& c = cv.shape;
+    // GridView::locate's arithmetic: (p - origin) * (1 / voxel), clamped to the grid.
+    const float inv = 1.0f / c.voxelSize;
+    const float fy = clampf((row.y - c.origin.y) * inv, 0.0f, static_cast<float>(c.cells[1]));
+    const float fz = clampf((row.z - c.origin.z) * inv, 0.0f, static_cast<float>(c.cells[2]));
+    const int cj = clampi(static_cast<int>(fy), 0, c.cells[1] - 1);
+    const int ck = clampi(static_cast<int>(fz), 0, c.cells[2] - 1);
+    const float v = fy - cj, w = fz - ck;
+    const size_t sy = static_cast<size_t>(c.cells[0]) + 1, sz = sy * (c.cells[1] + 1);
+    const float* r00 = cv.samples + static_cast<size_t>(ck) * sz + static_cast<size_t>(cj) * sy;
+    const float *r10 = r00 + sy, *r01 = r00 + sz, *r11 = r00 + sz + sy;
+    const float nx = static_cast<float>(c.cells[0]);
+    const int n = s.vertices(0);
+    for (int i = 0; i < n; ++i) {
+        const float fx =
+            clampf((row.x + static_cast<float>(i) * s.voxelSize - c.origin.x) * inv, 0.0f, nx);
+        const int ci = clampi(static_cast<int>(fx), 0, c.cells[0] - 1);
+        const float corners[8] = {r00[ci], r00[ci + 1], r10[ci], r10[ci + 1],
+                                  r01[ci], r01[ci + 1], r11[ci], r11[ci + 1]};
+        out[i] = trilinear(corners, fx - ci, v, w);
+    }
+}
+
 }  // namespace
+
+void interpolateDenseRow(const GridView& coarse, const GridShape& fine, int j, int k, float* out) {
+    SDFT_CHECK(coarse.kind == GridKind::Dense);
+    interpolateRow(coarse, fine, j, k, out);
+}
 
 void beginRtsdfFrame(RtsdfHistory& h, const GridShape& s) {
     const bool carried = h.frames > 0 && h.fine.size() == s.vertexCount() &&
@@ -98,12 +129,13 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
     arena.execute([&] {
         tbb::parallel_for(0, vz, [&](int k) {
             size_t localRefined = 0, localMissed = 0;
-            for (int j = 0; j < vy; ++j)
+            for (int j = 0; j < vy; ++j) {
+                float* row = out.data() + vertexIndex(s, 0, j, k);
+                interpolateDenseRow(cv, s, j, k, row);  // the coarse value everywhere
                 for (int i = 0; i < vx; ++i) {
                     const size_t idx = vertexIndex(s, i, j, k);
                     const Vec3 p = vertexPosition(s, i, j, k);
-                    const float c = cv.interpolate(p);
-                    out[idx] = c;
+                    const float c = row[i];
                     if (std::fabs(c) > mask) {
                         // eq. 1, c_t > d: the coarse value, the history forgotten
                         if (h) h->fine[idx] = INFINITY;
@@ -115,6 +147,7 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
                     out[idx] = h ? rtsdfAccumulate(h->fine[idx], h->alpha, c, rays, s.voxelSize)
                                  : rtsdfSingleValue(c, rays);
                 }
+            }
             refined += localRefined;
             missed += localMissed;
         });

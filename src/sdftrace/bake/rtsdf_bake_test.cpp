@@ -5,7 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <random>
 
+#include "sdftrace/bake/jump_flood_step.h"
+#include "sdftrace/bake/rtsdf_vertex.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/io/mesh_io.h"
 #include "test_meshes.h"
@@ -63,6 +67,41 @@ GridShape shape() {
     SampleOptions o;
     o.resolution = 40;
     return gridShapeFor({Vec3(-1.2f), Vec3(1.2f)}, o);
+}
+
+// The fine pass reads the coarse field a row at a time (interpolateDenseRow): GridView::interpolate
+// at every vertex bit for bit, on RTSDF's half-resolution grid (odd and even cell counts) and on a
+// grid reaching past the coarse one on every side (clamped lookups).
+TEST(RtsdfBake, CoarseRowsInterpolateAsTheGridView) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-1, 1);
+    GridShape fine;
+    fine.cells[0] = 37, fine.cells[1] = 20, fine.cells[2] = 15;
+    fine.voxelSize = 0.07f;
+    fine.origin = Vec3(-1.1f, 0.3f, 2.0f);
+    GridShape beyond = fine;  // reaches past the coarse grid on every side
+    beyond.origin = fine.origin - Vec3(0.5f);
+    for (int a = 0; a < 3; ++a) beyond.cells[a] += 16;
+    const GridShape coarse = rtsdfCoarseShape(fine);
+    std::vector<float> samples(coarse.vertexCount());
+    for (float& v : samples) v = u(rng);
+    GridView cv;
+    cv.kind = GridKind::Dense;
+    cv.shape = coarse;
+    cv.samples = samples.data();
+    for (const GridShape& s : {fine, beyond}) {
+        std::vector<float> row(static_cast<size_t>(s.vertices(0)));
+        int differ = 0;
+        for (int k = 0; k < s.vertices(2); ++k)
+            for (int j = 0; j < s.vertices(1); ++j) {
+                interpolateDenseRow(cv, s, j, k, row.data());
+                for (int i = 0; i < s.vertices(0); ++i) {
+                    const float ref = cv.interpolate(vertexPosition(s, i, j, k));
+                    differ += std::memcmp(&ref, &row[static_cast<size_t>(i)], 4) != 0;
+                }
+            }
+        EXPECT_EQ(differ, 0);
+    }
 }
 
 // A single bake is relaxed to 1-Lipschitz along the axes: same-sign neighbours differ by at most
