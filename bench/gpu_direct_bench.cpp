@@ -1,6 +1,7 @@
 // Direct lighting on the GPU against the CPU renderer on the same machine (issue 14, docs/gpu.md):
 // whole frames as `sdftrace render --device cuda` and `--device cpu` render them (primary rays,
-// normals, materials, each light's shadows, AO where asked), at 1280x720. The GPU runs
+// normals, materials, each light's shadows, AO where asked), at 1280x720 (RTSDF's frame at
+// 1920x1080). The GPU runs
 // shadeDirectPixel one thread per pixel (gpu/gpu_render.h); the CPU the tile renderer on every
 // hardware thread. Each case: a scene and a shadow method; evaluations per pixel count every
 // field evaluation of the frame. Medians of --runs (GPU, after one untimed warm-up) and
@@ -38,12 +39,27 @@ struct Case {
     const char* shadows;
 };
 
-constexpr Case kCases[] = {
-    {"city", "hard"},         {"city", "soft"},           {"demo", "hard"},
-    {"shadows", "soft"},      {"shadows", "distributed"}, {"many_blend", "ao"},
-    {"rock", "hard"},         {"jewel", "hard"},          {"jewel", "whitted"},
-    {"glass_shapes", "hard"}, {"jewel", "path"},          {"path", "path"},
-    {"textures", "soft"},     {"projected", "soft"},      {"hybrid", "triangles"}};
+constexpr Case kCases[] = {{"city", "hard"},           {"city", "soft"},
+                           {"demo", "hard"},           {"shadows", "soft"},
+                           {"shadows", "distributed"}, {"many_blend", "ao"},
+                           {"rock", "hard"},           {"jewel", "hard"},
+                           {"jewel", "whitted"},       {"glass_shapes", "hard"},
+                           {"jewel", "path"},          {"path", "path"},
+                           {"textures", "soft"},       {"projected", "soft"},
+                           {"hybrid", "triangles"},    {"rtsdf_frame", "triangles"}};
+
+// RTSDF's frame (Tan et al. 2022, Table 1; issue 16's target): a moving mesh regenerated at size
+// M (the teapot's fine grid 256 cells, x = 1), a floor, one sun, primary rays on the triangles and
+// soft shadows marched in the SDF, at 1920x1080. This bench times its shading; the per-frame
+// field (pose, coarse and fine passes) is gpu_bake_bench's "moving" rows.
+constexpr const char* kRtsdfFrame = R"({
+  "camera": {"eye": [0.2, 0.9, 2.2], "target": [0, 0.35, 0], "fov": 30, "width": 1920, "height": 1080},
+  "lights": [{"type": "directional", "direction": [-0.4, -1, -0.5], "intensity": 2, "angle": 2}],
+  "objects": [
+    {"type": "box", "size": [4, 0.1, 4], "translate": [0, -0.05, 0]},
+    {"mesh": "../data/meshes/teapot.obj", "resolution": 256, "scale": 0.15,
+     "dynamic": {"method": "rtsdf", "rays": 1}}],
+  "render": {"shadow_method": "soft", "primary_triangles": true}})";
 
 // Keinert's jewel scene: its gems as absorbing dielectrics (diamond's and ruby's indices).
 void makeGemsGlass(Scene& scene) {
@@ -71,10 +87,14 @@ int main(int argc, char** argv) {
         "CPU ms | CPU / GPU kernel |\n| --- | --- | --- | --- | --- | --- | --- |\n");
     for (const Case& c : kCases) {
         try {
-            Scene scene =
-                parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/" + c.scene + ".json");
-            scene.camera.width = 1280;
-            scene.camera.height = 720;
+            const bool rtsdf = std::string(c.scene) == "rtsdf_frame";
+            Scene scene = rtsdf ? parseSceneText(kRtsdfFrame, "rtsdf_frame",
+                                                 std::string(SDFT_SOURCE_DIR) + "/examples")
+                                : parseSceneFile(std::string(SDFT_SOURCE_DIR) + "/examples/" +
+                                                 c.scene + ".json");
+            const int W = rtsdf ? 1920 : 1280, H = rtsdf ? 1080 : 720;
+            scene.camera.width = W;
+            scene.camera.height = H;
             const std::string s = c.shadows;
             scene.settings.shadows = true;
             scene.settings.primaryTriangles = s == "triangles";
@@ -94,11 +114,11 @@ int main(int argc, char** argv) {
                 std::printf("| %s | %s | skipped: %s |\n", c.scene, c.shadows, why.c_str());
                 continue;
             }
-            const double pixels = 1280.0 * 720.0;
+            const double pixels = static_cast<double>(W) * H;
             std::vector<double> cpuMs;
             double cpuEvals = 0;
             for (int r = 0; r < cpuRuns; ++r) {
-                Film film(1280, 720, Film::bit(Aov::Color));
+                Film film(W, H, Film::bit(Aov::Color));
                 const RenderStats st = render(plan, film, false);
                 cpuMs.push_back(st.seconds * 1e3);
                 cpuEvals = static_cast<double>(st.totalEvaluations()) / pixels;
@@ -115,7 +135,7 @@ int main(int argc, char** argv) {
             std::vector<double> kernel, whole;
             double gpuEvals = 0;
             for (int r = 0; r < runs + 1; ++r) {
-                Film film(1280, 720, Film::bit(Aov::Color));
+                Film film(W, H, Film::bit(Aov::Color));
                 const RenderStats st = renderer.render(frame, film);
                 if (r == 0) {  // the first launch loads the module: not timed
                     gpuEvals = static_cast<double>(st.totalEvaluations()) / pixels;
