@@ -7,7 +7,7 @@
 // field evaluation of the frame. Medians of --runs (GPU, after one untimed warm-up) and
 // --cpu-runs.
 //
-//   sdftrace_gpu_direct_bench [--runs 10] [--cpu-runs 3]
+//   sdftrace_gpu_direct_bench [--runs 10] [--cpu-runs 3] [--scenes all|city,rtsdf_frame,...]
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -79,13 +79,19 @@ void makeGemsGlass(Scene& scene) {
 
 int main(int argc, char** argv) {
     bench::GpuBenchArgs args;
-    if (!bench::parseGpuBenchArgs(argc, argv, "sdftrace_gpu_direct_bench", args)) return 2;
+    if (!bench::parseGpuBenchArgs(argc, argv, "sdftrace_gpu_direct_bench", args, "all")) return 2;
+    // --scenes a,b: only the cases of those scenes ("all": every case).
+    auto wanted = [&](const char* scene) {
+        return args.scenes == "all" ||
+               ("," + args.scenes + ",").find("," + std::string(scene) + ",") != std::string::npos;
+    };
     const int runs = args.runs, cpuRuns = args.cpuRuns;
     const GpuInfo& gpu = gpuInfo();
     std::printf(
         "| scene | shadows | evaluations per pixel (GPU / CPU) | GPU kernel ms | GPU frame ms | "
         "CPU ms | CPU / GPU kernel |\n| --- | --- | --- | --- | --- | --- | --- |\n");
     for (const Case& c : kCases) {
+        if (!wanted(c.scene)) continue;
         try {
             const bool rtsdf = std::string(c.scene) == "rtsdf_frame";
             Scene scene = rtsdf ? parseSceneText(kRtsdfFrame, "rtsdf_frame",
