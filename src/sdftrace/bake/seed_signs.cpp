@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include "sdftrace/bake/winding_number.h"
+#include "sdftrace/bake/winding_packet.h"
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/vertex_loop.h"
@@ -126,6 +127,30 @@ void signDistances(std::vector<float>& d, const TriangleMesh& mesh, const MeshBv
     if (method == SignMethod::FloodFill) {
         std::vector<uint8_t> inside = floodFillInside(mesh, s, seeds);
         for (size_t i = 0; i < d.size(); ++i) d[i] = inside[i] ? -std::fabs(d[i]) : std::fabs(d[i]);
+        return;
+    }
+    if (method == SignMethod::WindingNumber) {
+        // Rows of vertices through the winding tree together (winding_packet.h): the same signs
+        // as WindingNumber::inside per vertex.
+        const WindingNumber winding(mesh);
+        const WindingView w = winding.view();
+        const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
+        ThreadArena arena(threads);
+        arena.execute([&] {
+            tbb::parallel_for(0, vz, [&](int k) {
+                std::vector<Vec3> points(static_cast<size_t>(vx));
+                std::vector<uint8_t> inside(static_cast<size_t>(vx));
+                for (int j = 0; j < vy; ++j) {
+                    for (int i = 0; i < vx; ++i)
+                        points[static_cast<size_t>(i)] = s.origin + Vec3(i, j, k) * s.voxelSize;
+                    windingInsideRow(w, points.data(), vx, winding.beta(), inside.data());
+                    float* row = d.data() + (static_cast<size_t>(k) * vy + j) * vx;
+                    for (int i = 0; i < vx; ++i)
+                        row[i] =
+                            inside[static_cast<size_t>(i)] ? -std::fabs(row[i]) : std::fabs(row[i]);
+                }
+            });
+        });
         return;
     }
     InsideTest test(mesh, bvh, method);

@@ -1,0 +1,20 @@
+// The hierarchical winding number (winding_view.h) of several points at once, for the CPU's sign
+// passes over rows of grid vertices: the points walk the tree together, each taking the nodes
+// windingNumberFast would take in the same order (a point that settles a node by its dipole or
+// its leaf drops out of that subtree), so each point's sum is the scalar sum bit for bit. The
+// work per node is branch-free across the points, so that it vectorizes (built for AVX2 where the
+// CPU has it, exec/simd.h).
+#pragma once
+
+#include <cstdint>
+
+#include "sdftrace/bake/winding_view.h"
+
+namespace sdft {
+
+// windingInside (winding_view.h) of points p[0..n), any n: out[i] = 1 inside, 0 outside.
+void windingInsideRow(const WindingView& w, const Vec3* p, int n, double beta, uint8_t* out);
+// windingNumberFast of points p[0..n): for tests of the bit-for-bit claim.
+void windingNumberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out);
+
+}  // namespace sdft

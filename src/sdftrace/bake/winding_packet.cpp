@@ -1,0 +1,133 @@
+#include "sdftrace/bake/winding_packet.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+
+#include "sdftrace/core/macros.h"
+#include "sdftrace/exec/simd.h"
+
+namespace sdft {
+
+namespace {
+
+constexpr int kLanes = 8;
+
+// x where `on`, else 0 (+0.0: adding it leaves a sum's bits as they are, but for the sign of a
+// zero sum, which no comparison with 1/2 sees).
+inline double masked(bool on, double x) { return on ? x : 0.0; }
+
+// windingNumberFast of lanes `active` of p[0..kLanes) into sum (added), the scalar's traversal
+// per lane: its stack order (left pushed before right), its far test, its dipole term and its
+// float leaf sums.
+inline void packetSum(const WindingView& w, const Vec3* p, uint32_t active, double beta,
+                      double* sum) {
+    if (w.nodeCount == 0 || active == 0) return;
+    struct Entry {
+        int node;
+        uint32_t lanes;
+    };
+    Entry stack[128];
+    int top = 0;
+    stack[top++] = {0, active};
+    double px[kLanes], py[kLanes], pz[kLanes];
+    for (int l = 0; l < kLanes; ++l) px[l] = p[l].x, py[l] = p[l].y, pz[l] = p[l].z;
+    while (top > 0) {
+        const Entry e = stack[--top];
+        const WindingNode& n = w.nodes[e.node];
+        const double reach = beta * beta * n.radius * n.radius;
+        int64_t on[kLanes], nearLane[kLanes];
+        for (int l = 0; l < kLanes; ++l) on[l] = (e.lanes >> l) & 1u;
+        for (int l = 0; l < kLanes; ++l) {
+            const double dx = n.cx - px[l], dy = n.cy - py[l], dz = n.cz - pz[l];
+            const double d2 = dx * dx + dy * dy + dz * dz;
+            const bool far = d2 > reach;
+            // Far: the dipole term, Omega ~ (c - p).N / |c - p|^3 (Barill et al. 2018, eq. 8).
+            const double term = (dx * n.nx + dy * n.ny + dz * n.nz) / (d2 * std::sqrt(d2));
+            sum[l] += on[l] && far ? term : 0.0;
+            nearLane[l] = on[l] && !far;
+        }
+        uint32_t near = 0;
+        for (int l = 0; l < kLanes; ++l) near |= static_cast<uint32_t>(nearLane[l]) << l;
+        if (near == 0) continue;
+        if (n.left < 0) {
+            float leaf[kLanes] = {};
+            for (int i = n.first; i < n.first + n.count; ++i) {
+                const float* t = w.corners + 9 * static_cast<size_t>(i);
+                for (int l = 0; l < kLanes; ++l) leaf[l] += solidAngleFloat(p[l], t);
+            }
+            for (int l = 0; l < kLanes; ++l) sum[l] += masked((near >> l) & 1u, leaf[l]);
+        } else if (top + 2 <= 128) {
+            stack[top++] = {n.left, near};
+            stack[top++] = {n.right, near};
+        }
+    }
+}
+
+// Up to kLanes points from p: the last ones repeat the last point (their answers unused).
+inline void load(const Vec3* p, int n, Vec3* lanes) {
+    for (int l = 0; l < kLanes; ++l) lanes[l] = p[std::min(l, n - 1)];
+}
+
+inline void numberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out) {
+    for (int i = 0; i < n; i += kLanes) {
+        const int m = std::min(kLanes, n - i);
+        Vec3 lanes[kLanes];
+        load(p + i, m, lanes);
+        double sum[kLanes] = {};
+        packetSum(w, lanes, (1u << m) - 1, beta, sum);
+        for (int l = 0; l < m; ++l) out[i + l] = w.nodeCount == 0 ? 0 : sum[l] / 12.566370614359172;
+    }
+}
+
+// windingInside per lane: the coarse beta (1.5) first, the full one for the lanes it leaves
+// within 0.3 of 1/2.
+inline void insideRow(const WindingView& w, const Vec3* p, int n, double beta, uint8_t* out) {
+    for (int i = 0; i < n; i += kLanes) {
+        const int m = std::min(kLanes, n - i);
+        Vec3 lanes[kLanes];
+        load(p + i, m, lanes);
+        double coarse[kLanes] = {}, full[kLanes] = {};
+        packetSum(w, lanes, (1u << m) - 1, 1.5, coarse);
+        uint32_t again = 0;
+        for (int l = 0; l < m; ++l) {
+            coarse[l] = w.nodeCount == 0 ? 0 : coarse[l] / 12.566370614359172;
+            again |= static_cast<uint32_t>(std::fabs(coarse[l] - 0.5) <= 0.3) << l;
+        }
+        packetSum(w, lanes, again, beta, full);
+        for (int l = 0; l < m; ++l)
+            out[i + l] = (again >> l) & 1u
+                             ? (w.nodeCount == 0 ? 0 : full[l] / 12.566370614359172) > 0.5
+                             : coarse[l] > 0.5;
+    }
+}
+
+SDFT_TARGET_AVX2 void insideRowAvx2(const WindingView& w, const Vec3* p, int n, double beta,
+                                    uint8_t* out) {
+    insideRow(w, p, n, beta, out);
+}
+SDFT_TARGET_BASELINE void insideRowBaseline(const WindingView& w, const Vec3* p, int n, double beta,
+                                            uint8_t* out) {
+    insideRow(w, p, n, beta, out);
+}
+SDFT_TARGET_AVX2 void numberRowAvx2(const WindingView& w, const Vec3* p, int n, double beta,
+                                    double* out) {
+    numberRow(w, p, n, beta, out);
+}
+SDFT_TARGET_BASELINE void numberRowBaseline(const WindingView& w, const Vec3* p, int n, double beta,
+                                            double* out) {
+    numberRow(w, p, n, beta, out);
+}
+
+}  // namespace
+
+void windingInsideRow(const WindingView& w, const Vec3* p, int n, double beta, uint8_t* out) {
+    (useAvx2() ? insideRowAvx2 : insideRowBaseline)(w, p, n, beta, out);
+}
+
+void windingNumberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out) {
+    (useAvx2() ? numberRowAvx2 : numberRowBaseline)(w, p, n, beta, out);
+}
+
+}  // namespace sdft
