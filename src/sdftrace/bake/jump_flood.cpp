@@ -48,7 +48,7 @@ inline float blend(uint32_t m, float a, float b) {
 // wins), so that it vectorizes.
 inline void jumpFloodRow(const GridShape& s, const Vec3* seed, int j, int k, int offset, Vec3* out,
                          RowScratch& r) {
-    const int vx = s.vertices(0), vy = s.vertices(1), vz = s.vertices(2);
+    const int vx = s.vertices(0);
     const Vec3 row = vertexPosition(s, 0, j, k);
     const float h = s.voxelSize;
     const Vec3* own = seed + vertexIndex(s, 0, j, k);
@@ -58,33 +58,27 @@ inline void jumpFloodRow(const GridShape& s, const Vec3* seed, int j, int k, int
         bx[i] = own[i].x, by[i] = own[i].y, bz[i] = own[i].z;
         bd[i] = own[i].x == kNoSeed ? kNoSeed : dot(p - own[i], p - own[i]);
     }
-    for (int dk = -offset; dk <= offset; dk += offset) {
-        const int kk = k + dk;
-        if (kk < 0 || kk >= vz) continue;
-        for (int dj = -offset; dj <= offset; dj += offset) {
-            const int jj = j + dj;
-            if (jj < 0 || jj >= vy) continue;
-            const float* other = &seed[vertexIndex(s, 0, jj, kk)].x;
-            for (int di = -offset; di <= offset; di += offset) {
-                // The vertices whose neighbour i + di lies in the row.
-                const int lo = std::max(0, -di), hi = std::min(vx, vx - di);
-                const float* q = other + 3 * di;
+    forEachJumpRow(s, j, k, offset, [&](int jj, int kk) {
+        const float* other = &seed[vertexIndex(s, 0, jj, kk)].x;
+        for (int di = -offset; di <= offset; di += offset) {
+            // The vertices whose neighbour i + di lies in the row.
+            const int lo = std::max(0, -di), hi = std::min(vx, vx - di);
+            const float* q = other + 3 * di;
 #pragma omp simd
-                for (int i = lo; i < hi; ++i) {
-                    const float qx = q[3 * i], qy = q[3 * i + 1], qz = q[3 * i + 2];
-                    const float dx = row.x + static_cast<float>(i) * h - qx, dy = row.y - qy,
-                                dz = row.z - qz;
-                    const float d = dx * dx + dy * dy + dz * dz;
-                    // Selected by a bit mask: GCC's if-conversion leaves ?: as branches here.
-                    const uint32_t m = 0u - static_cast<uint32_t>(d < bd[i]);
-                    bd[i] = blend(m, d, bd[i]);
-                    bx[i] = blend(m, qx, bx[i]);
-                    by[i] = blend(m, qy, by[i]);
-                    bz[i] = blend(m, qz, bz[i]);
-                }
+            for (int i = lo; i < hi; ++i) {
+                const float qx = q[3 * i], qy = q[3 * i + 1], qz = q[3 * i + 2];
+                const float dx = row.x + static_cast<float>(i) * h - qx, dy = row.y - qy,
+                            dz = row.z - qz;
+                const float d = dx * dx + dy * dy + dz * dz;
+                // Selected by a bit mask: GCC's if-conversion leaves ?: as branches here.
+                const uint32_t m = 0u - static_cast<uint32_t>(d < bd[i]);
+                bd[i] = blend(m, d, bd[i]);
+                bx[i] = blend(m, qx, bx[i]);
+                by[i] = blend(m, qy, by[i]);
+                bz[i] = blend(m, qz, bz[i]);
             }
         }
-    }
+    });
     for (int i = 0; i < vx; ++i) out[i] = Vec3(bx[i], by[i], bz[i]);
 }
 
