@@ -13,6 +13,7 @@ namespace sdft {
 namespace {
 
 constexpr int kLanes = 8;
+constexpr double kFourPi = 12.566370614359172;  // a tree-less view sums 0: 0 / 4 pi
 
 // x where `on`, else 0 (+0.0: adding it leaves a sum's bits as they are, but for the sign of a
 // zero sum, which no comparison with 1/2 sees).
@@ -77,7 +78,7 @@ inline void numberRow(const WindingView& w, const Vec3* p, int n, double beta, d
         load(p + i, m, lanes);
         double sum[kLanes] = {};
         packetSum(w, lanes, (1u << m) - 1, beta, sum);
-        for (int l = 0; l < m; ++l) out[i + l] = w.nodeCount == 0 ? 0 : sum[l] / 12.566370614359172;
+        for (int l = 0; l < m; ++l) out[i + l] = sum[l] / kFourPi;
     }
 }
 
@@ -92,14 +93,12 @@ inline void insideRow(const WindingView& w, const Vec3* p, int n, double beta, u
         packetSum(w, lanes, (1u << m) - 1, 1.5, coarse);
         uint32_t again = 0;
         for (int l = 0; l < m; ++l) {
-            coarse[l] = w.nodeCount == 0 ? 0 : coarse[l] / 12.566370614359172;
+            coarse[l] /= kFourPi;
             again |= static_cast<uint32_t>(std::fabs(coarse[l] - 0.5) <= 0.3) << l;
         }
         packetSum(w, lanes, again, beta, full);
         for (int l = 0; l < m; ++l)
-            out[i + l] = (again >> l) & 1u
-                             ? (w.nodeCount == 0 ? 0 : full[l] / 12.566370614359172) > 0.5
-                             : coarse[l] > 0.5;
+            out[i + l] = (again >> l) & 1u ? full[l] / kFourPi > 0.5 : coarse[l] > 0.5;
     }
 }
 

@@ -147,8 +147,8 @@ __global__ void fillKernel(float* a, size_t n, float value) {
     if (i < n) a[i] = value;
 }
 
-// The dipole tree over the LBVH (bake/winding_lbvh.h): its leaves and corners in key order, the
-// parents of the radix tree's nodes, then from each leaf up the second thread to reach a node
+// The dipole tree over the LBVH (bake/winding_lbvh.h): its leaves and corners in key order, then
+// from each leaf up, through the parents the LBVH's build kept, the second thread to reach a node
 // fills it (the LBVH's box pass).
 __global__ void windingLeafKernel(const LbvhTriangle* tris, int n, WindingNode* nodes,
                                   float* corners) {
@@ -156,19 +156,6 @@ __global__ void windingLeafKernel(const LbvhTriangle* tris, int n, WindingNode* 
     if (j >= n) return;
     nodes[n - 1 + j] = windingLeaf(tris[j], j);
     windingCorners(tris[j], corners + 9 * static_cast<size_t>(j));
-}
-
-__global__ void lbvhParentKernel(const LbvhNode* lbvh, int n, int32_t* parentOfNode,
-                                 int32_t* parentOfLeaf) {
-    const int i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= n - 1) return;
-    const int32_t children[2] = {lbvh[i].left, lbvh[i].right};
-    for (const int32_t child : children) {
-        if (child < 0)
-            parentOfLeaf[~child] = i;
-        else
-            parentOfNode[child] = i;
-    }
 }
 
 // A node read past the L1 cache: another block may have written it.
@@ -279,17 +266,13 @@ struct GpuMeshBaker::Impl {
                                                       windingCorners.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
         if (n < 2) return;
-        cuda::DeviceArray<int32_t> parentOfNode(n - 1), parentOfLeaf(n);
         cuda::DeviceArray<int> visits(n - 1);
-        SDFT_CUDA_CHECK(cudaMemset(parentOfNode.get(), 0xFF, (n - 1) * sizeof(int32_t)));
         SDFT_CUDA_CHECK(cudaMemset(visits.get(), 0, (n - 1) * sizeof(int)));
-        lbvhParentKernel<<<blocksFor(n - 1), kThreads>>>(v.nodes, n, parentOfNode.get(),
-                                                         parentOfLeaf.get());
+        windingUpKernel<<<blocksFor(n), kThreads>>>(v.nodes, n, lbvh->parentOfNode(),
+                                                    lbvh->parentOfLeaf(), windingNodes.get(),
+                                                    visits.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
-        windingUpKernel<<<blocksFor(n), kThreads>>>(
-            v.nodes, n, parentOfNode.get(), parentOfLeaf.get(), windingNodes.get(), visits.get());
-        SDFT_CUDA_CHECK(cudaGetLastError());
-        SDFT_CUDA_CHECK(cudaDeviceSynchronize());  // before the parents and counts go
+        SDFT_CUDA_CHECK(cudaDeviceSynchronize());  // before the counts go
     }
 
     WindingView winding() const {

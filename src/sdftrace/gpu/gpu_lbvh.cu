@@ -98,15 +98,17 @@ DeviceLbvh::DeviceLbvh(const Vec3* positions, const uint32_t* triangles, int n, 
                                              m_triangles.get());
     SDFT_CUDA_CHECK(cudaGetLastError());
     if (n > 1) {
-        DeviceArray<int32_t> parentOfNode(n - 1), parentOfLeaf(n);
+        m_parentOfNode = DeviceArray<int32_t>(n - 1);
+        m_parentOfLeaf = DeviceArray<int32_t>(n);
         DeviceArray<int> visits(n - 1);
-        SDFT_CUDA_CHECK(cudaMemset(parentOfNode.get(), 0xFF, (n - 1) * sizeof(int32_t)));
+        SDFT_CUDA_CHECK(cudaMemset(m_parentOfNode.get(), 0xFF, (n - 1) * sizeof(int32_t)));
         SDFT_CUDA_CHECK(cudaMemset(visits.get(), 0, (n - 1) * sizeof(int)));
         nodeKernel<<<blocksFor(n - 1), kThreads>>>(sorted.get(), n, m_nodes.get(),
-                                                   parentOfNode.get(), parentOfLeaf.get());
+                                                   m_parentOfNode.get(), m_parentOfLeaf.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
         boxKernel<<<blocksFor(n), kThreads>>>(m_triangles.get(), n, m_nodes.get(),
-                                              parentOfNode.get(), parentOfLeaf.get(), visits.get());
+                                              m_parentOfNode.get(), m_parentOfLeaf.get(),
+                                              visits.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
         SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
         m_buildMs = timer.elapsedMs();  // waits for the kernels before the arrays go

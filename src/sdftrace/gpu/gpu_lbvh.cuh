@@ -15,15 +15,21 @@ class DeviceLbvh {
     DeviceLbvh(const Vec3* positions, const uint32_t* triangles, int count, LbvhFrame frame);
 
     LbvhView view() const { return {m_nodes.get(), m_triangles.get(), m_count}; }
+    // Each internal node's and each leaf's parent (-1: the root), kept from the build for
+    // further bottom-up passes (the winding dipoles, bake/winding_lbvh.h). Empty below 2 triangles.
+    const int32_t* parentOfNode() const { return m_parentOfNode.get(); }
+    const int32_t* parentOfLeaf() const { return m_parentOfLeaf.get(); }
     double buildMs() const { return m_buildMs; }
     size_t bytes() const {
-        return m_nodes.size() * sizeof(LbvhNode) + m_triangles.size() * sizeof(LbvhTriangle);
+        return m_nodes.size() * sizeof(LbvhNode) + m_triangles.size() * sizeof(LbvhTriangle) +
+               (m_parentOfNode.size() + m_parentOfLeaf.size()) * sizeof(int32_t);
     }
 
   private:
     int m_count = 0;
     DeviceArray<LbvhNode> m_nodes;
     DeviceArray<LbvhTriangle> m_triangles;
+    DeviceArray<int32_t> m_parentOfNode, m_parentOfLeaf;
     double m_buildMs = 0;
 };
 
