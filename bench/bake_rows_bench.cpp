@@ -2,7 +2,8 @@
 // compared bit for bit on every run: jump flooding (the row sweep, jump_flood.cpp, against
 // jumpFloodVertex per vertex, the GPU's body), winding-number signs (winding_packet.h against
 // WindingNumber::inside per vertex) and RTSDF's coarse lookups (interpolateDenseRow against
-// GridView::interpolate per vertex). TBB over z slabs on every hardware thread; medians of --runs.
+// GridView::interpolate per vertex), and RTSDF's per-frame block grid (refreshed against
+// sparsified afresh). TBB over z slabs on every hardware thread; medians of --runs.
 // SDFT_SIMD=sse2 measures the baseline build of the dispatched rows.
 //
 //   sdftrace_bake_rows_bench [--runs 5] [--meshes bunny_npm:127,teapot:127,stanford-bunny:255]
@@ -10,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -26,6 +28,7 @@
 #include "sdftrace/bake/winding_number.h"
 #include "sdftrace/bake/winding_packet.h"
 #include "sdftrace/exec/simd.h"
+#include "sdftrace/field/grid.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/io/mesh_io.h"
 
@@ -157,6 +160,47 @@ void coarseRows(int cells, int runs) {
         [&] { return std::memcmp(rows.data(), ref.data(), n * sizeof(float)) == 0; });
 }
 
+// RTSDF's per-frame grid (every block kept, bandVoxels 1e6): sparsified afresh from the frame's
+// dense samples as before (Grid::sparseFromDense) against the last frame's complete grid refreshed
+// (Grid::refreshComplete); every vertex compared bit for bit on every run.
+void gridFinish(int cells, int runs) {
+    GridShape s;
+    for (int a = 0; a < 3; ++a) s.cells[a] = cells;
+    s.voxelSize = 1.0f / static_cast<float>(cells);
+    s.origin = Vec3(-0.5f);
+    auto field = [&](float shift) {
+        std::vector<float> f(s.vertexCount());
+        tbb::parallel_for(0, s.vertices(2), [&](int k) {
+            for (int j = 0; j < s.vertices(1); ++j)
+                for (int i = 0; i < s.vertices(0); ++i) {
+                    const Vec3 p = vertexPosition(s, i, j, k);
+                    f[vertexIndex(s, i, j, k)] =
+                        length(p - Vec3(shift, 0, 0)) - 0.3f +
+                        0.02f * std::sin(40 * p.x) * std::sin(30 * p.y) * std::sin(35 * p.z);
+                }
+        });
+        return f;
+    };
+    const Grid last = Grid::completeFromDense(s, field(0), 4, 1e6f);
+    const std::vector<float> now = field(0.05f);
+    std::vector<double> a, b;
+    bool same = true;
+    for (int r = 0; r < runs; ++r) {
+        auto t = Clock::now();
+        const Grid refreshed = last.refreshComplete(now);
+        a.push_back(msSince(t));
+        t = Clock::now();
+        const Grid sparse = Grid::sparseFromDense(s, now, 4, 1e6f);
+        b.push_back(msSince(t));
+        same = same && refreshed.vertexSamples() == sparse.vertexSamples() &&
+               refreshed.lipschitz() == sparse.lipschitz() &&
+               refreshed.tileSkip() == sparse.tileSkip();
+    }
+    std::printf("| %d cells (%zu vertices) | %.1f | %.1f | %.2fx | %s |\n", cells, s.vertexCount(),
+                median(b), median(a), median(b) / median(a), same ? "yes" : "NO");
+    std::fflush(stdout);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -186,5 +230,9 @@ int main(int argc, char** argv) {
     }
     coarseRows(256, runs);
     coarseRows(512, runs);
+    std::printf(
+        "\nRTSDF's per-frame grid (every block kept):\n\n| grid | sparsify afresh ms | "
+        "refresh ms | speedup | same vertices |\n| --- | --- | --- | --- | --- |\n");
+    for (int cells : {128, 256, 512}) gridFinish(cells, runs);
     return 0;
 }

@@ -62,9 +62,13 @@ void checkMeshBake(const TriangleMesh& mesh, const MeshBakeOptions& options, dou
 MeshBakeResult bakeMesh(const TriangleMesh& mesh, const MeshBakeOptions& options);
 
 // A bake's dense samples as the grid `sampling` asks for (a sparse one marks the "sparsify"
-// stage), into r.grid: what every method (and the GPU's, gpu_bake.h) ends with.
+// stage), into r.grid: what every method (and the GPU's, gpu_bake.h) ends with. A frame of
+// RTSDF's per-frame regeneration (`history` non-null) gets a complete block grid
+// (Grid::completeFromDense): the history's last grid refreshed where it has this shape (the
+// "refresh" stage), else one built afresh.
 void finishMeshBake(const GridShape& shape, std::vector<float> samples,
-                    const SampleOptions& sampling, MeshBakeResult& r, StageClock& clock);
+                    const SampleOptions& sampling, MeshBakeResult& r, StageClock& clock,
+                    const RtsdfHistory* history = nullptr);
 
 // The summary of an exact bake's work (MeshBakeResult::details): distances and signs.
 std::string exactBakeDetails(const ExactBakeStats& stats, const MeshBakeOptions& options,

@@ -32,6 +32,9 @@ struct RtsdfHistory {
     // Where the GPU regenerates the field (bakeMeshGpu), the mesh, its LBVH and f_{t-1} stay on
     // the device between frames: `fine` is then empty and `frames` counts the device's frames.
     std::shared_ptr<RtsdfDeviceState> device;
+    // The last frame's grid, a complete block grid (Grid::completeFromDense) whose layout the
+    // next frame's samples refresh (finishMeshBake); set by the caller that keeps the grid.
+    std::shared_ptr<const Grid> grid;
 };
 
 // Eq. 1's previous frame: kept when `history` holds frames of `shape` on the host, else started

@@ -180,6 +180,22 @@ class Grid {
     static Grid sparseFromDense(const GridShape& shape, const std::vector<float>& samples,
                                 int blockSize, float bandVoxels);
 
+    // A complete block grid (complete_grid.cpp): every block keeps its samples, as RTSDF's
+    // per-frame grids cover their volume (Tan et al. 2022, §2.5.1). It reconstructs what
+    // sparseFromDense(shape, samples, blockSize, bandVoxels) does when every block lies within
+    // the band, but its layout (block pages, sample blocks, neighbour entries: the apron entries
+    // past the grid's far faces always private) depends on the shape alone, so that the next
+    // frame's samples refresh it (refreshComplete) instead of sparsifying afresh.
+    static Grid completeFromDense(const GridShape& shape, const std::vector<float>& samples,
+                                  int blockSize, float bandVoxels);
+    bool isComplete() const { return m_complete; }
+    // This complete grid's layout with `samples` (vertexCount() of them, x fastest): the grid
+    // completeFromDense(shape(), samples, ...) builds, array for array, its blocks refreshed in
+    // parallel by refreshCompleteBlock (complete_block.h, the GPU's kernel body too).
+    Grid refreshComplete(const std::vector<float>& samples) const;
+    // The band (world units) a complete grid clamps its samples to.
+    float completeBand() const { return m_completeBand; }
+
     GridView view() const;
     GridKind kind() const { return m_kind; }
     const GridShape& shape() const { return m_shape; }
@@ -259,6 +275,9 @@ class Grid {
     friend class SparseGridBuilder;  // fills the sparse layout (sparse_grid_builder.h)
     void computeLipschitz();         // dense
     void computeBlockSkip();         // sparse, from the flags and cell masks
+    // Complete grids: the global bound, the skip tables and the local bounds from each block's
+    // squared cell gradient bound (times h^2).
+    void finishComplete(const std::vector<float>& blockWorst);
     // Sparse: m_blockLipschitz and m_tileLipschitz from each surface block's squared cell
     // gradient bound (times h^2).
     void computeLocalLipschitz(const std::vector<float>& blockWorst);
@@ -289,6 +308,8 @@ class Grid {
     std::vector<uint8_t> m_blockSkip;
     std::vector<float> m_texcoords;
     TexcoordKind m_texcoordKind = TexcoordKind::None;
+    bool m_complete = false;  // completeFromDense's layout
+    float m_completeBand = 0;
 };
 
 // ---- inline view functions (GPU-ready) ----

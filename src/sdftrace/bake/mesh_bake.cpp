@@ -174,16 +174,31 @@ MeshBakeResult bakeInArena(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     std::vector<float> samples = o.method == MeshBakeMethod::Rtsdf
                                      ? bakeRtsdf(mesh, o, shape, r, clock)
                                      : bakeFromSeeds(mesh, o, shape, r, clock);
-    finishMeshBake(shape, std::move(samples), so, r, clock);
+    finishMeshBake(shape, std::move(samples), so, r, clock,
+                   o.method == MeshBakeMethod::Rtsdf ? o.rtsdf.history : nullptr);
     return r;
 }
 
 }  // namespace
 
 void finishMeshBake(const GridShape& shape, std::vector<float> samples, const SampleOptions& so,
-                    MeshBakeResult& r, StageClock& clock) {
+                    MeshBakeResult& r, StageClock& clock, const RtsdfHistory* history) {
     if (so.kind == GridKind::Dense) {
         r.grid = Grid::dense(shape, std::move(samples));
+    } else if (history) {
+        const Grid* last = history->grid.get();
+        const GridShape& ls = last ? last->shape() : shape;
+        if (last && last->isComplete() && last->blockSize() == so.blockSize &&
+            last->completeBand() == so.bandVoxels * shape.voxelSize &&
+            ls.voxelSize == shape.voxelSize && ls.origin.x == shape.origin.x &&
+            ls.origin.y == shape.origin.y && ls.origin.z == shape.origin.z &&
+            std::equal(ls.cells, ls.cells + 3, shape.cells)) {
+            r.grid = last->refreshComplete(samples);
+            clock.mark("refresh");
+        } else {
+            r.grid = Grid::completeFromDense(shape, samples, so.blockSize, so.bandVoxels);
+            clock.mark("sparsify");
+        }
     } else {
         r.grid = Grid::sparseFromDense(shape, samples, so.blockSize, so.bandVoxels);
         clock.mark("sparsify");

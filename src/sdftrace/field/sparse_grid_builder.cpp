@@ -10,6 +10,7 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/field/block_masks.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -17,75 +18,11 @@
 
 namespace sdft {
 
-// Jamriška §4.1: one bit per cell of each surface block, set when the signs of its 8 corner samples
-// differ (the cell contains the surface). Recomputed whenever the block's samples change.
-// One pass over the surface blocks' cells (sparse grids only): the cell masks (cells with a
-// sign change), and the Lipschitz bound of the trilinear reconstruction, the max over cells of
-// cellGradientBound2 (the interpolant is continuous across faces within a block).
+// Jamriška §4.1's cell masks and the Lipschitz bound of each block (block_masks.h), the block of
+// 4 in SSE2 where the CPU has it.
 namespace {
-// One surface block's cell masks (set into `mask`) and the largest cellGradientBound2 over its
-// first ni x nj x nk cells. The same values as cell by cell, computed once per vertex and edge
-// rather than once per cell corner (each edge is shared by four cells), in fixed-size rows the
-// compiler vectorizes.
-// The cells of a row of a block that change sign, one bit per cell (the first ni), from the
-// negative-vertex bits of the row's 4 corner rows of vertices: some corner of cell i (bits i and
-// i + 1) is negative and not all are.
-inline uint32_t rowSignChanges(uint32_t a, uint32_t b, uint32_t c, uint32_t d, int ni) {
-    const uint32_t any = a | b | c | d, all = a & b & c & d;
-    return ((any | any >> 1) & ~(all & all >> 1)) & ((1u << ni) - 1);
-}
-
-template <int B>
-float blockMasksAndBoundB(const float* s, int ni, int nj, int nk, uint64_t* mask) {
-    constexpr int V = B + 1, sy = V, sz = V * V;
-    // Edge differences, in straight rows (the compiler vectorizes each).
-    float ex[V][V][B], ey[V][B][V], ez[B][V][V];
-    for (int k = 0; k < V; ++k)
-        for (int j = 0; j < V; ++j) {
-            const float* r = s + k * sz + j * sy;
-            for (int i = 0; i < B; ++i) ex[k][j][i] = std::fabs(r[i + 1] - r[i]);
-            if (j < B)
-                for (int i = 0; i < V; ++i) ey[k][j][i] = std::fabs(r[i + sy] - r[i]);
-            if (k < B)
-                for (int i = 0; i < V; ++i) ez[k][j][i] = std::fabs(r[i + sz] - r[i]);
-        }
-    // Vertex signs, one bit per x along each (j, k) row.
-    uint32_t negative[V][V];
-    for (int k = 0; k < V; ++k)
-        for (int j = 0; j < V; ++j) {
-            const float* r = s + k * sz + j * sy;
-            uint32_t bits = 0;
-            for (int i = 0; i < V; ++i) bits |= static_cast<uint32_t>(r[i] < 0) << i;
-            negative[k][j] = bits;
-        }
-    // Cells past ni (a block cut by the grid's face) count for neither.
-    float keep[B];
-    for (int i = 0; i < B; ++i) keep[i] = i < ni ? 1.0f : 0.0f;
-    float worst = 0;
-    for (int k = 0; k < nk; ++k)
-        for (int j = 0; j < nj; ++j) {
-            // cellGradientBound2 of each cell of the row: its 4 x-, y- and z-edges' largest.
-            float rowWorst = 0;
-            for (int i = 0; i < B; ++i) {
-                const float gx = std::max(std::max(ex[k][j][i], ex[k][j + 1][i]),
-                                          std::max(ex[k + 1][j][i], ex[k + 1][j + 1][i]));
-                const float gy = std::max(std::max(ey[k][j][i], ey[k][j][i + 1]),
-                                          std::max(ey[k + 1][j][i], ey[k + 1][j][i + 1]));
-                const float gz = std::max(std::max(ez[k][j][i], ez[k][j][i + 1]),
-                                          std::max(ez[k][j + 1][i], ez[k][j + 1][i + 1]));
-                rowWorst = std::max(rowWorst, (gx * gx + gy * gy + gz * gz) * keep[i]);
-            }
-            worst = std::max(worst, rowWorst);
-            const uint32_t change = rowSignChanges(negative[k][j], negative[k][j + 1],
-                                                   negative[k + 1][j], negative[k + 1][j + 1], ni);
-            const int bit = (k * B + j) * B;
-            mask[bit / 64] |= static_cast<uint64_t>(change) << (bit % 64);
-        }
-    return worst;
-}
-
 #if defined(__SSE2__)
-// blockMasksAndBoundB<4> in SSE2 (the x86-64 baseline): a row of 4 cells is one vector. The same
+// blockMasksAndBoundOf<4> in SSE2 (the x86-64 baseline): a row of 4 cells is one vector. The same
 // operations in the same order, so the same values.
 float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask) {
     constexpr int V = 5, sy = V, sz = V * V;
@@ -142,12 +79,12 @@ float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask
 }
 #else
 float blockMasksAndBound4(const float* s, int ni, int nj, int nk, uint64_t* mask) {
-    return blockMasksAndBoundB<4>(s, ni, nj, nk, mask);
+    return blockMasksAndBoundOf<4>(s, ni, nj, nk, mask);
 }
 #endif
 
 float blockMasksAndBound(const float* s, int B, int ni, int nj, int nk, uint64_t* mask) {
-    return B == 8 ? blockMasksAndBoundB<8>(s, ni, nj, nk, mask)
+    return B == 8 ? blockMasksAndBoundOf<8>(s, ni, nj, nk, mask)
                   : blockMasksAndBound4(s, ni, nj, nk, mask);
 }
 }  // namespace

@@ -95,7 +95,7 @@ MeshBakeResult bakeMeshGpu(const TriangleMesh& mesh, const MeshBakeOptions& o) {
                     "); seeds " + millis(t.seedMs) + ", signs " + millis(t.signMs) + " (" +
                     signMethodName(o.sign) + ", every vertex)";
     }
-    finishMeshBake(shape, std::move(samples), so, r, clock);
+    finishMeshBake(shape, std::move(samples), so, r, clock, h);
     return r;
 }
 

@@ -181,11 +181,20 @@ TEST(AnimatedScene, DynamicMeshesAreRegeneratedEveryFrame) {
     AnimatedScene::InstantAssets used;
     const Vec3 p(0.7f, 0, 0);  // 0.2 outside the first cube, 0.1 inside the second
     float before = 0, after = 0;
+    std::shared_ptr<const Grid> first;
     for (int i = 0; i < 40; ++i) {
         const double t = i < 10 ? 0.05 * i : 1.0 + 0.05 * i;
         const Scene s = rtsdf.at(t, cache, {}, &used);
         EXPECT_EQ(used.stats.baked, 1u) << i;  // every frame regenerated, none cached
         (i < 10 ? before : after) = fieldAt(s, p);
+        // Each frame's grid is a complete block grid of its own, the first frame's layout
+        // refreshed.
+        const std::shared_ptr<const Grid> g = cache.rtsdfHistory("dyn.json: /objects/0/mesh").grid;
+        ASSERT_TRUE(g && g->isComplete()) << i;
+        if (!first) first = g;
+        EXPECT_EQ(g->blockNeighbors(), first->blockNeighbors()) << i;
+        EXPECT_EQ(g->blockSamples().size(), first->blockSamples().size()) << i;
+        if (i > 0) EXPECT_NE(g, first) << i;
     }
     EXPECT_EQ(cache.rtsdfHistory("dyn.json: /objects/0/mesh").frames, 40);
     EXPECT_GT(before, 0.05f);

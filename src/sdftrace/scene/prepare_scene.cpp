@@ -151,9 +151,16 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
                     // Every block kept, as RTSDF's 3D textures cover their volume: beyond the
                     // mask the grid holds the coarse SDF's distances, which SDF soft shadows
                     // (k h / t) need (a narrow band leaves only lower bounds there, read as near
-                    // misses). Blocks, not one dense array, so that a block's Lipschitz bound (a
-                    // few rays' noisy distances, a wrong sign) slows only that block.
+                    // misses). A complete block grid (Grid::completeFromDense), whose layout the
+                    // next frame refreshes. Its samples are unclamped, so its blocks share the
+                    // global Lipschitz bound (Grid::computeLocalLipschitz's floor of background
+                    // / (B h) keeps the local one for narrow bands).
                     bake.sampling.bandVoxels = 1e6f;
+                    auto grid = std::make_shared<const Grid>(
+                        (options.bakeMesh ? options.bakeMesh(mesh, bake) : bakeMesh(mesh, bake))
+                            .grid);
+                    h.grid = grid;
+                    return grid;
                 }
                 return std::make_shared<const Grid>(
                     (options.bakeMesh ? options.bakeMesh(mesh, bake) : bakeMesh(mesh, bake)).grid);

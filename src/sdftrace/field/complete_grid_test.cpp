@@ -1,0 +1,168 @@
+// Complete block grids (Grid::completeFromDense, refreshComplete): the reconstruction, bounds and
+// skip tables of sparseFromDense's grid where every block lies in the band, and a refresh equal,
+// array for array, to a complete grid built afresh from the same samples.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "sdftrace/field/grid.h"
+#include "sdftrace/field/grid_distance.h"
+#include "sdftrace/field/test_util.h"
+
+namespace sdft {
+namespace {
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// A bumpy sphere of radius r around c, in world units, at every vertex of `s`.
+std::vector<float> bumpySphere(const GridShape& s, Vec3 c, float r, float bumps) {
+    std::vector<float> out;
+    out.reserve(s.vertexCount());
+    for (int k = 0; k <= s.cells[2]; ++k)
+        for (int j = 0; j <= s.cells[1]; ++j)
+            for (int i = 0; i <= s.cells[0]; ++i) {
+                const Vec3 p = s.origin + Vec3(i, j, k) * s.voxelSize;
+                out.push_back(length(p - c) - r +
+                              bumps * std::sin(7 * p.x) * std::sin(5 * p.y) * std::sin(6 * p.z));
+            }
+    return out;
+}
+
+GridShape shapeOf(int nx, int ny, int nz) {
+    GridShape s;
+    s.cells[0] = nx, s.cells[1] = ny, s.cells[2] = nz;
+    s.origin = Vec3(-1.0f);
+    s.voxelSize = 2.0f / static_cast<float>(std::max(nx, std::max(ny, nz)));
+    return s;
+}
+
+// Every view value a tracer reads, of two grids that must reconstruct alike: each vertex and
+// cell corner, the bounds and skip distances of every block (by its coordinates) and tile, and
+// the distance bound at random points in and around the box.
+void expectSameField(const Grid& a, const Grid& b) {
+    const GridView u = a.view(), v = b.view();
+    ASSERT_EQ(u.lipschitz, v.lipschitz);
+    ASSERT_EQ(u.lipschitzLevel[1], v.lipschitzLevel[1]);
+    const GridShape& s = a.shape();
+    for (int k = 0; k <= s.cells[2]; ++k)
+        for (int j = 0; j <= s.cells[1]; ++j)
+            for (int i = 0; i <= s.cells[0]; ++i)
+                ASSERT_TRUE(sameBits(u.vertex(i, j, k), v.vertex(i, j, k)))
+                    << "vertex " << i << " " << j << " " << k;
+    for (int k = 0; k < s.cells[2]; ++k)
+        for (int j = 0; j < s.cells[1]; ++j)
+            for (int i = 0; i < s.cells[0]; ++i) {
+                float c[8], d[8];
+                u.cellCorners(i, j, k, c);
+                v.cellCorners(i, j, k, d);
+                for (int n = 0; n < 8; ++n)
+                    ASSERT_TRUE(sameBits(c[n], d[n])) << "cell " << i << " " << j << " " << k;
+            }
+    for (int bk = 0; bk < u.blocks[2]; ++bk)
+        for (int bj = 0; bj < u.blocks[1]; ++bj)
+            for (int bi = 0; bi < u.blocks[0]; ++bi) {
+                const size_t x = u.blockSlot(bi, bj, bk), y = v.blockSlot(bi, bj, bk);
+                ASSERT_EQ(u.blockSkip[x], v.blockSkip[y]) << bi << " " << bj << " " << bk;
+                ASSERT_EQ(u.blockLipschitz[x], v.blockLipschitz[y]);
+                const int32_t da = u.blockData[x], db = v.blockData[y];
+                ASSERT_EQ(da >= 0, db >= 0);
+                if (da < 0) continue;
+                for (int w = 0; w < u.wordsPerMask(); ++w)
+                    ASSERT_EQ(u.cellMasks[static_cast<size_t>(da) * u.wordsPerMask() + w],
+                              v.cellMasks[static_cast<size_t>(db) * v.wordsPerMask() + w]);
+            }
+    ASSERT_EQ(a.tileSkip(), b.tileSkip());
+    ASSERT_EQ(a.tileLipschitz(), b.tileLipschitz());
+    testing::Rng rng(3);
+    const Bounds3 box = s.bounds();
+    for (int n = 0; n < 4000; ++n) {
+        const Vec3 p = rng.inBox(box.lo - Vec3(0.2f), box.hi + Vec3(0.2f));
+        ASSERT_TRUE(sameBits(gridDistanceBound(u, p), gridDistanceBound(v, p)));
+    }
+}
+
+// Two grids array for array: the same layout and the same values.
+void expectSameArrays(const Grid& a, const Grid& b) {
+    EXPECT_EQ(a.lipschitz(), b.lipschitz());
+    EXPECT_EQ(a.background(), b.background());
+    EXPECT_EQ(a.tilePage(), b.tilePage());
+    EXPECT_EQ(a.flags(), b.flags());
+    EXPECT_EQ(a.blockData(), b.blockData());
+    EXPECT_EQ(a.blockNeighbors(), b.blockNeighbors());
+    ASSERT_EQ(a.blockSamples().size(), b.blockSamples().size());
+    EXPECT_EQ(0, std::memcmp(a.blockSamples().data(), b.blockSamples().data(),
+                             a.blockSamples().size() * sizeof(float)));
+    EXPECT_EQ(a.cellMasks(), b.cellMasks());
+    EXPECT_EQ(a.blockSkip(), b.blockSkip());
+    EXPECT_EQ(a.tileSkip(), b.tileSkip());
+    EXPECT_EQ(a.blockLipschitz(), b.blockLipschitz());
+    EXPECT_EQ(a.tileLipschitz(), b.tileLipschitz());
+    EXPECT_EQ(a.view().lipschitzLevel[1], b.view().lipschitzLevel[1]);
+}
+
+struct Case {
+    int n[3];
+    int B;
+    float band;  // voxels
+};
+
+// Shapes whose cell counts are and are not multiples of the block size, and tiles cut by the
+// grid's faces.
+constexpr Case kCases[] = {{{40, 40, 40}, 4, 1e6f},
+                           {{37, 29, 45}, 4, 1e6f},
+                           {{70, 33, 48}, 8, 1e6f},
+                           {{21, 66, 35}, 8, 500.0f},
+                           {{44, 36, 52}, 4, 80.0f}};
+
+TEST(CompleteGrid, ReconstructsAsTheSparseGridWhereEveryBlockIsInTheBand) {
+    for (const Case& c : kCases) {
+        SCOPED_TRACE(::testing::Message() << c.n[0] << "x" << c.n[1] << "x" << c.n[2] << " B "
+                                          << c.B << " band " << c.band);
+        const GridShape s = shapeOf(c.n[0], c.n[1], c.n[2]);
+        const std::vector<float> f = bumpySphere(s, Vec3(0.1f, -0.05f, 0.0f), 0.55f, 0.04f);
+        const Grid sparse = Grid::sparseFromDense(s, f, c.B, c.band);
+        size_t inside, outside, surface;
+        sparse.blockCounts(inside, outside, surface);
+        ASSERT_EQ(inside + outside, 0u) << "the band must hold every block for this comparison";
+        const Grid complete = Grid::completeFromDense(s, f, c.B, c.band);
+        EXPECT_TRUE(complete.isComplete());
+        EXPECT_FALSE(sparse.isComplete());
+        EXPECT_EQ(complete.surfaceBlockCount(), surface);
+        expectSameField(sparse, complete);
+    }
+}
+
+TEST(CompleteGrid, ARefreshIsTheGridBuiltAfreshFromTheSameSamples) {
+    for (const Case& c : kCases) {
+        SCOPED_TRACE(::testing::Message()
+                     << c.n[0] << "x" << c.n[1] << "x" << c.n[2] << " B " << c.B);
+        const GridShape s = shapeOf(c.n[0], c.n[1], c.n[2]);
+        const Grid first = Grid::completeFromDense(
+            s, bumpySphere(s, Vec3(0.1f, -0.05f, 0.0f), 0.55f, 0.04f), c.B, c.band);
+        // A moved surface, and a field whose far faces are one value (where sparseFromDense
+        // would share a constant apron block: the complete layout keeps them private).
+        std::vector<float> moved = bumpySphere(s, Vec3(-0.2f, 0.1f, 0.15f), 0.4f, 0.08f);
+        std::vector<float> flat(s.vertexCount());
+        for (size_t i = 0; i < flat.size(); ++i) flat[i] = i % 7 == 0 ? -0.3f : 0.25f;
+        for (int k = 0; k <= s.cells[2]; ++k)
+            for (int j = 0; j <= s.cells[1]; ++j)
+                for (int i = 0; i <= s.cells[0]; ++i)
+                    if (i == s.cells[0] || j == s.cells[1] || k == s.cells[2])
+                        flat[(static_cast<size_t>(k) * (s.cells[1] + 1) + j) * (s.cells[0] + 1) +
+                             i] = 0.5f;
+        for (const std::vector<float>* f : {&moved, &flat}) {
+            const Grid refreshed = first.refreshComplete(*f);
+            EXPECT_TRUE(refreshed.isComplete());
+            expectSameArrays(refreshed, Grid::completeFromDense(s, *f, c.B, c.band));
+            // And a second refresh, from the refreshed grid.
+            expectSameArrays(refreshed.refreshComplete(moved),
+                             Grid::completeFromDense(s, moved, c.B, c.band));
+            if (c.band > 1e5f)
+                expectSameField(refreshed, Grid::sparseFromDense(s, *f, c.B, c.band));
+        }
+    }
+}
+
+}  // namespace
+}  // namespace sdft
