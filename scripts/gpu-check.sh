@@ -37,7 +37,7 @@ cmake --build build-gpu -j"$(nproc)" --target sdftrace_unit_tests sdftrace_e2e_t
 step "tests"
 status=0
 timeout 120 build-gpu/sdftrace_unit_tests \
-    --gtest_filter='Gpu*:PrimaryPixel.*:DirectPixel.*:WhittedPixel.*:PathPixel.*:PrimaryTriangles.*:Texture.*:SoftShadows.*:AmbientOcclusion.*:Tape.*:FieldTracer.*:GridDistance.*:GridTracer.MinMax*:Lbvh.*:LbvhWinding.*:WindingNumber.*:WindingPacket.*:JumpFlood.*:RtsdfBake.*:RtsdfAccumulation.*' \
+    --gtest_filter='Gpu*:PrimaryPixel.*:DirectPixel.*:WhittedPixel.*:PathPixel.*:PrimaryTriangles.*:Texture.*:SoftShadows.*:AmbientOcclusion.*:Tape.*:FieldTracer.*:GridDistance.*:GridTracer.MinMax*:Lbvh.*:LbvhWinding.*:WindingNumber.*:WindingPacket.*:JumpFlood.*:RtsdfBake.*:RtsdfAccumulation.*:CompleteGrid.*' \
     > "$out/tests.log" 2>&1 || status=$?
 grep -E "^\[  (PASSED|FAILED|SKIPPED) " "$out/tests.log" >> "$summary"
 grep -E "near:|far :|variant [0-9]:|\[ gpu bake \]" "$out/tests.log" >> "$summary"

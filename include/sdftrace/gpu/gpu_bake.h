@@ -70,6 +70,12 @@ class GpuMeshBaker {
     std::vector<float> accumulate(const GridShape& shape, const RtsdfOptions& options, float alpha,
                                   const RtsdfHistory* from = nullptr, RtsdfStats* stats = nullptr,
                                   GpuBakeTimes* times = nullptr);
+    // accumulate() without the copy back: the frame's field f_t stays on the device
+    // (shape.vertexCount() floats, x fastest), valid until the next call or the baker's end, for
+    // a device grid's refresh (gpu_complete_grid.h). Wall ms into times->totalMs.
+    const float* accumulateOnDevice(const GridShape& shape, const RtsdfOptions& options,
+                                    float alpha, const RtsdfHistory* from = nullptr,
+                                    RtsdfStats* stats = nullptr, GpuBakeTimes* times = nullptr);
     int accumulatedFrames() const;  // frames in the device's accumulation
 
     // The pieces alone, for tests: seeds of `shape`, jump flooding of given seeds, first hits.

@@ -7,7 +7,9 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "sdftrace/gpu/gpu_tape.h"
 #include "sdftrace/render/film.h"
 #include "sdftrace/render/render_plan.h"
 #include "sdftrace/render/render_stats.h"
@@ -19,7 +21,9 @@ class GpuDirectRenderer {
     // Uploads `plan` (which must outlive this). Throws InputError "<what>: ..." when no GPU can
     // be used or the plan needs what the GPU path does not render yet (directPixelUnsupported);
     // `what` names the flag that asked (e.g. "--device cuda").
-    GpuDirectRenderer(const RenderPlan& plan, const std::string& what);
+    // Grids in `bound` are already on the device (GpuCompleteGrid): the tapes read them there.
+    GpuDirectRenderer(const RenderPlan& plan, const std::string& what,
+                      const std::vector<GpuGridBinding>& bound = {});
     ~GpuDirectRenderer();
     GpuDirectRenderer(GpuDirectRenderer&&) noexcept;
     GpuDirectRenderer& operator=(GpuDirectRenderer&&) noexcept;
@@ -27,6 +31,8 @@ class GpuDirectRenderer {
     // One frame into `film` (the plan camera's size): colour, and the depth, normal, steps,
     // error, shadow and AO AOVs the film keeps. The stats carry the GPU's times.
     RenderStats render(const FrameView& view, Film& film) const;
+    // A bound grid's view anew, in every tape that reads it (after its refresh).
+    void rebind(const GpuGridBinding& binding);
 
   private:
     struct Impl;

@@ -8,34 +8,13 @@
 
 #include "sdftrace/field/grid.h"
 #include "sdftrace/field/grid_distance.h"
+#include "sdftrace/field/test_grid_fields.h"
 #include "sdftrace/field/test_util.h"
 
 namespace sdft {
 namespace {
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
-
-// A bumpy sphere of radius r around c, in world units, at every vertex of `s`.
-std::vector<float> bumpySphere(const GridShape& s, Vec3 c, float r, float bumps) {
-    std::vector<float> out;
-    out.reserve(s.vertexCount());
-    for (int k = 0; k <= s.cells[2]; ++k)
-        for (int j = 0; j <= s.cells[1]; ++j)
-            for (int i = 0; i <= s.cells[0]; ++i) {
-                const Vec3 p = s.origin + Vec3(i, j, k) * s.voxelSize;
-                out.push_back(length(p - c) - r +
-                              bumps * std::sin(7 * p.x) * std::sin(5 * p.y) * std::sin(6 * p.z));
-            }
-    return out;
-}
-
-GridShape shapeOf(int nx, int ny, int nz) {
-    GridShape s;
-    s.cells[0] = nx, s.cells[1] = ny, s.cells[2] = nz;
-    s.origin = Vec3(-1.0f);
-    s.voxelSize = 2.0f / static_cast<float>(std::max(nx, std::max(ny, nz)));
-    return s;
-}
 
 // Every view value a tracer reads, of two grids that must reconstruct alike: each vertex and
 // cell corner, the bounds and skip distances of every block (by its coordinates) and tile, and
@@ -119,8 +98,9 @@ TEST(CompleteGrid, ReconstructsAsTheSparseGridWhereEveryBlockIsInTheBand) {
     for (const Case& c : kCases) {
         SCOPED_TRACE(::testing::Message() << c.n[0] << "x" << c.n[1] << "x" << c.n[2] << " B "
                                           << c.B << " band " << c.band);
-        const GridShape s = shapeOf(c.n[0], c.n[1], c.n[2]);
-        const std::vector<float> f = bumpySphere(s, Vec3(0.1f, -0.05f, 0.0f), 0.55f, 0.04f);
+        const GridShape s = testing::shapeOverUnitCube(c.n[0], c.n[1], c.n[2]);
+        const std::vector<float> f =
+            testing::bumpySphere(s, Vec3(0.1f, -0.05f, 0.0f), 0.55f, 0.04f);
         const Grid sparse = Grid::sparseFromDense(s, f, c.B, c.band);
         size_t inside, outside, surface;
         sparse.blockCounts(inside, outside, surface);
@@ -137,12 +117,12 @@ TEST(CompleteGrid, ARefreshIsTheGridBuiltAfreshFromTheSameSamples) {
     for (const Case& c : kCases) {
         SCOPED_TRACE(::testing::Message()
                      << c.n[0] << "x" << c.n[1] << "x" << c.n[2] << " B " << c.B);
-        const GridShape s = shapeOf(c.n[0], c.n[1], c.n[2]);
+        const GridShape s = testing::shapeOverUnitCube(c.n[0], c.n[1], c.n[2]);
         const Grid first = Grid::completeFromDense(
-            s, bumpySphere(s, Vec3(0.1f, -0.05f, 0.0f), 0.55f, 0.04f), c.B, c.band);
+            s, testing::bumpySphere(s, Vec3(0.1f, -0.05f, 0.0f), 0.55f, 0.04f), c.B, c.band);
         // A moved surface, and a field whose far faces are one value (where sparseFromDense
         // would share a constant apron block: the complete layout keeps them private).
-        std::vector<float> moved = bumpySphere(s, Vec3(-0.2f, 0.1f, 0.15f), 0.4f, 0.08f);
+        std::vector<float> moved = testing::bumpySphere(s, Vec3(-0.2f, 0.1f, 0.15f), 0.4f, 0.08f);
         std::vector<float> flat(s.vertexCount());
         for (size_t i = 0; i < flat.size(); ++i) flat[i] = i % 7 == 0 ? -0.3f : 0.25f;
         for (int k = 0; k <= s.cells[2]; ++k)

@@ -2,6 +2,7 @@
 // OFF): every request for a GPU is one clear error, and gpuInfo() says why.
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_bake.h"
+#include "sdftrace/gpu/gpu_complete_grid.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_primary.h"
 #include "sdftrace/gpu/gpu_render.h"
@@ -24,7 +25,8 @@ void requireGpu(const std::string& what) { throw InputError(what + ": " + gpuInf
 
 struct GpuTape::Impl {};
 
-GpuTape::GpuTape(const Tape&) { requireGpu("GPU tape"); }
+GpuTape::GpuTape(const Tape&, const std::vector<GpuGridBinding>&) { requireGpu("GPU tape"); }
+void GpuTape::rebind(const GpuGridBinding&) {}
 GpuTape::~GpuTape() = default;
 GpuTape::GpuTape(GpuTape&&) noexcept = default;
 GpuTape& GpuTape::operator=(GpuTape&&) noexcept = default;
@@ -46,9 +48,11 @@ GpuMinMax buildMinMaxGpu(const GpuTape&, int, const GridView&, const Camera&, in
 
 struct GpuDirectRenderer::Impl {};
 
-GpuDirectRenderer::GpuDirectRenderer(const RenderPlan&, const std::string& what) {
+GpuDirectRenderer::GpuDirectRenderer(const RenderPlan&, const std::string& what,
+                                     const std::vector<GpuGridBinding>&) {
     requireGpu(what);
 }
+void GpuDirectRenderer::rebind(const GpuGridBinding&) {}
 GpuDirectRenderer::~GpuDirectRenderer() = default;
 GpuDirectRenderer::GpuDirectRenderer(GpuDirectRenderer&&) noexcept = default;
 GpuDirectRenderer& GpuDirectRenderer::operator=(GpuDirectRenderer&&) noexcept = default;
@@ -56,6 +60,20 @@ RenderStats GpuDirectRenderer::render(const FrameView&, Film&) const {
     requireGpu("GPU render");
     return {};
 }
+
+struct GpuCompleteGrid::Impl {};
+
+GpuCompleteGrid::GpuCompleteGrid(const Grid&) { requireGpu("GPU complete grid"); }
+GpuCompleteGrid::~GpuCompleteGrid() = default;
+GpuCompleteGrid::GpuCompleteGrid(GpuCompleteGrid&&) noexcept = default;
+GpuCompleteGrid& GpuCompleteGrid::operator=(GpuCompleteGrid&&) noexcept = default;
+void GpuCompleteGrid::refresh(const float*, GpuRefreshTimes*) {}
+void GpuCompleteGrid::refreshFromHost(const std::vector<float>&, GpuRefreshTimes*) {}
+const GridView& GpuCompleteGrid::view() const {
+    static const GridView none;
+    return none;
+}
+GpuCompleteGridArrays GpuCompleteGrid::download() const { return {}; }
 
 struct GpuMeshBaker::Impl {};
 
@@ -77,6 +95,10 @@ void GpuMeshBaker::pose(const TriangleMesh&, GpuBakeTimes*) {}
 std::vector<float> GpuMeshBaker::accumulate(const GridShape&, const RtsdfOptions&, float,
                                             const RtsdfHistory*, RtsdfStats*, GpuBakeTimes*) {
     return {};
+}
+const float* GpuMeshBaker::accumulateOnDevice(const GridShape&, const RtsdfOptions&, float,
+                                              const RtsdfHistory*, RtsdfStats*, GpuBakeTimes*) {
+    return nullptr;
 }
 int GpuMeshBaker::accumulatedFrames() const { return 0; }
 SurfaceSeeds GpuMeshBaker::seeds(const GridShape&) const { return {}; }

@@ -222,6 +222,7 @@ struct GpuMeshBaker::Impl {
     cuda::DeviceArray<float> accumulation;
     GridShape accumulatedShape;
     int accumulated = 0;
+    cuda::DeviceArray<float> field;  // accumulateOnDevice()'s last frame f_t
 
     // The mesh on the device: positions, triangles (unless `sameTriangles`), the LBVH built
     // there, and the winding-number tree: the median split built on the host and uploaded (the
@@ -467,6 +468,19 @@ std::vector<float> GpuMeshBaker::accumulate(const GridShape& s, const RtsdfOptio
                                             const RtsdfHistory* from, RtsdfStats* stats,
                                             GpuBakeTimes* times) {
     const auto start = std::chrono::steady_clock::now();
+    GpuBakeTimes local;
+    GpuBakeTimes& t = times ? *times : local;
+    accumulateOnDevice(s, o, alpha, from, stats, &t);
+    std::vector<float> result;
+    m_impl->field.download(result, s.vertexCount());
+    t.totalMs = since(start);
+    return result;
+}
+
+const float* GpuMeshBaker::accumulateOnDevice(const GridShape& s, const RtsdfOptions& o,
+                                              float alpha, const RtsdfHistory* from,
+                                              RtsdfStats* stats, GpuBakeTimes* times) {
+    const auto start = std::chrono::steady_clock::now();
     Impl& m = *m_impl;
     GpuBakeTimes local;
     GpuBakeTimes& t = times ? *times : local;
@@ -483,13 +497,11 @@ std::vector<float> GpuMeshBaker::accumulate(const GridShape& s, const RtsdfOptio
         m.accumulatedShape = s;
         m.accumulated = 0;
     }
-    const cuda::DeviceArray<float> out =
-        m.fine(s, o, m.accumulation.get(), m.accumulated, alpha, stats, t);
-    std::vector<float> result;
-    out.download(result, n);
+    m.field = m.fine(s, o, m.accumulation.get(), m.accumulated, alpha, stats, t);
     ++m.accumulated;
+    SDFT_CUDA_CHECK(cudaDeviceSynchronize());
     t.totalMs = since(start);
-    return result;
+    return m.field.get();
 }
 
 int GpuMeshBaker::accumulatedFrames() const { return m_impl->accumulated; }

@@ -298,7 +298,9 @@ TEST(GpuBake, DeviceAccumulationFollowsAMovingMeshAsTheCpu) {
             const std::vector<float> gpu = baker.accumulate(s, o, 0.9f, nullptr, nullptr, &times);
             const std::vector<float> cpu = bakeRtsdfSamples(mesh, MeshBvh(mesh), s, o);
             EXPECT_EQ(baker.accumulatedFrames(), cpuHistory.frames);
-            if (frame > 0) EXPECT_GT(times.poseMs, 0.0);
+            if (frame > 0) {
+                EXPECT_GT(times.poseMs, 0.0);
+            }
             ASSERT_EQ(gpu.size(), cpu.size());
             const size_t differ = differing(cpu, gpu, 1e-3f * s.voxelSize);
             EXPECT_LE(differ, cpu.size() / 2000) << differ << " of " << cpu.size() << " differ";
@@ -345,7 +347,8 @@ TEST(GpuBake, RtsdfFramesOfBakeMeshGpuStayOnTheDevice) {
             // history here; the GPU's next frame continues from the host's.
             bakeMesh(mesh, o);
             EXPECT_EQ(gpuHistory.frames, 1);
-            cpuHistory = RtsdfHistory{0.8f};
+            cpuHistory = RtsdfHistory();
+            cpuHistory.alpha = 0.8f;
             o.rtsdf.history = &cpuHistory;
             bakeMesh(mesh, o);
             continue;

@@ -93,9 +93,9 @@ struct GpuDirectRenderer::Impl {
     std::vector<GpuTape> convexTapes;
     cuda::DeviceArray<ConvexView> convex;
 
-    explicit Impl(const RenderPlan& p)
+    Impl(const RenderPlan& p, const std::vector<GpuGridBinding>& bound)
         : plan(p),
-          tape(p.tape),
+          tape(p.tape, bound),
           tables(directPixelTables(p)),
           lights(tables.lights),
           materials(tables.materials),
@@ -107,7 +107,7 @@ struct GpuDirectRenderer::Impl {
             imageViews.push_back({pixels.back().get(), image.width, image.height});
         }
         images = cuda::DeviceArray<ImageView>(imageViews);
-        if (p.primaryField) primaryTape.emplace(*p.primaryField);
+        if (p.primaryField) primaryTape.emplace(*p.primaryField, bound);
         std::vector<MeshPrimaryMesh> meshViews;
         for (const MeshPrimaryTables::Mesh& mesh : tables.meshes.meshes) {
             meshNodes.emplace_back(mesh.nodes);
@@ -126,7 +126,7 @@ struct GpuDirectRenderer::Impl {
         if (!whitted) return;
         std::vector<ConvexView> views;
         for (const ConvexObject& c : p.convexObjects) {
-            convexTapes.emplace_back(c.tape);
+            convexTapes.emplace_back(c.tape, bound);
             views.push_back({convexTapes.back().view(), c.bounds});
         }
         convex = cuda::DeviceArray<ConvexView>(views);
@@ -146,12 +146,20 @@ struct GpuDirectRenderer::Impl {
     }
 };
 
-GpuDirectRenderer::GpuDirectRenderer(const RenderPlan& plan, const std::string& what) {
+GpuDirectRenderer::GpuDirectRenderer(const RenderPlan& plan, const std::string& what,
+                                     const std::vector<GpuGridBinding>& bound) {
     requireGpu(what);
     if (const std::string why = directPixelUnsupported(plan); !why.empty())
         throw InputError(what + ": the GPU does not render " + why +
                          " yet (docs/gpu.md); use --device cpu");
-    m_impl = std::make_unique<Impl>(plan);
+    m_impl = std::make_unique<Impl>(plan, bound);
+}
+
+void GpuDirectRenderer::rebind(const GpuGridBinding& binding) {
+    Impl& m = *m_impl;
+    m.tape.rebind(binding);
+    if (m.primaryTape) m.primaryTape->rebind(binding);
+    for (GpuTape& t : m.convexTapes) t.rebind(binding);
 }
 
 GpuDirectRenderer::~GpuDirectRenderer() = default;

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -61,22 +62,34 @@ struct GpuTape::Impl {
     void* buffer = nullptr;
     size_t bytes = 0;
     TapeView view;
+    std::vector<const Grid*> grids;  // the tape's, in view order
     ~Impl() {
         if (buffer) cudaFree(buffer);
     }
 };
 
-GpuTape::GpuTape(const Tape& tape) : m_impl(std::make_unique<Impl>()) {
+GpuTape::GpuTape(const Tape& tape, const std::vector<GpuGridBinding>& bound)
+    : m_impl(std::make_unique<Impl>()) {
     requireGpu("GPU tape");
     Packer pack;
     const std::span<const Instr> instrs = tape.instructions();
     const std::span<const float> consts = tape.constants();
     const size_t instrAt = pack.add(instrs.data(), instrs.size_bytes());
     const size_t constAt = pack.add(consts.data(), consts.size_bytes());
-    // Each grid's arrays (their offsets in forEachGridArray's order), then their views.
+    // Each grid's arrays (their offsets in forEachGridArray's order), then their views; a bound
+    // grid's view as given, nothing uploaded.
     std::vector<GridView> views;
     std::vector<size_t> offsets;
+    std::vector<bool> onDevice;
     for (const auto& g : tape.grids()) {
+        m_impl->grids.push_back(g.get());
+        auto b = std::find_if(bound.begin(), bound.end(),
+                              [&](const GpuGridBinding& x) { return x.grid == g.get(); });
+        onDevice.push_back(b != bound.end());
+        if (onDevice.back()) {
+            views.push_back(b->view);
+            continue;
+        }
         views.push_back(g->view());
         forEachGridArray(views.back(), *g,
                          [&](auto&, const auto& host) { offsets.push_back(pack.add(host)); });
@@ -90,9 +103,10 @@ GpuTape::GpuTape(const Tape& tape) : m_impl(std::make_unique<Impl>()) {
     const unsigned char* base = static_cast<const unsigned char*>(m_impl->buffer);
     size_t next = 0;
     for (size_t i = 0; i < views.size(); ++i) {
-        forEachGridArray(views[i], *tape.grids()[i], [&](auto& field, const auto& host) {
-            relocate(field, host, offsets[next++], base);
-        });
+        if (!onDevice[i])
+            forEachGridArray(views[i], *tape.grids()[i], [&](auto& field, const auto& host) {
+                relocate(field, host, offsets[next++], base);
+            });
         std::memcpy(bytes.data() + viewsAt + i * sizeof(GridView), &views[i], sizeof(GridView));
     }
     SDFT_CUDA_CHECK(cudaMemcpy(m_impl->buffer, bytes.data(), bytes.size(), cudaMemcpyHostToDevice));
@@ -101,6 +115,14 @@ GpuTape::GpuTape(const Tape& tape) : m_impl(std::make_unique<Impl>()) {
     v.instrs = reinterpret_cast<const Instr*>(base + instrAt);
     v.consts = reinterpret_cast<const float*>(base + constAt);
     v.grids = views.empty() ? nullptr : reinterpret_cast<const GridView*>(base + viewsAt);
+}
+
+void GpuTape::rebind(const GpuGridBinding& b) {
+    const auto& grids = m_impl->grids;
+    const auto it = std::find(grids.begin(), grids.end(), b.grid);
+    if (it == grids.end()) return;  // not a grid of this tape
+    GridView* slot = const_cast<GridView*>(m_impl->view.grids) + (it - grids.begin());
+    SDFT_CUDA_CHECK(cudaMemcpy(slot, &b.view, sizeof(GridView), cudaMemcpyHostToDevice));
 }
 
 GpuTape::~GpuTape() = default;
