@@ -3,9 +3,11 @@
 // array for array, to a complete grid built afresh from the same samples.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
+#include "sdftrace/field/complete_skip.h"
 #include "sdftrace/field/grid.h"
 #include "sdftrace/field/grid_distance.h"
 #include "sdftrace/field/test_grid_fields.h"
@@ -141,6 +143,66 @@ TEST(CompleteGrid, ARefreshIsTheGridBuiltAfreshFromTheSameSamples) {
             if (c.band > 1e5f)
                 expectSameField(refreshed, Grid::sparseFromDense(s, *f, c.B, c.band));
         }
+    }
+}
+
+// The GPU refresh's skip distances (complete_skip.h's functions run in loops as its kernels run
+// them: sources, 8 dilations of the padded blocks, the tiles' sources and their dilations) against
+// Grid::computeBlockSkip's, on grids whose surface is small (most blocks and tiles far from it)
+// and large.
+TEST(CompleteGrid, SkipDistancesByDilationAreComputeBlockSkips) {
+    struct Field {
+        int n[3], B;
+        float radius;
+    };
+    for (const Field c : {Field{{128, 128, 128}, 4, 0.08f}, Field{{150, 97, 121}, 4, 0.3f},
+                          Field{{200, 90, 130}, 8, 0.12f}, Field{{40, 40, 40}, 4, 0.55f}}) {
+        SCOPED_TRACE(::testing::Message() << c.n[0] << "x" << c.n[1] << "x" << c.n[2] << " B "
+                                          << c.B << " r " << c.radius);
+        const GridShape s = testing::shapeOverUnitCube(c.n[0], c.n[1], c.n[2]);
+        const Grid grid = Grid::completeFromDense(
+            s, testing::bumpySphere(s, Vec3(0.3f, -0.2f, 0.1f), c.radius, 0.01f), c.B, 1e6f);
+        const GridView g = grid.view();
+        const int px = g.tiles[0] * kTileBlocks, py = g.tiles[1] * kTileBlocks,
+                  pz = g.tiles[2] * kTileBlocks;
+        const size_t n = static_cast<size_t>(px) * py * pz;
+        std::vector<uint8_t> d(n), next(n);
+        auto forEach = [](int nx, int ny, int nz, auto&& f) {
+            for (int z = 0; z < nz; ++z)
+                for (int y = 0; y < ny; ++y)
+                    for (int x = 0; x < nx; ++x)
+                        f((static_cast<size_t>(z) * ny + y) * nx + x, x, y, z);
+        };
+        forEach(px, py, pz,
+                [&](size_t i, int x, int y, int z) { d[i] = blockSkipSource(g, x, y, z); });
+        for (int step = 0; step < kTileBlocks; ++step) {
+            forEach(px, py, pz, [&](size_t i, int x, int y, int z) {
+                next[i] = chebyshevStep(d.data(), px, py, pz, x, y, z);
+            });
+            d.swap(next);
+        }
+        std::vector<uint8_t> blockSkip(grid.blockSkip().size(), 1);
+        forEach(px, py, pz, [&](size_t i, int x, int y, int z) {
+            blockSkip[completePaddedSlot(g, x, y, z)] = d[i];
+        });
+        EXPECT_EQ(blockSkip, grid.blockSkip());
+        const size_t tiles = grid.tileSkip().size();
+        std::vector<uint16_t> t(tiles), tnext(tiles);
+        forEach(g.tiles[0], g.tiles[1], g.tiles[2], [&](size_t i, int x, int y, int z) {
+            t[i] = tileSkipSource(d.data(), px, py, x, y, z);
+        });
+        for (int step = 0; step < std::max(g.tiles[0], std::max(g.tiles[1], g.tiles[2])); ++step) {
+            forEach(g.tiles[0], g.tiles[1], g.tiles[2], [&](size_t i, int x, int y, int z) {
+                tnext[i] = chebyshevStep(t.data(), g.tiles[0], g.tiles[1], g.tiles[2], x, y, z);
+            });
+            t.swap(tnext);
+        }
+        std::vector<uint8_t> tileSkip(tiles);
+        for (size_t i = 0; i < tiles; ++i) tileSkip[i] = tileSkipEntry(t[i]);
+        EXPECT_EQ(tileSkip, grid.tileSkip());
+        // The cases reach both caps: blocks 9 away and tiles without a source.
+        EXPECT_TRUE(std::count(blockSkip.begin(), blockSkip.end(), kSkipFarBlocks) > 0 ||
+                    c.radius > 0.5f);
     }
 }
 

@@ -9,6 +9,7 @@
 #include "device_buffer.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/complete_block.h"
+#include "sdftrace/field/complete_skip.h"
 #include "sdftrace/gpu/gpu_complete_grid.h"
 #include "sdftrace/gpu/gpu_device.h"
 
@@ -17,8 +18,6 @@ namespace sdft {
 namespace {
 
 constexpr int kThreads = 256;
-constexpr uint8_t kFarBlocks = kTileBlocks + 1;  // Grid::computeBlockSkip's "beyond 8"
-constexpr uint16_t kFarTiles = 256;              // its tile transform's start
 
 unsigned blocksFor(size_t n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
@@ -38,13 +37,6 @@ __global__ void maxWorstKernel(const float* worst, int32_t n, unsigned* out) {
     atomicMax(out, __float_as_uint(m));
 }
 
-// Padded block (x, y, z), the tile grid's extent in blocks: its slot (every tile of a complete
-// grid has a page of its own).
-__device__ inline size_t paddedSlot(const GridView& g, int x, int y, int z) {
-    return static_cast<size_t>(g.tilePage[g.tileIndex(x, y, z)]) * kPageEntries +
-           pageLocal(x, y, z);
-}
-
 // This thread's entry i of an nx x ny x nz array (x fastest) and its coordinates; false past
 // its end.
 __device__ inline bool arrayThread(int nx, int ny, int nz, size_t& i, int& x, int& y, int& z) {
@@ -56,71 +48,37 @@ __device__ inline bool arrayThread(int nx, int ny, int nz, size_t& i, int& x, in
     return true;
 }
 
-// Sources of the block skip distances: blocks holding a sign-changing cell (0), else far.
+// The kernels of the skip distances: complete_skip.h's functions, one padded block or tile each.
 __global__ void blockSourcesKernel(GridView g, int px, int py, int pz, uint8_t* d) {
     size_t i;
     int x, y, z;
-    if (!arrayThread(px, py, pz, i, x, y, z)) return;
-    uint8_t v = kFarBlocks;
-    if (x < g.blocks[0] && y < g.blocks[1] && z < g.blocks[2]) {
-        const int32_t data = g.blockData[paddedSlot(g, x, y, z)];
-        if (data >= 0) {
-            const int words = g.wordsPerMask();
-            const uint64_t* mask = g.cellMasks + static_cast<size_t>(data) * words;
-            bool crossing = false;
-            for (int w = 0; w < words; ++w) crossing |= mask[w] != 0;
-            if (crossing) v = 0;
-        }
-    }
-    d[i] = v;
+    if (arrayThread(px, py, pz, i, x, y, z)) d[i] = blockSkipSource(g, x, y, z);
 }
 
-// One step of a Chebyshev distance transform over an nx x ny x nz array: each entry the least of
-// itself and its 26 neighbours' plus one.
 template <class T>
 __global__ void dilateKernel(const T* in, T* out, int nx, int ny, int nz) {
     size_t i;
     int x, y, z;
-    if (!arrayThread(nx, ny, nz, i, x, y, z)) return;
-    unsigned m = in[i];
-    for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                const int a = x + dx, b = y + dy, c = z + dz;
-                if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
-                const unsigned v = in[(static_cast<size_t>(c) * ny + b) * nx + a] + 1u;
-                m = v < m ? v : m;
-            }
-    out[i] = static_cast<T>(m);
+    if (arrayThread(nx, ny, nz, i, x, y, z)) out[i] = chebyshevStep(in, nx, ny, nz, x, y, z);
 }
 
-// The padded distances into the slots; each tile a source of the tile transform when one of its
-// blocks is a source.
 __global__ void writeBlockSkipKernel(GridView g, int px, int py, int pz, const uint8_t* d,
                                      uint8_t* blockSkip) {
     size_t i;
     int x, y, z;
-    if (!arrayThread(px, py, pz, i, x, y, z)) return;
-    blockSkip[paddedSlot(g, x, y, z)] = d[i];
+    if (arrayThread(px, py, pz, i, x, y, z)) blockSkip[completePaddedSlot(g, x, y, z)] = d[i];
 }
 
 __global__ void tileSourcesKernel(GridView g, int px, int py, const uint8_t* d, uint16_t* t) {
     size_t i;
-    int tx, ty, tz;
-    if (!arrayThread(g.tiles[0], g.tiles[1], g.tiles[2], i, tx, ty, tz)) return;
-    bool any = false;
-    for (int z = 0; z < kTileBlocks; ++z)
-        for (int y = 0; y < kTileBlocks; ++y)
-            for (int x = 0; x < kTileBlocks; ++x)
-                any |=
-                    d[(static_cast<size_t>(tz * kTileBlocks + z) * py + ty * kTileBlocks + y) * px +
-                      tx * kTileBlocks + x] == 0;
-    t[i] = any ? 0 : kFarTiles;
+    int x, y, z;
+    if (arrayThread(g.tiles[0], g.tiles[1], g.tiles[2], i, x, y, z))
+        t[i] = tileSkipSource(d, px, py, x, y, z);
 }
 
 __global__ void writeTileSkipKernel(const uint16_t* t, size_t n, uint8_t* tileSkip) {
     const size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
-    if (i < n) tileSkip[i] = static_cast<uint8_t>(t[i] < 255 ? t[i] : 255);
+    if (i < n) tileSkip[i] = tileSkipEntry(t[i]);
 }
 
 double since(std::chrono::steady_clock::time_point t) {
