@@ -58,9 +58,10 @@ TEST(DeviceCli, AutoFallsBackToTheCpuAndSaysWhy) {
     ASSERT_EQ(mapped.status, 0) << mapped.err;
     EXPECT_NE(mapped.err.find("--device auto: rendering on the CPU ("), std::string::npos)
         << mapped.err;
-    if (gpuInfo().present)
+    if (gpuInfo().present) {
         EXPECT_NE(mapped.err.find("the GPU does not render shadow maps"), std::string::npos)
             << mapped.err;
+    }
     // Without a GPU the plastic scene is the CPU's image bit for bit.
     const RunResult a = runCli(
         "render " + example("shadows") + " --device auto -o " + dir.file("auto.pfm") + kSize, dir);
@@ -84,7 +85,7 @@ TEST(DeviceCli, AutoFallsBackToTheCpuAndSaysWhy) {
 TEST(DeviceCli, TexturesAndTrianglePrimariesRenderOnTheGpu) {
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why;
     TempDir dir;
-    for (const std::string args :
+    for (const std::string& args :
          {example("textures"), example("hybrid") + " --primary-triangles"}) {
         SCOPED_TRACE(args);
         const RunResult g = runCli(

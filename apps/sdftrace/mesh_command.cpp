@@ -125,10 +125,10 @@ Grid fieldOf(const MeshArgs& a, bool progress, std::string& how) {
         return bakeMesh(mesh, o).grid;
     }
     AssetCache cache;
-    Scene scene = a.time ? AnimatedScene::fromFile(a.input).at(*a.time, cache,
-                                                               PrepareOptions{.progress = progress})
+    Scene scene = a.time ? AnimatedScene::fromFile(a.input).at(
+                               *a.time, cache, PrepareOptions{.progress = progress, .bakeMesh = {}})
                          : describeSceneFile(a.input);
-    if (!a.time) prepareScene(scene, cache, PrepareOptions{.progress = progress});
+    if (!a.time) prepareScene(scene, cache, PrepareOptions{.progress = progress, .bakeMesh = {}});
     how = "sampled at " + std::to_string(a.resolution > 0 ? a.resolution : kDefaultRes) + " cells";
     return sampleField(scene.root, nullptr, a, progress);
 }

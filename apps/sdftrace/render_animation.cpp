@@ -153,7 +153,7 @@ struct Animation {
     std::unique_ptr<Instant> prepare(long long i, AssetCache& cache, PrepareStats& assets) const {
         auto in = std::make_unique<Instant>();
         AnimatedScene::InstantAssets used;
-        in->scene = anim.at(frames.at(i), cache, prepareOptions(a, distributed), &used);
+        in->scene = anim.at(frames.at(i), cache, prepareOptions(a, distributed, motion), &used);
         cache.keepOnly(used.keys);  // what this frame needs stays cached, the rest goes
         assets.add(used.stats);
         applyOverrides(a, in->scene);

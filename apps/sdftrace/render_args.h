@@ -92,8 +92,10 @@ std::unique_ptr<GpuDirectRenderer> deviceRenderer(const RenderArgs& a, const Ren
                                                   bool distributed, bool note);
 // How the scene's meshes bake under --device (prepare_scene.h): cuda, or auto with a GPU present,
 // bake on the GPU what it bakes (jfa and rtsdf: RTSDF's per-frame regeneration of dynamic meshes),
-// the rest on the CPU; cpu, mpirun or no GPU: empty (bakeMesh on the CPU).
-PrepareOptions prepareOptions(const RenderArgs& a, bool distributed);
+// the rest on the CPU; cpu, mpirun or no GPU: empty (bakeMesh on the CPU). Under cuda, RTSDF's
+// per-frame grids stay on the device (MeshBakeOptions::gpuResident) unless `hostFields`: motion
+// vectors evaluate the objects' fields on the host (SceneMotion::objectAt).
+PrepareOptions prepareOptions(const RenderArgs& a, bool distributed, bool hostFields = false);
 // The frames of `gpu` as renderImage's and renderFrames' per-frame hook.
 FrameRenderFn gpuFrames(const GpuDirectRenderer& gpu);
 

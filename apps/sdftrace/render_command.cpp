@@ -210,11 +210,18 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
     return renderFrames(plan, film, t, onFrame, progress, across);
 }
 
-PrepareOptions prepareOptions(const RenderArgs& a, bool distributed) {
-    PrepareOptions o{.progress = !a.quiet && stderrIsTerminal()};
+PrepareOptions prepareOptions(const RenderArgs& a, bool distributed, bool hostFields) {
+    PrepareOptions o{.progress = !a.quiet && stderrIsTerminal(), .bakeMesh = {}};
     if (a.device == "cpu" || distributed || !gpuInfo().present) return o;
-    o.bakeMesh = [](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
-        return gpuBakeUnsupported(bake).empty() ? bakeMeshGpu(mesh, bake) : bakeMesh(mesh, bake);
+    // With --device cuda the GPU renders every frame: RTSDF's per-frame grids stay on the device
+    // (MeshBakeOptions::gpuResident). --device auto may fall back to the CPU, which needs them,
+    // as do motion vectors.
+    const bool resident = a.device == "cuda" && !hostFields;
+    o.bakeMesh = [resident](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
+        if (!gpuBakeUnsupported(bake).empty()) return bakeMesh(mesh, bake);
+        MeshBakeOptions b = bake;
+        b.gpuResident = resident;
+        return bakeMeshGpu(mesh, b);
     };
     return o;
 }

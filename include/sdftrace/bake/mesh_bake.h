@@ -36,10 +36,17 @@ struct MeshBakeOptions {
     // The grid's region and voxel (default: from the mesh's bounds and `sampling`): frames that
     // accumulate into one grid keep its shape.
     std::optional<GridShape> shape;
+    // An rtsdf frame baked on the GPU for a GPU renderer (render --device cuda): from its second
+    // frame on, the field stays on the device and refreshes the history's device grid
+    // (bakeMeshGpu, gpu/gpu_bake.h); the result then holds no grid (onDevice).
+    bool gpuResident = false;
 };
 
 struct MeshBakeResult {
+    // Empty when `onDevice`: the frame's values are in the history's device grid, and the
+    // history's host grid (RtsdfHistory::grid) stands in for it.
     Grid grid;
+    bool onDevice = false;
     std::vector<BakeStage> stages;
     std::string details;  // method-specific counts for the summary line ("" if none)
 };

@@ -35,6 +35,9 @@ struct RtsdfHistory {
     // The last frame's grid, a complete block grid (Grid::completeFromDense) whose layout the
     // next frame's samples refresh (finishMeshBake); set by the caller that keeps the grid.
     std::shared_ptr<const Grid> grid;
+    // The last frame's values are on the device (the device state's grid), not in `grid`, which
+    // keeps its layout and an earlier frame's values (MeshBakeOptions::gpuResident).
+    bool gridOnDevice = false;
 };
 
 // Eq. 1's previous frame: kept when `history` holds frames of `shape` on the host, else started

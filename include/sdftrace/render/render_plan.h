@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "sdftrace/field/device_resident_grid.h"
 #include "sdftrace/field/grid.h"
 #include "sdftrace/field/node.h"
 #include "sdftrace/field/tape.h"
@@ -42,6 +43,9 @@ struct RenderPlan {
     // `tape`.
     std::shared_ptr<const MeshPrimary> meshPrimary;
     std::optional<Tape> primaryField;
+    // Grids of the tape whose current values are on the GPU: the GPU renderer binds them; the
+    // CPU renderer refuses the plan (device_resident_grid.h).
+    std::vector<DeviceResidentGrid> deviceGrids;
 };
 
 // What changes between frames of one plan (temporal.h): the camera, the frame number that seeds

@@ -12,6 +12,7 @@
 
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/texture_coords.h"
+#include "sdftrace/field/device_resident_grid.h"
 #include "sdftrace/field/node.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/math/camera.h"
@@ -81,6 +82,8 @@ struct Scene {
     // The triangles each mesh grid was baked from (prepareScene), for primary rays on the
     // triangles (RenderSettings::primaryTriangles).
     std::map<const Grid*, std::shared_ptr<const TriangleMesh>> meshes;
+    // Grids whose current values are on the GPU (prepareScene, for `render --device cuda`).
+    std::vector<DeviceResidentGrid> deviceGrids;
 };
 
 }  // namespace sdft

@@ -11,8 +11,11 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/test_grid_fields.h"
+#include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_render.h"
+#include "sdftrace/render/renderer.h"
+#include "sdftrace/scene/animated_scene.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
 
@@ -101,6 +104,59 @@ TEST(GpuCompleteGrid, ABoundGridRendersAsItsUpload) {
     double diff = 0;
     for (size_t i = 0; i < a.color.size(); ++i) diff += std::fabs(a.color[i] - b.color[i]);
     EXPECT_LT(diff / static_cast<double>(a.color.size()), 1e-5);
+}
+
+// render --device cuda's RTSDF frames (MeshBakeOptions::gpuResident): from the second frame on,
+// the field is accumulated and the grid refreshed on the device, and the plan binds that grid in
+// place of its host stand-in. Each frame renders as the same frame baked back to the host and
+// uploaded; the CPU renderer refuses the resident plan.
+TEST(GpuCompleteGrid, ResidentFramesRenderAsFramesBakedToTheHost) {
+    SKIP_WITHOUT_GPU();
+    const AnimatedScene anim =
+        AnimatedScene::fromText(R"({
+      "camera": {"eye": [0.2, 0.9, 2.2], "target": [0, 0.35, 0], "fov": 30, "width": 160,
+                 "height": 90},
+      "lights": [{"type": "directional", "direction": [-0.4, -1, -0.5], "intensity": 2,
+                  "angle": 2}],
+      "objects": [
+        {"type": "box", "size": [4, 0.1, 4], "translate": [0, -0.05, 0]},
+        {"mesh": "../data/meshes/teapot.obj", "resolution": 48, "scale": 0.15,
+         "rotate": {"axis": [0, 1, 0], "angle": {"keyframes": [{"time": 0, "value": 0},
+                                                              {"time": 1, "value": 90}]}},
+         "dynamic": {"method": "rtsdf", "rays": 2, "alpha": 0.8}}],
+      "render": {"shadow_method": "soft"}})",
+                                "resident.json", std::string(SDFT_SOURCE_DIR) + "/examples");
+    const auto baker = [](bool resident) {
+        PrepareOptions o;
+        o.bakeMesh = [resident](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
+            MeshBakeOptions b = bake;
+            b.gpuResident = resident;
+            return bakeMeshGpu(mesh, b);
+        };
+        return o;
+    };
+    AssetCache onDevice, onHost;
+    for (int i = 0; i < 4; ++i) {
+        const double t = 0.25 * i;
+        const Scene a = anim.at(t, onDevice, baker(true));
+        const Scene b = anim.at(t, onHost, baker(false));
+        EXPECT_EQ(a.deviceGrids.size(), i > 0 ? 1u : 0u) << i;
+        EXPECT_TRUE(b.deviceGrids.empty()) << i;
+        const RenderPlan pa = planRender(a), pb = planRender(b);
+        FrameView frame;
+        frame.camera = pa.camera;
+        Film fa(pa.camera.width, pa.camera.height, Film::bit(Aov::Color));
+        Film fb(pa.camera.width, pa.camera.height, Film::bit(Aov::Color));
+        GpuDirectRenderer(pa, "test").render(frame, fa);
+        GpuDirectRenderer(pb, "test").render(frame, fb);
+        double diff = 0;
+        for (size_t k = 0; k < fa.color.size(); ++k) diff += std::fabs(fa.color[k] - fb.color[k]);
+        EXPECT_LT(diff / static_cast<double>(fa.color.size()), 1e-4) << "frame " << i;
+        if (i > 0) {
+            Film cpu(pa.camera.width, pa.camera.height, Film::bit(Aov::Color));
+            EXPECT_THROW(render(pa, frame, cpu), InputError) << i;
+        }
+    }
 }
 
 }  // namespace

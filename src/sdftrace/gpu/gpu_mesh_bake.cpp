@@ -1,6 +1,7 @@
 // bakeMesh on the GPU (gpu_bake.h): what the GPU bakes, and the result assembled as the CPU's
 // (stages, details, a sparse grid from the dense samples). Built with and without CUDA: without
 // it, GpuMeshBaker answers with gpu_absent.cpp's one line.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -24,6 +25,15 @@ std::string gpuBakeUnsupported(const MeshBakeOptions& o) {
 }
 
 namespace {
+
+// Whether complete grid `g` is the one finishMeshBake makes of a frame of `shape` and `so`.
+bool sameCompleteLayout(const Grid& g, const GridShape& shape, const SampleOptions& so) {
+    const GridShape& s = g.shape();
+    return g.isComplete() && g.blockSize() == so.blockSize &&
+           g.completeBand() == so.bandVoxels * shape.voxelSize && s.voxelSize == shape.voxelSize &&
+           s.origin.x == shape.origin.x && s.origin.y == shape.origin.y &&
+           s.origin.z == shape.origin.z && std::equal(s.cells, s.cells + 3, shape.cells);
+}
 
 std::string millis(double ms) {
     char s[32];
@@ -54,13 +64,37 @@ MeshBakeResult bakeMeshGpu(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     } else if (h) {
         // Signs by the dipoles over the LBVH: no host work when the mesh is posed.
         h->device = std::make_shared<RtsdfDeviceState>(
-            RtsdfDeviceState{GpuMeshBaker(mesh, GpuWinding::Lbvh)});
+            RtsdfDeviceState{GpuMeshBaker(mesh, GpuWinding::Lbvh), std::nullopt});
         clock.mark("upload + lbvh (gpu)");
     } else {
         own.emplace(mesh);
         clock.mark("upload + lbvh (gpu)");
     }
     GpuMeshBaker& baker = h ? h->device->baker : *own;
+    // A later frame for a GPU renderer: the field refreshes the device grid and stays there.
+    if (h && o.gpuResident && onDevice && h->device->grid && h->grid &&
+        sameCompleteLayout(*h->grid, shape, so)) {
+        RtsdfOptions ro = o.rtsdf;
+        ro.coarseSign = o.sign;
+        RtsdfStats st;
+        const float* field = baker.accumulateOnDevice(shape, ro, h->alpha, nullptr, &st, &t);
+        h->frames = baker.accumulatedFrames();
+        clock.mark("rtsdf (gpu)");
+        GpuRefreshTimes rt;
+        h->device->grid->refresh(field, &rt);
+        clock.mark("refresh (gpu)");
+        char line[400];
+        std::snprintf(line, sizeof line,
+                      "%zu vertices refined by %d rays each (%zu rays), %zu with no hit; GPU: "
+                      "lbvh %s, seeds %s, jfa %s, signs %s, rays %s, grid refresh %s; frame %d "
+                      "accumulated and its grid refreshed on the GPU",
+                      st.refined, ro.rays, st.rays, st.missed, millis(baker.lbvhBuildMs()).c_str(),
+                      millis(t.seedMs).c_str(), millis(t.jfaMs).c_str(), millis(t.signMs).c_str(),
+                      millis(t.rayMs).c_str(), millis(rt.blocksMs + rt.skipMs).c_str(), h->frames);
+        r.details = line;
+        r.onDevice = true;
+        return r;
+    }
     std::vector<float> samples;
     if (o.method == MeshBakeMethod::Rtsdf) {
         RtsdfOptions ro = o.rtsdf;
@@ -96,6 +130,11 @@ MeshBakeResult bakeMeshGpu(const TriangleMesh& mesh, const MeshBakeOptions& o) {
                     signMethodName(o.sign) + ", every vertex)";
     }
     finishMeshBake(shape, std::move(samples), so, r, clock, h);
+    // The device grid the next frames refresh, uploaded once from this frame's.
+    if (h && o.gpuResident && r.grid.isComplete()) {
+        h->device->grid.emplace(r.grid);
+        clock.mark("grid upload (gpu)");
+    }
     return r;
 }
 

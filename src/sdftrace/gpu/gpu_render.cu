@@ -7,6 +7,7 @@
 #include "gpu_minmax.cuh"
 #include "gpu_render_launch.cuh"
 #include "sdftrace/core/error.h"
+#include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_render.h"
 #include "sdftrace/gpu/gpu_tape.h"
@@ -152,7 +153,15 @@ GpuDirectRenderer::GpuDirectRenderer(const RenderPlan& plan, const std::string& 
     if (const std::string why = directPixelUnsupported(plan); !why.empty())
         throw InputError(what + ": the GPU does not render " + why +
                          " yet (docs/gpu.md); use --device cpu");
-    m_impl = std::make_unique<Impl>(plan, bound);
+    // The plan's grids whose values are on the device (RTSDF's per-frame grids): their device
+    // copies, refreshed there, in place of an upload.
+    std::vector<GpuGridBinding> all = bound;
+    for (const DeviceResidentGrid& d : plan.deviceGrids) {
+        if (!d.state || !d.state->grid)
+            throw InputError(what + ": a grid of the plan lives on the GPU without a device copy");
+        all.push_back({d.grid, d.state->grid->view()});
+    }
+    m_impl = std::make_unique<Impl>(plan, all);
 }
 
 void GpuDirectRenderer::rebind(const GpuGridBinding& binding) {

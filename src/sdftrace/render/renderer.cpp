@@ -9,6 +9,7 @@
 #include <cmath>
 #include <memory>
 
+#include "sdftrace/core/error.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/math/camera.h"
@@ -599,8 +600,18 @@ struct FrameRenderer::Impl {
     tbb::enumerable_thread_specific<RenderStats> pathStats;
 };
 
+namespace {
+// A grid whose values are on the GPU (device_resident_grid.h) has only a stand-in on the host.
+void requireHostGrids(const RenderPlan& plan) {
+    if (!plan.deviceGrids.empty())
+        throw InputError(
+            "render: the plan's RTSDF grid lives on the GPU (--device cuda); the CPU renderer "
+            "cannot read it");
+}
+}  // namespace
+
 FrameRenderer::FrameRenderer(const RenderPlan& plan, const FrameView& view, Film& film)
-    : m_impl(std::make_unique<Impl>(plan, view, film)) {
+    : m_impl((requireHostGrids(plan), std::make_unique<Impl>(plan, view, film))) {
     Impl& m = *m_impl;
     m.tileSize = std::max(1, plan.settings.tileSize);
     m.tilesX = (film.width + m.tileSize - 1) / m.tileSize;
@@ -661,6 +672,7 @@ RenderStats FrameRenderer::stats() const {
 }
 
 RenderStats render(const RenderPlan& plan, const FrameView& view, Film& film, bool progress) {
+    requireHostGrids(plan);
     if (plan.settings.pathTracing) return renderPaths(plan, view, film, progress);
     FrameRenderer frame(plan, view, film);
     Progress bar("render", static_cast<uint64_t>(frame.tileCount()), progress);

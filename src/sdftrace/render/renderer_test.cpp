@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "sdftrace/core/error.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
@@ -53,6 +54,30 @@ TEST(Renderer, DemoHasNoNonFinitePixelAndCountsEveryRay) {
     }
     // The steps AOV is the per-pixel count of the primary-ray evaluations in the stats.
     EXPECT_EQ(steps, static_cast<double>(stats.primaryEvaluations));
+}
+
+// A plan whose grid's values live on the GPU (render --device cuda's RTSDF frames) holds only a
+// stand-in on the host: the CPU renderer refuses it with one line rather than rendering stale
+// values.
+TEST(Renderer, RefusesAPlanWhoseGridLivesOnTheGpu) {
+    Scene scene = demoScene();
+    scene.camera.width = 8;
+    scene.camera.height = 8;
+    RenderPlan plan = planRender(scene);
+    GridShape shape;
+    shape.cells[0] = shape.cells[1] = shape.cells[2] = 1;
+    const Grid stand = Grid::dense(shape, std::vector<float>(8, 1.0f));
+    plan.deviceGrids.push_back({&stand, nullptr});
+    Film film(8, 8);
+    try {
+        render(plan, film);
+        ADD_FAILURE() << "the CPU rendered a plan with a device-resident grid";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("--device cuda"), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+    EXPECT_THROW(FrameRenderer(plan, FrameView{plan.camera}, film), InputError);
 }
 
 TEST(Renderer, ThreadCountDoesNotChangeTheImage) {

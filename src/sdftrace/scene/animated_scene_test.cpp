@@ -194,7 +194,9 @@ TEST(AnimatedScene, DynamicMeshesAreRegeneratedEveryFrame) {
         if (!first) first = g;
         EXPECT_EQ(g->blockNeighbors(), first->blockNeighbors()) << i;
         EXPECT_EQ(g->blockSamples().size(), first->blockSamples().size()) << i;
-        if (i > 0) EXPECT_NE(g, first) << i;
+        if (i > 0) {
+            EXPECT_NE(g, first) << i;
+        }
     }
     EXPECT_EQ(cache.rtsdfHistory("dyn.json: /objects/0/mesh").frames, 40);
     EXPECT_GT(before, 0.05f);

@@ -70,6 +70,7 @@ RenderPlan planRender(const Scene& scene) {
     plan.lighting = scene.lighting;
     plan.camera = scene.camera;
     plan.settings = scene.settings;
+    plan.deviceGrids = scene.deviceGrids;
     compileField(plan, scene.root);
     if (plan.settings.primaryTriangles && !scene.meshes.empty()) {
         std::vector<PlacedMesh> meshes;

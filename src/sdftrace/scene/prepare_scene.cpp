@@ -156,9 +156,16 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
                     // global Lipschitz bound (Grid::computeLocalLipschitz's floor of background
                     // / (B h) keeps the local one for narrow bands).
                     bake.sampling.bandVoxels = 1e6f;
-                    auto grid = std::make_shared<const Grid>(
-                        (options.bakeMesh ? options.bakeMesh(mesh, bake) : bakeMesh(mesh, bake))
-                            .grid);
+                    MeshBakeResult baked =
+                        options.bakeMesh ? options.bakeMesh(mesh, bake) : bakeMesh(mesh, bake);
+                    h.gridOnDevice = baked.onDevice;
+                    // On the GPU, from the second frame on, the values stay in the device grid
+                    // and the last host grid stands in (MeshBakeOptions::gpuResident).
+                    if (baked.onDevice) {
+                        SDFT_CHECK(h.grid);
+                        return h.grid;
+                    }
+                    auto grid = std::make_shared<const Grid>(std::move(baked.grid));
                     h.grid = grid;
                     return grid;
                 }
@@ -210,6 +217,10 @@ PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions&
         cache.insert(q.key, grids[i]);
         cache.insertMesh(q.key, triangles);
         if (triangles) scene.meshes[grids[i].get()] = triangles;
+        if (q.dynamic == AssetRequest::Dynamic::Rtsdf) {
+            const RtsdfHistory& h = cache.rtsdfHistory(q.where);
+            if (h.gridOnDevice) scene.deviceGrids.push_back({grids[i].get(), h.device});
+        }
         ++(q.kind == AssetRequest::Kind::GridFile ? stats.loaded : stats.baked);
     }
     checkRepeats(scene, grids, done);
