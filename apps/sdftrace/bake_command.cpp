@@ -183,8 +183,11 @@ void printVerify(const char* method, const BakeVerification& v) {
     };
     line("stored samples", v.all);
     line("narrow band", v.band);
-    std::fprintf(stderr, "sdftrace bake: verify %s: %.4f%% of %zu vertices with the wrong sign\n",
-                 method, 100.0 * v.wrongSignShare(), v.vertices);
+    std::fprintf(stderr,
+                 "sdftrace bake: verify %s: %.4f%% of %zu vertices with the wrong sign (%.4f%% "
+                 "beyond half a voxel of the surface)\n",
+                 method, 100.0 * v.wrongSignShare(), v.vertices,
+                 v.vertices ? 100.0 * static_cast<double>(v.wrongSignsFar) / v.vertices : 0.0);
 }
 
 // A scene's grid against the scene's own field f/L: at the vertices, and at cell centres where

@@ -1,9 +1,10 @@
 // RTSDF's ray-sampled SDF with a ray mask (Tan et al. 2022, §2.1 and §2.3): a coarse SDF by jump
 // flooding at half the resolution decides which vertices are near the surface (|coarse| <= d);
 // those cast x rays in uniformly random directions through the BVH (Embree) and keep the minimum
-// hit distance, negative when most hits struck back faces (§2.1, after Wright 2015). Vertices
-// beyond d keep the coarse value (§2.3). The minimum over x directions overestimates the distance:
-// by about d (2 / x) on a plane at distance d.
+// hit distance, signed by the facing of the hits near the vertex where they agree with all hits'
+// (§2.1's vote, after Wright 2015), else by the coarse SDF (rtsdfNegative, rtsdf_vertex.h).
+// Vertices beyond d keep the coarse value (§2.3). The minimum over x directions overestimates the
+// distance: by about d (2 / x) on a plane at distance d.
 #pragma once
 
 #include <cstdint>
@@ -18,11 +19,11 @@ namespace sdft {
 
 // The fine SDF carried from frame to frame for temporal accumulation (RTSDF §2.5.1, eq. 1):
 // f_t = min(alpha f_{t-1} + (1 - alpha) c_t, r_t) where the coarse SDF c_t is within the mask
-// distance d (f_{t-1} taken as c_t where none exists), f_t = c_t beyond it (no ghost can survive
-// there). The sign follows a moving surface at once: the coarse SDF's beyond one coarse voxel of
-// it, nearer the frame's own front / back vote (the coarse sign where all its rays missed); no
-// vote is carried over. Empty before the first frame; bound to one grid shape (a new shape starts
-// afresh).
+// distance d (f_{t-1} taken as c_t where none exists; c_t's magnitude bounded from below by its
+// cell's corners, rtsdfCoarseDistance), f_t = c_t beyond it (no ghost can survive there). The sign
+// follows a moving surface at once: the coarse SDF's beyond one coarse voxel of it, nearer the
+// frame's own rays' (rtsdfNegative); no vote is carried over. Empty before the first frame; bound
+// to one grid shape (a new shape starts afresh).
 struct RtsdfDeviceState;  // gpu/gpu_bake.h
 struct RtsdfHistory {
     float alpha = 0.95f;
@@ -38,7 +39,14 @@ struct RtsdfHistory {
     // The last frame's values are on the device (the device state's grid), not in `grid`, which
     // keeps its layout and an earlier frame's values (MeshBakeOptions::gpuResident).
     bool gridOnDevice = false;
+    // Whether the mesh is watertight (rtsdfNegative, rtsdf_vertex.h), for the triangles whose
+    // hash is `topology` (0: none yet): a deforming mesh keeps its triangles from frame to frame.
+    uint64_t topology = 0;
+    bool closed = false;
 };
+
+// Whether `mesh` is watertight (isWatertight), remembered in `history` while its triangles stay.
+bool rtsdfMeshClosed(RtsdfHistory* history, const TriangleMesh& mesh);
 
 // Eq. 1's previous frame: kept when `history` holds frames of `shape` on the host, else started
 // afresh (the first frame, a grid that changed shape, or an accumulation the GPU kept).

@@ -20,7 +20,9 @@ struct BakeVerification {
                      // the exact distance clamped to the band as the grid stores it)
     BakeError band;  // those with |exact| < band
     // Over every vertex more than 1% of a voxel from the surface (sparse: flags count).
-    size_t wrongSigns = 0, vertices = 0;
+    // Vertices off the surface (beyond 1% of a voxel) whose sign is wrong, and those of them
+    // beyond half a voxel, where a wrong sign moves the surface visibly.
+    size_t wrongSigns = 0, wrongSignsFar = 0, vertices = 0;
     double wrongSignShare() const { return vertices ? double(wrongSigns) / vertices : 0; }
 };
 

@@ -102,8 +102,10 @@ TEST(MeshBake, EveryMethodWithinItsBoundOfClosedFormSdfs) {
 }
 
 // RTSDF's ray sampling: the minimum over x random directions. Near the surface it is within a
-// stated bound on average; its maximum is not bounded where the closest point is a convex edge or
-// corner seen through a small solid angle (10 voxels next to the box's corners at x = 64).
+// stated bound on average. Where the closest point is a convex edge or corner seen through a small
+// solid angle the rays may all miss it (10 voxels off next to the box's corners at x = 64 once):
+// the relaxation to 1-Lipschitz along the axes, and the coarse distance standing in where no hit
+// is near, keep the maximum within 2 voxels.
 TEST(MeshBake, RtsdfWithinItsBoundAndNeverBelowTheDistance) {
     for (const ClosedForm& m : closedFormMeshes()) {
         MeshBakeOptions o;
@@ -120,6 +122,7 @@ TEST(MeshBake, RtsdfWithinItsBoundAndNeverBelowTheDistance) {
         EXPECT_EQ(ver.wrongSigns, 0u) << m.name;
         EXPECT_LT(ver.band.mean, 0.2) << m.name;
         EXPECT_LT(ver.band.p99, 1.5) << m.name;
+        EXPECT_LT(ver.band.max, 2.0) << m.name;
         // Ray hits lie on the mesh: never closer than its closest point.
         GridView v = g.view();
         size_t n = 0;

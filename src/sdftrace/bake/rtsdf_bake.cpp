@@ -75,6 +75,20 @@ void interpolateDenseRow(const GridView& coarse, const GridShape& fine, int j, i
     interpolateRow(coarse, fine, j, k, out);
 }
 
+bool rtsdfMeshClosed(RtsdfHistory* history, const TriangleMesh& mesh) {
+    if (!history) return isWatertight(mesh);
+    // FNV-1a over the indices, and their count: 0 stands for none.
+    uint64_t hash = 14695981039346656037ull ^ mesh.triangles.size();
+    for (const auto& t : mesh.triangles)
+        for (uint32_t v : t) hash = (hash ^ v) * 1099511628211ull;
+    hash |= 1;
+    if (hash != history->topology) {
+        history->topology = hash;
+        history->closed = isWatertight(mesh);
+    }
+    return history->closed;
+}
+
 void beginRtsdfFrame(RtsdfHistory& h, const GridShape& s) {
     const bool carried = h.frames > 0 && h.fine.size() == s.vertexCount() &&
                          h.shape.cells[0] == s.cells[0] && h.shape.cells[1] == s.cells[1] &&
@@ -113,6 +127,7 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
     assignHuge(out, s.vertexCount(), 0.0f);
     RtsdfHistory* h = o.history;
     if (h) beginRtsdfFrame(*h, s);
+    const bool closed = rtsdfMeshClosed(h, mesh);
     std::atomic<size_t> refined{0}, missed{0};
     const int frame = h ? h->frames : 0;
     // The rays through Embree, or through the LBVH the GPU bake traverses (the same header code).
@@ -120,10 +135,11 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
     if (o.caster == RtsdfCaster::Lbvh) lbvh = std::make_unique<Lbvh>(mesh, threads);
     const LbvhCaster lbvhCaster{lbvh ? lbvh->view() : LbvhView{}};
     auto embreeCaster = [&bvh](const Ray& ray, float tnear) { return bvh.firstHit(ray, tnear); };
-    auto castRays = [&](Vec3 p, size_t idx) {
+    auto castRays = [&](Vec3 p, size_t idx, float cd) {
         const uint64_t stream = rtsdfRayStream(o.seed, idx, frame);
-        return lbvh ? castRtsdfRays(lbvhCaster, p, stream, o.rays, tiny)
-                    : castRtsdfRays(embreeCaster, p, stream, o.rays, tiny);
+        const float reach = rtsdfReach(cd, s.voxelSize);
+        return lbvh ? castRtsdfRays(lbvhCaster, p, stream, o.rays, tiny, reach)
+                    : castRtsdfRays(embreeCaster, p, stream, o.rays, tiny, reach);
     };
     ThreadArena arena(threads);
     arena.execute([&] {
@@ -142,10 +158,12 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
                         continue;
                     }
                     ++localRefined;
-                    const RtsdfRays rays = castRays(p, idx);
+                    const float cd = rtsdfCoarseDistance(cv, p, c);
+                    const RtsdfRays rays = castRays(p, idx, cd);
                     localMissed += rays.best == INFINITY;
-                    out[idx] = h ? rtsdfAccumulate(h->fine[idx], h->alpha, c, rays, s.voxelSize)
-                                 : rtsdfSingleValue(c, rays);
+                    out[idx] = h ? rtsdfAccumulate(h->fine[idx], h->alpha, c, cd, rays, s.voxelSize,
+                                                   closed)
+                                 : rtsdfSingleValue(c, cd, rays, s.voxelSize, closed);
                 }
             }
             refined += localRefined;

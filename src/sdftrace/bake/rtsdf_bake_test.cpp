@@ -8,8 +8,10 @@
 #include <cstring>
 #include <random>
 
+#include "sdftrace/bake/exact_bake.h"
 #include "sdftrace/bake/jump_flood_step.h"
 #include "sdftrace/bake/rtsdf_vertex.h"
+#include "sdftrace/bake/verify_bake.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/io/mesh_io.h"
 #include "test_meshes.h"
@@ -150,13 +152,14 @@ TEST(RtsdfAccumulation, FewRaysPerFrameConvergeLikeManyRaysAtOnce) {
     for (int frame = 0; frame < 32; ++frame)
         last = meanError(bakeRtsdfSamples(mesh, bvh, s, few), s, 0, 3);
     EXPECT_EQ(history.frames, 32);
-    // 2 rays once are far off (their minimum overestimates; relaxed to 1-Lipschitz, as single
-    // bakes are); 32 frames of 2, starting from and decaying towards the coarse SDF, do better
-    // than 32 rays at once (measured: 0.28 voxel, 0.035 after 32 frames, 0.066 for 32 rays at
-    // once; unrelaxed 1.26 and 0.18).
-    EXPECT_GT(single, 2 * once) << "single " << single << ", once " << once;
+    // 2 rays once are far off (their minimum overestimates; where no hit lies within reach the
+    // coarse magnitude stands in; relaxed to 1-Lipschitz, as single bakes are); 32 frames of 2,
+    // starting from and decaying towards the coarse SDF, do better than 32 rays at once
+    // (measured: 0.127 voxel, 0.035 after 32 frames, 0.062 for 32 rays at once; before the
+    // coarse magnitude stood in for far hits, 2 rays once gave 0.28, and unrelaxed 1.26).
+    EXPECT_GT(single, 1.5 * once) << "single " << single << ", once " << once;
     EXPECT_LT(last, once) << "last " << last << ", once " << once;
-    EXPECT_LT(last, single / 4) << "last " << last << ", single " << single;
+    EXPECT_LT(last, single / 3) << "last " << last << ", single " << single;
 }
 
 TEST(RtsdfAccumulation, AMovedMeshsGhostDecays) {
@@ -251,18 +254,27 @@ TEST(RtsdfAccumulation, SignsFollowAMovedMeshAtOnce) {
 namespace sdft {
 namespace {
 
+TriangleMesh dataMesh(const std::string& name) {
+    return loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name);
+}
+
+// A dense grid of 48 cells along the mesh's longest axis.
+GridShape denseShape48(const TriangleMesh& mesh) {
+    SampleOptions so;
+    so.resolution = 48;
+    so.kind = GridKind::Dense;
+    return gridShapeFor(mesh.bounds(), so);
+}
+
 // The fine rays through the LBVH (the GPU bake's traversal, run here on the CPU) and through
 // Embree: the same ray streams, two triangle tests, so the same field but for the odd ray through
 // an edge; on an open and a closed real mesh.
 TEST(RtsdfBake, RaysThroughTheLbvhGiveEmbreesField) {
     for (const char* name : {"bunny_npm.obj", "elephant-with-holes.obj"}) {
         SCOPED_TRACE(name);
-        const TriangleMesh mesh = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/" + name);
+        const TriangleMesh mesh = dataMesh(name);
         const MeshBvh bvh(mesh);
-        SampleOptions so;
-        so.resolution = 48;
-        so.kind = GridKind::Dense;
-        const GridShape s = gridShapeFor(mesh.bounds(), so);
+        const GridShape s = denseShape48(mesh);
         RtsdfOptions o;
         o.rays = 8;
         RtsdfStats embreeStats, lbvhStats;
@@ -275,6 +287,39 @@ TEST(RtsdfBake, RaysThroughTheLbvhGiveEmbreesField) {
         for (size_t i = 0; i < embree.size(); ++i)
             differ += std::fabs(embree[i] - lbvh[i]) > 1e-4f * s.voxelSize;
         EXPECT_LE(differ, lbvhStats.refined / 1000) << differ << " of " << lbvhStats.refined;
+    }
+}
+
+// Few rays per vertex on open meshes (RTSDF's regime): rays through a mesh's holes strike back
+// faces from outside and rays that stray far say little of the vertex, so the sign is the vote of
+// the hits near it where all hits agree, else the coarse SDF's, and the coarse magnitude stands in
+// where no hit is near (rtsdfNegative, rtsdf_vertex.h). Measured at 48 cells and 2 rays: wrong
+// signs beyond half a voxel of the surface 0.13% (elephant) and 0.012% (Stanford bunny), band
+// error mean 0.22 / 0.19 and max 2.1 / 2.3 voxels; with §2.1's majority of all hits they were
+// 1.1% and 0.14%, 0.62 / 0.39 and 33 / 32 voxels. On a closed mesh every ray's first hit tells
+// the side, far ones too: no wrong sign beyond half a voxel with one ray.
+TEST(RtsdfBake, FewRaysKeepOpenMeshesSignsAndBoundTheirErrors) {
+    struct Case {
+        const char* name;
+        int rays;
+        double farSigns, bandMean, bandMax;
+    };
+    for (const Case& c : {Case{"elephant-with-holes.obj", 2, 0.003, 0.3, 3.0},
+                          Case{"stanford-bunny.obj", 2, 0.001, 0.25, 3.0},
+                          Case{"bunny_npm.obj", 1, 0.0, 0.25, 3.0}}) {
+        SCOPED_TRACE(c.name);
+        const TriangleMesh mesh = dataMesh(c.name);
+        const MeshBvh bvh(mesh);
+        const GridShape s = denseShape48(mesh);
+        RtsdfOptions o;
+        o.rays = c.rays;
+        const Grid g = Grid::dense(s, bakeRtsdfSamples(mesh, bvh, s, o));
+        const BakeVerification v =
+            verifyBake(g, bakeExactSamples(bvh, s, SignMethod::WindingNumber), 3);
+        EXPECT_LE(static_cast<double>(v.wrongSignsFar), c.farSigns * v.vertices)
+            << v.wrongSignsFar << " of " << v.vertices;
+        EXPECT_LT(v.band.mean, c.bandMean);
+        EXPECT_LT(v.band.max, c.bandMax);
     }
 }
 

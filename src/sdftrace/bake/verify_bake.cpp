@@ -39,7 +39,9 @@ BakeVerification verifyBake(const Grid& grid, const std::vector<float>& exact, f
                 float baked = v.vertex(i, j, k), ex = exact[idx];
                 // On the surface itself (within 1% of a voxel) the sign is moot.
                 if (std::fabs(ex) > 0.01f * h) {
-                    r.wrongSigns += (baked < 0) != (ex < 0);
+                    const bool wrong = (baked < 0) != (ex < 0);
+                    r.wrongSigns += wrong;
+                    r.wrongSignsFar += wrong && std::fabs(ex) > 0.5f * h;
                     ++r.vertices;
                 }
                 bool stored = true;
@@ -57,7 +59,8 @@ BakeVerification verifyBake(const Grid& grid, const std::vector<float>& exact, f
                                   : std::fabs(ex);
                 double e = std::fabs(std::fabs(baked) - exMag) / h;
                 all.push_back(e);
-                if (std::fabs(ex) < band) near.push_back(e);
+                // The band of either field: a baked surface where there is none counts too.
+                if (std::fabs(ex) < band || std::fabs(baked) < band) near.push_back(e);
             }
     r.all = summarize(all);
     r.band = summarize(near);

@@ -103,7 +103,7 @@ __global__ void signedDistanceKernel(GridShape s, size_t n, const Vec3* points, 
 // through the LBVH with their vote, single or accumulated (history non-null).
 __global__ void rtsdfFineKernel(GridShape s, size_t n, GridView coarse, LbvhView bvh, float mask,
                                 float tiny, int rays, uint32_t seed, int frame, float* history,
-                                float alpha, float* out, unsigned long long* counts) {
+                                float alpha, bool closed, float* out, unsigned long long* counts) {
     const size_t idx = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     bool refined = false, missed = false;
     if (idx < n) {
@@ -116,11 +116,12 @@ __global__ void rtsdfFineKernel(GridShape s, size_t n, GridView coarse, LbvhView
             if (history) history[idx] = INFINITY;
         } else {
             refined = true;
-            const RtsdfRays r =
-                castRtsdfRays(LbvhCaster{bvh}, p, rtsdfRayStream(seed, idx, frame), rays, tiny);
+            const float cd = rtsdfCoarseDistance(coarse, p, c);
+            const RtsdfRays r = castRtsdfRays(LbvhCaster{bvh}, p, rtsdfRayStream(seed, idx, frame),
+                                              rays, tiny, rtsdfReach(cd, s.voxelSize));
             missed = r.best == INFINITY;
-            out[idx] = history ? rtsdfAccumulate(history[idx], alpha, c, r, s.voxelSize)
-                               : rtsdfSingleValue(c, r);
+            out[idx] = history ? rtsdfAccumulate(history[idx], alpha, c, cd, r, s.voxelSize, closed)
+                               : rtsdfSingleValue(c, cd, r, s.voxelSize, closed);
         }
     }
     const int blockRefined = __syncthreads_count(refined),
@@ -212,6 +213,7 @@ struct GpuMeshBaker::Impl {
     int count = 0;
     GpuWinding windingSource = GpuWinding::MedianTree;
     std::vector<uint32_t> indices;  // the host's copy of `triangles`, for pose()
+    bool closed = false;            // the mesh is watertight (rtsdfNegative, rtsdf_vertex.h)
     cuda::DeviceArray<Vec3> positions;
     cuda::DeviceArray<uint32_t> triangles;
     std::unique_ptr<cuda::DeviceLbvh> lbvh;
@@ -234,6 +236,7 @@ struct GpuMeshBaker::Impl {
         positions.upload(mesh.positions);
         if (!sameTriangles) {
             indices = triangleIndices(mesh);
+            closed = isWatertight(mesh);
             triangles = cuda::DeviceArray<uint32_t>(indices);
         }
         lbvh = std::make_unique<cuda::DeviceLbvh>(positions.get(), triangles.get(), count,
@@ -370,7 +373,7 @@ struct GpuMeshBaker::Impl {
         SDFT_CUDA_CHECK(cudaEventRecord(rays.start));
         rtsdfFineKernel<<<blocksFor(n), kThreads>>>(
             s, n, cv, lbvh->view(), o.maskVoxels * s.voxelSize, 1e-4f * s.voxelSize, o.rays, o.seed,
-            frame, history, alpha, out.get(), counts.get());
+            frame, history, alpha, closed, out.get(), counts.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
         SDFT_CUDA_CHECK(cudaEventRecord(rays.stop));
         t.rayMs += rays.elapsedMs();
