@@ -46,7 +46,18 @@ struct RenderPlan {
     // Grids of the tape whose current values are on the GPU: the GPU renderer binds them; the
     // CPU renderer refuses the plan (device_resident_grid.h).
     std::vector<DeviceResidentGrid> deviceGrids;
+    // The field's bounds (nodeBounds of the scene's root; everything when unbounded), from which
+    // settings.maxDistance is resolved for the plan's camera (resolveMaxDistance).
+    Bounds3 sceneBounds = Bounds3::everything();
 };
+
+// Primary rays' t_max for `camera`: settings.maxDistance as given, or while it is automatic
+// (RenderSettings::maxDistanceAuto) the default raised to reach past every corner of `bounds`
+// from any eye at the camera's distance from its target (|eye - target| + the farthest corner's
+// distance from the target: the same for every orbit about the target). Unbounded scenes keep
+// the default.
+float resolveMaxDistance(const RenderSettings& settings, const CameraDesc& camera,
+                         const Bounds3& bounds);
 
 // What changes between frames of one plan (temporal.h): the camera, the frame number that seeds
 // per-pixel random sequences, and the subpixel offset of primary rays.

@@ -50,9 +50,13 @@ struct RenderSettings {
     bool primaryTriangles = false;
     // The integrator: direct lighting (the tile renderer) or the path tracer (path_tracer.h).
     bool pathTracing = false;
-    int samplesPerPixel = 16;       // path tracer
-    int maxDepth = 5;               // path tracer: scattering events per path
-    float maxDistance = 100.0f;     // t_max of primary rays (the scene bounds clip it further)
+    int samplesPerPixel = 16;  // path tracer
+    int maxDepth = 5;          // path tracer: scattering events per path
+    // t_max of primary rays (the scene bounds clip it further). While `maxDistanceAuto`
+    // (max_distance not given, or 0), planRender raises it to reach past the scene's bounds from
+    // any camera at the camera's distance from its target (resolveMaxDistance, render_plan.h).
+    float maxDistance = 100.0f;
+    bool maxDistanceAuto = true;
     float shadowOffsetMin = 1e-3f;  // eps_min of the shadow-ray origin offset
     bool boundsCulling = true;  // skip far union operands (docs/decisions/0002-bounds-culling.md)
     int threads = 0;            // 0 = all hardware threads

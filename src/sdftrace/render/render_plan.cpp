@@ -1,5 +1,7 @@
 #include "sdftrace/render/render_plan.h"
 
+#include <algorithm>
+
 namespace sdft {
 
 void compileField(RenderPlan& plan, const NodePtr& root) {
@@ -20,6 +22,22 @@ void compileField(RenderPlan& plan, const NodePtr& root) {
         if (isConvex(*o) && b.finite() && !b.empty())
             plan.convexObjects.push_back({compileTape(o), b});
     }
+}
+
+float resolveMaxDistance(const RenderSettings& settings, const CameraDesc& camera,
+                         const Bounds3& bounds) {
+    if (!settings.maxDistanceAuto) return settings.maxDistance;
+    const float base = RenderSettings{}.maxDistance;
+    if (!bounds.finite() || bounds.empty()) return base;
+    float corner = 0;
+    for (int c = 0; c < 8; ++c) {
+        const Vec3 p((c & 1) ? bounds.hi.x : bounds.lo.x, (c & 2) ? bounds.hi.y : bounds.lo.y,
+                     (c & 4) ? bounds.hi.z : bounds.lo.z);
+        corner = std::max(corner, length(p - camera.target));
+    }
+    // A little past the far corner: the last step of a ray grazing it.
+    const float reach = 1.01f * (length(camera.eye - camera.target) + corner);
+    return std::max(base, reach);
 }
 
 }  // namespace sdft

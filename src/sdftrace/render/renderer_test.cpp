@@ -8,6 +8,7 @@
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
+#include "sdftrace/scene/render_options.h"
 #include "shadow_test_scenes.h"
 
 namespace sdft {
@@ -78,6 +79,42 @@ TEST(Renderer, RefusesAPlanWhoseGridLivesOnTheGpu) {
         EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
     }
     EXPECT_THROW(FrameRenderer(plan, FrameView{plan.camera}, film), InputError);
+}
+
+// Primary rays reach past the scene from a camera far away: t_max is raised to the scene's far
+// side unless max_distance is given (a sphere 300 units off was black under the former fixed
+// t_max of 100, and so was a grid file seen with --eye past 4 times its framing distance).
+TEST(Renderer, AFarCameraStillSeesTheScene) {
+    const char* far = R"({"camera": {"eye": [0, 0, 300], "target": [0, 0, 0], "fov": 2,
+                                     "width": 16, "height": 16},
+                          "objects": [{"type": "sphere", "radius": 2}]})";
+    const RenderPlan autoPlan = planRender(parseSceneText(far, "far.json"));
+    EXPECT_GE(autoPlan.settings.maxDistance, 302.0f);
+    Film film(16, 16);
+    EXPECT_GT(render(autoPlan, film).hits, 0u);
+    Scene clipped = parseSceneText(far, "far.json");
+    ASSERT_TRUE(findRenderOption("max_distance"));
+    findRenderOption("max_distance")->set(clipped.settings, 100);
+    const RenderPlan clippedPlan = planRender(clipped);
+    EXPECT_EQ(clippedPlan.settings.maxDistance, 100.0f);
+    EXPECT_EQ(render(clippedPlan, film).hits, 0u);
+    // The reach is the same from every eye at the camera's distance from its target (orbits),
+    // and covers every corner of the bounds from there.
+    const Bounds3 b{Vec3(-1, -2, -3), Vec3(4, 5, 6)};
+    CameraDesc cam;
+    cam.target = Vec3(1, 1, 1);
+    cam.eye = cam.target + Vec3(0, 0, 150);
+    const float reach = resolveMaxDistance(RenderSettings{}, cam, b);
+    for (const Vec3 dir : {Vec3(1, 0, 0), Vec3(0, -1, 0), normalize(Vec3(1, 1, -1))}) {
+        cam.eye = cam.target + dir * 150.0f;
+        EXPECT_EQ(resolveMaxDistance(RenderSettings{}, cam, b), reach);
+        for (int c = 0; c < 8; ++c) {
+            const Vec3 p((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y,
+                         (c & 4) ? b.hi.z : b.lo.z);
+            EXPECT_GE(reach, length(p - cam.eye));
+        }
+    }
+    EXPECT_EQ(resolveMaxDistance(RenderSettings{}, cam, Bounds3::everything()), 100.0f);
 }
 
 TEST(Renderer, ThreadCountDoesNotChangeTheImage) {

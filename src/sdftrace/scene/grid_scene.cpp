@@ -37,8 +37,6 @@ Scene sceneForObject(NodePtr object, const Bounds3& bounds) {
     s.lighting.lights = {key, fill};
     s.lighting.ambient = {0.08f, 0.08f, 0.1f};
     s.lighting.background = {0.18f, 0.19f, 0.22f};
-    // Rays never need to go much past the object.
-    s.settings.maxDistance = 4.0f * length(s.camera.eye - bounds.center());
     return s;
 }
 

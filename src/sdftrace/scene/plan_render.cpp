@@ -72,6 +72,8 @@ RenderPlan planRender(const Scene& scene) {
     plan.settings = scene.settings;
     plan.deviceGrids = scene.deviceGrids;
     compileField(plan, scene.root);
+    plan.sceneBounds = nodeBounds(*scene.root);
+    plan.settings.maxDistance = resolveMaxDistance(plan.settings, plan.camera, plan.sceneBounds);
     if (plan.settings.primaryTriangles && !scene.meshes.empty()) {
         std::vector<PlacedMesh> meshes;
         const NodePtr rest = takeMeshes(scene.root, scene, {}, meshes);

@@ -134,10 +134,16 @@ std::vector<RenderOption> makeTable() {
          .flags = "--max-distance",
          .group = "Tracer",
          .type = T::Float,
-         .range = kPositive,
+         .range = kNonNegative,
          .what = "a distance",
-         .doc = "t_max of primary rays (the scene bounds clip it further)",
-         SDFT_MEMBER(maxDistance)},
+         .doc = "t_max of primary rays (the scene bounds clip it further); 0: automatic, at least "
+                "100 and past the scene's bounds from the camera at its distance from the target",
+         .get = [](const RenderSettings& s) { return s.maxDistanceAuto ? 0.0 : s.maxDistance; },
+         .set =
+             [](RenderSettings& s, double v) {
+                 s.maxDistanceAuto = v == 0;
+                 s.maxDistance = v == 0 ? RenderSettings{}.maxDistance : fromNumber<float>(v);
+             }},
         {.key = "bounds_culling",
          .flags = "--bounds-culling",
          .group = "Tracer",

@@ -10,13 +10,16 @@ void ProgressiveView::setPlan(RenderPlan plan) {
     const std::optional<CameraDesc> camera =
         m_plan ? std::optional<CameraDesc>(m_plan->camera) : std::nullopt;
     m_plan.emplace(std::move(plan));
-    if (camera) m_plan->camera = *camera;
+    if (camera) setCamera(*camera);
     restart();
 }
 
 void ProgressiveView::setCamera(const CameraDesc& camera) {
     if (!m_plan) return;
     m_plan->camera = camera;
+    // Zoomed out past the plan's camera, rays still reach the scene's far side.
+    m_plan->settings.maxDistance =
+        resolveMaxDistance(m_plan->settings, camera, m_plan->sceneBounds);
     restart();
 }
 
