@@ -43,6 +43,78 @@ std::string millis(double ms) {
 
 }  // namespace
 
+namespace {
+
+// The rays' counts and the passes' GPU times of an RTSDF frame, for the summary line.
+std::string rtsdfDetails(const RtsdfStats& st, int rays, const GpuMeshBaker& baker,
+                         const GpuBakeTimes& t, const std::string& last) {
+    char line[400];
+    std::snprintf(line, sizeof line,
+                  "%zu vertices refined by %d rays each (%zu rays), %zu with no hit; GPU: lbvh %s, "
+                  "seeds %s, jfa %s, signs %s, rays %s, %s",
+                  st.refined, rays, st.rays, st.missed, millis(baker.lbvhBuildMs()).c_str(),
+                  millis(t.seedMs).c_str(), millis(t.jfaMs).c_str(), millis(t.signMs).c_str(),
+                  millis(t.rayMs).c_str(), last.c_str());
+    return line;
+}
+
+// A later RTSDF frame for a GPU renderer (MeshBakeOptions::gpuResident): eq. 1 accumulated on the
+// device, whose field refreshes the history's device grid; nothing comes back to the host.
+void residentFrame(GpuMeshBaker& baker, RtsdfHistory& h, const GridShape& shape,
+                   const MeshBakeOptions& o, GpuBakeTimes& t, StageClock& clock,
+                   MeshBakeResult& r) {
+    RtsdfOptions ro = o.rtsdf;
+    ro.coarseSign = o.sign;
+    RtsdfStats st;
+    const float* field = baker.accumulateOnDevice(shape, ro, h.alpha, nullptr, &st, &t);
+    h.frames = baker.accumulatedFrames();
+    clock.mark("rtsdf (gpu)");
+    GpuRefreshTimes rt;
+    h.device->grid->refresh(field, &rt);
+    clock.mark("refresh (gpu)");
+    r.details = rtsdfDetails(st, ro.rays, baker, t,
+                             "grid refresh " + millis(rt.blocksMs + rt.skipMs) + "; frame " +
+                                 std::to_string(h.frames) +
+                                 " accumulated and its grid refreshed on the GPU");
+    r.onDevice = true;
+}
+
+// The frame's samples on the GPU, brought to the host: RTSDF's (a frame of a history, or a single
+// bake) or jump flooding's.
+std::vector<float> hostSamples(GpuMeshBaker& baker, RtsdfHistory* h, bool onDevice,
+                               const GridShape& shape, const MeshBakeOptions& o, GpuBakeTimes& t,
+                               StageClock& clock, MeshBakeResult& r) {
+    std::vector<float> samples;
+    if (o.method == MeshBakeMethod::Rtsdf) {
+        RtsdfOptions ro = o.rtsdf;
+        ro.coarseSign = o.sign;
+        RtsdfStats st;
+        if (h) {
+            samples = baker.accumulate(shape, ro, h->alpha, onDevice ? nullptr : h, &st, &t);
+            h->shape = shape;
+            h->fine.clear();
+            h->frames = baker.accumulatedFrames();
+        } else {
+            samples = baker.rtsdf(shape, ro, &st, &t);
+        }
+        clock.mark("rtsdf (gpu)");
+        const std::string frame =
+            h ? "; frame " + std::to_string(h->frames) + " accumulated on the GPU" : "";
+        r.details = rtsdfDetails(st, ro.rays, baker, t, "relax " + millis(t.relaxMs) + frame);
+        return samples;
+    }
+    samples = baker.jumpFlood(shape, o.jfaVariant, o.sign, o.betaVoxels, &t);
+    clock.mark("jump flooding (gpu)");
+    std::string passes;
+    for (size_t i = 0; i < t.passMs.size(); ++i) passes += (i ? ", " : "") + millis(t.passMs[i]);
+    r.details = std::to_string(t.passMs.size()) + " passes on the GPU (" + passes + "); seeds " +
+                millis(t.seedMs) + ", signs " + millis(t.signMs) + " (" + signMethodName(o.sign) +
+                ", every vertex)";
+    return samples;
+}
+
+}  // namespace
+
 MeshBakeResult bakeMeshGpu(const TriangleMesh& mesh, const MeshBakeOptions& o) {
     checkMeshBake(mesh, o);
     if (std::string why = gpuBakeUnsupported(o); !why.empty())
@@ -71,65 +143,12 @@ MeshBakeResult bakeMeshGpu(const TriangleMesh& mesh, const MeshBakeOptions& o) {
         clock.mark("upload + lbvh (gpu)");
     }
     GpuMeshBaker& baker = h ? h->device->baker : *own;
-    // A later frame for a GPU renderer: the field refreshes the device grid and stays there.
     if (h && o.gpuResident && onDevice && h->device->grid && h->grid &&
         sameCompleteLayout(*h->grid, shape, so)) {
-        RtsdfOptions ro = o.rtsdf;
-        ro.coarseSign = o.sign;
-        RtsdfStats st;
-        const float* field = baker.accumulateOnDevice(shape, ro, h->alpha, nullptr, &st, &t);
-        h->frames = baker.accumulatedFrames();
-        clock.mark("rtsdf (gpu)");
-        GpuRefreshTimes rt;
-        h->device->grid->refresh(field, &rt);
-        clock.mark("refresh (gpu)");
-        char line[400];
-        std::snprintf(line, sizeof line,
-                      "%zu vertices refined by %d rays each (%zu rays), %zu with no hit; GPU: "
-                      "lbvh %s, seeds %s, jfa %s, signs %s, rays %s, grid refresh %s; frame %d "
-                      "accumulated and its grid refreshed on the GPU",
-                      st.refined, ro.rays, st.rays, st.missed, millis(baker.lbvhBuildMs()).c_str(),
-                      millis(t.seedMs).c_str(), millis(t.jfaMs).c_str(), millis(t.signMs).c_str(),
-                      millis(t.rayMs).c_str(), millis(rt.blocksMs + rt.skipMs).c_str(), h->frames);
-        r.details = line;
-        r.onDevice = true;
+        residentFrame(baker, *h, shape, o, t, clock, r);
         return r;
     }
-    std::vector<float> samples;
-    if (o.method == MeshBakeMethod::Rtsdf) {
-        RtsdfOptions ro = o.rtsdf;
-        ro.coarseSign = o.sign;
-        RtsdfStats st;
-        if (h) {
-            samples = baker.accumulate(shape, ro, h->alpha, onDevice ? nullptr : h, &st, &t);
-            h->shape = shape;
-            h->fine.clear();
-            h->frames = baker.accumulatedFrames();
-        } else {
-            samples = baker.rtsdf(shape, ro, &st, &t);
-        }
-        clock.mark("rtsdf (gpu)");
-        const std::string frame =
-            h ? "; frame " + std::to_string(h->frames) + " accumulated on the GPU" : "";
-        char line[400];
-        std::snprintf(line, sizeof line,
-                      "%zu vertices refined by %d rays each (%zu rays), %zu with no hit; GPU: "
-                      "lbvh %s, seeds %s, jfa %s, signs %s, rays %s, relax %s%s",
-                      st.refined, ro.rays, st.rays, st.missed, millis(baker.lbvhBuildMs()).c_str(),
-                      millis(t.seedMs).c_str(), millis(t.jfaMs).c_str(), millis(t.signMs).c_str(),
-                      millis(t.rayMs).c_str(), millis(t.relaxMs).c_str(), frame.c_str());
-        r.details = line;
-    } else {
-        samples = baker.jumpFlood(shape, o.jfaVariant, o.sign, o.betaVoxels, &t);
-        clock.mark("jump flooding (gpu)");
-        std::string passes;
-        for (size_t i = 0; i < t.passMs.size(); ++i)
-            passes += (i ? ", " : "") + millis(t.passMs[i]);
-        r.details = std::to_string(t.passMs.size()) + " passes on the GPU (" + passes +
-                    "); seeds " + millis(t.seedMs) + ", signs " + millis(t.signMs) + " (" +
-                    signMethodName(o.sign) + ", every vertex)";
-    }
-    finishMeshBake(shape, std::move(samples), so, r, clock, h);
+    finishMeshBake(shape, hostSamples(baker, h, onDevice, shape, o, t, clock, r), so, r, clock, h);
     // The device grid the next frames refresh, uploaded once from this frame's.
     if (h && o.gpuResident && r.grid.isComplete()) {
         h->device->grid.emplace(r.grid);
