@@ -68,6 +68,16 @@ inline void interpolateRow(const GridView& cv, const GridShape& s, int j, int k,
     }
 }
 
+// The coarse SDF (§2.2): jump flooding at half the resolution over the same region, signed.
+std::vector<float> coarseField(const TriangleMesh& mesh, const MeshBvh& bvh,
+                               const GridShape& coarse, SignMethod sign, int threads) {
+    SurfaceSeeds seeds = seedSurfaceVertices(mesh, coarse, threads);
+    std::vector<float> samples = distancesToPoints(
+        coarse, jumpFlood(coarse, seeds.point, JfaVariant::Plain, threads), threads);
+    signDistances(samples, mesh, &bvh, coarse, seeds, sign, 0.5f, threads);
+    return samples;
+}
+
 }  // namespace
 
 void interpolateDenseRow(const GridView& coarse, const GridShape& fine, int j, int k, float* out) {
@@ -105,12 +115,8 @@ std::vector<float> bakeRtsdfSamples(const TriangleMesh& mesh, const MeshBvh& bvh
                                     const GridShape& s, const RtsdfOptions& o, int threads,
                                     RtsdfStats* stats) {
     auto start = std::chrono::steady_clock::now();
-    // The coarse SDF: jump flooding at half the resolution over the same region.
     const GridShape coarse = rtsdfCoarseShape(s);
-    SurfaceSeeds seeds = seedSurfaceVertices(mesh, coarse, threads);
-    std::vector<float> coarseSamples = distancesToPoints(
-        coarse, jumpFlood(coarse, seeds.point, JfaVariant::Plain, threads), threads);
-    signDistances(coarseSamples, mesh, &bvh, coarse, seeds, o.coarseSign, 0.5f, threads);
+    const std::vector<float> coarseSamples = coarseField(mesh, bvh, coarse, o.coarseSign, threads);
     // Read by trilinear interpolation only: a view, no Grid (whose Lipschitz scan of every cell
     // nothing here reads).
     GridView cv;
