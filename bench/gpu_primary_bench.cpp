@@ -113,7 +113,8 @@ double cpuPrimaryMs(const RenderPlan& plan, const Camera& camera, const TraceOpt
         for (size_t i = 0; i < results.size(); ++i) {
             if (!results[i].hit) continue;
             const Vec3 p = segments[i].ray.at(results[i].t);
-            const float eps = primaryNormalSpacing(results[i].t, options.pixelRadius);
+            const float eps = primaryNormalSpacing(results[i].t, options.pixelRadius,
+                                                   plan.settings.normalSpacingMin);
             for (int k = 0; k < sn; ++k) {
                 const Vec3 q = p + stencilOffset(est, k) * eps;
                 sx.push_back(q.x);

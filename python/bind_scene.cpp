@@ -86,7 +86,7 @@ void applyOption(RenderSettings& s, const std::string& key, const pyb::handle& v
         v = value.cast<double>();
         if (std::string e = o->check(v); !e.empty()) throw InputError(where + ": " + e);
     }
-    o->set(s, v);
+    o->give(s, v);
 }
 
 // The scene render() draws: a Scene, a Grid (framed automatically) or a path (as `render`).

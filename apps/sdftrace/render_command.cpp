@@ -63,7 +63,7 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
             if (std::string error = arg.option->parse(arg.text, v); !error.empty())
                 throw InputError(arg.option->mainFlag() + " " + arg.text + ": " + error);
         }
-        arg.option->set(s, v);
+        arg.option->give(s, v);
     }
     if (a.threads) s.threads = *a.threads;
 }

@@ -28,9 +28,9 @@ SDFT_HOST_DEVICE inline Vec3 stencilOffset(NormalEstimator e, int k) {
 }
 
 // The stencil's spacing at a primary hit at distance t: half a pixel's footprint there, at least
-// 1e-4.
-SDFT_HOST_DEVICE inline float primaryNormalSpacing(float t, float pixelRadius) {
-    return maxf(1e-4f, 0.5f * t * pixelRadius);
+// `minSpacing` (RenderSettings::normalSpacingMin).
+SDFT_HOST_DEVICE inline float primaryNormalSpacing(float t, float pixelRadius, float minSpacing) {
+    return maxf(minSpacing, 0.5f * t * pixelRadius);
 }
 
 // The unit gradient at p with spacing h; zero where the estimate vanishes.

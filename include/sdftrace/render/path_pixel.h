@@ -188,7 +188,7 @@ SDFT_HOST_DEVICE inline Vec3 pathRadiance(const PathPixelView& v, const Material
             beta = beta * Vec3(expf(-medium.absorption.x * t), expf(-medium.absorption.y * t),
                                expf(-medium.absorption.z * t));
         }
-        Vec3 n = estimateTapeNormal(field, p, 1e-4f, d.primary.normals);
+        Vec3 n = estimateTapeNormal(field, p, d.primary.normalSpacingMin, d.primary.normals);
         c.normalEvaluations += 4;
         if (!(length(n) > 0)) n = -ray.direction;
         if (depth == 0) {

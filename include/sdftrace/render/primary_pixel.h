@@ -31,6 +31,7 @@ struct PrimaryPixelView {
     Camera camera{CameraDesc{}};
     TraceOptions options;  // the plan's primary-ray options, pixelRadius set from the camera
     float maxDistance = kInfinity;
+    float normalSpacingMin = 1e-4f;  // RenderSettings::normalSpacingMin
     float jitter[2] = {0, 0};
     NormalEstimator normals = NormalEstimator::Tetrahedral;
     // A lone grid traced by Jamriška's two-level DDA (§4) instead of sphere tracing: its index in
@@ -95,7 +96,8 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
         }
     }
     if (out.trace.hit) {
-        const float h = primaryNormalSpacing(out.trace.t, v.options.pixelRadius);
+        const float h =
+            primaryNormalSpacing(out.trace.t, v.options.pixelRadius, v.normalSpacingMin);
         const Vec3 n = estimateTapeNormal(v.field, seg.ray.at(out.trace.t), h, v.normals);
         out.normal = normalOrFacing(n, seg.ray.direction);
     }

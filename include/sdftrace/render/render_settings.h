@@ -57,6 +57,11 @@ struct RenderSettings {
     // any camera at the camera's distance from its target (resolveMaxDistance, render_plan.h).
     float maxDistance = 100.0f;
     bool maxDistanceAuto = true;
+    // The smallest spacing of the normals' finite differences (scene units; scaled down with a
+    // scene smaller than a unit, scaleLengthDefaults).
+    float normalSpacingMin = 1e-4f;
+    // The options the user gave (bit i: renderOptions()[i], RenderOption::give).
+    uint64_t given = 0;
     float shadowOffsetMin = 1e-3f;  // eps_min of the shadow-ray origin offset
     bool boundsCulling = true;  // skip far union operands (docs/decisions/0002-bounds-culling.md)
     int threads = 0;            // 0 = all hardware threads

@@ -121,7 +121,8 @@ SDFT_HOST_DEVICE inline float offset(const DirectPixelView& v, const WhittedPixe
 }
 
 SDFT_HOST_DEVICE inline Vec3 normalAt(const DirectPixelView& v, Vec3 p) {
-    const Vec3 n = estimateTapeNormal(v.primary.field, p, 1e-4f, v.primary.normals);
+    const Vec3 n =
+        estimateTapeNormal(v.primary.field, p, v.primary.normalSpacingMin, v.primary.normals);
     return length(n) > 0 ? n : Vec3(0, 1, 0);
 }
 

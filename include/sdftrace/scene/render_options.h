@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "sdftrace/math/camera.h"
+#include "sdftrace/math/ray.h"
 #include "sdftrace/render/render_settings.h"
 
 namespace sdft {
@@ -35,6 +37,9 @@ struct RenderOption {
     // The member as a number: bools 0/1, choices their index, ints and floats themselves.
     double (*get)(const RenderSettings&);
     void (*set)(RenderSettings&, double);
+    // A length whose default suits scenes a unit or more across: planRender scales it down with
+    // smaller scenes unless it was given (scaleLengthDefaults).
+    bool scaled = false;
 
     std::string mainFlag() const;      // "--max-steps"
     std::string accepted() const;      // "an integer in [1, 100000]", "true or false", ...
@@ -46,11 +51,20 @@ struct RenderOption {
     std::string parse(const std::string& text, double& out) const;
     // Range check of a number (Int: also integral); an error message or empty.
     std::string check(double v) const;
+    // Sets the value as given by the user (a scene file, a flag, the viewer, Python): set(), and
+    // the option marked in RenderSettings::given.
+    void give(RenderSettings& s, double v) const;
 };
 
 // Every option, in the order docs and help list them.
 std::span<const RenderOption> renderOptions();
 const RenderOption* findRenderOption(const std::string& key);
+
+// The scene's length scale for the `scaled` options' defaults: its bounds' diagonal, or where
+// unbounded the camera's distance to its target, capped at 1 (defaults suit scenes a unit or more
+// across); the options not given take their default times that.
+float sceneLengthFactor(const Bounds3& bounds, const CameraDesc& camera);
+void scaleLengthDefaults(RenderSettings& s, float factor);
 
 // The options as a Markdown table (key, flag, default, accepted, meaning): what docs/cli.md
 // holds between its `<!-- render-options -->` markers (a test compares them).

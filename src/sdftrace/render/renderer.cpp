@@ -378,7 +378,8 @@ void TileRenderer::stencilNormals(TileScratch& s) {
     for (size_t j = 0; j < todo.size(); ++j) {
         const int h = todo[j];
         float t = s.results[s.hitPixel[h]].t;
-        const float eps = primaryNormalSpacing(t, m_primary.pixelRadius);
+        const float eps =
+            primaryNormalSpacing(t, m_primary.pixelRadius, m_settings.normalSpacingMin);
         for (int k = 0; k < sn; ++k) {
             Vec3 q = s.hitPoint[h] + stencilOffset(est, k) * eps;
             s.x[j * sn + k] = q.x;

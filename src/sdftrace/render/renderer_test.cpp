@@ -117,6 +117,46 @@ TEST(Renderer, AFarCameraStillSeesTheScene) {
     EXPECT_EQ(resolveMaxDistance(RenderSettings{}, cam, Bounds3::everything()), 100.0f);
 }
 
+// Lengths the user did not give (shadow offset, AO step, tau, the normals' spacing, ...) scale
+// down with a scene smaller than a unit (sceneLengthFactor): the same scene at a thousandth of the
+// size renders the same image (measured: mean difference 2.5e-7). With the fixed defaults the
+// shadow rays of the small scene's floor started above its sphere, the AO samples far outside it
+// and the normals' spacing was half its torus's tube (mean difference 0.49).
+TEST(Renderer, ASceneSmallerThanAUnitRendersAsAtUnitScale) {
+    auto scene = [](float s) {
+        char text[900];
+        std::snprintf(text, sizeof text, R"({
+          "camera": {"eye": [0, %g, %g], "target": [0, 0, 0], "width": 48, "height": 32},
+          "lights": [{"type": "directional", "direction": [-0.4, -1, -0.5], "intensity": 2,
+                      "angle": 3}],
+          "objects": [{"type": "box", "size": [%g, %g, %g], "translate": [0, %g, 0]},
+                      {"type": "sphere", "radius": %g},
+                      {"type": "torus", "major_radius": %g, "minor_radius": %g,
+                       "translate": [%g, 0, 0]}],
+          "render": {"shadow_method": "hard", "ao": true}})",
+                      1 * s, 4 * s, 6 * s, 0.1 * s, 6 * s, -1.05 * s, 1 * s, 0.8 * s, 0.2 * s,
+                      1.5 * s);
+        return parseSceneText(text, "scaled.json");
+    };
+    // 0.85 and 0.00085 units across: defaults at 0.85 and 0.00085 times theirs.
+    const RenderPlan unit = planRender(scene(0.1f)), small = planRender(scene(0.0001f));
+    EXPECT_FLOAT_EQ(unit.settings.shadowOffsetMin,
+                    RenderSettings{}.shadowOffsetMin * length(unit.sceneBounds.extent()));
+    EXPECT_FLOAT_EQ(small.settings.ao.step,
+                    RenderSettings{}.ao.step * length(small.sceneBounds.extent()));
+    EXPECT_EQ(planRender(scene(1)).settings.shadowOffsetMin, RenderSettings{}.shadowOffsetMin);
+    Film a(48, 32), b(48, 32);
+    render(unit, a);
+    render(small, b);
+    double diff = 0;
+    for (size_t i = 0; i < a.color.size(); ++i) diff += std::fabs(a.color[i] - b.color[i]);
+    EXPECT_LT(diff / static_cast<double>(a.color.size()), 1e-4);
+    // A given length is kept.
+    Scene given = scene(0.0001f);
+    findRenderOption("shadow_offset")->give(given.settings, 0.01);
+    EXPECT_FLOAT_EQ(planRender(given).settings.shadowOffsetMin, 0.01f);
+}
+
 TEST(Renderer, ThreadCountDoesNotChangeTheImage) {
     Scene scene = demoScene();
     scene.camera.width = 64;

@@ -25,7 +25,8 @@ float WhittedTracer::offset(float f) const {
 }
 
 Vec3 WhittedTracer::normalAt(Vec3 p) const {
-    const Vec3 n = estimateNormal(m_tape, p, 1e-4f, m_plan.settings.normals);
+    const Vec3 n =
+        estimateNormal(m_tape, p, m_plan.settings.normalSpacingMin, m_plan.settings.normals);
     return length(n) > 0 ? n : Vec3(0, 1, 0);
 }
 

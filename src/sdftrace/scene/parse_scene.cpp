@@ -146,7 +146,7 @@ void parseRender(const Reader& r, RenderSettings& s) {
                     r.failKey(o.key, error);
                 break;
         }
-        o.set(s, v);
+        o.give(s, v);
     }
 }
 

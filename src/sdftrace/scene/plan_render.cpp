@@ -5,6 +5,7 @@
 #include "placed_meshes.h"
 #include "sdftrace/core/macros.h"
 #include "sdftrace/field/grid.h"
+#include "sdftrace/scene/render_options.h"
 
 namespace sdft {
 
@@ -73,6 +74,7 @@ RenderPlan planRender(const Scene& scene) {
     plan.deviceGrids = scene.deviceGrids;
     compileField(plan, scene.root);
     plan.sceneBounds = nodeBounds(*scene.root);
+    scaleLengthDefaults(plan.settings, sceneLengthFactor(plan.sceneBounds, plan.camera));
     plan.settings.maxDistance = resolveMaxDistance(plan.settings, plan.camera, plan.sceneBounds);
     if (plan.settings.primaryTriangles && !scene.meshes.empty()) {
         std::vector<PlacedMesh> meshes;

@@ -5,6 +5,8 @@
 #include <sstream>
 #include <type_traits>
 
+#include "sdftrace/core/macros.h"
+
 namespace sdft {
 
 namespace {
@@ -55,7 +57,8 @@ std::vector<RenderOption> makeTable() {
          .range = kPositive,
          .what = "a hit threshold",
          .doc = "hit threshold on f/L when `screen_space` is off",
-         SDFT_MEMBER(trace.tau)},
+         SDFT_MEMBER(trace.tau),
+         .scaled = true},
         {.key = "omega",
          .flags = "--omega",
          .group = "Tracer",
@@ -104,7 +107,8 @@ std::vector<RenderOption> makeTable() {
          .range = kPositive,
          .what = "a distance",
          .doc = "f/L under which the hybrid searches linearly",
-         SDFT_MEMBER(trace.hybridEpsilon)},
+         SDFT_MEMBER(trace.hybridEpsilon),
+         .scaled = true},
         {.key = "hybrid_step",
          .flags = "--hybrid-step",
          .group = "Tracer",
@@ -112,7 +116,8 @@ std::vector<RenderOption> makeTable() {
          .range = kPositive,
          .what = "a step length",
          .doc = "the hybrid's linear step (features thinner than this can be stepped over)",
-         SDFT_MEMBER(trace.hybridStep)},
+         SDFT_MEMBER(trace.hybridStep),
+         .scaled = true},
         {.key = "falsi_iterations",
          .flags = "--falsi-iterations",
          .group = "Tracer",
@@ -190,7 +195,8 @@ std::vector<RenderOption> makeTable() {
          .what = "a distance",
          .doc = "eps_min of the shadow- and secondary-ray origin offset 2 max(eps_min, |f(p)|) "
                 "(Keinert §3.3)",
-         SDFT_MEMBER(shadowOffsetMin)},
+         SDFT_MEMBER(shadowOffsetMin),
+         .scaled = true},
         {.key = "soft_max_step",
          .flags = "--soft-max-step",
          .group = "Shading",
@@ -198,7 +204,8 @@ std::vector<RenderOption> makeTable() {
          .range = kNonNegative,
          .what = "a distance",
          .doc = "soft: the largest march step (RTSDF §2.5.2 uses 0.05; 0 = unlimited)",
-         SDFT_MEMBER(soft.maxStep)},
+         SDFT_MEMBER(soft.maxStep),
+         .scaled = true},
         {.key = "soft_bias",
          .flags = "--soft-bias",
          .group = "Shading",
@@ -206,7 +213,8 @@ std::vector<RenderOption> makeTable() {
          .range = kNonNegative,
          .what = "a distance",
          .doc = "soft: subtracted from every distance, thickening thin surfaces (RTSDF §2.5.3)",
-         SDFT_MEMBER(soft.bias)},
+         SDFT_MEMBER(soft.bias),
+         .scaled = true},
         {.key = "soft_triangulation",
          .flags = "--soft-triangulation",
          .group = "Shading",
@@ -271,7 +279,8 @@ std::vector<RenderOption> makeTable() {
          .range = kPositive,
          .what = "a distance",
          .doc = "ao: spacing of the samples",
-         SDFT_MEMBER(ao.step)},
+         SDFT_MEMBER(ao.step),
+         .scaled = true},
         {.key = "ao_strength",
          .flags = "--ao-strength",
          .group = "Shading",
@@ -313,7 +322,8 @@ std::vector<RenderOption> makeTable() {
          .range = kPositive,
          .what = "a distance",
          .doc = "the offset along the normal when `secondary_epsilon` is global",
-         SDFT_MEMBER(globalEpsilon)},
+         SDFT_MEMBER(globalEpsilon),
+         .scaled = true},
         {.key = "convex_bounds",
          .flags = "--convex-bounds",
          .group = "Whitted",
@@ -425,7 +435,32 @@ std::string number(double v) {
 
 std::span<const RenderOption> renderOptions() {
     static const std::vector<RenderOption> table = makeTable();
+    static_assert(sizeof(RenderSettings::given) * 8 >= 64);
+    SDFT_CHECK(table.size() <= 64);  // RenderSettings::given holds a bit per option
     return table;
+}
+
+void RenderOption::give(RenderSettings& s, double v) const {
+    set(s, v);
+    const auto all = renderOptions();
+    s.given |= uint64_t{1} << (this - all.data());
+}
+
+float sceneLengthFactor(const Bounds3& bounds, const CameraDesc& camera) {
+    const float length = bounds.finite() && !bounds.empty()
+                             ? sdft::length(bounds.extent())
+                             : sdft::length(camera.eye - camera.target);
+    return length > 0 && length < 1 ? length : 1.0f;
+}
+
+void scaleLengthDefaults(RenderSettings& s, float factor) {
+    const RenderSettings defaults;
+    const auto all = renderOptions();
+    for (size_t i = 0; i < all.size(); ++i)
+        if (all[i].scaled && !(s.given >> i & 1)) all[i].set(s, all[i].get(defaults) * factor);
+    // Lengths no option sets: the soft shadow's hit distance, the normals' smallest spacing.
+    s.soft.epsilon = defaults.soft.epsilon * factor;
+    s.normalSpacingMin = defaults.normalSpacingMin * factor;
 }
 
 const RenderOption* findRenderOption(const std::string& key) {

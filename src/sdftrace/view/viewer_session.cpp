@@ -51,7 +51,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options)
 void ViewerSession::replan() {
     Scene scene = m_source.scene();
     if (m_classic) scene.settings.trace = TraceOptions::classic();
-    for (const auto& [key, value] : m_overrides) findRenderOption(key)->set(scene.settings, value);
+    for (const auto& [key, value] : m_overrides) findRenderOption(key)->give(scene.settings, value);
     if (m_threads > 0) scene.settings.threads = m_threads;
     scene.camera = m_camera.camera();
     m_settings = scene.settings;
