@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <string>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/test_grid_fields.h"
@@ -24,6 +25,17 @@ namespace {
 
 #define SKIP_WITHOUT_GPU() \
     if (!gpuInfo().present) GTEST_SKIP() << "no GPU: " << gpuInfo().why
+
+// RTSDF's frame as these tests render it: `teapot` (a mesh object) on a floor under a sun,
+// `render` the scene's render options, a w x h camera.
+std::string teapotOnFloor(int w, int h, const std::string& teapot, const std::string& render) {
+    return R"({"camera": {"eye": [0.2, 0.9, 2.2], "target": [0, 0.35, 0], "fov": 30, "width": )" +
+           std::to_string(w) + R"(, "height": )" + std::to_string(h) + R"(},
+      "lights": [{"type": "directional", "direction": [-0.4, -1, -0.5], "intensity": 2,
+                  "angle": 2}],
+      "objects": [{"type": "box", "size": [4, 0.1, 4], "translate": [0, -0.05, 0]}, )" +
+           teapot + R"(], "render": )" + render + "}";
+}
 
 TEST(GpuCompleteGrid, AbsenceIsOneClearError) {
     if (gpuInfo().present) GTEST_SKIP() << "a GPU is present: " << gpuInfo().name;
@@ -74,17 +86,12 @@ TEST(GpuCompleteGrid, RefreshesAsTheCpu) {
 // triangles): the plan's complete grid bound to its device copy renders as the plan uploaded.
 TEST(GpuCompleteGrid, ABoundGridRendersAsItsUpload) {
     SKIP_WITHOUT_GPU();
-    const Scene scene = parseSceneText(R"({
-      "camera": {"eye": [0.2, 0.9, 2.2], "target": [0, 0.35, 0], "fov": 30, "width": 320,
-                 "height": 180},
-      "lights": [{"type": "directional", "direction": [-0.4, -1, -0.5], "intensity": 2,
-                  "angle": 2}],
-      "objects": [
-        {"type": "box", "size": [4, 0.1, 4], "translate": [0, -0.05, 0]},
-        {"mesh": "../data/meshes/teapot.obj", "resolution": 64, "scale": 0.15,
-         "dynamic": {"method": "rtsdf", "rays": 2}}],
-      "render": {"shadow_method": "soft", "primary_triangles": true}})",
-                                       "bound.json", std::string(SDFT_SOURCE_DIR) + "/examples");
+    const Scene scene = parseSceneText(
+        teapotOnFloor(320, 180,
+                      R"({"mesh": "../data/meshes/teapot.obj", "resolution": 64, "scale": 0.15,
+                          "dynamic": {"method": "rtsdf", "rays": 2}})",
+                      R"({"shadow_method": "soft", "primary_triangles": true})"),
+        "bound.json", std::string(SDFT_SOURCE_DIR) + "/examples");
     const RenderPlan plan = planRender(scene);
     const Grid* complete = nullptr;
     for (const auto& g : plan.tape.grids())
@@ -112,20 +119,15 @@ TEST(GpuCompleteGrid, ABoundGridRendersAsItsUpload) {
 // uploaded; the CPU renderer refuses the resident plan.
 TEST(GpuCompleteGrid, ResidentFramesRenderAsFramesBakedToTheHost) {
     SKIP_WITHOUT_GPU();
-    const AnimatedScene anim =
-        AnimatedScene::fromText(R"({
-      "camera": {"eye": [0.2, 0.9, 2.2], "target": [0, 0.35, 0], "fov": 30, "width": 160,
-                 "height": 90},
-      "lights": [{"type": "directional", "direction": [-0.4, -1, -0.5], "intensity": 2,
-                  "angle": 2}],
-      "objects": [
-        {"type": "box", "size": [4, 0.1, 4], "translate": [0, -0.05, 0]},
-        {"mesh": "../data/meshes/teapot.obj", "resolution": 48, "scale": 0.15,
-         "rotate": {"axis": [0, 1, 0], "angle": {"keyframes": [{"time": 0, "value": 0},
-                                                              {"time": 1, "value": 90}]}},
-         "dynamic": {"method": "rtsdf", "rays": 2, "alpha": 0.8}}],
-      "render": {"shadow_method": "soft"}})",
-                                "resident.json", std::string(SDFT_SOURCE_DIR) + "/examples");
+    const AnimatedScene anim = AnimatedScene::fromText(
+        teapotOnFloor(160, 90,
+                      R"({"mesh": "../data/meshes/teapot.obj", "resolution": 48, "scale": 0.15,
+                          "rotate": {"axis": [0, 1, 0],
+                                     "angle": {"keyframes": [{"time": 0, "value": 0},
+                                                             {"time": 1, "value": 90}]}},
+                          "dynamic": {"method": "rtsdf", "rays": 2, "alpha": 0.8}})",
+                      R"({"shadow_method": "soft"})"),
+        "resident.json", std::string(SDFT_SOURCE_DIR) + "/examples");
     const auto baker = [](bool resident) {
         PrepareOptions o;
         o.bakeMesh = [resident](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
