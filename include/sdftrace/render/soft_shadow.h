@@ -5,10 +5,14 @@
 //    As RTSDF fig. 16 notes, this widens penumbrae outwards: the umbra is the hard shadow.
 //  - Aaltonen's triangulation (RTSDF fig. 8): from two consecutive samples (distances h_prev,
 //    h at t), the closest approach between them is estimated at E, y = h² / (2 h_prev) back along
-//    the ray, with clearance d = sqrt(h² - y²): less banding than h/t.
+//    the ray, with clearance d = sqrt(h² - y²): less banding than h/t. Ours takes the step s
+//    between the samples as it was (y = (h² - h_prev² + s²) / 2s, the same for s = h_prev) and
+//    uses E only where it lies between them: a ray receding from the scene has h = 2 h_prev, the
+//    spheres touch at the previous sample's back and d = 0, which darkened every march that ran
+//    on far past a small scene.
 //  - A maximum step (RTSDF §2.5.2) so that neighbouring pixels take similar samples, and a
-//  per-pixel
-//    jitter of the start within one step against the step pattern (removed by accumulation).
+//    per-pixel jitter of the start within one step against the step pattern (removed by
+//    accumulation).
 //  - A bias subtracted from the distance (§2.5.3): thickens thin surfaces against holes in the
 //    umbra of a coarse grid.
 //  - `centered` (ours, default): the march goes on through occluders with negative distances, so
@@ -24,6 +28,7 @@
 #include "sdftrace/core/macros.h"
 #include "sdftrace/field/tape.h"
 #include "sdftrace/field/tape_view.h"
+#include "sdftrace/math/ray.h"
 
 namespace sdft {
 
@@ -49,12 +54,16 @@ class SoftShadowMarch {
   public:
     // Marches origin + t dir (dir unit) for t in [tMin, tMax). `tanRadius`: the tangent of the
     // light's angular radius at the origin (light_sample.h; 0: a hard shadow, +inf: inside the
-    // light). `jitter01` in [0, 1): the start offset in units of the max step.
+    // light). `jitter01` in [0, 1): the start offset in units of the max step. `tLeave`: where
+    // the ray leaves the scene (softShadowEnd); the march ends with its first sample past it,
+    // whose pairing with the last one inside still catches an edge on the way out.
     SDFT_HOST_DEVICE void start(Vec3 origin, Vec3 dir, float tMin, float tMax, float tanRadius,
-                                const SoftShadowOptions& o, float jitter01) {
+                                const SoftShadowOptions& o, float jitter01,
+                                float tLeave = INFINITY) {
         m_origin = origin;
         m_dir = dir;
         m_tMax = tMax;
+        m_tLeave = tLeave;
         m_k = tanRadius > 0 ? 1.0f / tanRadius : 0.0f;
         m_centered = o.centered && m_k > 0;
         m_t = tMin + (o.jitter && o.maxStep > 0 ? jitter01 * o.maxStep : 0.0f);
@@ -74,14 +83,17 @@ class SoftShadowMarch {
                 m_s = 0;
                 return m_active = false;
             }
-            float clearance;
+            float clearance = h / std::fmax(m_t, 1e-12f);
             if (o.triangulate && m_prev < INFINITY && h > 0 && m_prev > 0) {
-                // E: where the spheres of the two samples come closest to the ray.
-                const float y = h * h / (2.0f * m_prev);
-                const float d = std::sqrt(std::fmax(0.0f, h * h - y * y));
-                clearance = d / std::fmax(m_t - y, 1e-12f);
-            } else {
-                clearance = h / std::fmax(m_t, 1e-12f);
+                // E: where the spheres of the two samples, m_step apart, meet closest to the
+                // ray, y back from this sample (Aaltonen's y = h² / (2 h_prev) for a step of
+                // h_prev). Only an E between the two samples says more than their own h/t; past
+                // the last sample (a ray leaving the scene: h = 2 h_prev, where Aaltonen's d is
+                // 0) or with one sphere inside the other, this sample's h/t stands.
+                const float y = (h * h - m_prev * m_prev + m_step * m_step) / (2.0f * m_step);
+                const float d2 = h * h - y * y;
+                if (y > 0 && y < m_step && d2 > 0)
+                    clearance = std::sqrt(d2) / std::fmax(m_t - y, 1e-12f);
             }
             m_s = minf(m_s, m_k * clearance);
             if (m_centered && m_s <= -1.0f) return m_active = false;
@@ -94,7 +106,9 @@ class SoftShadowMarch {
         // small fraction of t so the march gets through.
         float step = std::fabs(h);
         if (m_centered) step = std::fmax(step, std::fmax(o.epsilon, 2e-3f * m_t));
-        m_t += o.maxStep > 0 ? minf(step, o.maxStep) : step;
+        if (m_t >= m_tLeave) return m_active = false;
+        m_step = o.maxStep > 0 ? minf(step, o.maxStep) : step;
+        m_t += m_step;
         return m_active = m_t < m_tMax && m_evaluations < o.maxSteps;
     }
     SDFT_HOST_DEVICE SoftShadowResult result() const {
@@ -114,19 +128,34 @@ class SoftShadowMarch {
 
   private:
     Vec3 m_origin, m_dir;
-    float m_t = 0, m_tMax = 0, m_k = 0, m_prev = INFINITY, m_s = 1;
+    float m_t = 0, m_tMax = 0, m_tLeave = INFINITY, m_k = 0, m_prev = INFINITY, m_s = 1, m_step = 0;
     int m_evaluations = 0;
     bool m_centered = false, m_active = false, m_inside = false;
 };
 
+// Where a march towards a light leaves the field's bounds grown by the bias (which thickens
+// every surface), beyond which nothing occludes: at most tMax, tMin where it misses them
+// (SoftShadowMarch's tLeave). A directional light's march would otherwise run on to
+// max_distance: up to `maxSteps` evaluations under a max step, and a far field of doubling steps
+// past a small scene.
+SDFT_HOST_DEVICE inline float softShadowEnd(const Bounds3& bounds, Vec3 origin, Vec3 dir,
+                                            float tMin, float tMax, float bias) {
+    const Vec3 grow(std::fmax(bias, 0.0f));
+    float t0, t1;
+    return intersectBounds({bounds.lo - grow, bounds.hi + grow}, {origin, dir}, tMin, tMax, t0, t1)
+               ? t1
+               : tMin;
+}
+
 // One march through a tape's field by its scalar evaluator (a device thread's, and the CPU's
-// softShadow below).
+// softShadow below), ending where the ray leaves the field's bounds.
 SDFT_HOST_DEVICE inline SoftShadowResult softShadowTape(const TapeView& field, Vec3 origin,
                                                         Vec3 dir, float tMin, float tMax,
                                                         float tanRadius, const SoftShadowOptions& o,
                                                         float jitter01) {
     SoftShadowMarch m;
-    m.start(origin, dir, tMin, tMax, tanRadius, o, jitter01);
+    m.start(origin, dir, tMin, tMax, tanRadius, o, jitter01,
+            softShadowEnd(field.bounds, origin, dir, tMin, tMax, o.bias));
     const float invL = 1.0f / field.lipschitz;
     while (m.active()) m.step(evalTape(field, m.point()) * invL - o.bias, o);
     return m.result();
@@ -135,7 +164,8 @@ SDFT_HOST_DEVICE inline SoftShadowResult softShadowTape(const TapeView& field, V
 SoftShadowResult softShadow(const Tape& tape, Vec3 origin, Vec3 dir, float tMin, float tMax,
                             float tanRadius, const SoftShadowOptions& options, float jitter01);
 
-// Marches every ray together, the live ones' points evaluated in one batch per step.
+// Marches every ray together, the live ones' points evaluated in one batch per step; each ends
+// where it leaves the tape's bounds.
 struct SoftShadowRay {
     Vec3 origin, dir;
     float tMin = 0, tMax = 0, tanRadius = 0, jitter01 = 0;

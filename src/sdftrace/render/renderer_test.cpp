@@ -121,9 +121,11 @@ TEST(Renderer, AFarCameraStillSeesTheScene) {
 // down with a scene smaller than a unit (sceneLengthFactor): the same scene at a thousandth of the
 // size renders the same image (measured: mean difference 2.5e-7). With the fixed defaults the
 // shadow rays of the small scene's floor started above its sphere, the AO samples far outside it
-// and the normals' spacing was half its torus's tube (mean difference 0.49).
+// and the normals' spacing was half its torus's tube (mean difference 0.49). Soft shadows too:
+// their marches towards the sun run on to max_distance, ten thousand times the small scene's size
+// (triangulation's estimate once fell to 0 there: mean difference 0.31).
 TEST(Renderer, ASceneSmallerThanAUnitRendersAsAtUnitScale) {
-    auto scene = [](float s) {
+    auto scene = [](float s, const char* shadows = "hard") {
         char text[900];
         std::snprintf(text, sizeof text, R"({
           "camera": {"eye": [0, %g, %g], "target": [0, 0, 0], "width": 48, "height": 32},
@@ -133,9 +135,9 @@ TEST(Renderer, ASceneSmallerThanAUnitRendersAsAtUnitScale) {
                       {"type": "sphere", "radius": %g},
                       {"type": "torus", "major_radius": %g, "minor_radius": %g,
                        "translate": [%g, 0, 0]}],
-          "render": {"shadow_method": "hard", "ao": true}})",
+          "render": {"shadow_method": "%s", "ao": true}})",
                       1 * s, 4 * s, 6 * s, 0.1 * s, 6 * s, -1.05 * s, 1 * s, 0.8 * s, 0.2 * s,
-                      1.5 * s);
+                      1.5 * s, shadows);
         return parseSceneText(text, "scaled.json");
     };
     // 0.85 and 0.00085 units across: defaults at 0.85 and 0.00085 times theirs.
@@ -151,6 +153,11 @@ TEST(Renderer, ASceneSmallerThanAUnitRendersAsAtUnitScale) {
     double diff = 0;
     for (size_t i = 0; i < a.color.size(); ++i) diff += std::fabs(a.color[i] - b.color[i]);
     EXPECT_LT(diff / static_cast<double>(a.color.size()), 1e-4);
+    render(planRender(scene(0.1f, "soft")), a);
+    render(planRender(scene(0.0001f, "soft")), b);
+    diff = 0;
+    for (size_t i = 0; i < a.color.size(); ++i) diff += std::fabs(a.color[i] - b.color[i]);
+    EXPECT_LT(diff / static_cast<double>(a.color.size()), 1e-3) << "soft shadows";
     // A given length is kept.
     Scene given = scene(0.0001f);
     findRenderOption("shadow_offset")->give(given.settings, 0.01);

@@ -15,7 +15,8 @@ void softShadowPacket(const Tape& tape, const std::vector<SoftShadowRay>& rays,
     s.live.clear();
     for (int i = 0; i < n; ++i) {
         const SoftShadowRay& r = rays[i];
-        s.marches[i].start(r.origin, r.dir, r.tMin, r.tMax, r.tanRadius, o, r.jitter01);
+        s.marches[i].start(r.origin, r.dir, r.tMin, r.tMax, r.tanRadius, o, r.jitter01,
+                           softShadowEnd(tape.bounds(), r.origin, r.dir, r.tMin, r.tMax, o.bias));
         if (s.marches[i].active()) s.live.push_back(i);
     }
     const float invL = 1.0f / tape.lipschitz();

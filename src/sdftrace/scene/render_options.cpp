@@ -176,7 +176,8 @@ std::vector<RenderOption> makeTable() {
          .type = T::Choice,
          .choices = {"hard", "soft", "distributed", "pcf", "evsm"},
          .doc = "hard: one ray to the light's centre (Liktor §4.1); soft: SDF soft shadows, one "
-                "march (RTSDF §2.4-2.5); distributed: rays to stratified points on the light, the "
+                "march to where the ray leaves the scene (RTSDF §2.4-2.5); distributed: rays to "
+                "stratified points on the light, the "
                 "ground truth; pcf, evsm: shadow maps traced from the light",
          SDFT_MEMBER(shadowMethod)},
         {.key = "shadow_rays",
@@ -219,7 +220,8 @@ std::vector<RenderOption> makeTable() {
          .flags = "--soft-triangulation",
          .group = "Shading",
          .type = T::Bool,
-         .doc = "soft: Aaltonen's estimate from two consecutive samples (RTSDF fig. 8); off: k·h/t",
+         .doc = "soft: Aaltonen's estimate from two consecutive samples (RTSDF fig. 8), where "
+                "it falls between them; off: k·h/t",
          SDFT_MEMBER(soft.triangulate)},
         {.key = "soft_jitter",
          .flags = "--soft-jitter",
