@@ -85,9 +85,9 @@ void makeGemsGlass(Scene& scene) {
 // teapot posed (a wobble about its vertical axis and a bob, inside the grid's margin), its field
 // accumulated on the device (GpuMeshBaker::accumulateOnDevice), the plan's complete block grid
 // refreshed there (GpuCompleteGrid, bound into the renderer's tapes) and the frame shaded: nothing
-// of the field crosses to the host. The primary rays hit the plan's triangles (their LBVH, built
-// once; a deforming mesh would read the baker's, which the pose rebuilds and the pose's time
-// counts). Medians over `runs` frames after one untimed.
+// of the field crosses to the host. The primary rays hit the posed triangles: the baker's LBVH,
+// which the pose rebuilds (the pose's time), and its vertex normals (GpuMeshBaker::surface),
+// rebound into the renderer. Medians over `runs` frames after one untimed.
 void rtsdfWholeFrame(const RenderPlan& plan, int runs) {
     const Grid* complete = nullptr;
     for (const auto& g : plan.tape.grids())
@@ -123,6 +123,7 @@ void rtsdfWholeFrame(const RenderPlan& plan, int runs) {
         GpuRefreshTimes r;
         grid.refresh(f_t, &r);
         renderer.rebind({complete, grid.view()});
+        renderer.rebind(0, baker.surface());  // the primary rays' triangles of this pose
         Film film(plan.camera.width, plan.camera.height, Film::bit(Aov::Color));
         const RenderStats st = renderer.render(frame, film);
         const double ms =

@@ -38,6 +38,15 @@ struct GpuBakeTimes {
 // the device (bake/winding_lbvh.h: no host work when a mesh is posed every frame).
 enum class GpuWinding { MedianTree, Lbvh };
 
+// The mesh as it stands on the device, in the arrays a GPU renderer's triangle primaries read
+// (MeshPrimaryMesh, render/mesh_primary.h): the LBVH, area-weighted unit vertex normals (as the
+// host's smoothNormals) and 3 indices per triangle. Valid until the baker's next pose() or end.
+struct GpuMeshSurface {
+    LbvhView bvh;
+    const Vec3* normals = nullptr;
+    const uint32_t* indices = nullptr;
+};
+
 class GpuMeshBaker {
   public:
     // Uploads the mesh, builds its LBVH on the device and its winding-number tree. Throws
@@ -79,6 +88,9 @@ class GpuMeshBaker {
                                     float alpha, const RtsdfHistory* from = nullptr,
                                     RtsdfStats* stats = nullptr, GpuBakeTimes* times = nullptr);
     int accumulatedFrames() const;  // frames in the device's accumulation
+    // The posed mesh for a GPU renderer's triangle primaries (RTSDF's hybrid mode: the triangles
+    // of the frame the field was regenerated from, with no host LBVH per frame).
+    GpuMeshSurface surface() const;
 
     // The pieces alone, for tests: seeds of `shape`, jump flooding of given seeds, first hits.
     SurfaceSeeds seeds(const GridShape& shape) const;

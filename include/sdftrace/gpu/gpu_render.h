@@ -16,6 +16,8 @@
 
 namespace sdft {
 
+struct GpuMeshSurface;  // gpu_bake.h
+
 class GpuDirectRenderer {
   public:
     // Uploads `plan` (which must outlive this). Throws InputError "<what>: ..." when no GPU can
@@ -33,6 +35,9 @@ class GpuDirectRenderer {
     RenderStats render(const FrameView& view, Film& film) const;
     // A bound grid's view anew, in every tape that reads it (after its refresh).
     void rebind(const GpuGridBinding& binding);
+    // Triangle primaries: mesh `mesh` of the plan (in its order) as `surface` now holds it (a
+    // baker's posed mesh in the same coordinates, GpuMeshBaker::surface), in place of its upload.
+    void rebind(int mesh, const GpuMeshSurface& surface);
 
   private:
     struct Impl;

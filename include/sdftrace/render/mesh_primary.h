@@ -8,9 +8,11 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "sdftrace/core/macros.h"
+#include "sdftrace/field/device_resident_grid.h"
 #include "sdftrace/math/lbvh_traverse.h"
 #include "sdftrace/math/ray.h"
 #include "sdftrace/math/vec.h"
@@ -83,6 +85,10 @@ struct MeshPrimaryTables {
         Affine toLocal;
         Mat3 normalToWorld;
         float bias = 0;
+        // A mesh posed on the GPU (an RTSDF mesh whose grid lives there, DeviceResidentGrid):
+        // the arrays above are empty and a GPU renderer reads the baker's
+        // (GpuMeshBaker::surface).
+        std::shared_ptr<RtsdfDeviceState> device;
     };
     std::vector<Mesh> meshes;
     std::vector<MeshPrimaryMesh> views;  // filled by view()
@@ -90,7 +96,8 @@ struct MeshPrimaryTables {
     // Views of the meshes' arrays (valid while this lives and is not changed).
     MeshPrimaryView view() {
         views.clear();
-        for (const Mesh& m : meshes)
+        for (const Mesh& m : meshes) {
+            SDFT_CHECK(!m.device);  // its arrays are on the GPU
             views.push_back(
                 {{m.nodes.data(), m.triangles.data(), static_cast<int>(m.triangles.size())},
                  m.normals.data(),
@@ -98,6 +105,7 @@ struct MeshPrimaryTables {
                  m.toLocal,
                  m.normalToWorld,
                  m.bias});
+        }
         return {views.data(), static_cast<int>(views.size())};
     }
 };

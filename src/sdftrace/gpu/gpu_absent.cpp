@@ -53,6 +53,7 @@ GpuDirectRenderer::GpuDirectRenderer(const RenderPlan&, const std::string& what,
     requireGpu(what);
 }
 void GpuDirectRenderer::rebind(const GpuGridBinding&) {}
+void GpuDirectRenderer::rebind(int, const GpuMeshSurface&) {}
 GpuDirectRenderer::~GpuDirectRenderer() = default;
 GpuDirectRenderer::GpuDirectRenderer(GpuDirectRenderer&&) noexcept = default;
 GpuDirectRenderer& GpuDirectRenderer::operator=(GpuDirectRenderer&&) noexcept = default;
@@ -101,6 +102,7 @@ const float* GpuMeshBaker::accumulateOnDevice(const GridShape&, const RtsdfOptio
     return nullptr;
 }
 int GpuMeshBaker::accumulatedFrames() const { return 0; }
+GpuMeshSurface GpuMeshBaker::surface() const { return {}; }
 SurfaceSeeds GpuMeshBaker::seeds(const GridShape&) const { return {}; }
 std::vector<Vec3> GpuMeshBaker::jumpFloodPoints(const GridShape&, const std::vector<Vec3>&,
                                                 JfaVariant, GpuBakeTimes*) const {

@@ -148,6 +148,28 @@ __global__ void fillKernel(float* a, size_t n, float value) {
     if (i < n) a[i] = value;
 }
 
+// Area-weighted vertex normals (the host's smoothNormals, scene/placed_meshes.cpp): each
+// triangle adds its doubled area vector to its vertices (atomically, so the sum's order, and its
+// last bits, vary), then each vertex's sum is made unit.
+__global__ void vertexNormalSumKernel(const Vec3* positions, const uint32_t* triangles, int n,
+                                      Vec3* normals) {
+    const int j = blockIdx.x * blockDim.x + threadIdx.x;
+    if (j >= n) return;
+    const uint32_t* t = triangles + 3 * static_cast<size_t>(j);
+    const Vec3 a = positions[t[0]];
+    const Vec3 area = cross(positions[t[1]] - a, positions[t[2]] - a);
+    for (int k = 0; k < 3; ++k) {
+        atomicAdd(&normals[t[k]].x, area.x);
+        atomicAdd(&normals[t[k]].y, area.y);
+        atomicAdd(&normals[t[k]].z, area.z);
+    }
+}
+
+__global__ void unitNormalKernel(Vec3* normals, size_t n) {
+    const size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < n) normals[i] = length(normals[i]) > 0 ? normalize(normals[i]) : Vec3(0, 1, 0);
+}
+
 // The dipole tree over the LBVH (bake/winding_lbvh.h): its leaves and corners in key order, then
 // from each leaf up, through the parents the LBVH's build kept, the second thread to reach a node
 // fills it (the LBVH's box pass).
@@ -224,7 +246,9 @@ struct GpuMeshBaker::Impl {
     cuda::DeviceArray<float> accumulation;
     GridShape accumulatedShape;
     int accumulated = 0;
-    cuda::DeviceArray<float> field;  // accumulateOnDevice()'s last frame f_t
+    cuda::DeviceArray<float> field;   // accumulateOnDevice()'s last frame f_t
+    cuda::DeviceArray<Vec3> normals;  // surface()'s, of the current pose (none: not made yet)
+    bool normalsMade = false;
 
     // The mesh on the device: positions, triangles (unless `sameTriangles`), the LBVH built
     // there, and the winding-number tree: the median split built on the host and uploaded (the
@@ -241,6 +265,7 @@ struct GpuMeshBaker::Impl {
         }
         lbvh = std::make_unique<cuda::DeviceLbvh>(positions.get(), triangles.get(), count,
                                                   lbvhFrame(mesh));
+        normalsMade = false;
         if (windingSource == GpuWinding::Lbvh) {
             windingOverLbvh();
             return;
@@ -277,6 +302,24 @@ struct GpuMeshBaker::Impl {
                                                     visits.get());
         SDFT_CUDA_CHECK(cudaGetLastError());
         SDFT_CUDA_CHECK(cudaDeviceSynchronize());  // before the counts go
+    }
+
+    // The vertex normals of the current pose, made on first use after each pose.
+    void makeNormals() {
+        if (normalsMade) return;
+        const size_t n = positions.size();
+        if (normals.size() != n) normals = cuda::DeviceArray<Vec3>(n);
+        if (n > 0) {
+            SDFT_CUDA_CHECK(cudaMemset(normals.get(), 0, n * sizeof(Vec3)));
+            if (count > 0) {
+                vertexNormalSumKernel<<<blocksFor(count), kThreads>>>(
+                    positions.get(), triangles.get(), count, normals.get());
+                SDFT_CUDA_CHECK(cudaGetLastError());
+            }
+            unitNormalKernel<<<blocksFor(n), kThreads>>>(normals.get(), n);
+            SDFT_CUDA_CHECK(cudaGetLastError());
+        }
+        normalsMade = true;
     }
 
     WindingView winding() const {
@@ -456,6 +499,12 @@ std::vector<float> GpuMeshBaker::rtsdf(const GridShape& s, const RtsdfOptions& o
     }
     t.totalMs = since(start);
     return result;
+}
+
+GpuMeshSurface GpuMeshBaker::surface() const {
+    Impl& m = *m_impl;
+    m.makeNormals();
+    return {m.lbvh->view(), m.normals.get(), m.triangles.get()};
 }
 
 void GpuMeshBaker::pose(const TriangleMesh& mesh, GpuBakeTimes* times) {

@@ -115,48 +115,71 @@ TEST(GpuCompleteGrid, ABoundGridRendersAsItsUpload) {
 
 // render --device cuda's RTSDF frames (MeshBakeOptions::gpuResident): from the second frame on,
 // the field is accumulated and the grid refreshed on the device, and the plan binds that grid in
-// place of its host stand-in. Each frame renders as the same frame baked back to the host and
-// uploaded; the CPU renderer refuses the resident plan.
+// place of its host stand-in; with triangle primaries (RTSDF's hybrid mode) the primary rays hit
+// the baker's posed triangles there too (GpuMeshBaker::surface: its LBVH and vertex normals, no
+// host BVH). Each frame renders as the same frame baked back to the host and uploaded; the CPU
+// renderer refuses the resident plan.
 TEST(GpuCompleteGrid, ResidentFramesRenderAsFramesBakedToTheHost) {
     SKIP_WITHOUT_GPU();
-    const AnimatedScene anim = AnimatedScene::fromText(
-        teapotOnFloor(160, 90,
-                      R"({"mesh": "../data/meshes/teapot.obj", "resolution": 48, "scale": 0.15,
-                          "rotate": {"axis": [0, 1, 0],
-                                     "angle": {"keyframes": [{"time": 0, "value": 0},
-                                                             {"time": 1, "value": 90}]}},
-                          "dynamic": {"method": "rtsdf", "rays": 2, "alpha": 0.8}})",
-                      R"({"shadow_method": "soft"})"),
-        "resident.json", std::string(SDFT_SOURCE_DIR) + "/examples");
-    const auto baker = [](bool resident) {
-        PrepareOptions o;
-        o.bakeMesh = [resident](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
-            MeshBakeOptions b = bake;
-            b.gpuResident = resident;
-            return bakeMeshGpu(mesh, b);
+    for (const bool triangles : {false, true}) {
+        SCOPED_TRACE(triangles ? "triangle primaries" : "SDF primaries");
+        const AnimatedScene anim = AnimatedScene::fromText(
+            teapotOnFloor(160, 90,
+                          R"({"mesh": "../data/meshes/teapot.obj", "resolution": 48, "scale": 0.15,
+                              "rotate": {"axis": [0, 1, 0],
+                                         "angle": {"keyframes": [{"time": 0, "value": 0},
+                                                                 {"time": 1, "value": 90}]}},
+                              "dynamic": {"method": "rtsdf", "rays": 2, "alpha": 0.8}})",
+                          std::string(R"({"shadow_method": "soft", "primary_triangles": )") +
+                              (triangles ? "true" : "false") + "}"),
+            "resident.json", std::string(SDFT_SOURCE_DIR) + "/examples");
+        const auto baker = [](bool resident) {
+            PrepareOptions o;
+            o.bakeMesh = [resident](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
+                MeshBakeOptions b = bake;
+                b.gpuResident = resident;
+                return bakeMeshGpu(mesh, b);
+            };
+            return o;
         };
-        return o;
-    };
-    AssetCache onDevice, onHost;
-    for (int i = 0; i < 4; ++i) {
-        const double t = 0.25 * i;
-        const Scene a = anim.at(t, onDevice, baker(true));
-        const Scene b = anim.at(t, onHost, baker(false));
-        EXPECT_EQ(a.deviceGrids.size(), i > 0 ? 1u : 0u) << i;
-        EXPECT_TRUE(b.deviceGrids.empty()) << i;
-        const RenderPlan pa = planRender(a), pb = planRender(b);
-        FrameView frame;
-        frame.camera = pa.camera;
-        Film fa(pa.camera.width, pa.camera.height, Film::bit(Aov::Color));
-        Film fb(pa.camera.width, pa.camera.height, Film::bit(Aov::Color));
-        GpuDirectRenderer(pa, "test").render(frame, fa);
-        GpuDirectRenderer(pb, "test").render(frame, fb);
-        double diff = 0;
-        for (size_t k = 0; k < fa.color.size(); ++k) diff += std::fabs(fa.color[k] - fb.color[k]);
-        EXPECT_LT(diff / static_cast<double>(fa.color.size()), 1e-4) << "frame " << i;
-        if (i > 0) {
-            Film cpu(pa.camera.width, pa.camera.height, Film::bit(Aov::Color));
-            EXPECT_THROW(render(pa, frame, cpu), InputError) << i;
+        AssetCache onDevice, onHost;
+        for (int i = 0; i < 4; ++i) {
+            const double t = 0.25 * i;
+            const Scene a = anim.at(t, onDevice, baker(true));
+            const Scene b = anim.at(t, onHost, baker(false));
+            EXPECT_EQ(a.deviceGrids.size(), i > 0 ? 1u : 0u) << i;
+            EXPECT_TRUE(b.deviceGrids.empty()) << i;
+            const RenderPlan pa = planRender(a), pb = planRender(b);
+            ASSERT_EQ(pa.meshPrimary != nullptr, triangles);
+            if (triangles) {
+                const MeshPrimaryTables ta = pa.meshPrimary->tables();
+                ASSERT_EQ(ta.meshes.size(), 1u);
+                EXPECT_EQ(ta.meshes[0].device != nullptr, i > 0) << i;
+                EXPECT_EQ(ta.meshes[0].nodes.empty(), i > 0) << i;
+            }
+            FrameView frame;
+            frame.camera = pa.camera;
+            Film fa(pa.camera.width, pa.camera.height,
+                    Film::bit(Aov::Color) | Film::bit(Aov::Depth));
+            Film fb(pa.camera.width, pa.camera.height,
+                    Film::bit(Aov::Color) | Film::bit(Aov::Depth));
+            GpuDirectRenderer(pa, "test").render(frame, fa);
+            GpuDirectRenderer(pb, "test").render(frame, fb);
+            double diff = 0;
+            for (size_t k = 0; k < fa.color.size(); ++k)
+                diff += std::fabs(fa.color[k] - fb.color[k]);
+            EXPECT_LT(diff / static_cast<double>(fa.color.size()), 1e-4) << "frame " << i;
+            // The same triangles hit: every pixel's depth within 1e-4 t (the LBVHs may order
+            // equal hits differently), the same pixels hit.
+            for (size_t k = 0; k < fa.depth.size(); ++k) {
+                ASSERT_EQ(std::isinf(fa.depth[k]), std::isinf(fb.depth[k])) << i << ", " << k;
+                if (!std::isinf(fa.depth[k]))
+                    ASSERT_NEAR(fa.depth[k], fb.depth[k], 1e-4f * fb.depth[k]) << i << ", " << k;
+            }
+            if (i > 0) {
+                Film cpu(pa.camera.width, pa.camera.height, Film::bit(Aov::Color));
+                EXPECT_THROW(render(pa, frame, cpu), InputError) << i;
+            }
         }
     }
 }

@@ -88,6 +88,7 @@ struct GpuDirectRenderer::Impl {
     std::vector<cuda::DeviceArray<LbvhTriangle>> meshTriangles;
     std::vector<cuda::DeviceArray<Vec3>> meshNormals;
     std::vector<cuda::DeviceArray<uint32_t>> meshIndices;
+    std::vector<MeshPrimaryMesh> meshViews;  // the host's copy of `meshes`
     cuda::DeviceArray<MeshPrimaryMesh> meshes;
     // Whitted rays: the convex objects' tapes (Keinert §3.5) on the device, and their views.
     bool whitted;
@@ -109,8 +110,13 @@ struct GpuDirectRenderer::Impl {
         }
         images = cuda::DeviceArray<ImageView>(imageViews);
         if (p.primaryField) primaryTape.emplace(*p.primaryField, bound);
-        std::vector<MeshPrimaryMesh> meshViews;
         for (const MeshPrimaryTables::Mesh& mesh : tables.meshes.meshes) {
+            if (mesh.device) {  // posed on the device with its field: the baker's arrays
+                const GpuMeshSurface s = mesh.device->baker.surface();
+                meshViews.push_back(
+                    {s.bvh, s.normals, s.indices, mesh.toLocal, mesh.normalToWorld, mesh.bias});
+                continue;
+            }
             meshNodes.emplace_back(mesh.nodes);
             meshTriangles.emplace_back(mesh.triangles);
             meshNormals.emplace_back(mesh.normals);
@@ -169,6 +175,16 @@ void GpuDirectRenderer::rebind(const GpuGridBinding& binding) {
     m.tape.rebind(binding);
     if (m.primaryTape) m.primaryTape->rebind(binding);
     for (GpuTape& t : m.convexTapes) t.rebind(binding);
+}
+
+void GpuDirectRenderer::rebind(int mesh, const GpuMeshSurface& surface) {
+    Impl& m = *m_impl;
+    SDFT_CHECK(mesh >= 0 && mesh < static_cast<int>(m.meshViews.size()));
+    MeshPrimaryMesh& v = m.meshViews[mesh];
+    v.bvh = surface.bvh;
+    v.normals = surface.normals;
+    v.indices = surface.indices;
+    m.meshes.upload(m.meshViews);
 }
 
 GpuDirectRenderer::~GpuDirectRenderer() = default;

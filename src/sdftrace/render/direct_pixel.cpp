@@ -43,7 +43,10 @@ DirectPixelTables directPixelTables(const RenderPlan& plan) {
     for (const TextureImage& image : plan.images) t.images.push_back(image.view());
     if (plan.meshPrimary) {
         t.meshes = plan.meshPrimary->tables();
-        t.meshView = t.meshes.view();
+        // Meshes posed on the GPU have no host arrays: the GPU renderer makes its own view.
+        bool host = true;
+        for (const MeshPrimaryTables::Mesh& m : t.meshes.meshes) host = host && !m.device;
+        if (host) t.meshView = t.meshes.view();
     }
     return t;
 }

@@ -19,6 +19,7 @@ MeshPrimary::Hit PlacedMeshes::firstHit(const Ray& ray, float tMax) const {
     Hit best;
     best.t = tMax;
     for (const PlacedMesh& m : m_meshes) {
+        SDFT_CHECK(m.bvh != nullptr);  // a device mesh's plan is refused by the CPU renderer
         // The ray in the mesh's coordinates, its direction not renormalised so that t stays the
         // world distance through any scale.
         const Vec3 o = m.placement.toLocal(ray.origin);
@@ -58,13 +59,16 @@ MeshPrimaryTables PlacedMeshes::tables() const {
     MeshPrimaryTables t;
     for (const PlacedMesh& m : m_meshes) {
         MeshPrimaryTables::Mesh out;
-        const Lbvh bvh(*m.mesh);
-        out.nodes = bvh.nodes();
-        out.triangles = bvh.triangles();
-        out.normals = m.normals;
-        out.indices.reserve(3 * m.mesh->triangles.size());
-        for (const auto& tri : m.mesh->triangles)
-            out.indices.insert(out.indices.end(), tri.begin(), tri.end());
+        out.device = m.device;
+        if (!m.device) {
+            const Lbvh bvh(*m.mesh);
+            out.nodes = bvh.nodes();
+            out.triangles = bvh.triangles();
+            out.normals = m.normals;
+            out.indices.reserve(3 * m.mesh->triangles.size());
+            for (const auto& tri : m.mesh->triangles)
+                out.indices.insert(out.indices.end(), tri.begin(), tri.end());
+        }
         out.toLocal = affineOf([&](Vec3 p) { return m.placement.toLocal(p); });
         // The inverse transpose of mesh-to-world's linear part: world-to-mesh's, transposed.
         out.normalToWorld = out.toLocal.linear.transposed();

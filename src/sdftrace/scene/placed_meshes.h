@@ -15,10 +15,14 @@ namespace sdft {
 
 struct PlacedMesh {
     std::shared_ptr<const TriangleMesh> mesh;
-    std::shared_ptr<const MeshBvh> bvh;  // over *mesh
+    std::shared_ptr<const MeshBvh> bvh;  // over *mesh; none when `device`
     std::vector<Vec3> normals;           // per vertex (smoothNormals), in the mesh's coordinates
     Placement placement;                 // mesh to world
     float bias = 0;                      // MeshPrimary::Hit::bias
+    // A mesh whose grid lives on the GPU (DeviceResidentGrid): its posed triangles are there too
+    // (GpuMeshBaker::surface), so neither the BVH nor the normals are built on the host. Only a
+    // GPU renderer reads it.
+    std::shared_ptr<RtsdfDeviceState> device;
 };
 
 // Area-weighted vertex normals of a mesh, for shading its triangles smoothly.

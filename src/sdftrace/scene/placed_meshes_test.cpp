@@ -10,7 +10,9 @@
 #include <fstream>
 
 #include "sdftrace/bake/mesh_bvh.h"
+#include "sdftrace/core/error.h"
 #include "sdftrace/io/mesh_io.h"
+#include "sdftrace/render/direct_pixel.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/animated_scene.h"
 #include "sdftrace/scene/plan_render.h"
@@ -191,6 +193,47 @@ TEST(PrimaryTriangles, LbvhTablesHitWhereEmbreeHits) {
     EXPECT_GT(hits, rays / 8);
     EXPECT_LE(hitMismatch, rays / 500);
     EXPECT_LE(normalOff, hits / 200);
+}
+
+// A mesh whose grid lives on the GPU (render --device cuda's RTSDF frames, DeviceResidentGrid)
+// is posed there too: the plan builds no host BVH or normals for it and its tables carry the
+// device state instead of arrays, for the GPU renderer to bind the baker's (GpuMeshBaker::surface;
+// GpuCompleteGrid.ResidentFramesRenderAsFramesBakedToTheHost renders it on a GPU); the host view
+// leaves it out and the CPU renderer refuses the plan. Other meshes keep their host arrays.
+TEST(PrimaryTriangles, AMeshPosedOnTheGpuGetsNoHostBvh) {
+    AssetCache cache;
+    Scene scene = AnimatedScene::fromText(bunnyScene(true), "bunny.json", kMeshes).at(0, cache);
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    const Grid* bunny = scene.meshes.begin()->first;
+    const RenderPlan host = planRender(scene);
+    ASSERT_TRUE(host.meshPrimary);
+    const MeshPrimaryTables hostTables = host.meshPrimary->tables();
+    ASSERT_EQ(hostTables.meshes.size(), 1u);
+    EXPECT_FALSE(hostTables.meshes[0].device);
+    EXPECT_FALSE(hostTables.meshes[0].nodes.empty());
+    EXPECT_EQ(directPixelTables(host).meshView.count, 1);
+    // A stand-in state: the plan only carries it, the GPU renderer alone reads it.
+    int marker = 0;
+    const std::shared_ptr<RtsdfDeviceState> state(std::make_shared<int>(0),
+                                                  reinterpret_cast<RtsdfDeviceState*>(&marker));
+    scene.deviceGrids.push_back({bunny, state});
+    const RenderPlan device = planRender(scene);
+    ASSERT_TRUE(device.meshPrimary);
+    const MeshPrimaryTables tables = device.meshPrimary->tables();
+    ASSERT_EQ(tables.meshes.size(), 1u);
+    EXPECT_EQ(tables.meshes[0].device, state);
+    EXPECT_TRUE(tables.meshes[0].nodes.empty());
+    EXPECT_TRUE(tables.meshes[0].normals.empty());
+    EXPECT_TRUE(tables.meshes[0].indices.empty());
+    // The placement still goes along: the GPU renderer carries rays into the mesh by it.
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_EQ(tables.meshes[0].toLocal.linear.m[r][c],
+                      hostTables.meshes[0].toLocal.linear.m[r][c]);
+    EXPECT_EQ(tables.meshes[0].bias, hostTables.meshes[0].bias);
+    EXPECT_EQ(directPixelTables(device).meshView.count, 0);
+    Film film(device.camera.width, device.camera.height);
+    EXPECT_THROW(render(device, film), InputError);
 }
 
 }  // namespace

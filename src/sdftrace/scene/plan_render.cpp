@@ -31,8 +31,12 @@ NodePtr takeMeshes(const NodePtr& n, const Scene& scene, Placement placement,
         if (it == scene.meshes.end()) return n;
         PlacedMesh m;
         m.mesh = it->second;
-        m.bvh = std::make_shared<const MeshBvh>(*m.mesh);
-        m.normals = smoothNormals(*m.mesh);
+        for (const DeviceResidentGrid& d : scene.deviceGrids)
+            if (d.grid == n->grid.get()) m.device = d.state;
+        if (!m.device) {
+            m.bvh = std::make_shared<const MeshBvh>(*m.mesh);
+            m.normals = smoothNormals(*m.mesh);
+        }
         m.placement = placement;
         m.bias = worldVoxel(placement, *n->grid);
         out.push_back(std::move(m));
