@@ -157,6 +157,7 @@ struct Animation {
         cache.keepOnly(used.keys);  // what this frame needs stays cached, the rest goes
         assets.add(used.stats);
         applyOverrides(a, in->scene);
+        shareMeshAccels(in->scene, cache);  // a rigid mesh's BVH built once for all frames
         in->plan.emplace(planRender(in->scene));
         return in;
     }

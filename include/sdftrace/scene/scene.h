@@ -22,6 +22,8 @@
 
 namespace sdft {
 
+class MeshAccel;  // scene/mesh_accel.h
+
 // A grid the scene needs: a grid file, a mesh baked to a grid, or a subtree sampled into one.
 struct AssetRequest {
     enum class Kind { GridFile, Mesh, Subtree };
@@ -82,6 +84,9 @@ struct Scene {
     // The triangles each mesh grid was baked from (prepareScene), for primary rays on the
     // triangles (RenderSettings::primaryTriangles).
     std::map<const Grid*, std::shared_ptr<const TriangleMesh>> meshes;
+    // Their BVHs and normals where primary rays hit triangles, from the cache (prepareScene):
+    // shared by the frames of an animation; planRender builds what is missing.
+    std::map<const TriangleMesh*, std::shared_ptr<const MeshAccel>> meshAccels;
     // Grids whose current values are on the GPU (prepareScene, for `render --device cuda`).
     std::vector<DeviceResidentGrid> deviceGrids;
 };

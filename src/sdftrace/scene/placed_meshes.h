@@ -10,23 +10,22 @@
 #include "sdftrace/bake/mesh_bvh.h"
 #include "sdftrace/render/mesh_primary.h"
 #include "sdftrace/render/motion.h"
+#include "sdftrace/scene/mesh_accel.h"
 
 namespace sdft {
 
 struct PlacedMesh {
     std::shared_ptr<const TriangleMesh> mesh;
-    std::shared_ptr<const MeshBvh> bvh;  // over *mesh; none when `device`
-    std::vector<Vec3> normals;           // per vertex (smoothNormals), in the mesh's coordinates
-    Placement placement;                 // mesh to world
-    float bias = 0;                      // MeshPrimary::Hit::bias
+    // Its BVH and normals (in the mesh's coordinates), shared with the other frames' plans; none
+    // when `device`.
+    std::shared_ptr<const MeshAccel> accel;
+    Placement placement;  // mesh to world
+    float bias = 0;       // MeshPrimary::Hit::bias
     // A mesh whose grid lives on the GPU (DeviceResidentGrid): its posed triangles are there too
     // (GpuMeshBaker::surface), so neither the BVH nor the normals are built on the host. Only a
     // GPU renderer reads it.
     std::shared_ptr<RtsdfDeviceState> device;
 };
-
-// Area-weighted vertex normals of a mesh, for shading its triangles smoothly.
-std::vector<Vec3> smoothNormals(const TriangleMesh& mesh);
 
 class PlacedMeshes : public MeshPrimary {
   public:

@@ -34,8 +34,9 @@ NodePtr takeMeshes(const NodePtr& n, const Scene& scene, Placement placement,
         for (const DeviceResidentGrid& d : scene.deviceGrids)
             if (d.grid == n->grid.get()) m.device = d.state;
         if (!m.device) {
-            m.bvh = std::make_shared<const MeshBvh>(*m.mesh);
-            m.normals = smoothNormals(*m.mesh);
+            const auto accel = scene.meshAccels.find(m.mesh.get());
+            m.accel = accel != scene.meshAccels.end() ? accel->second
+                                                      : std::make_shared<const MeshAccel>(m.mesh);
         }
         m.placement = placement;
         m.bias = worldVoxel(placement, *n->grid);

@@ -196,6 +196,35 @@ void checkRepeats(const Scene& scene, const std::vector<std::shared_ptr<const Gr
 
 }  // namespace
 
+std::shared_ptr<const MeshAccel> AssetCache::meshAccel(
+    const std::shared_ptr<const TriangleMesh>& mesh) {
+    dropUnheldAccels();
+    auto it = m_accels.find(mesh.get());
+    if (it != m_accels.end() && it->second->meshPointer() == mesh) return it->second;
+    auto accel = std::make_shared<const MeshAccel>(mesh);
+    bool held = false;  // only meshes the cache holds stay (their accels hold them in turn)
+    for (const auto& [key, m] : m_meshes) held = held || m == mesh;
+    if (held) m_accels[mesh.get()] = accel;
+    return accel;
+}
+
+void AssetCache::dropUnheldAccels() {
+    for (auto it = m_accels.begin(); it != m_accels.end();) {
+        bool held = false;
+        for (const auto& [key, m] : m_meshes) held = held || m.get() == it->first;
+        it = held ? std::next(it) : m_accels.erase(it);
+    }
+}
+
+void shareMeshAccels(Scene& scene, AssetCache& cache) {
+    if (!scene.settings.primaryTriangles) return;
+    for (const auto& [grid, mesh] : scene.meshes) {
+        bool device = false;  // posed on the GPU with its grid: nothing on the host
+        for (const DeviceResidentGrid& d : scene.deviceGrids) device = device || d.grid == grid;
+        if (!device) scene.meshAccels[mesh.get()] = cache.meshAccel(mesh);
+    }
+}
+
 PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions& options) {
     PrepareStats stats;
     std::vector<std::shared_ptr<const Grid>> grids(scene.assets.size());
@@ -223,6 +252,7 @@ PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions&
         }
         ++(q.kind == AssetRequest::Kind::GridFile ? stats.loaded : stats.baked);
     }
+    shareMeshAccels(scene, cache);
     checkRepeats(scene, grids, done);
     if (scene.root) scene.root = substitute(scene.root, grids, done);
     scene.assets.clear();
