@@ -68,6 +68,7 @@ class SoftShadowMarch {
         m_centered = o.centered && m_k > 0;
         m_t = tMin + (o.jitter && o.maxStep > 0 ? jitter01 * o.maxStep : 0.0f);
         m_prev = INFINITY;
+        m_step = 0;
         m_s = 1.0f;  // the closest approach in light radii (RTSDF: the visibility itself)
         m_evaluations = 0;
         m_inside = !(tanRadius < INFINITY);  // inside the light: nothing can cover all of it

@@ -24,7 +24,6 @@ class MeshAccel {
   public:
     explicit MeshAccel(std::shared_ptr<const TriangleMesh> mesh);
 
-    const TriangleMesh& mesh() const { return *m_mesh; }
     const std::shared_ptr<const TriangleMesh>& meshPointer() const { return m_mesh; }
     const MeshBvh& bvh() const { return m_bvh; }
     const std::vector<Vec3>& normals() const { return m_normals; }

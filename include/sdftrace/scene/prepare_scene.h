@@ -15,10 +15,11 @@
 #include "sdftrace/bake/rtsdf_bake.h"
 #include "sdftrace/field/grid.h"
 #include "sdftrace/io/mesh_animation.h"
-#include "sdftrace/scene/mesh_accel.h"
 #include "sdftrace/scene/scene.h"
 
 namespace sdft {
+
+class MeshAccel;  // scene/mesh_accel.h
 
 // Grids by request key: a file or mesh used twice, in one scene or in several scenes prepared with
 // the same cache (frames, viewers), is loaded and baked once.

@@ -13,6 +13,7 @@
 #include "sdftrace/field/tape.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_io.h"
+#include "sdftrace/scene/mesh_accel.h"
 
 namespace sdft {
 
