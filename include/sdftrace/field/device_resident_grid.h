@@ -6,6 +6,7 @@
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "sdftrace/field/grid.h"
 
@@ -17,5 +18,13 @@ struct DeviceResidentGrid {
     const Grid* grid = nullptr;  // the host stand-in in the node tree
     std::shared_ptr<RtsdfDeviceState> state;
 };
+
+// The device state of `grid` among `grids`; none where its values are on the host.
+inline std::shared_ptr<RtsdfDeviceState> deviceStateOf(const std::vector<DeviceResidentGrid>& grids,
+                                                       const Grid* grid) {
+    for (const DeviceResidentGrid& d : grids)
+        if (d.grid == grid) return d.state;
+    return nullptr;
+}
 
 }  // namespace sdft

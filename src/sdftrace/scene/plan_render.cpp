@@ -31,8 +31,7 @@ NodePtr takeMeshes(const NodePtr& n, const Scene& scene, Placement placement,
         if (it == scene.meshes.end()) return n;
         PlacedMesh m;
         m.mesh = it->second;
-        for (const DeviceResidentGrid& d : scene.deviceGrids)
-            if (d.grid == n->grid.get()) m.device = d.state;
+        m.device = deviceStateOf(scene.deviceGrids, n->grid.get());
         if (!m.device) {
             const auto accel = scene.meshAccels.find(m.mesh.get());
             m.accel = accel != scene.meshAccels.end() ? accel->second

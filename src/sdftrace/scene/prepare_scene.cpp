@@ -220,9 +220,9 @@ void AssetCache::dropUnheldAccels() {
 void shareMeshAccels(Scene& scene, AssetCache& cache) {
     if (!scene.settings.primaryTriangles) return;
     for (const auto& [grid, mesh] : scene.meshes) {
-        bool device = false;  // posed on the GPU with its grid: nothing on the host
-        for (const DeviceResidentGrid& d : scene.deviceGrids) device = device || d.grid == grid;
-        if (!device) scene.meshAccels[mesh.get()] = cache.meshAccel(mesh);
+        // Posed on the GPU with its grid: nothing on the host.
+        if (!deviceStateOf(scene.deviceGrids, grid))
+            scene.meshAccels[mesh.get()] = cache.meshAccel(mesh);
     }
 }
 
