@@ -1,8 +1,11 @@
-# Thin wrapper over CMake. `make run` renders the demo; `make test` builds and runs every test.
+# Thin wrapper over CMake. `make run` builds the CLI alone and renders the demo; `make test` builds
+# and runs every test; `make install PREFIX=...` installs the CLI, library, headers, CMake package,
+# Python package, examples and docs.
 BUILD ?= build/release
 JOBS ?= $(shell nproc)
+PREFIX ?= /usr/local
 
-.PHONY: deps configure build run test test-sanitize bench clean
+.PHONY: deps configure build cli run test test-sanitize bench install clean
 
 deps:
 	bash scripts/install-deps.sh
@@ -13,7 +16,11 @@ configure:
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
-run: build
+# The CLI and its OpenVDB plugin only: the first picture without the tests and benchmarks.
+cli: configure
+	cmake --build $(BUILD) -j $(JOBS) --target sdftrace_cli
+
+run: cli
 	$(BUILD)/apps/sdftrace/sdftrace render -o demo.png
 
 test: build
@@ -28,6 +35,9 @@ test-sanitize:
 
 bench: build
 	$(BUILD)/bench/sdftrace_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
 
 clean:
 	rm -rf build

@@ -295,10 +295,23 @@ void bindGrid(pyb::module_& m) {
           pyb::arg("resolution") = 128, pyb::arg("method") = "exact", pyb::arg("band") = 3.0f,
           pyb::arg("dense") = false, pyb::arg("sign") = "winding", pyb::arg("block") = 4,
           pyb::arg("padding") = 2.0f, pyb::arg("progress") = false,
-          "Bakes a triangle mesh to a Grid: `mesh` is a file path (OBJ, PLY, STL, OFF, glTF) or "
-          "an N x 3 vertex array with `faces` (M x 3 indices). method: exact, jfa, danielsson, "
-          "edt, rtsdf; sign: winding, parity, flood, beta; `resolution` cells along the longest "
-          "axis; sparse (blocks within `band` voxels) unless dense=True");
+          "Bakes a triangle mesh to a signed distance Grid.\n\n"
+          "mesh: a file path (OBJ, PLY, STL, OFF, glTF), or an N x 3 array of vertex positions.\n"
+          "faces: with a vertex array, the M x 3 array of triangle vertex indices; None with a "
+          "path.\n"
+          "resolution: cells along the mesh's longest axis, in [4, 16384] (the others in "
+          "proportion).\n"
+          "method: how distances are computed: 'exact' (closest point transform / narrow-band "
+          "scattering), 'jfa' (3D jump flooding, RTSDF §2.2), 'rtsdf' (RTSDF's ray-sampled field), "
+          "'danielsson' (Liktor §3.2) or 'edt' (exact separable EDT).\n"
+          "band: sparse grids keep the blocks within this many voxels of the surface (> 0).\n"
+          "dense: True stores every sample; False (default) a sparse block grid (Jamriska §3).\n"
+          "sign: inside/outside test: 'winding' (generalized winding number, robust on open "
+          "meshes), 'parity' (ray crossings), 'flood' (flood fill) or 'beta' (RTSDF's shell).\n"
+          "block: cells per sparse block edge, 4 or 8.\n"
+          "padding: voxels of margin around the mesh's bounds.\n"
+          "progress: print the bake's stages and percentage on stderr.\n\n"
+          "Raises ValueError naming the argument for bad input.");
 }
 
 }  // namespace sdft::py

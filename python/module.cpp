@@ -4,7 +4,9 @@
 #include <pybind11/pybind11.h>
 
 #include "bindings.h"
+#include "sdftrace/core/build_info.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/exec/simd.h"
 
 PYBIND11_MODULE(_sdftrace, m) {
     m.doc() = "sdftrace: signed distance fields, baked and ray traced (C++ core)";
@@ -19,4 +21,30 @@ PYBIND11_MODULE(_sdftrace, m) {
     sdft::py::bindGrid(m);
     sdft::py::bindScene(m);
     sdft::py::bindImages(m);
+    m.attr("__version__") = sdft::buildInfo().version;
+    m.def(
+        "build_info",
+        [] {
+            const sdft::BuildInfo& b = sdft::buildInfo();
+            pybind11::dict d;
+            d["version"] = b.version;
+            d["revision"] = b.revision;
+            d["build_type"] = b.buildType;
+            d["compiler"] = b.compiler;
+            d["cuda"] = b.cuda;
+            d["cuda_version"] = b.cudaVersion;
+            d["cuda_architectures"] = b.cudaArchitectures;
+            d["openvdb"] = b.openvdbVersion;
+            d["embree"] = b.embreeVersion;
+            d["tbb"] = b.tbbVersion;
+            d["mpi"] = b.mpi;
+            d["video"] = b.video;
+            d["viewer"] = b.viewer;
+            d["simd"] = sdft::simdLevelName(sdft::simdLevel());
+            return d;
+        },
+        "What this build of sdftrace is and includes, as `sdftrace --version` prints it: a dict "
+        "with version, revision (git), build_type, compiler, cuda (bool), cuda_version, "
+        "cuda_architectures, openvdb, embree, tbb (their versions), mpi, video, viewer (bool) and "
+        "simd (the SIMD level chosen at run time).");
 }

@@ -30,7 +30,7 @@ step "configure"
 cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DSDFT_CUDA=ON -DSDFT_MPI=OFF -DSDFT_PYTHON=OFF \
     $SDFT_CMAKE_ARGS > "$out/configure.log" 2>&1 || fail "configure (configure.log)"
 step "build"
-cmake --build build-gpu -j"$(nproc)" --target sdftrace_unit_tests sdftrace_e2e_tests \
+cmake --build build-gpu -j"$(nproc)" --target sdftrace_gpu_kernels sdftrace_unit_tests sdftrace_e2e_tests \
     sdftrace_gpu_primary_bench sdftrace_gpu_direct_bench sdftrace_gpu_bake_bench \
     > "$out/build.log" 2>&1 || { tail -40 "$out/build.log" >> "$summary"; fail "build (build.log)"; }
 

@@ -18,6 +18,7 @@ packages=(
     libavcodec-dev libavformat-dev libswscale-dev libavutil-dev  # video output (H.264, FFmpeg)
     pybind11-dev python3-dev python3-numpy  # the Python module (python/)
     python3-pytest        # its tests
+    python3-pip python3-venv python3-setuptools  # pip install . (offline, --no-build-isolation)
     libglfw3-dev libimgui-dev  # the viewer (sdftrace view): GLFW + OpenGL, Dear ImGui
     xvfb xauth libgl1-mesa-dri  # its tests: a virtual X server with Mesa's software OpenGL
     libopenmpi-dev openmpi-bin  # mpirun -np N sdftrace render|bake (SDFT_MPI)

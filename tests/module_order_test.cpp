@@ -101,20 +101,53 @@ TEST(ModuleOrder, NoLibraryIncludeGoesAgainstTheOrder) {
     EXPECT_TRUE(found.empty()) << found.size() << " includes against the module order:" << report;
 }
 
-// The CLI uses the public API only: no header from src/.
+// The CLI uses the public API (include/) and no other internal header than these, which it still
+// reaches until the device choice moves into the library (docs/decisions/0015).
 TEST(ModuleOrder, AppsIncludeOnlyThePublicApi) {
-    const fs::path apps = fs::path(SDFT_SOURCE_DIR) / "apps" / "sdftrace";
+    const fs::path root(SDFT_SOURCE_DIR);
+    const fs::path apps = root / "apps" / "sdftrace";
+    const std::set<std::string> internals = {
+        "sdftrace/gpu/gpu_bake.h",        "sdftrace/gpu/gpu_render.h",
+        "sdftrace/render/direct_pixel.h", "sdftrace/exec/thread_arena.h",
+        "sdftrace/view/view_script.h",    "sdftrace/view/viewer_session.h"};
     static const std::regex local(R"re(#include\s+"([^"]+)")re");
+    size_t publicIncludes = 0;
     for (const auto& f : fs::recursive_directory_iterator(apps)) {
         if (!f.is_regular_file()) continue;
         const std::string text = readFile(f.path());
         for (std::sregex_iterator it(text.begin(), text.end(), local), end; it != end; ++it) {
             const std::string header = (*it)[1];
-            const bool ok = header.rfind("sdftrace/", 0) == 0 || fs::exists(apps / header) ||
-                            fs::exists(f.path().parent_path() / header);
-            EXPECT_TRUE(ok) << f.path().filename() << " includes " << header;
+            if (header.rfind("sdftrace/", 0) == 0) {
+                const bool isPublic = fs::exists(root / "include" / header);
+                publicIncludes += isPublic;
+                EXPECT_TRUE(isPublic || internals.count(header))
+                    << f.path().filename() << " includes the internal " << header;
+                continue;
+            }
+            EXPECT_TRUE(fs::exists(apps / header) || fs::exists(f.path().parent_path() / header))
+                << f.path().filename() << " includes " << header;
         }
     }
+    EXPECT_GT(publicIncludes, 20u) << "the walk found too few includes";
+}
+
+// The public headers include nothing from src/: an installed tree is complete.
+TEST(ModuleOrder, PublicHeadersIncludeOnlyPublicHeaders) {
+    const fs::path include = fs::path(SDFT_SOURCE_DIR) / "include";
+    static const std::regex local(R"re(#include\s+"([^"]+)")re");
+    size_t headers = 0;
+    for (const auto& f : fs::recursive_directory_iterator(include)) {
+        if (!f.is_regular_file()) continue;
+        ++headers;
+        const std::string text = readFile(f.path());
+        for (std::sregex_iterator it(text.begin(), text.end(), local), end; it != end; ++it) {
+            const std::string header = (*it)[1];
+            EXPECT_TRUE(fs::exists(include / header))
+                << fs::relative(f.path(), include) << " includes " << header
+                << ", which is not a public header";
+        }
+    }
+    EXPECT_GT(headers, 50u);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "sdftrace/cluster/communicator.h"
 #include "sdftrace/cluster/work_farm.h"
+#include "sdftrace/core/build_info.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/simd.h"
@@ -35,8 +36,12 @@ int run(int argc, char** argv) {
     CLI::App app{"sdftrace: build and ray trace signed distance fields"};
     app.name("sdftrace");
     app.require_subcommand(1);
-    app.set_version_flag("--version", std::string("sdftrace 0.1.0 (SIMD: ") +
-                                          sdft::simdLevelName(sdft::simdLevel()) + ")");
+    // The version, the git revision and what this build includes (core/build_info.h).
+    app.set_version_flag("--version", [] {
+        std::string text = sdft::describeBuild(sdft::simdLevelName(sdft::simdLevel()));
+        if (!text.empty() && text.back() == '\n') text.pop_back();
+        return text;
+    });
     app.fallthrough();  // --max-memory may follow the subcommand
     app.add_option_function<std::string>(
            "--max-memory",

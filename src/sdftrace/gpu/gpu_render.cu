@@ -1,3 +1,5 @@
+#include <dlfcn.h>
+
 #include <chrono>
 #include <cstdint>
 #include <optional>
@@ -5,7 +7,8 @@
 
 #include "device_buffer.h"
 #include "gpu_minmax.cuh"
-#include "gpu_render_launch.cuh"
+#include "../core/plugin_dirs.h"
+#include "gpu_kernel_table.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"
@@ -22,24 +25,37 @@ namespace {
 
 using gpu_render::DirectOut;
 using gpu_render::kCounters;
-static_assert(kTapeMaxScalarRegs == 64, "CMakeLists.txt generates the kernels' units for 64");
+static_assert(kTapeMaxScalarRegs ==
+                  gpu_render::kMaterialRegFiles[gpu_render::kMaterialRegFileCount - 1],
+              "the largest material register file holds every tape");
 
-// Calls launch(std::integral_constant<int, R>) for the material register file R that `regs`
-// names (1, 8, 16, 32, else kTapeMaxScalarRegs): one switch for every kernel's instantiations.
-template <class Launch>
-void withMaterialRegs(int regs, Launch&& launch) {
-    switch (regs) {
-        case 1:
-            return launch(std::integral_constant<int, 1>{});
-        case 8:
-            return launch(std::integral_constant<int, 8>{});
-        case 16:
-            return launch(std::integral_constant<int, 16>{});
-        case 32:
-            return launch(std::integral_constant<int, 32>{});
-        default:
-            return launch(std::integral_constant<int, kTapeMaxScalarRegs>{});
-    }
+// The GPU renderer's kernels from libsdftrace_gpu_kernels.so (core/plugin_dirs.h says where it is
+// looked for); a missing or mismatched plugin is one clear error.
+const gpu_render::KernelTable& kernelTable() {
+    struct Loaded {
+        const gpu_render::KernelTable* table = nullptr;
+        std::string failure;
+    };
+    static const Loaded loaded = [] {
+        const std::string file = "libsdftrace_gpu_kernels.so";
+        std::string tried;
+        const std::string path = findPlugin(file, tried);
+        if (path.empty())
+            return Loaded{nullptr, file + " not found (looked for " + tried +
+                                       "; `make build` builds it, SDFT_PLUGIN_DIR names its "
+                                       "directory)"};
+        void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+        if (!handle) return Loaded{nullptr, "cannot load " + path + " (" + dlerror() + ")"};
+        auto entry = reinterpret_cast<const gpu_render::KernelTable* (*)()>(
+            dlsym(handle, "sdftrace_gpu_kernels"));
+        const gpu_render::KernelTable* table = entry ? entry() : nullptr;
+        if (!table || table->version != gpu_render::KernelTable::kVersion ||
+            table->layout != gpu_render::kernelTableLayout())
+            return Loaded{nullptr, path + " is not this build's GPU kernels (rebuild sdftrace)"};
+        return Loaded{table, {}};
+    }();
+    if (!loaded.table) throw InputError("the GPU renderer needs its kernels: " + loaded.failure);
+    return *loaded.table;
 }
 
 // The summary's counters of a frame from the kernel's per-pixel counters `c` and the steps,
@@ -230,15 +246,13 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
         pathView = pathPixelView(m.plan, frame, m.tables);
         pathView.direct = view;
     }
-    withMaterialRegs(regs, [&](auto r) {
-        constexpr int kRegs = decltype(r)::value;
-        if (paths)
-            gpu_render::launchPath<kRegs>(pathView, w, h, out);
-        else if (m.whitted)
-            gpu_render::launchDirect<kRegs, true>(view, whitted, w, h, out);
-        else
-            gpu_render::launchDirect<kRegs, false>(view, whitted, w, h, out);
-    });
+    // The kernels come from their plugin (gpu_kernel_table.h), loaded on the first render.
+    const gpu_render::KernelTable& k = kernelTable();
+    const int r = gpu_render::materialRegFileIndex(regs);
+    if (paths)
+        k.path[r](pathView, w, h, out);
+    else
+        k.direct[r][m.whitted ? 1 : 0](view, whitted, w, h, out);
     SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
     RenderStats st;
     st.gpu = true;

@@ -6,8 +6,8 @@
 #include <set>
 #include <string>
 
-#include "sdftrace/render/grid_test_scenes.h"
-#include "sdftrace/render/primary_test_scenes.h"
+#include "test_scenes/grid_test_scenes.h"
+#include "test_scenes/primary_test_scenes.h"
 #include "sdftrace/render/render_plan.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/render/whitted_pixel.h"

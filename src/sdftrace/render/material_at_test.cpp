@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "shadow_test_scenes.h"
+#include "test_scenes/shadow_test_scenes.h"
 
 namespace sdft {
 namespace {

@@ -6,7 +6,7 @@
 
 #include "sdftrace/render/temporal.h"
 #include "sdftrace/scene/plan_render.h"
-#include "shadow_test_scenes.h"
+#include "test_scenes/shadow_test_scenes.h"
 
 namespace sdft {
 namespace {

@@ -9,7 +9,7 @@
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
 #include "sdftrace/scene/render_options.h"
-#include "shadow_test_scenes.h"
+#include "test_scenes/shadow_test_scenes.h"
 
 namespace sdft {
 namespace {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "sdftrace/field/node.h"
-#include "shadow_test_scenes.h"
+#include "test_scenes/shadow_test_scenes.h"
 
 namespace sdft {
 namespace {

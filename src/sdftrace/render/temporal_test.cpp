@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "sdftrace/scene/plan_render.h"
-#include "shadow_test_scenes.h"
+#include "test_scenes/shadow_test_scenes.h"
 
 namespace sdft {
 namespace {
