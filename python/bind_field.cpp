@@ -182,7 +182,8 @@ void bindField(pyb::module_& m) {
             },
             pyb::arg("resolution") = 128, pyb::arg("dense") = false, pyb::arg("band") = 3.0f,
             pyb::arg("block") = 4, pyb::arg("padding") = 2.0f, pyb::arg("bounds") = pyb::none(),
-            "Samples f / L at the vertices of a grid over the field's bounds (or `bounds`), "
+            "Samples f / L at the vertices of a grid over the field's bounds (or `bounds`, "
+            "((x0, y0, z0), (x1, y1, z1))), with `padding` voxels of margin, "
             "`resolution` cells along the longest axis: dense, or a sparse block grid keeping "
             "the blocks within `band` voxels of the surface")
         .def("__repr__", [](const Field& f) {

@@ -240,7 +240,9 @@ void bindGrid(pyb::module_& m) {
                 pyb::gil_scoped_release release;
                 return PyGrid{std::make_shared<const Grid>(loadGridFile(p))};
             },
-            pyb::arg("path"), "Reads a .sdfg or .vdb (OpenVDB float level set) file")
+            pyb::arg("path"),
+            "Reads a grid file: `path` names a .sdfg, .vdb (OpenVDB float level set), .sdf "
+            "(SDFGen) or .raw (with its .raw.json sidecar)")
         .def(
             "save",
             [](const PyGrid& g, const pyb::handle& path) {
@@ -249,14 +251,16 @@ void bindGrid(pyb::module_& m) {
                 saveGridFile(*g.grid, p);
             },
             pyb::arg("path"),
-            "Writes .sdfg, .vdb, .sdf (SDFGen) or .raw (+ .raw.json), by the extension; atomic "
+            "Writes the grid to `path`: .sdfg, .vdb, .sdf (SDFGen) or .raw (+ .raw.json), by the "
+            "extension; atomic "
             "(a temporary file renamed into place)")
         .def_static(
             "from_numpy", &gridFromNumpy, pyb::arg("values"),
             pyb::arg("origin") = std::array<float, 3>{0, 0, 0}, pyb::arg("voxel_size") = 1.0f,
             pyb::arg("sparse") = false, pyb::arg("block") = 4, pyb::arg("band") = 3.0f,
             "A grid from vertex distances values[i, j, k] at origin + voxel_size * (i, j, k); "
-            "sparse=True keeps the blocks within `band` voxels of the surface")
+            "sparse=True keeps the blocks within `band` voxels of the surface, in blocks of "
+            "`block` (4 or 8) cells per edge")
         .def("to_numpy", &gridArray,
              "The vertex distances as an (nx+1) x (ny+1) x (nz+1) float32 array indexed "
              "[i, j, k] (vertex at origin + voxel_size * (i, j, k)): a read-only view of a dense "
@@ -280,7 +284,8 @@ void bindGrid(pyb::module_& m) {
             "The grid as a Field (its tape: one grid primitive), reading the samples divided by "
             "info['lipschitz'] so that the field is 1-Lipschitz for the tracer")
         .def("to_mesh", &gridToMesh, pyb::arg("adaptivity") = 0.0f, pyb::arg("isovalue") = 0.0f,
-             "The surface (or the offset surface `isovalue`) as (vertices N x 3 float32, faces "
+             "The surface (or the offset surface `isovalue`), simplified where flat by "
+             "`adaptivity` in [0, 1] (0: none), as (vertices N x 3 float32, faces "
              "M x 3 int32), counter-clockwise seen from outside (OpenVDB's volumeToMesh)")
         .def("__repr__", [](const PyGrid& g) {
             const GridShape& s = g.grid->shape();

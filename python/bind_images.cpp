@@ -73,7 +73,8 @@ void writeImage(const pyb::handle& pathArg, const pyb::handle& image, const std:
 
 void bindImages(pyb::module_& m) {
     m.def("write_image", &writeImage, pyb::arg("path"), pyb::arg("image"), pyb::arg("label") = "",
-          "Writes an H x W x 3 (RGB) or H x W (scalar) array: .png (float RGB: linear, "
+          "Writes `image`, an H x W x 3 (RGB) or H x W (scalar) array, to `path` by its "
+          "extension: .png (float RGB: linear, "
           "tone-mapped to sRGB; uint8: as is; scalar float: a heat map with a legend named "
           "`label`), .exr or .pfm (32-bit float). Atomic: a temporary file renamed into place.");
     m.def(
@@ -90,7 +91,8 @@ void bindImages(pyb::module_& m) {
             std::copy(bytes.begin(), bytes.end(), out.mutable_data());
             return out;
         },
-        pyb::arg("color"), "Linear radiance (H x W x 3) to 8-bit sRGB, as PNG output tone-maps it");
+        pyb::arg("color"),
+        "Linear radiance `color` (H x W x 3) to 8-bit sRGB, as PNG output tone-maps it");
 }
 
 }  // namespace sdft::py

@@ -212,7 +212,9 @@ void bindScene(pyb::module_& m) {
                          "camera (docs/scene-format.md), its assets loaded and baked")
         .def_static("load", &loadScene, pyb::arg("path"), pyb::arg("progress") = false,
                     "Loads a scene file (.json), or a mesh or grid file framed automatically; "
-                    "bad input raises ValueError naming the file and the JSON path")
+                    "bad input raises ValueError naming the file and the JSON path.\n\n"
+                    "path: the file (str or os.PathLike); its assets load relative to it.\n"
+                    "progress: print each asset's loading and baking on stderr.")
         .def_static("_from_text", &sceneFromText, pyb::arg("text"), pyb::arg("source"),
                     pyb::arg("base_dir") = "")
         .def_static(
@@ -251,7 +253,18 @@ void bindScene(pyb::module_& m) {
           "isect_tests, shadow, ao). Keyword arguments set the render options by their scene "
           "keys (render_options()): omega=1.6, shadow_method='soft', ao=True, ... classic=True "
           "starts from plain sphere tracing. frames=N accumulates N jittered frames. "
-          "return_stats=True returns (images, stats).");
+          "return_stats=True returns (images, stats).\n\n"
+          "scene: an sdftrace.Scene, an sdftrace.Grid (framed automatically) or a path to a "
+          "scene, grid or mesh file.\n"
+          "width, height: the image size in pixels (default: the scene camera's).\n"
+          "eye, target, up: the camera's position, the point it looks at and its up vector, "
+          "each (x, y, z) (default: the scene camera's).\n"
+          "fov: the vertical field of view in degrees, in (0, 180).\n"
+          "aovs: the outputs to return, by name.\n"
+          "frames: jittered frames accumulated (temporal accumulation).\n"
+          "classic: start from Hart's plain sphere tracing instead of the enhanced tracer.\n"
+          "threads: worker threads (default: all cores).\n"
+          "return_stats: also return the render's counters as a dict.");
     m.def(
         "render_options",
         [] {

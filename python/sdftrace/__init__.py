@@ -17,8 +17,10 @@ __all__ = ["Field", "Grid", "Scene", "bake", "build_info", "render", "render_opt
 
 def _scene_from_dict(description, base_dir="."):
     """A scene from a dict with the scene file's schema (docs/scene-format.md): the same checks
-    and the same one-line errors as a file, raised as ValueError naming the JSON path. Relative
-    file paths in it start from `base_dir`."""
+    and the same one-line errors as a file, raised as ValueError naming the JSON path.
+
+    description: the scene as a dict (camera, lights, materials, objects, ...).
+    base_dir: where relative file paths in it (meshes, grids, textures) start."""
     if not isinstance(description, dict):
         raise ValueError("Scene.from_dict: expected a dict with the scene file's schema, got %s"
                          % type(description).__name__)
@@ -60,8 +62,14 @@ def slice_points(bounds, axis="z", at=None, resolution=256):
 
 
 def slice_field(field, axis="z", at=None, resolution=256, bounds=None):
-    """Distances on a slice (H x W float32) of a Field or Grid, over `bounds` (default: the grid's
-    box, or the field's bounds)."""
+    """Distances on a slice (H x W float32) of a Field or Grid.
+
+    field: the Field or Grid to sample.
+    axis: the slice's normal, 'x', 'y' or 'z'.
+    at: the slice's coordinate along the axis (default: the middle of the bounds).
+    resolution: pixels along the slice's longer side.
+    bounds: ((x0, y0, z0), (x1, y1, z1)) to slice (default: the grid's box, or the field's
+    bounds)."""
     if bounds is None:
         bounds = field.info["bounds"] if isinstance(field, Grid) else field.bounds
         if bounds is None:

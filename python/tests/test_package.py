@@ -29,8 +29,8 @@ def _parameters(func):
     first = doc.splitlines()[0] if doc else ""
     m = re.match(r"\w+\((.*)\) ->", first)
     if m:
-        names = [p.split(":")[0].strip() for p in re.split(r",\s*(?![^\[]*\])", m.group(1)) if p]
-        return [n.lstrip("*") for n in names if n and n not in ("self", "*args", "**kwargs")]
+        names = re.findall(r"(?:^|,\s*)\*{0,2}(\w+)\s*:", m.group(1))
+        return [n for n in names if n != "self"]
     try:
         return [p for p in inspect.signature(func).parameters if p != "self"]
     except (TypeError, ValueError):
