@@ -4,8 +4,8 @@
 
 #include <string>
 
-#include "sdftrace/core/error.h"
 #include "../core/plugin_dirs.h"
+#include "sdftrace/core/error.h"
 
 namespace sdft {
 

@@ -8,11 +8,11 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
-#include "test_scenes/grid_test_scenes.h"
-#include "test_scenes/primary_test_scenes.h"
 #include "sdftrace/render/render_plan.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
+#include "test_scenes/grid_test_scenes.h"
+#include "test_scenes/primary_test_scenes.h"
 
 namespace sdft {
 namespace {

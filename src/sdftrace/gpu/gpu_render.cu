@@ -3,12 +3,11 @@
 #include <chrono>
 #include <cstdint>
 #include <optional>
-#include <type_traits>
 
-#include "device_buffer.h"
-#include "gpu_minmax.cuh"
 #include "../core/plugin_dirs.h"
+#include "device_buffer.h"
 #include "gpu_kernel_table.h"
+#include "gpu_minmax.cuh"
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"

@@ -5,12 +5,12 @@
 #include <cmath>
 #include <string>
 
-#include "test_scenes/grid_test_scenes.h"
-#include "test_scenes/primary_test_scenes.h"
 #include "sdftrace/render/render_plan.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
+#include "test_scenes/grid_test_scenes.h"
+#include "test_scenes/primary_test_scenes.h"
 
 namespace sdft {
 namespace {
