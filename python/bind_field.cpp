@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bindings.h"
+#include "sdftrace/bake/bake_options.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/sample_grid.h"
 
@@ -117,6 +118,13 @@ float stepArgument(std::optional<float> h, float fallback, const std::string& wh
 }
 
 void bindField(pyb::module_& m) {
+    static const std::string toGridDoc =
+        "Samples f / L at the vertices of a grid over the field's bounds (or `bounds`), with "
+        "`padding` voxels of margin: dense, or a sparse block grid keeping the blocks within "
+        "`band` voxels of the surface.\n\n" +
+        bakeOptionsDoc({"resolution", "dense", "band", "block", "padding"}) +
+        "bounds: ((x0, y0, z0), (x1, y1, z1)), the region to sample; None: the field's bounds "
+        "(an unbounded field needs it).\n";
     pyb::class_<Field>(m, "Field",
                        "A signed distance field compiled to sdftrace's tape: evaluate it at "
                        "points, or sample it into a Grid. Get one from Scene.field or Grid.field.")
@@ -146,15 +154,13 @@ void bindField(pyb::module_& m) {
             "to_grid",
             [](const Field& f, int resolution, bool dense, float band, int block, float padding,
                std::optional<std::pair<std::array<float, 3>, std::array<float, 3>>> bounds) {
-                if (resolution < 2 || resolution > 16384)
-                    throw InputError("to_grid: resolution = " + std::to_string(resolution) +
-                                     ": expected an integer in [2, 16384]");
-                if (block != 4 && block != 8)
-                    throw InputError("to_grid: block = " + std::to_string(block) +
-                                     ": expected 4 or 8");
-                if (!(band > 0)) throw InputError("to_grid: band: expected a width > 0 in voxels");
-                if (!(padding >= 0))
-                    throw InputError("to_grid: padding: expected a number of voxels >= 0");
+                // Checked by the bake option table (bake/bake_options.h).
+                MeshBakeOptions bake;
+                setBakeOption(bake, "resolution", resolution, "to_grid");
+                setBakeOption(bake, "dense", dense ? 1 : 0, "to_grid");
+                setBakeOption(bake, "band", band, "to_grid");
+                setBakeOption(bake, "block", block, "to_grid");
+                setBakeOption(bake, "padding", padding, "to_grid");
                 Bounds3 region = f.tape->bounds();
                 if (bounds) {
                     region.lo = Vec3(bounds->first[0], bounds->first[1], bounds->first[2]);
@@ -167,12 +173,7 @@ void bindField(pyb::module_& m) {
                 if (region.empty() || !region.finite())
                     throw InputError("to_grid: the " + f.what +
                                      " is unbounded; give bounds=((x0, y0, z0), (x1, y1, z1))");
-                SampleOptions o;
-                o.resolution = resolution;
-                o.kind = dense ? GridKind::Dense : GridKind::Sparse;
-                o.bandVoxels = band;
-                o.blockSize = block;
-                o.paddingVoxels = padding;
+                const SampleOptions& o = bake.sampling;
                 std::shared_ptr<const Grid> grid;
                 {
                     pyb::gil_scoped_release release;
@@ -180,12 +181,12 @@ void bindField(pyb::module_& m) {
                 }
                 return PyGrid{grid};
             },
-            pyb::arg("resolution") = 128, pyb::arg("dense") = false, pyb::arg("band") = 3.0f,
-            pyb::arg("block") = 4, pyb::arg("padding") = 2.0f, pyb::arg("bounds") = pyb::none(),
-            "Samples f / L at the vertices of a grid over the field's bounds (or `bounds`, "
-            "((x0, y0, z0), (x1, y1, z1))), with `padding` voxels of margin, "
-            "`resolution` cells along the longest axis: dense, or a sparse block grid keeping "
-            "the blocks within `band` voxels of the surface")
+            pyb::arg("resolution") = bakeDefault<int>("resolution"),
+            pyb::arg("dense") = bakeDefault<bool>("dense"),
+            pyb::arg("band") = bakeDefault<float>("band"),
+            pyb::arg("block") = std::stoi(bakeDefaultText("block")),
+            pyb::arg("padding") = bakeDefault<float>("padding"), pyb::arg("bounds") = pyb::none(),
+            toGridDoc.c_str())
         .def("__repr__", [](const Field& f) {
             return "<sdftrace.Field: " + f.what + ", " + std::to_string(f.tape->size()) +
                    " instructions, L = " + std::to_string(f.tape->lipschitz()) + ">";

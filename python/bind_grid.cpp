@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bindings.h"
+#include "sdftrace/bake/bake_options.h"
 #include "sdftrace/bake/extract_surface.h"
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/core/error.h"
@@ -126,26 +127,22 @@ TriangleMesh meshArgument(const pyb::handle& mesh, const pyb::handle& faces, Mes
 
 PyGrid bake(const pyb::handle& mesh, const pyb::handle& faces, int resolution,
             const std::string& method, float band, bool dense, const std::string& sign, int block,
-            float padding, bool progress) {
+            float padding, bool progress, const std::string& closest, const std::string& jfaVariant,
+            float beta, int rays, float mask) {
+    // Checked by the bake option table (bake/bake_options.h), as the CLI's flags and scene files.
     MeshBakeOptions o;
-    if (!parseMeshBakeMethod(method, o.method))
-        throw InputError("bake: method = '" + method + "': expected one of " + kMeshBakeMethods);
-    if (!parseSignMethod(sign, o.sign))
-        throw InputError("bake: sign = '" + sign + "': expected one of " + kSignMethods);
-    if (resolution < 4 || resolution > 16384)
-        throw InputError("bake: resolution = " + std::to_string(resolution) +
-                         ": expected an integer in [4, 16384]");
-    if (block != 4 && block != 8)
-        throw InputError("bake: block = " + std::to_string(block) + ": expected 4 or 8");
-    if (!(band > 0) || !std::isfinite(band))
-        throw InputError("bake: band: expected a finite width > 0 in voxels");
-    if (!(padding >= 0) || !std::isfinite(padding))
-        throw InputError("bake: padding: expected a finite number of voxels >= 0");
-    o.sampling.resolution = resolution;
-    o.sampling.kind = dense ? GridKind::Dense : GridKind::Sparse;
-    o.sampling.bandVoxels = band;
-    o.sampling.blockSize = block;
-    o.sampling.paddingVoxels = padding;
+    setBakeOption(o, "resolution", resolution, "bake");
+    setBakeOption(o, "method", method, "bake");
+    setBakeOption(o, "band", band, "bake");
+    setBakeOption(o, "dense", dense ? 1 : 0, "bake");
+    setBakeOption(o, "sign", sign, "bake");
+    setBakeOption(o, "block", block, "bake");
+    setBakeOption(o, "padding", padding, "bake");
+    setBakeOption(o, "closest", closest, "bake");
+    setBakeOption(o, "jfa_variant", jfaVariant, "bake");
+    setBakeOption(o, "beta", beta, "bake");
+    setBakeOption(o, "rays", rays, "bake");
+    setBakeOption(o, "mask", mask, "bake");
     o.progress = progress;
     validateMeshBakeOptions(o);
     MeshReport report;
@@ -229,6 +226,24 @@ pyb::tuple gridToMesh(const PyGrid& g, float adaptivity, float isovalue) {
 
 }  // namespace
 
+double bakeDefaultNumber(const char* key) { return findBakeOption(key)->defaultValue(); }
+
+std::string bakeDefaultText(const char* key) { return findBakeOption(key)->defaultText(); }
+
+std::string bakeOptionsDoc(std::initializer_list<const char*> keys) {
+    std::string doc;
+    for (const char* key : keys) {
+        const BakeOption* o = findBakeOption(key);
+        std::string accepted = o->accepted();
+        if (o->type == OptionType::Bool) accepted = "True or False";
+        doc += std::string(key) + ": " + o->doc + "; " + accepted + " [" +
+               (o->type == OptionType::Bool ? (o->defaultValue() != 0 ? "True" : "False")
+                                            : o->defaultText()) +
+               "].\n";
+    }
+    return doc;
+}
+
 void bindGrid(pyb::module_& m) {
     pyb::class_<PyGrid>(m, "Grid",
                         "A sampled signed distance field: dense, or a sparse block grid with "
@@ -296,27 +311,27 @@ void bindGrid(pyb::module_& m) {
                    ">";
         });
 
-    m.def("bake", &bake, pyb::arg("mesh"), pyb::arg("faces") = pyb::none(),
-          pyb::arg("resolution") = 128, pyb::arg("method") = "exact", pyb::arg("band") = 3.0f,
-          pyb::arg("dense") = false, pyb::arg("sign") = "winding", pyb::arg("block") = 4,
-          pyb::arg("padding") = 2.0f, pyb::arg("progress") = false,
-          "Bakes a triangle mesh to a signed distance Grid.\n\n"
-          "mesh: a file path (OBJ, PLY, STL, OFF, glTF), or an N x 3 array of vertex positions.\n"
-          "faces: with a vertex array, the M x 3 array of triangle vertex indices; None with a "
-          "path.\n"
-          "resolution: cells along the mesh's longest axis, in [4, 16384] (the others in "
-          "proportion).\n"
-          "method: how distances are computed: 'exact' (closest point transform / narrow-band "
-          "scattering), 'jfa' (3D jump flooding, RTSDF §2.2), 'rtsdf' (RTSDF's ray-sampled field), "
-          "'danielsson' (Liktor §3.2) or 'edt' (exact separable EDT).\n"
-          "band: sparse grids keep the blocks within this many voxels of the surface (> 0).\n"
-          "dense: True stores every sample; False (default) a sparse block grid (Jamriska §3).\n"
-          "sign: inside/outside test: 'winding' (generalized winding number, robust on open "
-          "meshes), 'parity' (ray crossings), 'flood' (flood fill) or 'beta' (RTSDF's shell).\n"
-          "block: cells per sparse block edge, 4 or 8.\n"
-          "padding: voxels of margin around the mesh's bounds.\n"
-          "progress: print the bake's stages and percentage on stderr.\n\n"
-          "Raises ValueError naming the argument for bad input.");
+    static const std::string bakeDoc =
+        "Bakes a triangle mesh to a signed distance Grid.\n\n"
+        "mesh: a file path (OBJ, PLY, STL, OFF, glTF), or an N x 3 array of vertex positions.\n"
+        "faces: with a vertex array, the M x 3 array of triangle vertex indices; None with a "
+        "path.\n" +
+        bakeOptionsDoc({"resolution", "method", "band", "dense", "sign", "block", "padding"}) +
+        "progress: print the bake's stages and percentage on stderr.\n" +
+        bakeOptionsDoc({"closest", "jfa_variant", "beta", "rays", "mask"}) +
+        "\nRaises ValueError naming the argument for bad input.";
+    m.def(
+        "bake", &bake, pyb::arg("mesh"), pyb::arg("faces") = pyb::none(),
+        pyb::arg("resolution") = bakeDefault<int>("resolution"),
+        pyb::arg("method") = bakeDefaultText("method"),
+        pyb::arg("band") = bakeDefault<float>("band"),
+        pyb::arg("dense") = bakeDefault<bool>("dense"), pyb::arg("sign") = bakeDefaultText("sign"),
+        pyb::arg("block") = std::stoi(bakeDefaultText("block")),
+        pyb::arg("padding") = bakeDefault<float>("padding"), pyb::arg("progress") = false,
+        pyb::arg("closest") = bakeDefaultText("closest"),
+        pyb::arg("jfa_variant") = bakeDefaultText("jfa_variant"),
+        pyb::arg("beta") = bakeDefault<float>("beta"), pyb::arg("rays") = bakeDefault<int>("rays"),
+        pyb::arg("mask") = bakeDefault<float>("mask"), bakeDoc.c_str());
 }
 
 }  // namespace sdft::py

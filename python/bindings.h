@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include <functional>
+#include <initializer_list>
 #include <memory>
 #include <optional>
 #include <string>
@@ -54,6 +55,16 @@ float stepArgument(std::optional<float> h, float fallback, const std::string& wh
 
 // ((x0, y0, z0), (x1, y1, z1)), or None for empty or unbounded boxes.
 pyb::object boundsToPython(const Bounds3& b);
+
+// The bake option table's defaults and docs (bake/bake_options.h) for keyword arguments: the
+// default as a number, or as the text the user writes; "key: doc; accepted [default].\n" lines.
+double bakeDefaultNumber(const char* key);
+std::string bakeDefaultText(const char* key);
+template <class T>
+T bakeDefault(const char* key) {
+    return static_cast<T>(bakeDefaultNumber(key));
+}
+std::string bakeOptionsDoc(std::initializer_list<const char*> keys);
 
 void bindField(pyb::module_& m);
 void bindGrid(pyb::module_& m);

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "commands.h"
+#include "sdftrace/bake/bake_options.h"
 #include "sdftrace/bake/exact_bake.h"
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/texture_coords.h"
@@ -38,20 +39,21 @@ struct BakeArgs {
     std::string scene;
     std::optional<double> time;  // --time: the instant of an animated scene
     std::string output;
-    int resolution = 128;
-    bool dense = false, sparse = false;
-    int blockSize = 4;
-    float band = 3;
+    // The bake option table's flags (bake/bake_options.h), one per row in its order, and the
+    // options they make (runBake fills `bake`).
+    struct OptionFlag {
+        std::string text;
+        bool value = false;  // Bool rows: the flag, and the one that sets false ("--sparse")
+        bool falseValue = false;
+        CLI::Option* cli = nullptr;
+        CLI::Option* falseCli = nullptr;
+    };
+    std::vector<OptionFlag> options;
+    MeshBakeOptions bake;
     std::string bounds;
-    std::string method = "exact";
-    std::string sign = "winding";
-    std::string closest = "transform";
-    std::string jfaVariant = "plain";
-    float beta = 0.5f;
     bool quiet = false;
-    int rays = 64;
-    float mask = 3;
     bool verify = false;
+    bool listOptions = false;
     int threads = 0;
     std::string device = "cpu";  // cpu, cuda, auto
     std::string texcoords;       // "", sphere, cylinder
@@ -72,23 +74,27 @@ void rejectGiven(const BakeArgs& a, std::initializer_list<const char*> flags,
 }
 
 void rejectFlagsThatDoNotApply(const BakeArgs& a, bool mesh) {
+    const MeshBakeOptions& o = a.bake;
+    const bool dense = o.sampling.kind == GridKind::Dense;
     if (mesh) {
         rejectGiven(a, {"--bounds"},
                     "applies to scene files only (a mesh's grid covers the mesh's bounds)");
-        if (a.method != "rtsdf")
+        if (o.method != MeshBakeMethod::Rtsdf)
             rejectGiven(a, {"--rays", "--mask"}, "applies to --method rtsdf only");
-        if (a.method != "jfa") rejectGiven(a, {"--jfa-variant"}, "applies to --method jfa only");
-        if (a.sign != "beta") rejectGiven(a, {"--beta"}, "applies to --sign beta only");
-        if (a.method != "exact" || !a.dense)
+        if (o.method != MeshBakeMethod::JumpFlood)
+            rejectGiven(a, {"--jfa-variant"}, "applies to --method jfa only");
+        if (o.sign != SignMethod::BetaShell)
+            rejectGiven(a, {"--beta"}, "applies to --sign beta only");
+        if (o.method != MeshBakeMethod::Exact || !dense)
             rejectGiven(a, {"--closest"}, "applies to --method exact with --dense only");
     } else {
-        rejectGiven(
-            a,
-            {"--method", "--sign", "--closest", "--jfa-variant", "--beta", "--rays", "--mask",
-             "--device"},
-            "applies to meshes only; " + a.scene + " is a scene file, sampled from its own field");
+        const std::string why =
+            "applies to meshes only; " + a.scene + " is a scene file, sampled from its own field";
+        for (const BakeOption& option : bakeOptions())
+            if (option.meshOnly) rejectGiven(a, {option.mainFlag().c_str()}, why);
+        rejectGiven(a, {"--device"}, why);
     }
-    if (a.dense) rejectGiven(a, {"--block", "--band"}, "applies to sparse grids only (--dense)");
+    if (dense) rejectGiven(a, {"--block", "--band"}, "applies to sparse grids only (--dense)");
     if (a.texcoords.empty())
         rejectGiven(a, {"--texcoord-center", "--texcoord-axis"}, "needs --texcoords");
 }
@@ -120,13 +126,22 @@ Bounds3 parseBoundsArg(const std::string& text) {
     return {{v[0], v[1], v[2]}, {v[3], v[4], v[5]}};
 }
 
-SampleOptions sampleOptions(const BakeArgs& a) {
-    SampleOptions o;
-    o.resolution = a.resolution;
-    o.kind = a.dense ? GridKind::Dense : GridKind::Sparse;
-    o.blockSize = a.blockSize;
-    o.bandVoxels = a.band;
-    o.threads = a.threads;
+// The bake options from the table's flags: each given one parsed by its row (CLI11 checked the
+// text against the same row while parsing), the others at the table's default.
+MeshBakeOptions bakeOptionsFromFlags(const BakeArgs& a) {
+    MeshBakeOptions o;
+    const auto table = bakeOptions();
+    for (size_t i = 0; i < table.size(); ++i) {
+        const BakeArgs::OptionFlag& flag = a.options[i];
+        if (flag.falseCli && flag.falseCli->count() > 0) table[i].set(o, 0);
+        if (!flag.cli || flag.cli->count() == 0) continue;
+        if (table[i].type == OptionType::Bool)
+            table[i].set(o, 1);
+        else
+            setBakeOption(o, table[i].key, flag.text, table[i].mainFlag());
+    }
+    o.sampling.threads = a.threads;
+    o.progress = !a.quiet;
     return o;
 }
 
@@ -209,20 +224,7 @@ void printFieldVerify(const FieldVerification& v) {
 // methods run on rank 0.
 // The mesh bake's options from the flags (validated).
 MeshBakeOptions meshBakeOptions(const BakeArgs& a) {
-    MeshBakeOptions o;
-    if (!parseMeshBakeMethod(a.method, o.method)) {
-        throw InputError("--method " + a.method + ": unknown; accepted: " + kMeshBakeMethods);
-    }
-    o.sampling = sampleOptions(a);
-    parseSignMethod(a.sign, o.sign);           // CLI11 checked the name
-    parseClosestPoints(a.closest, o.closest);  // likewise
-    o.jfaVariant = a.jfaVariant == "1+jfa"   ? JfaVariant::OnePlusJfa
-                   : a.jfaVariant == "jfa+2" ? JfaVariant::JfaPlusTwo
-                                             : JfaVariant::Plain;
-    o.betaVoxels = a.beta;
-    o.rtsdf.rays = a.rays;
-    o.rtsdf.maskVoxels = a.mask;
-    o.progress = !a.quiet;
+    MeshBakeOptions o = a.bake;
     validateMeshBakeOptions(o);
     return o;
 }
@@ -243,14 +245,15 @@ void printMeshBakeSummary(const BakeArgs& a, const MeshBakeResult& r,
                   seconds(t[0], t[4]) - seconds(t[2], t[3]));
     stages += tail;
     if (!r.details.empty())
-        std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.method.c_str(), r.details.c_str());
+        std::fprintf(stderr, "sdftrace bake: %s: %s\n", meshBakeMethodName(a.bake.method),
+                     r.details.c_str());
     size_t in = 0, out = 0, surf = 0;
     if (r.grid.kind() == GridKind::Sparse) r.grid.blockCounts(in, out, surf);
     std::fprintf(stderr,
                  "sdftrace bake: %s, %dx%dx%d cells (voxel %.4g), %s%s, grid %.2f MiB, peak "
                  "memory %.0f MiB\nsdftrace bake: %s\n",
-                 a.method.c_str(), shape.cells[0], shape.cells[1], shape.cells[2], shape.voxelSize,
-                 r.grid.kind() == GridKind::Dense ? "dense" : "sparse",
+                 meshBakeMethodName(a.bake.method), shape.cells[0], shape.cells[1], shape.cells[2],
+                 shape.voxelSize, r.grid.kind() == GridKind::Dense ? "dense" : "sparse",
                  r.grid.kind() == GridKind::Sparse
                      ? (" (" + std::to_string(surf) + " surface / " + std::to_string(in) +
                         " inside / " + std::to_string(out) + " outside blocks)")
@@ -297,7 +300,7 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
         const double share = across ? 1.0 / comm.size() : 1.0;
         checkMemory(meshBakeBytes(mesh, gridShapeFor(mesh.bounds(), o.sampling), o,
                                   a.verify && comm.root(), share),
-                    a.resolution);
+                    a.bake.sampling.resolution);
         if (across) checkMeshBake(mesh, o, share);
     });
     if (comm.distributed() && !comm.root()) {
@@ -309,7 +312,8 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
         std::fprintf(stderr,
                      "sdftrace bake: --method %s%s runs on rank 0 alone (the sparse exact bake is "
                      "the one split across ranks)\n",
-                     a.method.c_str(), o.sampling.kind == GridKind::Dense ? " --dense" : "");
+                     meshBakeMethodName(o.method),
+                     o.sampling.kind == GridKind::Dense ? " --dense" : "");
     }
     std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.scene.c_str(), report.summary().c_str());
     auto t1 = std::chrono::steady_clock::now();
@@ -326,14 +330,14 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
         MeshBvh bvh(mesh);
         std::vector<float> exact = bakeExactSamples(bvh, r.grid.shape(), SignMethod::WindingNumber,
                                                     a.threads, nullptr, true);
-        printVerify(a.method.c_str(), verifyBake(r.grid, exact, a.band));
+        printVerify(meshBakeMethodName(o.method), verifyBake(r.grid, exact, o.sampling.bandVoxels));
     }
     if (!a.texcoords.empty()) {
         const GridView v = r.grid.view();
         // Particles follow the grid's reconstruction, a distance up to a voxel short of the band
         // where the sparse grid clamps it.
         const float stop = r.grid.kind() == GridKind::Sparse
-                               ? (a.band - 1) * r.grid.shape().voxelSize
+                               ? (o.sampling.bandVoxels - 1) * r.grid.shape().voxelSize
                                : static_cast<float>(INFINITY);
         addTexcoords(
             a, r.grid, [v](Vec3 p) { return v.sample(p); }, stop);
@@ -345,6 +349,14 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
 }
 
 int runBake(const BakeArgs& args) {
+    if (args.listOptions) {
+        std::fputs(bakeOptionsMarkdown().c_str(), stdout);
+        return 0;
+    }
+    if (args.scene.empty())
+        throw InputError("input: missing; give a scene file (JSON) or a mesh to bake");
+    if (args.output.empty())
+        throw InputError("--output: missing; give the grid file to write (.sdfg or .vdb)");
     Communicator& comm = Communicator::world();
     BakeArgs a = args;
     if (comm.distributed()) {
@@ -352,6 +364,7 @@ int runBake(const BakeArgs& args) {
         if (!comm.root()) a.quiet = true;
     }
     together(comm, [&] {
+        a.bake = bakeOptionsFromFlags(a);
         if (!isGridFile(a.output))
             throw InputError("--output " + a.output + ": accepted extensions: .sdfg, .vdb");
         if (comm.root()) checkWritablePath(a.output, "--output");  // rank 0 writes it
@@ -383,14 +396,14 @@ int runBake(const BakeArgs& args) {
             ": the scene is unbounded (a plane or a complement?); give the region with --bounds "
             "x0,y0,z0,x1,y1,z1");
     }
-    SampleOptions o = sampleOptions(a);
+    const SampleOptions& o = a.bake.sampling;
     GridShape shape = gridShapeFor(region, o);
-    checkMemory(static_cast<double>(shape.vertexCount()) * sizeof(float), a.resolution);
+    checkMemory(static_cast<double>(shape.vertexCount()) * sizeof(float), o.resolution);
     auto t0 = std::chrono::steady_clock::now();
     Grid grid = sampleGrid(tape, region, o);
     addTexcoords(a, grid, [&tape](Vec3 p) { return tape.eval(p); });
     auto t1 = std::chrono::steady_clock::now();
-    if (a.verify) printFieldVerify(verifyAgainstField(grid, tape, a.band, a.threads));
+    if (a.verify) printFieldVerify(verifyAgainstField(grid, tape, o.bandVoxels, a.threads));
     saveGridFile(grid, a.output);
     auto t2 = std::chrono::steady_clock::now();
     size_t in = 0, out = 0, surf = 0;
@@ -410,6 +423,38 @@ int runBake(const BakeArgs& args) {
     return 0;
 }
 
+// The bake option table's flags (bake_options.h): each row's flag, checked by its row while
+// CLI11 parses, with the row's default and doc in --help.
+void addOptionFlags(CLI::App* cmd, BakeArgs& args) {
+    const auto table = bakeOptions();
+    args.options.resize(table.size());  // fixed from here on: CLI11 keeps pointers into it
+    CLI::Option_group* grid = cmd->add_option_group("Grid", "The grid every bake makes");
+    CLI::Option_group* mesh = cmd->add_option_group("Mesh", "How a mesh's distances are computed");
+    for (size_t i = 0; i < table.size(); ++i) {
+        const BakeOption& o = table[i];
+        BakeArgs::OptionFlag& arg = args.options[i];
+        CLI::Option_group* group = o.meshOnly ? mesh : grid;
+        const std::string help = std::string(o.doc) + " [" + o.defaultText() + "]";
+        if (o.type == OptionType::Bool) {  // --dense or --sparse, not both
+            arg.cli = group->add_flag(o.mainFlag(), arg.value, help);
+            arg.falseCli = group->add_flag(o.falseFlag, arg.falseValue,
+                                           std::string("the opposite of ") + o.mainFlag());
+            arg.cli->excludes(arg.falseCli);
+            continue;
+        }
+        CLI::Validator valid(
+            [&o](std::string& text) {
+                double v = 0;
+                return o.parse(text, v);
+            },
+            o.type == OptionType::Choice ? o.value().choiceList() : o.accepted());
+        const char* type = o.type == OptionType::Choice ? "NAME"
+                           : o.type == OptionType::Int  ? "INT"
+                                                        : "FLOAT";
+        arg.cli = group->add_option(o.flags, arg.text, help)->type_name(type)->check(valid);
+    }
+}
+
 }  // namespace
 
 void addBakeCommand(CLI::App& app, Action& action) {
@@ -418,72 +463,21 @@ void addBakeCommand(CLI::App& app, Action& action) {
         "bake",
         "Sample a scene's distance field, or bake a mesh's signed distance, into a grid file");
     cmd->add_option("input", args->scene,
-                    "Scene file (JSON) or mesh (.obj, .ply, .stl, .off, .gltf, .glb)")
-        ->required();
+                    "Scene file (JSON) or mesh (.obj, .ply, .stl, .off, .gltf, .glb); required");
     cmd->add_option("-o,--output", args->output,
-                    "Output grid (.sdfg or .vdb, docs/file-formats.md)")
-        ->required();
-    cmd->add_option("--method", args->method,
-                    "Meshes: exact (exact closest points: a closest point transform when dense, "
-                    "triangles scattered over the band when sparse), jfa (jump flooding, "
-                    "RTSDF §2.2), danielsson (two-pass vector distance transform, Liktor §3.2), "
-                    "edt (exact separable distance transform of the voxelized surface) or rtsdf "
-                    "(ray-sampled near the surface, jump-flooded coarse field beyond; RTSDF §2.1, "
-                    "§2.3)")
-        ->capture_default_str();
-    cmd->add_option("--rays", args->rays, "rtsdf: rays per vertex near the surface (x)")
-        ->check(CLI::Range(1, 4096))
-        ->capture_default_str();
-    cmd->add_option(
-           "--mask", args->mask,
-           "rtsdf: vertices whose coarse distance is within this many voxels cast rays (d)")
-        ->check(CLI::Range(0.0, 1000.0))
-        ->capture_default_str();
-    cmd->add_option("--beta", args->beta,
-                    "--sign beta: the shell's half thickness in voxels (RTSDF §2.2)")
-        ->check(CLI::Range(0.0, 100.0))
-        ->capture_default_str();
-    cmd->add_option("--jfa-variant", args->jfaVariant, "Jump flooding: plain, 1+jfa or jfa+2")
-        ->check(CLI::IsMember({"plain", "1+jfa", "jfa+2"}))
-        ->capture_default_str();
+                    "Output grid (.sdfg or .vdb, docs/file-formats.md); required");
+    addOptionFlags(cmd, *args);
     cmd->add_flag(
         "--verify", args->verify,
         "Also report mean / p99 / max error in voxels and the share of wrong signs: meshes "
         "against an exact bake (all samples and the narrow band); scene files against the "
         "scene's own field f/L (at the vertices, and at cell centres through the trilinear "
         "reconstruction)");
-    cmd->add_option("--sign", args->sign,
-                    "Meshes: winding (generalized winding number, robust on open meshes), parity "
-                    "(ray-crossing parity, closed meshes); for jfa, danielsson and edt also flood "
-                    "(flood fill from the grid's boundary) or beta (|d| - beta: RTSDF's hollow "
-                    "shell)")
-        ->check(CLI::IsMember({"winding", "parity", "flood", "beta"}))
-        ->capture_default_str();
-    cmd->add_option("--closest", args->closest,
-                    "Exact, dense: transform (scan-convert each face's, edge's and vertex's "
-                    "region once; Mauch's closest point transform) or bvh (an Embree point query "
-                    "per vertex)")
-        ->check(CLI::IsMember({"transform", "bvh"}))
-        ->capture_default_str();
-    cmd->add_option("--res", args->resolution, "Cells along the longest axis of the region")
-        ->check(CLI::Range(8, 4096))
-        ->capture_default_str();
     cmd->add_option("--time", args->time,
                     "Bake a scene file at this time in seconds (its keyframed values, "
                     "docs/scene-format.md \"Animation\"; default: the animation's start)")
         ->check(CLI::Range(-1e9, 1e9));
     cmd->add_flag("-q,--quiet", args->quiet, "No progress on stderr (the summary lines stay)");
-    auto* dense = cmd->add_flag("--dense", args->dense, "Store every sample");
-    auto* sparse =
-        cmd->add_flag("--sparse", args->sparse, "Sparse block grid (default; Jamriška §3)");
-    dense->excludes(sparse);
-    cmd->add_option("--block", args->blockSize, "Sparse: cells per block edge")
-        ->check(CLI::IsMember({4, 8}))
-        ->capture_default_str();
-    cmd->add_option("--band", args->band,
-                    "Sparse: narrow band half-width in voxels (blocks farther away are dropped)")
-        ->check(CLI::Range(2.0, 64.0))
-        ->capture_default_str();
     cmd->add_option("--bounds", args->bounds,
                     "Region x0,y0,z0,x1,y1,z1 (default: the scene's bounds)");
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
@@ -504,6 +498,9 @@ void addBakeCommand(CLI::App& app, Action& action) {
     cmd->add_option("--texcoord-axis", args->texcoordAxis,
                     "The helper's axis x,y,z: the sphere's poles, the cylinder's axis (default "
                     "0,1,0)");
+    cmd->add_flag("--list-options", args->listOptions,
+                  "Print every bake option (scene key and Python keyword, flag, default, accepted "
+                  "values) as a Markdown table and exit");
     args->command = cmd;
     cmd->callback([&action, args] { action = [args] { return runBake(*args); }; });
 }

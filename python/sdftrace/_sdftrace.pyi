@@ -25,7 +25,14 @@ class Field:
     def lipschitz(self) -> float:
         ...
     def to_grid(self: Field, resolution: int = 128, dense: bool = False, band: float = 3.0, block: int = 4, padding: float = 2.0, bounds: Optional[Tuple[List[float], List[float]]] = None) -> Grid:
-        """Samples f / L at the vertices of a grid over the field's bounds (or `bounds`, ((x0, y0, z0), (x1, y1, z1))), with `padding` voxels of margin, `resolution` cells along the longest axis: dense, or a sparse block grid keeping the blocks within `band` voxels of the surface"""
+        """Samples f / L at the vertices of a grid over the field's bounds (or `bounds`), with `padding` voxels of margin: dense, or a sparse block grid keeping the blocks within `band` voxels of the surface.
+
+resolution: cells along the longest axis of the region (the others in proportion); an integer in [8, 4096] [128].
+dense: store every sample; false: a sparse block grid with per-block cell masks (Jamriška §3); True or False [False].
+band: sparse: narrow band half-width in voxels (blocks farther from the surface are dropped); a half-width in voxels in [2, 64] [3].
+block: sparse: cells per block edge; one of 4, 8 [4].
+padding: empty voxels around the region, beyond the band; a margin in voxels in [0, 64] [2].
+bounds: ((x0, y0, z0), (x1, y1, z1)), the region to sample; None: the field's bounds (an unbounded field needs it)."""
         ...
 
 class Grid:
@@ -94,19 +101,24 @@ progress: print each asset's loading and baking on stderr."""
     def source(self) -> str:
         ...
 
-def bake(mesh: object, faces: object = None, resolution: int = 128, method: str = 'exact', band: float = 3.0, dense: bool = False, sign: str = 'winding', block: int = 4, padding: float = 2.0, progress: bool = False) -> Grid:
+def bake(mesh: object, faces: object = None, resolution: int = 128, method: str = 'exact', band: float = 3.0, dense: bool = False, sign: str = 'winding', block: int = 4, padding: float = 2.0, progress: bool = False, closest: str = 'transform', jfa_variant: str = 'plain', beta: float = 0.5, rays: int = 64, mask: float = 3.0) -> Grid:
     """Bakes a triangle mesh to a signed distance Grid.
 
 mesh: a file path (OBJ, PLY, STL, OFF, glTF), or an N x 3 array of vertex positions.
 faces: with a vertex array, the M x 3 array of triangle vertex indices; None with a path.
-resolution: cells along the mesh's longest axis, in [4, 16384] (the others in proportion).
-method: how distances are computed: 'exact' (closest point transform / narrow-band scattering), 'jfa' (3D jump flooding, RTSDF §2.2), 'rtsdf' (RTSDF's ray-sampled field), 'danielsson' (Liktor §3.2) or 'edt' (exact separable EDT).
-band: sparse grids keep the blocks within this many voxels of the surface (> 0).
-dense: True stores every sample; False (default) a sparse block grid (Jamriska §3).
-sign: inside/outside test: 'winding' (generalized winding number, robust on open meshes), 'parity' (ray crossings), 'flood' (flood fill) or 'beta' (RTSDF's shell).
-block: cells per sparse block edge, 4 or 8.
-padding: voxels of margin around the mesh's bounds.
+resolution: cells along the longest axis of the region (the others in proportion); an integer in [8, 4096] [128].
+method: exact (closest points: a closest point transform when dense, triangles scattered over the band when sparse), jfa (jump flooding, RTSDF §2.2), danielsson (vector distance transform, Liktor §3.2), edt (exact separable distance transform of the voxelized surface), rtsdf (ray-sampled near the surface, jump-flooded beyond; RTSDF §2.1, §2.3); one of exact, jfa, danielsson, edt, rtsdf [exact].
+band: sparse: narrow band half-width in voxels (blocks farther from the surface are dropped); a half-width in voxels in [2, 64] [3].
+dense: store every sample; false: a sparse block grid with per-block cell masks (Jamriška §3); True or False [False].
+sign: inside/outside: winding (generalized winding number, robust on open meshes), parity (ray-crossing parity, closed meshes); jfa, danielsson and edt also flood (flood fill from the grid's boundary) or beta (|d| - beta: RTSDF's hollow shell); one of winding, parity, flood, beta [winding].
+block: sparse: cells per block edge; one of 4, 8 [4].
+padding: empty voxels around the region, beyond the band; a margin in voxels in [0, 64] [2].
 progress: print the bake's stages and percentage on stderr.
+closest: exact, dense: transform (scan-convert each face's, edge's and vertex's region once; Mauch's closest point transform) or bvh (an Embree point query per vertex); one of transform, bvh [transform].
+jfa_variant: jfa: the pass sequence (plain N/2 ... 1; 1+jfa an extra pass of offset 1 first; jfa+2 two extra passes, offsets 2 and 1, last); one of plain, 1+jfa, jfa+2 [plain].
+beta: sign beta: the shell's half thickness in voxels (RTSDF §2.2); a half thickness in voxels in [0, 100] [0.5].
+rays: rtsdf: rays per vertex near the surface (x); an integer in [1, 4096] [64].
+mask: rtsdf: vertices whose coarse distance is within this many voxels cast rays (d); a distance in voxels in [0, 64] [3].
 
 Raises ValueError naming the argument for bad input."""
     ...

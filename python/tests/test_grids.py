@@ -155,7 +155,7 @@ def test_bad_meshes_and_options_are_value_errors():
     v, f = cube_mesh()
     with pytest.raises(ValueError, match=r"bake: faces: face 0 names vertex 99; expected indices in \[0, 8\)"):
         sdftrace.bake(v, np.array([[0, 1, 99]]))
-    with pytest.raises(ValueError, match="bake: method = 'magic': expected one of exact, jfa"):
+    with pytest.raises(ValueError, match="bake: method = 'magic': unknown value 'magic'; accepted: exact, jfa"):
         sdftrace.bake(v, f, method="magic")
     with pytest.raises(ValueError, match="bake: sign"):
         sdftrace.bake(v, f, sign="guess")
@@ -169,6 +169,56 @@ def test_bad_meshes_and_options_are_value_errors():
         sdftrace.bake(v, np.array([[0, 0, 1]]))
     with pytest.raises(ValueError, match="missing.obj"):
         sdftrace.bake("missing.obj")
+
+
+def write_cube_obj(path):
+    v, f = cube_mesh()
+    path.write_text("".join("v %r %r %r\n" % tuple(map(float, p)) for p in v) +
+                    "".join("f %d %d %d\n" % tuple(t + 1) for t in f))
+    return path
+
+
+@pytest.mark.parametrize("options", [
+    {},  # every default
+    {"resolution": 24, "method": "jfa", "jfa_variant": "1+jfa", "block": 8, "band": 4,
+     "padding": 1},
+    {"resolution": 20, "method": "rtsdf", "rays": 8, "mask": 2, "dense": True},
+])
+def test_the_cli_a_scene_file_and_python_bake_alike_from_one_option_table(cli, tmp_path, options):
+    """One table of bake options: the same keys give the same grid through sdftrace.bake, a scene
+    file's mesh object and `sdftrace bake`'s flags, and the defaults agree."""
+    import json
+    import subprocess
+    obj = write_cube_obj(tmp_path / "cube.obj")
+    ours = sdftrace.bake(obj, **options)
+    flags = []
+    for key, value in options.items():
+        if value is True:
+            flags.append("--" + key)
+        else:
+            flags += ["--" + key.replace("_", "-"), str(value)]
+    subprocess.run([cli, "bake", str(obj), "-o", str(tmp_path / "cli.sdfg"), "-q"] + flags,
+                   check=True, capture_output=True)
+    theirs = sdftrace.Grid.load(tmp_path / "cli.sdfg")
+    scene = sdftrace.Scene.from_dict({"objects": [dict({"mesh": str(obj)}, **options)]})
+    at = np.random.default_rng(3).uniform(-0.7, 0.7, (4000, 3)).astype(np.float32)
+    assert ours.info["cells"] == theirs.info["cells"]
+    assert ours.info["kind"] == theirs.info["kind"]
+    np.testing.assert_array_equal(ours.sample(at), theirs.sample(at))
+    # The scene's field is the grid's samples over its Lipschitz bound, as Grid.field reads them.
+    np.testing.assert_allclose(scene.field.evaluate(at), ours.field.evaluate(at), atol=1e-6)
+
+
+def test_bad_bake_options_name_the_keyword_and_what_is_accepted():
+    v, f = cube_mesh()
+    with pytest.raises(ValueError, match=r"bake: block = 6: unknown value '6'; accepted: 4, 8"):
+        sdftrace.bake(v, f, block=6)
+    with pytest.raises(ValueError, match=r"bake: band = 1: expected a half-width in voxels in \[2, 64\]"):
+        sdftrace.bake(v, f, band=1)
+    with pytest.raises(ValueError, match=r"bake: rays = 0: expected an integer in \[1, 4096\]"):
+        sdftrace.bake(v, f, method="rtsdf", rays=0)
+    with pytest.raises(ValueError, match=r"to_grid: padding = -1"):
+        sdftrace.Scene.from_dict({"objects": [{"type": "sphere", "radius": 1}]}).field.to_grid(padding=-1)
 
 
 def test_bad_grid_files_are_value_errors(tmp_path):

@@ -9,21 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "sdftrace/core/option_value.h"
 #include "sdftrace/math/camera.h"
 #include "sdftrace/math/ray.h"
 #include "sdftrace/render/render_settings.h"
 
 namespace sdft {
-
-enum class OptionType { Bool, Int, Float, Choice };
-
-struct OptionRange {
-    double lo = 0, hi = 0;
-    bool loOpen = false, hiOpen = false;  // excluded end points (floats)
-    bool contains(double v) const {
-        return (loOpen ? v > lo : v >= lo) && (hiOpen ? v < hi : v <= hi);
-    }
-};
 
 struct RenderOption {
     const char* key;    // scene file: "render": {"<key>": value}
@@ -41,16 +32,17 @@ struct RenderOption {
     // smaller scenes unless it was given (scaleLengthDefaults).
     bool scaled = false;
 
-    std::string mainFlag() const;      // "--max-steps"
-    std::string accepted() const;      // "an integer in [1, 100000]", "true or false", ...
-    std::string choiceList() const;    // "hard, soft, distributed, pcf, evsm"
-    std::string show(double v) const;  // a value as the user writes it ("1.2", "true", "dda")
+    // What it accepts (core/option_value.h): accepted(), choiceList(), show(), parse(), check().
+    OptionValue value() const { return {type, range, what, choices}; }
+    std::string mainFlag() const;  // "--max-steps"
+    std::string accepted() const { return value().accepted(); }
+    std::string choiceList() const { return value().choiceList(); }
+    std::string show(double v) const { return value().show(v); }
     std::string defaultText() const { return show(get(RenderSettings{})); }
-    // Parses a CLI value (or a scene file's choice word) into `out`; returns an error message that
-    // says what is accepted, empty on success.
-    std::string parse(const std::string& text, double& out) const;
-    // Range check of a number (Int: also integral); an error message or empty.
-    std::string check(double v) const;
+    std::string parse(const std::string& text, double& out) const {
+        return value().parse(text, out);
+    }
+    std::string check(double v) const { return value().check(v); }
     // Sets the value as given by the user (a scene file, a flag, the viewer, Python): set(), and
     // the option marked in RenderSettings::given.
     void give(RenderSettings& s, double v) const;

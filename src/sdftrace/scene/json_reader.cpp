@@ -127,4 +127,25 @@ Vec3 Reader::vec3(const std::string& key, Vec3 fallback, const std::function<boo
     return has(key) ? vec3(key, ok, accepted) : fallback;
 }
 
+double optionValue(const Reader& r, const char* key, const OptionValue& option) {
+    double v = 0;
+    switch (option.type) {
+        case OptionType::Bool:
+            return r.boolean(key, false) ? 1 : 0;
+        case OptionType::Choice: {
+            const Json& j = r.value().at(key);
+            const std::string text = j.is_number() ? showNumber(j.get<double>()) : r.string(key);
+            if (std::string error = option.parse(text, v); !error.empty()) r.failKey(key, error);
+            return v;
+        }
+        case OptionType::Int:
+        case OptionType::Float:
+            v = r.number(key, anyFinite, option.accepted());
+            if (std::string error = option.check(r.value().at(key).get<double>()); !error.empty())
+                r.failKey(key, error);
+            return r.value().at(key).get<double>();
+    }
+    return v;
+}
+
 }  // namespace sdft::json_reader

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/option_value.h"
 #include "sdftrace/math/vec.h"
 
 namespace sdft::json_reader {
@@ -84,5 +85,10 @@ std::string show(double v);
 inline bool positive(double v) { return v > 0; }
 inline bool nonNegative(double v) { return v >= 0; }
 inline bool anyFinite(double) { return true; }
+
+// The value of an option table's row (core/option_value.h) at `key`, as the row's number (bools
+// 0/1, choices their index): a choice by its word (a choice of numbers, like a block size of 4 or
+// 8, also as a number), a number checked against the row's range; else an error naming the key.
+double optionValue(const Reader& r, const char* key, const OptionValue& option);
 
 }  // namespace sdft::json_reader

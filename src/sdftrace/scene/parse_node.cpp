@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "sdftrace/bake/bake_options.h"
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/texture_coords.h"
 #include "sdftrace/core/frame_pattern.h"
@@ -198,8 +199,28 @@ void parsePlay(const Reader& r, const NodeContext& ctx, AssetRequest& q) {
     q.play = std::move(play);
 }
 
-// A mesh file (relative to the scene file) baked to a sparse grid by prepareScene; the same file
-// with the same options is baked once.
+// The bake option table's keys (bake/bake_options.h) an object gives; `mesh`: the mesh-only ones
+// too. The others keep the table's defaults.
+MeshBakeOptions readBakeOptions(const Reader& r, bool mesh) {
+    MeshBakeOptions o;
+    for (const BakeOption& option : bakeOptions()) {
+        if (!r.has(option.key) || (option.meshOnly && !mesh)) continue;
+        const double v = json_reader::optionValue(r, option.key, option.value());
+        option.set(o, v);
+    }
+    return o;
+}
+
+// The keys of the bake option table an object takes (`mesh`: all, else those of every bake).
+std::vector<const char*> bakeOptionKeys(bool mesh) {
+    std::vector<const char*> keys;
+    for (const BakeOption& option : bakeOptions())
+        if (mesh || !option.meshOnly) keys.push_back(option.key);
+    return keys;
+}
+
+// A mesh file (relative to the scene file) baked by prepareScene (a sparse grid unless "dense");
+// the same file with the same options is baked once.
 NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
     const std::string file = meshFileOf(r);
     const std::string path = resolvePath(ctx, file).lexically_normal().string();
@@ -208,18 +229,7 @@ NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
                               (r.has("play") ? "' to play; accepted: .gltf, .glb, .dae, .fbx, .x"
                                              : "'; accepted: .obj, .ply, .stl, .off, .gltf, .glb"));
     }
-    SampleOptions o;
-    o.resolution = r.integer("resolution", 128, 8, 1024);
-    const std::string method = r.string("method", "exact");
-    MeshBakeOptions bake;
-    if (!parseMeshBakeMethod(method, bake.method))
-        r.failKey("method", "unknown method '" + method + "'; accepted: " + kMeshBakeMethods);
-    const std::string sign = r.string("sign", "winding");
-    if (!parseSignMethod(sign, bake.sign))
-        r.failKey("sign", "unknown sign '" + sign + "'; accepted: " + kSignMethods);
-    o.bandVoxels = r.number(
-        "band", 3.0f, [](double v) { return v >= 2 && v <= 64; }, "a band in [2, 64] voxels");
-    bake.sampling = o;
+    const MeshBakeOptions bake = readBakeOptions(r, true);
     try {
         validateMeshBakeOptions(bake);
     } catch (const InputError& e) {
@@ -230,10 +240,9 @@ NodePtr requestMesh(const Reader& r, NodeContext& ctx) {
     q.where = r.location("mesh");
     q.path = path;
     q.bake = bake;
-    q.key = "mesh|" + path + "|" + method + "|" + sign + "|" + std::to_string(o.resolution) + "|" +
-            std::to_string(o.bandVoxels);
+    q.key = "mesh|" + path + "|" + bakeOptionsKey(bake);
     if (r.has("play")) parsePlay(r, ctx, q);
-    if (r.has("dynamic")) parseDynamic(r, method, q);
+    if (r.has("dynamic")) parseDynamic(r, meshBakeMethodName(bake.method), q);
     return node::gridAsset(addRequest(ctx, std::move(q)));
 }
 
@@ -246,9 +255,7 @@ NodePtr requestSubtree(const Reader& r, NodeContext& ctx) {
     q.subtree = parseSingleChild(r, ctx);
     // Checked here when the child is analytic, else once its grids are loaded.
     if (!hasPendingAssets(*q.subtree) && !boundedField(q.subtree)) r.failKey("child", kUnbounded);
-    q.sampling.resolution = r.integer("resolution", 96, 8, 1024);
-    q.sampling.bandVoxels = r.number(
-        "band", 3.0f, [](double v) { return v >= 2 && v <= 64; }, "a band in [2, 64] voxels");
+    q.sampling = readBakeOptions(r, false).sampling;
     if (r.has("texcoords")) {
         TexcoordOptions t;
         const std::string helper = r.string("texcoords");
@@ -378,8 +385,9 @@ NodePtr parseGridNode(const Reader& r, NodeContext& ctx, const std::string& type
 }
 
 NodePtr parseBake(const Reader& r, NodeContext& ctx, const std::string& type) {
-    allowObjectKeys(
-        r, type, {"child", "resolution", "band", "texcoords", "texcoord_axis", "texcoord_center"});
+    std::vector<const char*> keys = {"child", "texcoords", "texcoord_axis", "texcoord_center"};
+    for (const char* k : bakeOptionKeys(false)) keys.push_back(k);
+    allowObjectKeys(r, type, keys);
     return requestSubtree(r, ctx);
 }
 
@@ -434,7 +442,7 @@ std::string repeatOverlap(const Bounds3& b, Vec3 cell, Vec3 count) {
 }
 
 void allowObjectKeys(const Reader& r, const std::string& type,
-                     std::initializer_list<const char*> extra) {
+                     const std::vector<const char*>& extra) {
     std::vector<const char*> keys = {"type", "material", "translate", "rotate", "scale"};
     keys.insert(keys.end(), extra.begin(), extra.end());
     for (auto it = r.value().begin(); it != r.value().end(); ++it) {
@@ -463,11 +471,13 @@ NodePtr parseNode(const Reader& r, NodeContext& ctx) {
         r.allowKeys({"grid", "material", "translate", "rotate", "scale"});
         return finishNode(r, requestGridFile(r, ctx, "grid"), ctx);
     }
-    // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact", "sign":
-    // "winding", "band": 3}.
+    // A mesh baked on load: {"mesh": "bunny.obj", "resolution": 128, "method": "exact", ...}, any
+    // key of the bake option table (bake/bake_options.h).
     if (!r.has("type") && r.has("mesh")) {
-        r.allowKeys({"mesh", "frame", "dynamic", "play", "resolution", "method", "sign", "band",
-                     "material", "translate", "rotate", "scale"});
+        std::vector<std::string> keys = {"mesh",     "frame",     "dynamic", "play",
+                                         "material", "translate", "rotate",  "scale"};
+        for (const char* k : bakeOptionKeys(true)) keys.push_back(k);
+        r.allowKeys(keys);
         return finishNode(r, requestMesh(r, ctx), ctx);
     }
     const std::string type = r.string("type");

@@ -38,7 +38,7 @@ NodePtr parseNode(const json_reader::Reader& r, NodeContext& context);
 // Rejects keys of an object of `type` other than the common ones (type, material, translate,
 // rotate, scale) and `extra`.
 void allowObjectKeys(const json_reader::Reader& r, const std::string& type,
-                     std::initializer_list<const char*> extra);
+                     const std::vector<const char*>& extra);
 
 // An analytic primitive of the primitive table by its scene-file name (parse_primitive.cpp);
 // null when `type` names none.

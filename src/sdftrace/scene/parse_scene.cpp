@@ -130,22 +130,7 @@ void parseRender(const Reader& r, RenderSettings& s) {
     r.allowKeys(keys);
     for (const RenderOption& o : renderOptions()) {
         if (!r.has(o.key)) continue;
-        double v = 0;
-        switch (o.type) {
-            case OptionType::Bool:
-                v = r.boolean(o.key, false) ? 1 : 0;
-                break;
-            case OptionType::Choice:
-                if (std::string error = o.parse(r.string(o.key), v); !error.empty())
-                    r.failKey(o.key, error);
-                break;
-            case OptionType::Int:
-            case OptionType::Float:
-                v = r.number(o.key, json_reader::anyFinite, o.accepted());
-                if (std::string error = o.check(r.value().at(o.key).get<double>()); !error.empty())
-                    r.failKey(o.key, error);
-                break;
-        }
+        const double v = json_reader::optionValue(r, o.key, o.value());
         o.give(s, v);
     }
 }

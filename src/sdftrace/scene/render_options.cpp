@@ -3,36 +3,17 @@
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
-#include <type_traits>
 
 #include "sdftrace/core/macros.h"
+#include "sdftrace/math/vec.h"
+
+static_assert(sdft::kMaxOptionMagnitude == sdft::kMaxCoordinate);
 
 namespace sdft {
 
 namespace {
 
-template <class T>
-double toNumber(T v) {
-    if constexpr (std::is_enum_v<T>)
-        return static_cast<double>(static_cast<int>(v));
-    else
-        return static_cast<double>(v);
-}
-
-template <class T>
-T fromNumber(double v) {
-    if constexpr (std::is_enum_v<T>)
-        return static_cast<T>(static_cast<int>(v));
-    else if constexpr (std::is_same_v<T, bool>)
-        return v != 0;
-    else
-        return static_cast<T>(v);
-}
-
-// The get/set pair of a RenderSettings member (nested members too: trace.omega).
-#define SDFT_MEMBER(m)                                            \
-    .get = [](const RenderSettings& s) { return toNumber(s.m); }, \
-    .set = [](RenderSettings& s, double v) { s.m = fromNumber<decltype(s.m)>(v); }
+#define SDFT_MEMBER(m) SDFT_OPTION_MEMBER(RenderSettings, m)
 
 constexpr double kInf = INFINITY;
 constexpr OptionRange kPositive{0, kInf, true, true};
@@ -147,7 +128,7 @@ std::vector<RenderOption> makeTable() {
          .set =
              [](RenderSettings& s, double v) {
                  s.maxDistanceAuto = v == 0;
-                 s.maxDistance = v == 0 ? RenderSettings{}.maxDistance : fromNumber<float>(v);
+                 s.maxDistance = v == 0 ? RenderSettings{}.maxDistance : fromOptionNumber<float>(v);
              }},
         {.key = "bounds_culling",
          .flags = "--bounds-culling",
@@ -425,14 +406,6 @@ std::vector<RenderOption> makeTable() {
 
 #undef SDFT_MEMBER
 
-std::string number(double v) {
-    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-    if (v == std::floor(v) && std::fabs(v) < 1e15) return std::to_string(static_cast<long long>(v));
-    std::ostringstream s;
-    s << v;
-    return s.str();
-}
-
 }  // namespace
 
 std::span<const RenderOption> renderOptions() {
@@ -476,77 +449,9 @@ std::string RenderOption::mainFlag() const {
     return f.substr(0, f.find(','));
 }
 
-std::string RenderOption::choiceList() const {
-    std::string list;
-    for (const char* c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
-    return list;
-}
-
-std::string RenderOption::accepted() const {
-    switch (type) {
-        case OptionType::Bool:
-            return "true or false";
-        case OptionType::Choice:
-            return "one of " + choiceList();
-        case OptionType::Int:
-            return "an integer in [" + number(range.lo) + ", " + number(range.hi) + "]";
-        case OptionType::Float:
-            break;
-    }
-    if (range.lo == 0 && std::isinf(range.hi))
-        return std::string(what) + (range.loOpen ? " > 0" : " >= 0");
-    return std::string(what) + " in " + (range.loOpen ? "(" : "[") + number(range.lo) + ", " +
-           number(range.hi) + (range.hiOpen ? ")" : "]");
-}
-
-std::string RenderOption::show(double v) const {
-    switch (type) {
-        case OptionType::Bool:
-            return v != 0 ? "true" : "false";
-        case OptionType::Choice:
-            return choices.at(static_cast<size_t>(v));
-        default:
-            return number(v);
-    }
-}
-
-std::string RenderOption::check(double v) const {
-    const bool integral = type != OptionType::Int || v == std::floor(v);
-    if (!std::isfinite(v) || !integral || !range.contains(v))
-        return "expected " + accepted() + ", got " + number(v);
-    if (std::fabs(v) > kMaxCoordinate)  // float geometry keeps about 7 digits, as in scene files
-        return "expected " + accepted() + ", got " + number(v) + "; numbers must lie within +-1e9";
-    return "";
-}
-
-std::string RenderOption::parse(const std::string& text, double& out) const {
-    if (type == OptionType::Choice) {
-        for (size_t i = 0; i < choices.size(); ++i)
-            if (text == choices[i]) return out = static_cast<double>(i), "";
-        return "unknown value '" + text + "'; accepted: " + choiceList();
-    }
-    if (type == OptionType::Bool) {
-        if (text == "true" || text == "1") return out = 1, "";
-        if (text == "false" || text == "0") return out = 0, "";
-        return "expected true or false, got '" + text + "'";
-    }
-    char* end = nullptr;
-    const double v = std::strtod(text.c_str(), &end);
-    if (text.empty() || end != text.c_str() + text.size())
-        return "expected " + accepted() + ", got '" + text + "'";
-    const std::string error = check(v);
-    if (error.empty()) out = v;
-    return error;
-}
-
 std::string renderOptionsMarkdown() {
     std::string md =
         "| key | flag | default | accepted | meaning |\n| --- | --- | --- | --- | --- |\n";
-    auto escape = [](std::string s) {
-        std::string out;
-        for (char c : s) out += c == '|' ? std::string("\\|") : std::string(1, c);
-        return out;
-    };
     for (const RenderOption& o : renderOptions()) {
         std::string flag = "`";
         flag += o.mainFlag();
@@ -558,7 +463,7 @@ std::string renderOptionsMarkdown() {
         }
         for (const std::string& cell :
              {std::string("`") + o.key + "`", flag, std::string("`") + o.defaultText() + "`",
-              escape(o.accepted()), escape(o.doc)}) {
+              markdownCell(o.accepted()), markdownCell(o.doc)}) {
             md += "| ";
             md += cell;
             md += " ";

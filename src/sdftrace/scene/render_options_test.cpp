@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "docs/docs_section.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/scene/parse_scene.h"
 
@@ -41,17 +42,7 @@ std::string sceneWith(const std::string& render) {
 }
 
 TEST(RenderOptions, DocsTableIsTheOptionTable) {
-    std::ifstream in(std::string(SDFT_SOURCE_DIR) + "/docs/cli.md");
-    ASSERT_TRUE(in) << "docs/cli.md";
-    std::stringstream text;
-    text << in.rdbuf();
-    const std::string doc = text.str();
-    const std::string begin = "<!-- render-options:begin -->\n",
-                      end = "<!-- render-options:end -->";
-    const size_t a = doc.find(begin), b = doc.find(end);
-    ASSERT_NE(a, std::string::npos);
-    ASSERT_NE(b, std::string::npos);
-    EXPECT_EQ(doc.substr(a + begin.size(), b - a - begin.size()), renderOptionsMarkdown())
+    EXPECT_EQ(test_support::docsSection("cli.md", "render-options"), renderOptionsMarkdown())
         << "regenerate the table with `sdftrace render --list-options`";
 }
 
