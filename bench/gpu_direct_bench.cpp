@@ -87,7 +87,7 @@ void makeGemsGlass(Scene& scene) {
 // refreshed there (GpuCompleteGrid, bound into the renderer's tapes) and the frame shaded: nothing
 // of the field crosses to the host. The primary rays hit the posed triangles: the baker's LBVH,
 // which the pose rebuilds (the pose's time), and its vertex normals (GpuMeshBaker::surface),
-// rebound into the renderer. Medians over `runs` frames after one untimed.
+// which the renderer follows. Medians over `runs` frames after one untimed.
 void rtsdfWholeFrame(const RenderPlan& plan, int runs) {
     const Grid* complete = nullptr;
     for (const auto& g : plan.tape.grids())
@@ -97,9 +97,12 @@ void rtsdfWholeFrame(const RenderPlan& plan, int runs) {
         return;
     }
     const TriangleMesh rest = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/teapot.obj");
-    GpuMeshBaker baker(rest, GpuWinding::Lbvh);
+    const auto state = std::make_shared<RtsdfDeviceState>(
+        RtsdfDeviceState{GpuMeshBaker(rest, GpuWinding::Lbvh), std::nullopt});
+    GpuMeshBaker& baker = state->baker;
     GpuCompleteGrid grid(*complete);
     GpuDirectRenderer renderer(plan, "bench", {{complete, grid.view()}});
+    renderer.followMesh(0, state);  // the primary rays' triangles: each pose's
     RtsdfOptions o;
     o.rays = 1;
     const Vec3 c = rest.bounds().center();
@@ -107,6 +110,7 @@ void rtsdfWholeFrame(const RenderPlan& plan, int runs) {
     FrameView frame;
     frame.camera = plan.camera;
     std::vector<double> pose, field, refresh, kernel, shade, whole;
+    double moved = 0;
     for (int f = 0; f <= runs; ++f) {
         const float a = 0.15f * std::sin(0.3f * static_cast<float>(f));
         const float ca = std::cos(a), sa = std::sin(a);
@@ -123,7 +127,6 @@ void rtsdfWholeFrame(const RenderPlan& plan, int runs) {
         GpuRefreshTimes r;
         grid.refresh(f_t, &r);
         renderer.rebind({complete, grid.view()});
-        renderer.rebind(0, baker.surface());  // the primary rays' triangles of this pose
         Film film(plan.camera.width, plan.camera.height, Film::bit(Aov::Color));
         const RenderStats st = renderer.render(frame, film);
         const double ms =
@@ -136,14 +139,15 @@ void rtsdfWholeFrame(const RenderPlan& plan, int runs) {
         kernel.push_back(t.kernelMs() + r.blocksMs + r.skipMs + st.gpuKernelMs);
         shade.push_back(st.gpuFrameMs);
         whole.push_back(ms);
+        moved = static_cast<double>(st.gpuBytesMoved) / 1e6;
     }
     std::printf(
         "\nRTSDF whole frame on the device (teapot M, x = 1, %dx%d, soft shadows, triangle "
         "primaries):\n\n| pose ms | field ms | grid refresh ms | shading ms (frame, film copied "
-        "back) | GPU kernels ms | whole frame ms (wall) |\n| --- | --- | --- | --- | --- | --- "
-        "|\n| %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n",
+        "back) | GPU kernels ms | MB moved | whole frame ms (wall) |\n| --- | --- | --- | --- | "
+        "--- | --- | --- |\n| %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f |\n",
         plan.camera.width, plan.camera.height, median(pose), median(field), median(refresh),
-        median(shade), median(kernel), median(whole));
+        median(shade), median(kernel), moved, median(whole));
 }
 
 }  // namespace
@@ -160,7 +164,8 @@ int main(int argc, char** argv) {
     const GpuInfo& gpu = gpuInfo();
     std::printf(
         "| scene | shadows | evaluations per pixel (GPU / CPU) | GPU kernel ms | GPU frame ms | "
-        "CPU ms | CPU / GPU kernel |\n| --- | --- | --- | --- | --- | --- | --- |\n");
+        "MB moved per frame | CPU ms | CPU / GPU kernel |\n| --- | --- | --- | --- | --- | --- | "
+        "--- | --- |\n");
     std::vector<std::unique_ptr<RenderPlan>> wholeFrames;  // RTSDF's, timed after the table
     for (const Case& c : kCases) {
         if (!wanted(c.scene)) continue;
@@ -203,7 +208,7 @@ int main(int argc, char** argv) {
             }
             const double cpu = median(cpuMs);
             if (!gpu.present) {
-                std::printf("| %s | %s | - / %.2f | - | - | %.1f | - |\n", c.scene, c.shadows,
+                std::printf("| %s | %s | - / %.2f | - | - | - | %.1f | - |\n", c.scene, c.shadows,
                             cpuEvals, cpu);
                 continue;
             }
@@ -211,7 +216,7 @@ int main(int argc, char** argv) {
             FrameView frame;
             frame.camera = plan.camera;
             std::vector<double> kernel, whole;
-            double gpuEvals = 0;
+            double gpuEvals = 0, moved = 0;
             for (int r = 0; r < runs + 1; ++r) {
                 Film film(W, H, Film::bit(Aov::Color));
                 const RenderStats st = renderer.render(frame, film);
@@ -221,10 +226,11 @@ int main(int argc, char** argv) {
                 }
                 kernel.push_back(st.gpuKernelMs);
                 whole.push_back(st.gpuFrameMs);
+                moved = static_cast<double>(st.gpuBytesMoved) / 1e6;
             }
             const double k = median(kernel);
-            std::printf("| %s | %s | %.2f / %.2f | %.3f | %.3f | %.1f | %.0fx |\n", c.scene,
-                        c.shadows, gpuEvals, cpuEvals, k, median(whole), cpu, cpu / k);
+            std::printf("| %s | %s | %.2f / %.2f | %.3f | %.3f | %.2f | %.1f | %.0fx |\n", c.scene,
+                        c.shadows, gpuEvals, cpuEvals, k, median(whole), moved, cpu, cpu / k);
             if (rtsdf) wholeFrames.push_back(std::make_unique<RenderPlan>(planRender(scene)));
         } catch (const std::exception& e) {
             std::printf("| %s | %s | error: %s |\n", c.scene, c.shadows, e.what());

@@ -81,8 +81,16 @@ SDFT_HOST_DEVICE inline float lbvhBoxEntry(Vec3 lo, Vec3 hi, Vec3 o, Vec3 inv, f
     return t0 <= t1 ? t0 : kInfinity;
 }
 
-// The first hit of r(t), tnear < t < tfar, nearer child first; a stack of 64 holds any tree of
-// 62-bit keys (its depth is at most their length).
+SDFT_HOST_DEVICE inline LbvhHit bruteForceFirstHit(const LbvhView& bvh, const Ray& r,
+                                                   float tnear = 0, float tfar = kInfinity);
+
+// The traversal stack's entries: enough for any tree of 62-bit keys (Karras' tree is at most as
+// deep as its keys are long). A deeper tree (a view built otherwise) is still answered right: the
+// ray whose stack would overflow is answered by testing every triangle, never by dropping
+// subtrees.
+inline constexpr int kLbvhStack = 64;
+
+// The first hit of r(t), tnear < t < tfar, nearer child first.
 SDFT_HOST_DEVICE inline LbvhHit lbvhFirstHit(const LbvhView& bvh, const Ray& r, float tnear = 0,
                                              float tfar = kInfinity) {
     LbvhHit hit;
@@ -108,7 +116,7 @@ SDFT_HOST_DEVICE inline LbvhHit lbvhFirstHit(const LbvhView& bvh, const Ray& r, 
             const float d = r.direction[axis];
             inv[axis] = 1.0f / (std::fabs(d) > 1e-30f ? d : (d < 0 ? -1e-30f : 1e-30f));
         }
-        int32_t stack[64];
+        int32_t stack[kLbvhStack];
         int top = 0;
         stack[top++] = 0;
         while (top > 0) {
@@ -125,8 +133,10 @@ SDFT_HOST_DEVICE inline LbvhHit lbvhFirstHit(const LbvhView& bvh, const Ray& r, 
             }
             // The farther child first on the stack, so the nearer is taken next.
             const int near = entry[1] < entry[0] ? 1 : 0, far = 1 - near;
-            if (entry[far] < hit.t && top < 64) stack[top++] = child[far];
-            if (entry[near] < hit.t && top < 64) stack[top++] = child[near];
+            const int pushes = (entry[far] < hit.t) + (entry[near] < hit.t);
+            if (top + pushes > kLbvhStack) return bruteForceFirstHit(bvh, r, tnear, tfar);
+            if (entry[far] < hit.t) stack[top++] = child[far];
+            if (entry[near] < hit.t) stack[top++] = child[near];
         }
     }
     if (hit.t == tfar) hit = LbvhHit{};
@@ -135,8 +145,8 @@ SDFT_HOST_DEVICE inline LbvhHit lbvhFirstHit(const LbvhView& bvh, const Ray& r, 
 
 // The first hit by testing every triangle of the view in order: the reference the traversal is
 // held to (same triangle test, so the same t bit for bit).
-SDFT_HOST_DEVICE inline LbvhHit bruteForceFirstHit(const LbvhView& bvh, const Ray& r,
-                                                   float tnear = 0, float tfar = kInfinity) {
+SDFT_HOST_DEVICE inline LbvhHit bruteForceFirstHit(const LbvhView& bvh, const Ray& r, float tnear,
+                                                   float tfar) {
     LbvhHit hit;
     hit.t = tfar;
     for (int i = 0; i < bvh.count; ++i) {

@@ -22,6 +22,9 @@ struct RenderStats {
     // kernels and copies), summed over frames.
     bool gpu = false;
     double gpuKernelMs = 0, gpuFrameMs = 0;
+    // Bytes copied between host and device for the frame (GPU renders): the AOVs asked for and
+    // the counters' sums; the buffers themselves stay on the device between frames.
+    uint64_t gpuBytesMoved = 0;
 
     // Sums the counters of `o` (per-thread, per-tile or per-frame statistics); not seconds,
     // threads or flags.

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "sdftrace/bake/mesh_bvh.h"
@@ -203,6 +204,40 @@ TEST(Lbvh, AgreesWithEmbreesFirstHits) {
         }
         EXPECT_GT(hits, rays / 4);
         EXPECT_LE(differ, rays / 1000) << differ << " of " << rays << " rays differ";
+    }
+}
+
+// A tree deeper than the traversal stack (a comb: each spine node's far child a pair of leaves,
+// every box the same) is answered as testing every triangle is: the ray whose stack would overflow
+// falls back to that test instead of dropping subtrees. Shallower combs traverse normally.
+TEST(Lbvh, ATreeDeeperThanTheStackStillFindsTheFirstHit) {
+    for (int depth : {20, kLbvhStack + 16, 3 * kLbvhStack}) {
+        const int count = 2 * depth + 1;
+        std::vector<LbvhTriangle> triangles(count);
+        std::mt19937 rng(static_cast<uint32_t>(depth));
+        std::vector<int> order(count);
+        for (int i = 0; i < count; ++i) order[i] = i;
+        std::shuffle(order.begin(), order.end(), rng);
+        for (int i = 0; i < count; ++i) {  // planes across the z axis at shuffled heights
+            const float z = 1.0f + 0.01f * static_cast<float>(order[i]);
+            triangles[i] = {{-1, -1, z}, {2, -1, z}, {-1, 2, z}, static_cast<uint32_t>(i)};
+        }
+        const LbvhNode box{{-1, -1, 0}, 0, {2, 2, 3}, 0};
+        std::vector<LbvhNode> nodes(2 * depth, box);
+        for (int i = 0; i < depth; ++i) {
+            LbvhNode& spine = nodes[i];
+            spine.left = i + 1 < depth ? i + 1 : ~(2 * depth);
+            spine.right = depth + i;  // the pair, pushed first and left on the stack
+            nodes[depth + i].left = ~(2 * i);
+            nodes[depth + i].right = ~(2 * i + 1);
+        }
+        const LbvhView view{nodes.data(), triangles.data(), count};
+        for (const Ray& r : {Ray{{0.1f, 0.2f, 0}, {0, 0, 1}}, Ray{{0.3f, 0.1f, 5}, {0, 0, -1}},
+                             Ray{{5, 0.5f, 1.5f}, {-1, 0, 0}}}) {
+            const LbvhHit a = lbvhFirstHit(view, r), b = bruteForceFirstHit(view, r);
+            EXPECT_EQ(a.t, b.t) << depth;
+            EXPECT_EQ(a.triangle, b.triangle) << depth;
+        }
     }
 }
 

@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+#include <vector>
+
 #include "sdftrace/bake/test_meshes.h"
+#include "sdftrace/bake/winding_view.h"
 #include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/io/mesh_io.h"
@@ -93,6 +97,41 @@ TEST(WindingNumber, TwoTierInsideAgreesWithTheFullEvaluation) {
                     inside += full;
                 }
         EXPECT_GT(inside, 500) << name;
+    }
+}
+
+// A tree deeper than the traversal stack (a comb whose spine runs down the child popped first, so
+// each level leaves its sibling on the stack) still gets every triangle's solid angle: a node whose
+// children would not fit is summed exactly over its range of triangles.
+TEST(WindingNumber, ATreeDeeperThanTheStackStillSumsEveryTriangle) {
+    for (int depth : {30, kWindingStack + 20, 3 * kWindingStack}) {
+        const int count = 2 * depth + 1;
+        std::mt19937 rng(static_cast<uint32_t>(depth));
+        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+        std::vector<float> corners(9 * static_cast<size_t>(count));
+        for (float& c : corners) c = u(rng);
+        // Spine node i covers triangles [2i, count), its leaf pair [2i, 2i + 2); the last leaf
+        // [2 depth, count). Radii so large that no node is far enough for its dipole.
+        std::vector<WindingNode> nodes(2 * depth + 1);
+        auto leaf = [](WindingNode& n, int first, int n_count) {
+            n.radius = 1e30;
+            n.first = first;
+            n.count = n_count;
+        };
+        for (int i = 0; i < depth; ++i) {
+            leaf(nodes[i], 2 * i, count - 2 * i);
+            nodes[i].left = depth + i;
+            nodes[i].right = i + 1 < depth ? i + 1 : 2 * depth;
+            leaf(nodes[depth + i], 2 * i, 2);
+        }
+        leaf(nodes[2 * depth], 2 * depth, 1);
+        const WindingView view{nodes.data(), static_cast<int>(nodes.size()), corners.data()};
+        for (const Vec3 p : {Vec3(0, 0, 0), Vec3(0.3f, -0.2f, 0.5f), Vec3(3, 1, -2)}) {
+            double exact = 0;
+            for (int t = 0; t < count; ++t) exact += solidAngleFloat(p, corners.data() + 9 * t);
+            exact /= 12.566370614359172;
+            EXPECT_NEAR(windingNumberFast(view, p, 2.0), exact, 1e-5) << depth;
+        }
     }
 }
 

@@ -92,13 +92,17 @@ struct WindingView {
     const float* corners = nullptr;  // 9 per triangle, in tree order
 };
 
+// The traversal stack's entries: enough for the median-split tree of any mesh (its depth is log2
+// of the triangle count) and for LbvhWinding's tree of 62-bit keys. A node whose children would
+// not fit (a deeper tree) is summed exactly over its triangles instead, never dropped.
+inline constexpr int kWindingStack = 128;
+
 // The winding number at p: nodes farther than beta times their radius by their dipole
-// (Barill et al. 2018, eq. 8), nearer leaves by their exact solid angles. A stack of 128 holds the
-// median-split tree of any mesh (its depth is log2 of the triangle count).
+// (Barill et al. 2018, eq. 8), nearer leaves by their exact solid angles.
 SDFT_HOST_DEVICE inline double windingNumberFast(const WindingView& w, Vec3 p, double beta) {
     if (w.nodeCount == 0) return 0;
     double sum = 0;
-    int stack[128];
+    int stack[kWindingStack];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
@@ -108,12 +112,14 @@ SDFT_HOST_DEVICE inline double windingNumberFast(const WindingView& w, Vec3 p, d
         if (d2 > beta * beta * n.radius * n.radius) {
             // Far: the dipole term, Omega ~ (c - p).N / |c - p|^3 (Barill et al. 2018, eq. 8).
             sum += (dx * n.nx + dy * n.ny + dz * n.nz) / (d2 * std::sqrt(d2));
-        } else if (n.left < 0) {
+        } else if (n.left < 0 || top + 2 > kWindingStack) {
+            // A leaf, or (stack full) the node's whole subtree: its triangles are [first,
+            // first + count) in tree order.
             float leaf = 0;
             for (int i = n.first; i < n.first + n.count; ++i)
                 leaf += solidAngleFloat(p, w.corners + 9 * static_cast<size_t>(i));
             sum += leaf;
-        } else if (top + 2 <= 128) {
+        } else {
             stack[top++] = n.left;
             stack[top++] = n.right;
         }

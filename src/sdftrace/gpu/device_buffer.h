@@ -61,6 +61,33 @@ class DeviceArray {
     size_t m_size = 0;
 };
 
+// Page-locked host memory (cudaMallocHost), grown on demand and never shrunk: the staging area of
+// asynchronous copies from the device (a pageable destination makes CUDA stage them itself).
+template <class T>
+class PinnedArray {
+  public:
+    PinnedArray() = default;
+    ~PinnedArray() { cudaFreeHost(m_ptr); }
+    PinnedArray(const PinnedArray&) = delete;
+    PinnedArray& operator=(const PinnedArray&) = delete;
+
+    // At least n elements (the old contents are not kept when it grows).
+    void reserve(size_t n) {
+        if (n <= m_capacity) return;
+        cudaFreeHost(m_ptr);
+        m_ptr = nullptr;
+        m_capacity = 0;
+        SDFT_CUDA_CHECK(cudaMallocHost(&m_ptr, n * sizeof(T)));
+        m_capacity = n;
+    }
+    T* get() const { return m_ptr; }
+    size_t capacity() const { return m_capacity; }
+
+  private:
+    T* m_ptr = nullptr;
+    size_t m_capacity = 0;
+};
+
 // Milliseconds of GPU time between record(start) and record(stop).
 struct EventTimer {
     cudaEvent_t start = nullptr, stop = nullptr;

@@ -53,7 +53,7 @@ GpuDirectRenderer::GpuDirectRenderer(const RenderPlan&, const std::string& what,
     requireGpu(what);
 }
 void GpuDirectRenderer::rebind(const GpuGridBinding&) {}
-void GpuDirectRenderer::rebind(int, const GpuMeshSurface&) {}
+void GpuDirectRenderer::followMesh(int, std::shared_ptr<RtsdfDeviceState>) {}
 GpuDirectRenderer::~GpuDirectRenderer() = default;
 GpuDirectRenderer::GpuDirectRenderer(GpuDirectRenderer&&) noexcept = default;
 GpuDirectRenderer& GpuDirectRenderer::operator=(GpuDirectRenderer&&) noexcept = default;

@@ -2,6 +2,7 @@
 #include <memory>
 #include <vector>
 
+#include "cuda_launch.cuh"
 #include "device_buffer.h"
 #include "gpu_lbvh.cuh"
 #include "sdftrace/bake/closest_point.h"
@@ -20,8 +21,6 @@ namespace {
 
 constexpr int kThreads = 256;
 constexpr unsigned long long kNoCandidate = ~0ull;
-
-unsigned blocksFor(size_t n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
 __device__ inline void vertexOf(const GridShape& s, size_t idx, int& i, int& j, int& k) {
     const size_t vx = s.vertices(0), vy = s.vertices(1);
@@ -239,6 +238,7 @@ struct GpuMeshBaker::Impl {
     cuda::DeviceArray<Vec3> positions;
     cuda::DeviceArray<uint32_t> triangles;
     std::unique_ptr<cuda::DeviceLbvh> lbvh;
+    uint64_t poses = 0;  // build() calls: the constructor's and each pose()
     cuda::DeviceArray<WindingNode> windingNodes;
     cuda::DeviceArray<float> windingCorners;
     double windingBeta = 3.0;
@@ -266,6 +266,7 @@ struct GpuMeshBaker::Impl {
         lbvh = std::make_unique<cuda::DeviceLbvh>(positions.get(), triangles.get(), count,
                                                   lbvhFrame(mesh));
         normalsMade = false;
+        ++poses;  // the surface's arrays are new: views of the last pose's are stale
         if (windingSource == GpuWinding::Lbvh) {
             windingOverLbvh();
             return;
@@ -291,16 +292,13 @@ struct GpuMeshBaker::Impl {
         if (windingCorners.size() != 9 * static_cast<size_t>(n))
             windingCorners = cuda::DeviceArray<float>(9 * static_cast<size_t>(n));
         const LbvhView v = lbvh->view();
-        windingLeafKernel<<<blocksFor(n), kThreads>>>(v.triangles, n, windingNodes.get(),
-                                                      windingCorners.get());
-        SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("windingLeafKernel", n, kThreads, windingLeafKernel, v.triangles, n,
+                     windingNodes.get(), windingCorners.get());
         if (n < 2) return;
         cuda::DeviceArray<int> visits(n - 1);
         SDFT_CUDA_CHECK(cudaMemset(visits.get(), 0, (n - 1) * sizeof(int)));
-        windingUpKernel<<<blocksFor(n), kThreads>>>(v.nodes, n, lbvh->parentOfNode(),
-                                                    lbvh->parentOfLeaf(), windingNodes.get(),
-                                                    visits.get());
-        SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("windingUpKernel", n, kThreads, windingUpKernel, v.nodes, n,
+                     lbvh->parentOfNode(), lbvh->parentOfLeaf(), windingNodes.get(), visits.get());
         SDFT_CUDA_CHECK(cudaDeviceSynchronize());  // before the counts go
     }
 
@@ -312,12 +310,10 @@ struct GpuMeshBaker::Impl {
         if (n > 0) {
             SDFT_CUDA_CHECK(cudaMemset(normals.get(), 0, n * sizeof(Vec3)));
             if (count > 0) {
-                vertexNormalSumKernel<<<blocksFor(count), kThreads>>>(
-                    positions.get(), triangles.get(), count, normals.get());
-                SDFT_CUDA_CHECK(cudaGetLastError());
+                cuda::launch("vertexNormalSumKernel", count, kThreads, vertexNormalSumKernel,
+                             positions.get(), triangles.get(), count, normals.get());
             }
-            unitNormalKernel<<<blocksFor(n), kThreads>>>(normals.get(), n);
-            SDFT_CUDA_CHECK(cudaGetLastError());
+            cuda::launch("unitNormalKernel", n, kThreads, unitNormalKernel, normals.get(), n);
         }
         normalsMade = true;
     }
@@ -336,13 +332,11 @@ struct GpuMeshBaker::Impl {
         cuda::EventTimer timer;
         SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
         SDFT_CUDA_CHECK(cudaMemset(best.get(), 0xFF, n * sizeof(unsigned long long)));
-        seedScatterKernel<<<blocksFor(count), kThreads>>>(positions.get(), triangles.get(), count,
-                                                          s, best.get());
-        SDFT_CUDA_CHECK(cudaGetLastError());
-        seedResolveKernel<<<blocksFor(n), kThreads>>>(
-            best.get(), positions.get(), triangles.get(), s, n, points.get(),
-            seedTriangles ? seedTriangles->get() : nullptr);
-        SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("seedScatterKernel", count, kThreads, seedScatterKernel, positions.get(),
+                     triangles.get(), count, s, best.get());
+        cuda::launch("seedResolveKernel", n, kThreads, seedResolveKernel, best.get(),
+                     positions.get(), triangles.get(), s, n, points.get(),
+                     seedTriangles ? seedTriangles->get() : nullptr);
         SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
         const double elapsed = timer.elapsedMs();  // and the kernels done before `best` goes
         if (ms) *ms += elapsed;
@@ -357,8 +351,8 @@ struct GpuMeshBaker::Impl {
         for (int offset : jumpFloodOffsets(s, variant)) {
             cuda::EventTimer timer;
             SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
-            jumpFloodKernel<<<blocksFor(n), kThreads>>>(s, n, points.get(), other.get(), offset);
-            SDFT_CUDA_CHECK(cudaGetLastError());
+            cuda::launch("jumpFloodKernel", n, kThreads, jumpFloodKernel, s, n, points.get(),
+                         other.get(), offset);
             SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
             std::swap(points, other);
             const double ms = timer.elapsedMs();
@@ -384,9 +378,8 @@ struct GpuMeshBaker::Impl {
         cuda::EventTimer timer;
         SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
         const float shell = sign == SignMethod::BetaShell ? betaVoxels * s.voxelSize : 0.0f;
-        signedDistanceKernel<<<blocksFor(n), kThreads>>>(s, n, points.get(), winding(), windingBeta,
-                                                         shell, out.get());
-        SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("signedDistanceKernel", n, kThreads, signedDistanceKernel, s, n, points.get(),
+                     winding(), windingBeta, shell, out.get());
         SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
         const double ms = timer.elapsedMs();
         if (times) times->signMs += ms;
@@ -414,10 +407,9 @@ struct GpuMeshBaker::Impl {
         SDFT_CUDA_CHECK(cudaMemset(counts.get(), 0, 2 * sizeof(unsigned long long)));
         cuda::EventTimer rays;
         SDFT_CUDA_CHECK(cudaEventRecord(rays.start));
-        rtsdfFineKernel<<<blocksFor(n), kThreads>>>(
-            s, n, cv, lbvh->view(), o.maskVoxels * s.voxelSize, 1e-4f * s.voxelSize, o.rays, o.seed,
-            frame, history, alpha, closed, out.get(), counts.get());
-        SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("rtsdfFineKernel", n, kThreads, rtsdfFineKernel, s, n, cv, lbvh->view(),
+                     o.maskVoxels * s.voxelSize, 1e-4f * s.voxelSize, o.rays, o.seed, frame,
+                     history, alpha, closed, out.get(), counts.get());
         SDFT_CUDA_CHECK(cudaEventRecord(rays.stop));
         t.rayMs += rays.elapsedMs();
         // A single bake is relaxed; accumulated frames are not (rtsdf_bake.cpp says why).
@@ -428,9 +420,8 @@ struct GpuMeshBaker::Impl {
             for (int axis = 0; axis < 3; ++axis) {
                 const size_t lines = static_cast<size_t>(nv[(axis + 1) % 3]) *
                                      static_cast<size_t>(nv[(axis + 2) % 3]);
-                relaxKernel<<<blocksFor(lines), kThreads>>>(out.get(), nv[0], nv[1], nv[2], axis,
-                                                            s.voxelSize);
-                SDFT_CUDA_CHECK(cudaGetLastError());
+                cuda::launch("relaxKernel", lines, kThreads, relaxKernel, out.get(), nv[0], nv[1],
+                             nv[2], axis, s.voxelSize);
             }
             SDFT_CUDA_CHECK(cudaEventRecord(relax.stop));
             t.relaxMs += relax.elapsedMs();
@@ -507,6 +498,8 @@ GpuMeshSurface GpuMeshBaker::surface() const {
     return {m.lbvh->view(), m.normals.get(), m.triangles.get()};
 }
 
+uint64_t GpuMeshBaker::poses() const { return m_impl->poses; }
+
 void GpuMeshBaker::pose(const TriangleMesh& mesh, GpuBakeTimes* times) {
     const auto start = std::chrono::steady_clock::now();
     Impl& m = *m_impl;
@@ -544,8 +537,7 @@ const float* GpuMeshBaker::accumulateOnDevice(const GridShape& s, const RtsdfOpt
     } else if (from || m.accumulated == 0 || !sameShape(m.accumulatedShape, s)) {
         // Eq. 1's f_{t-1} before the first frame: none anywhere (beginRtsdfFrame's infinities).
         if (m.accumulation.size() != n) m.accumulation = cuda::DeviceArray<float>(n);
-        fillKernel<<<blocksFor(n), kThreads>>>(m.accumulation.get(), n, INFINITY);
-        SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("fillKernel", n, kThreads, fillKernel, m.accumulation.get(), n, INFINITY);
         m.accumulatedShape = s;
         m.accumulated = 0;
     }
@@ -592,9 +584,8 @@ std::vector<Vec3> GpuMeshBaker::jumpFloodPoints(const GridShape& s, const std::v
 std::vector<LbvhHit> GpuMeshBaker::firstHits(const std::vector<Ray>& rays, float tnear) const {
     cuda::DeviceArray<Ray> in(rays);
     cuda::DeviceArray<LbvhHit> hits(rays.size());
-    firstHitKernel<<<blocksFor(rays.size()), kThreads>>>(m_impl->lbvh->view(), in.get(),
-                                                         rays.size(), tnear, hits.get());
-    SDFT_CUDA_CHECK(cudaGetLastError());
+    cuda::launch("firstHitKernel", rays.size(), kThreads, firstHitKernel, m_impl->lbvh->view(),
+                 in.get(), rays.size(), tnear, hits.get());
     std::vector<LbvhHit> out;
     hits.download(out, rays.size());
     return out;

@@ -40,7 +40,8 @@ enum class GpuWinding { MedianTree, Lbvh };
 
 // The mesh as it stands on the device, in the arrays a GPU renderer's triangle primaries read
 // (MeshPrimaryMesh, render/mesh_primary.h): the LBVH, area-weighted unit vertex normals (as the
-// host's smoothNormals) and 3 indices per triangle. Valid until the baker's next pose() or end.
+// host's smoothNormals) and 3 indices per triangle. Valid until the baker's next pose() or end:
+// a holder of one compares GpuMeshBaker::poses() with the count it was taken at.
 struct GpuMeshSurface {
     LbvhView bvh;
     const Vec3* normals = nullptr;
@@ -91,6 +92,8 @@ class GpuMeshBaker {
     // The posed mesh for a GPU renderer's triangle primaries (RTSDF's hybrid mode: the triangles
     // of the frame the field was regenerated from, with no host LBVH per frame).
     GpuMeshSurface surface() const;
+    // Poses so far, the constructor's included: a surface() taken at another count is stale.
+    uint64_t poses() const;
 
     // The pieces alone, for tests: seeds of `shape`, jump flooding of given seeds, first hits.
     SurfaceSeeds seeds(const GridShape& shape) const;

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cuda_launch.cuh"
 #include "device_buffer.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/complete_block.h"
@@ -178,40 +179,39 @@ void GpuCompleteGrid::refresh(const float* dense, GpuRefreshTimes* times) {
     r.worst = m.worst.get();
     cuda::EventTimer blocks, skip;
     SDFT_CUDA_CHECK(cudaEventRecord(blocks.start));
+    const size_t surface = static_cast<size_t>(m.surface);  // none: nothing to refresh
     if (m.B == 8)
-        refreshBlocksKernel<8><<<blocksFor(static_cast<size_t>(m.surface)), kThreads>>>(r);
+        cuda::launch("refreshBlocksKernel<8>", surface, kThreads, refreshBlocksKernel<8>, r);
     else
-        refreshBlocksKernel<4><<<blocksFor(static_cast<size_t>(m.surface)), kThreads>>>(r);
-    SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("refreshBlocksKernel<4>", surface, kThreads, refreshBlocksKernel<4>, r);
     SDFT_CUDA_CHECK(cudaEventRecord(blocks.stop));
     SDFT_CUDA_CHECK(cudaEventRecord(skip.start));
     SDFT_CUDA_CHECK(cudaMemset(m.worstBits.get(), 0, sizeof(unsigned)));
-    maxWorstKernel<<<std::min(1024u, blocksFor(static_cast<size_t>(m.surface))), kThreads>>>(
-        m.worst.get(), m.surface, m.worstBits.get());
-    SDFT_CUDA_CHECK(cudaGetLastError());
+    cuda::launchBlocks("maxWorstKernel", std::min<size_t>(1024, blocksFor(surface)), kThreads,
+                       maxWorstKernel, m.worst.get(), m.surface, m.worstBits.get());
     // Block skip distances: sources, 8 dilations (exact up to 8, 9 beyond), into the slots.
     const GridView& g = m.view;
     const int px = m.padded[0], py = m.padded[1], pz = m.padded[2];
     const size_t paddedCount = static_cast<size_t>(px) * py * pz;
-    blockSourcesKernel<<<blocksFor(paddedCount), kThreads>>>(g, px, py, pz, m.distance[0].get());
+    cuda::launch("blockSourcesKernel", paddedCount, kThreads, blockSourcesKernel, g, px, py, pz,
+                 m.distance[0].get());
     for (int step = 0; step < kTileBlocks; ++step)
-        dilateKernel<uint8_t><<<blocksFor(paddedCount), kThreads>>>(
-            m.distance[step & 1].get(), m.distance[(step + 1) & 1].get(), px, py, pz);
+        cuda::launch("dilateKernel<uint8_t>", paddedCount, kThreads, dilateKernel<uint8_t>,
+                     m.distance[step & 1].get(), m.distance[(step + 1) & 1].get(), px, py, pz);
     // kTileBlocks (even) steps end in distance[0].
-    writeBlockSkipKernel<<<blocksFor(paddedCount), kThreads>>>(g, px, py, pz, m.distance[0].get(),
-                                                               m.blockSkip.get());
+    cuda::launch("writeBlockSkipKernel", paddedCount, kThreads, writeBlockSkipKernel, g, px, py, pz,
+                 m.distance[0].get(), m.blockSkip.get());
     // Tile skip distances: the tiles holding a source, dilated across the tile grid.
     const size_t tiles = m.tileSkip.size();
-    tileSourcesKernel<<<blocksFor(tiles), kThreads>>>(g, px, py, m.distance[0].get(),
-                                                      m.tileDistance[0].get());
+    cuda::launch("tileSourcesKernel", tiles, kThreads, tileSourcesKernel, g, px, py,
+                 m.distance[0].get(), m.tileDistance[0].get());
     const int steps = std::max(g.tiles[0], std::max(g.tiles[1], g.tiles[2]));
     for (int step = 0; step < steps; ++step)
-        dilateKernel<uint16_t><<<blocksFor(tiles), kThreads>>>(m.tileDistance[step & 1].get(),
-                                                               m.tileDistance[(step + 1) & 1].get(),
-                                                               g.tiles[0], g.tiles[1], g.tiles[2]);
-    writeTileSkipKernel<<<blocksFor(tiles), kThreads>>>(m.tileDistance[steps & 1].get(), tiles,
-                                                        m.tileSkip.get());
-    SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("dilateKernel<uint16_t>", tiles, kThreads, dilateKernel<uint16_t>,
+                     m.tileDistance[step & 1].get(), m.tileDistance[(step + 1) & 1].get(),
+                     g.tiles[0], g.tiles[1], g.tiles[2]);
+    cuda::launch("writeTileSkipKernel", tiles, kThreads, writeTileSkipKernel,
+                 m.tileDistance[steps & 1].get(), tiles, m.tileSkip.get());
     SDFT_CUDA_CHECK(cudaEventRecord(skip.stop));
     unsigned bits = 0;
     SDFT_CUDA_CHECK(cudaMemcpy(&bits, m.worstBits.get(), sizeof bits, cudaMemcpyDeviceToHost));

@@ -1,5 +1,6 @@
 #include <cub/device/device_radix_sort.cuh>
 
+#include "cuda_launch.cuh"
 #include "gpu_lbvh.cuh"
 
 namespace sdft::cuda {
@@ -7,8 +8,6 @@ namespace sdft::cuda {
 namespace {
 
 constexpr int kThreads = 256;
-
-int blocksFor(int n) { return (n + kThreads - 1) / kThreads; }
 
 __global__ void keyKernel(const Vec3* positions, const uint32_t* triangles, int n, LbvhFrame frame,
                           uint64_t* keys) {
@@ -90,26 +89,21 @@ DeviceLbvh::DeviceLbvh(const Vec3* positions, const uint32_t* triangles, int n, 
         cub::DeviceRadixSort::SortKeys(nullptr, tempBytes, keys.get(), sorted.get(), n, 0, 62));
     DeviceArray<unsigned char> temp(tempBytes);
     SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
-    keyKernel<<<blocksFor(n), kThreads>>>(positions, triangles, n, frame, keys.get());
-    SDFT_CUDA_CHECK(cudaGetLastError());
+    cuda::launch("keyKernel", n, kThreads, keyKernel, positions, triangles, n, frame, keys.get());
     SDFT_CUDA_CHECK(
         cub::DeviceRadixSort::SortKeys(temp.get(), tempBytes, keys.get(), sorted.get(), n, 0, 62));
-    gatherKernel<<<blocksFor(n), kThreads>>>(sorted.get(), positions, triangles, n,
-                                             m_triangles.get());
-    SDFT_CUDA_CHECK(cudaGetLastError());
+    cuda::launch("gatherKernel", n, kThreads, gatherKernel, sorted.get(), positions, triangles, n,
+                 m_triangles.get());
     if (n > 1) {
         m_parentOfNode = DeviceArray<int32_t>(n - 1);
         m_parentOfLeaf = DeviceArray<int32_t>(n);
         DeviceArray<int> visits(n - 1);
         SDFT_CUDA_CHECK(cudaMemset(m_parentOfNode.get(), 0xFF, (n - 1) * sizeof(int32_t)));
         SDFT_CUDA_CHECK(cudaMemset(visits.get(), 0, (n - 1) * sizeof(int)));
-        nodeKernel<<<blocksFor(n - 1), kThreads>>>(sorted.get(), n, m_nodes.get(),
-                                                   m_parentOfNode.get(), m_parentOfLeaf.get());
-        SDFT_CUDA_CHECK(cudaGetLastError());
-        boxKernel<<<blocksFor(n), kThreads>>>(m_triangles.get(), n, m_nodes.get(),
-                                              m_parentOfNode.get(), m_parentOfLeaf.get(),
-                                              visits.get());
-        SDFT_CUDA_CHECK(cudaGetLastError());
+        cuda::launch("nodeKernel", n - 1, kThreads, nodeKernel, sorted.get(), n, m_nodes.get(),
+                     m_parentOfNode.get(), m_parentOfLeaf.get());
+        cuda::launch("boxKernel", n, kThreads, boxKernel, m_triangles.get(), n, m_nodes.get(),
+                     m_parentOfNode.get(), m_parentOfLeaf.get(), visits.get());
         SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
         m_buildMs = timer.elapsedMs();  // waits for the kernels before the arrays go
         return;

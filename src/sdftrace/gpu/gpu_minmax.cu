@@ -1,5 +1,6 @@
 #include <vector>
 
+#include "cuda_launch.cuh"
 #include "gpu_minmax.cuh"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_primary.h"
@@ -37,24 +38,35 @@ __global__ void splatBlocksKernel(TapeView field, int grid, Camera camera, MinMa
         }
 }
 
+__global__ void fillKernel(float* lo, float* hi, size_t n) {
+    const size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i >= n) return;
+    lo[i] = kInfinity;
+    hi[i] = -kInfinity;
+}
+
 }  // namespace
 
-DeviceMinMax::DeviceMinMax(const TapeView& field, int grid, const GridView& host,
-                           const Camera& camera, int resolution) {
+void DeviceMinMax::build(const TapeView& field, int grid, const GridView& host,
+                         const Camera& camera, int resolution) {
     const MinMaxShape shape = minMaxShape(camera.desc(), resolution);
     const size_t n = static_cast<size_t>(shape.w) * shape.h;
+    if (m_min.size() < n) {
+        m_min = DeviceArray<float>(n);
+        m_max = DeviceArray<float>(n);
+    }
     // +inf and -inf: the bits of -inf are a negative int, below every positive distance's.
-    m_min = DeviceArray<float>(std::vector<float>(n, kInfinity));
-    m_max = DeviceArray<float>(std::vector<float>(n, -kInfinity));
-    DeviceArray<unsigned> counters(std::vector<unsigned>(2, 0u));
+    cuda::launch("minmax fillKernel", n, 256, fillKernel, m_min.get(), m_max.get(), n);
+    SDFT_CUDA_CHECK(cudaMemsetAsync(m_counters.get(), 0, 2 * sizeof(unsigned)));
+    DeviceArray<unsigned>& counters = m_counters;
     int nb[3];
     minmax::blockCounts(host, nb);
     const size_t blocks = static_cast<size_t>(nb[0]) * nb[1] * nb[2];
     const int threads = 128;
-    splatBlocksKernel<<<static_cast<unsigned>((blocks + threads - 1) / threads), threads>>>(
-        field, grid, camera, shape, minmax::blockRadius(host), nb[0], nb[1], nb[2],
-        reinterpret_cast<int*>(m_min.get()), reinterpret_cast<int*>(m_max.get()), counters.get());
-    SDFT_CUDA_CHECK(cudaGetLastError());
+    cuda::launch("splatBlocksKernel", blocks, threads, splatBlocksKernel, field, grid, camera,
+                 shape, minmax::blockRadius(host), nb[0], nb[1], nb[2],
+                 reinterpret_cast<int*>(m_min.get()), reinterpret_cast<int*>(m_max.get()),
+                 counters.get());
     std::vector<unsigned> c;
     counters.download(c, 2);
     m_squares = c[0];

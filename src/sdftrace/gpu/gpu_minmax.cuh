@@ -18,13 +18,21 @@ class DeviceMinMax {
     // that grid's host view (its block counts). Launches on the default stream and waits for
     // the two counters (squares, everything).
     DeviceMinMax(const TapeView& field, int grid, const GridView& host, const Camera& camera,
-                 int resolution);
+                 int resolution) {
+        build(field, grid, host, camera, resolution);
+    }
+    DeviceMinMax() = default;
+    // The buffer anew for this camera, in the arrays of the last build where they are large
+    // enough (a renderer's frames allocate once).
+    void build(const TapeView& field, int grid, const GridView& host, const Camera& camera,
+               int resolution);
 
     MinMaxView view() const { return m_view; }
     size_t squares() const { return m_squares; }
 
   private:
     DeviceArray<float> m_min, m_max;
+    DeviceArray<unsigned> m_counters{2};
     MinMaxView m_view;
     size_t m_squares = 0;
 };

@@ -1,6 +1,7 @@
 #include <chrono>
 #include <vector>
 
+#include "cuda_launch.cuh"
 #include "device_buffer.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/gpu/gpu_device.h"
@@ -50,12 +51,10 @@ GpuPrimaryImage tracePrimaryGpu(const GpuTape& tape, const PrimaryPixelView& vie
         v.minMax.min = lo.get();
         v.minMax.max = hi.get();
     }
-    const dim3 block(16, 8);
-    const dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y);
     cuda::EventTimer timer;
     SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
-    primaryKernel<<<grid, block>>>(v, width, height, depth.get(), normal.get(), evaluations.get());
-    SDFT_CUDA_CHECK(cudaGetLastError());
+    cuda::launchImage("primaryKernel", width, height, dim3(16, 8), primaryKernel, v, width, height,
+                      depth.get(), normal.get(), evaluations.get());
     SDFT_CUDA_CHECK(cudaEventRecord(timer.stop));
     out.kernelMs = timer.elapsedMs();
     depth.download(out.depth, n);

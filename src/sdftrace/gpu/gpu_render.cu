@@ -2,9 +2,13 @@
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <optional>
+#include <vector>
 
 #include "../core/plugin_dirs.h"
+#include "cuda_launch.cuh"
 #include "device_buffer.h"
 #include "gpu_kernel_table.h"
 #include "gpu_minmax.cuh"
@@ -57,31 +61,94 @@ const gpu_render::KernelTable& kernelTable() {
     return *loaded.table;
 }
 
-// The summary's counters of a frame from the kernel's per-pixel counters `c` and the steps,
-// traversal and intersection AOVs.
-void addCounters(const std::vector<uint32_t>& c, const std::vector<float>& steps,
-                 const std::vector<float>& trav, const std::vector<float>& isect, bool paths,
-                 RenderStats& st, uint64_t& triangleHits) {
-    for (size_t i = 0; i < steps.size(); ++i) {
-        const uint32_t* p = c.data() + kCounters * i;
-        st.shadowEvaluations += p[0];
-        st.aoEvaluations += p[1];
-        st.fallbacks += p[2];
-        st.hits += p[3];
-        st.secondaryRays += p[4];
-        st.secondaryEvaluations += p[5];
-        st.selfIntersections += p[6];
-        if (paths) {
-            st.primaryEvaluations += p[7];  // every sample's
-            st.shadowRays += p[8];
-            st.normalEvaluations += p[9];
-        } else {
-            st.primaryEvaluations += static_cast<uint64_t>(steps[i]);
-            triangleHits += p[7];
-        }
-        st.traversalSteps += static_cast<uint64_t>(trav[i]);
-        st.intersectionTests += static_cast<uint64_t>(isect[i]);
+// The sums of a frame's counters: the kernel's kCounters per pixel, then its steps, traversal
+// steps and intersection tests (integral floats), reduced on the device so that only these come
+// back. Each block sums into shared memory first.
+constexpr int kSums = kCounters + 3;
+
+__global__ void sumCountersKernel(const uint32_t* counters, const float* steps, const float* trav,
+                                  const float* isect, size_t n, unsigned long long* sums) {
+    __shared__ unsigned long long local[kSums];
+    if (threadIdx.x < kSums) local[threadIdx.x] = 0;
+    __syncthreads();
+    const size_t stride = static_cast<size_t>(gridDim.x) * blockDim.x;
+    for (size_t i = static_cast<size_t>(blockIdx.x) * blockDim.x + threadIdx.x; i < n;
+         i += stride) {
+        const uint32_t* p = counters + kCounters * i;
+        for (int c = 0; c < kCounters; ++c)
+            if (p[c]) atomicAdd(&local[c], static_cast<unsigned long long>(p[c]));
+        atomicAdd(&local[kCounters], static_cast<unsigned long long>(steps[i]));
+        atomicAdd(&local[kCounters + 1], static_cast<unsigned long long>(trav[i]));
+        atomicAdd(&local[kCounters + 2], static_cast<unsigned long long>(isect[i]));
     }
+    __syncthreads();
+    if (threadIdx.x < kSums && local[threadIdx.x])
+        atomicAdd(&sums[threadIdx.x], local[threadIdx.x]);
+}
+
+// The summary's counters of a frame from the sums of sumCountersKernel.
+void addCounters(const unsigned long long* sums, bool paths, RenderStats& st,
+                 uint64_t& triangleHits) {
+    st.shadowEvaluations += sums[0];
+    st.aoEvaluations += sums[1];
+    st.fallbacks += sums[2];
+    st.hits += sums[3];
+    st.secondaryRays += sums[4];
+    st.secondaryEvaluations += sums[5];
+    st.selfIntersections += sums[6];
+    if (paths) {
+        st.primaryEvaluations += sums[7];  // every sample's
+        st.shadowRays += sums[8];
+        st.normalEvaluations += sums[9];
+    } else {
+        st.primaryEvaluations += sums[kCounters];
+        triangleHits += sums[7];
+    }
+    st.traversalSteps += sums[kCounters + 1];
+    st.intersectionTests += sums[kCounters + 2];
+}
+
+// A frame's device outputs and its host staging, allocated for the largest film seen and kept:
+// a renderer's frames (and, through the pool, the next renderer's: an animation makes one per
+// frame) allocate nothing once the film has been this size.
+struct FrameBuffers {
+    size_t capacity = 0;  // pixels
+    cuda::DeviceArray<float> color, depth, normal, steps, error, shadow, ao, trav, isect;
+    cuda::DeviceArray<uint32_t> counters;
+    cuda::DeviceArray<unsigned long long> sums{kSums};
+    cuda::PinnedArray<float> staging;  // the AOVs asked for, one after the other
+    cuda::PinnedArray<unsigned long long> sumsHost;
+    cuda::EventTimer timer;
+    cuda::DeviceMinMax minMax;  // Jamriška §6's buffer of a lone grid's frames
+
+    void ensure(size_t n) {
+        if (n <= capacity) return;
+        color = cuda::DeviceArray<float>(3 * n);
+        normal = cuda::DeviceArray<float>(3 * n);
+        for (cuda::DeviceArray<float>* a : {&depth, &steps, &error, &shadow, &ao, &trav, &isect})
+            *a = cuda::DeviceArray<float>(n);
+        counters = cuda::DeviceArray<uint32_t>(kCounters * n);
+        capacity = n;
+    }
+};
+
+// Frame buffers outlive their renderer in this pool and go to the next one.
+std::shared_ptr<FrameBuffers> takeFrameBuffers() {
+    static std::mutex mutex;
+    static std::vector<std::unique_ptr<FrameBuffers>> pool;
+    std::unique_ptr<FrameBuffers> b;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!pool.empty()) {
+            b = std::move(pool.back());
+            pool.pop_back();
+        }
+    }
+    if (!b) b = std::make_unique<FrameBuffers>();
+    return std::shared_ptr<FrameBuffers>(b.release(), [](FrameBuffers* f) {
+        std::lock_guard<std::mutex> lock(mutex);
+        pool.emplace_back(f);
+    });
 }
 
 }  // namespace
@@ -105,6 +172,34 @@ struct GpuDirectRenderer::Impl {
     std::vector<cuda::DeviceArray<uint32_t>> meshIndices;
     std::vector<MeshPrimaryMesh> meshViews;  // the host's copy of `meshes`
     cuda::DeviceArray<MeshPrimaryMesh> meshes;
+    // The meshes posed on the device (RTSDF's per-frame meshes): their owner, kept alive here,
+    // and the baker's pose count their views were taken at. A later pose replaces the baker's
+    // arrays, so render() takes the views anew first (freshMeshes).
+    struct PosedMesh {
+        size_t index;  // in meshViews
+        std::shared_ptr<RtsdfDeviceState> owner;
+        uint64_t poses;
+    };
+    std::vector<PosedMesh> posed;
+    // The frames' outputs on the device and their host staging, kept between frames.
+    std::shared_ptr<FrameBuffers> frames = takeFrameBuffers();
+
+    // The posed meshes' views as their bakers hold them now (uploaded where a pose changed them).
+    void freshMeshes() {
+        bool changed = false;
+        for (PosedMesh& p : posed) {
+            const uint64_t now = p.owner->baker.poses();
+            if (now == p.poses) continue;
+            const GpuMeshSurface s = p.owner->baker.surface();
+            MeshPrimaryMesh& v = meshViews[p.index];
+            v.bvh = s.bvh;
+            v.normals = s.normals;
+            v.indices = s.indices;
+            p.poses = now;
+            changed = true;
+        }
+        if (changed) meshes.upload(meshViews);
+    }
     // Whitted rays: the convex objects' tapes (Keinert §3.5) on the device, and their views.
     bool whitted;
     std::vector<GpuTape> convexTapes;
@@ -128,6 +223,7 @@ struct GpuDirectRenderer::Impl {
         for (const MeshPrimaryTables::Mesh& mesh : tables.meshes.meshes) {
             if (mesh.device) {  // posed on the device with its field: the baker's arrays
                 const GpuMeshSurface s = mesh.device->baker.surface();
+                posed.push_back({meshViews.size(), mesh.device, mesh.device->baker.poses()});
                 meshViews.push_back(
                     {s.bvh, s.normals, s.indices, mesh.toLocal, mesh.normalToWorld, mesh.bias});
                 continue;
@@ -192,14 +288,13 @@ void GpuDirectRenderer::rebind(const GpuGridBinding& binding) {
     for (GpuTape& t : m.convexTapes) t.rebind(binding);
 }
 
-void GpuDirectRenderer::rebind(int mesh, const GpuMeshSurface& surface) {
+void GpuDirectRenderer::followMesh(int mesh, std::shared_ptr<RtsdfDeviceState> state) {
     Impl& m = *m_impl;
-    SDFT_CHECK(mesh >= 0 && mesh < static_cast<int>(m.meshViews.size()));
-    MeshPrimaryMesh& v = m.meshViews[mesh];
-    v.bvh = surface.bvh;
-    v.normals = surface.normals;
-    v.indices = surface.indices;
-    m.meshes.upload(m.meshViews);
+    SDFT_CHECK(mesh >= 0 && mesh < static_cast<int>(m.meshViews.size()) && state);
+    const size_t index = static_cast<size_t>(mesh);
+    std::erase_if(m.posed, [&](const Impl::PosedMesh& p) { return p.index == index; });
+    // A count no baker has: the next render takes the arrays.
+    m.posed.push_back({index, std::move(state), ~uint64_t{0}});
 }
 
 GpuDirectRenderer::~GpuDirectRenderer() = default;
@@ -207,6 +302,7 @@ GpuDirectRenderer::GpuDirectRenderer(GpuDirectRenderer&&) noexcept = default;
 GpuDirectRenderer& GpuDirectRenderer::operator=(GpuDirectRenderer&&) noexcept = default;
 
 RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const {
+    m_impl->freshMeshes();  // a baker posed since: its new arrays, never the freed ones
     const Impl& m = *m_impl;
     const auto begin = std::chrono::steady_clock::now();
     const int w = film.width, h = film.height;
@@ -216,22 +312,20 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     WhittedPixelView whitted = whittedPixelView(m.plan, noTables);
     whitted.convex = m.convex.get();
     whitted.convexCount = static_cast<int>(m.convex.size());
-    cuda::DeviceArray<float> color(3 * n), depth(n), normal(3 * n), steps(n), error(n), shadow(n),
-        ao(n), travSteps(n), isectTests(n);
-    cuda::DeviceArray<uint32_t> counters(kCounters * n);
-    const DirectOut out{color.get(),      depth.get(),   normal.get(), steps.get(),
-                        error.get(),      shadow.get(),  ao.get(),     travSteps.get(),
-                        isectTests.get(), counters.get()};
-    cuda::EventTimer timer;
+    FrameBuffers& f = *m.frames;
+    f.ensure(n);
+    const DirectOut out{f.color.get(), f.depth.get(),   f.normal.get(), f.steps.get(),
+                        f.error.get(), f.shadow.get(),  f.ao.get(),     f.trav.get(),
+                        f.isect.get(), f.counters.get()};
+    const cuda::EventTimer& timer = f.timer;
     SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
     // A lone grid's primary rays narrowed by Jamriška §6's min/max buffer, built on the device
     // for this frame's camera (timed with the kernels).
-    std::optional<cuda::DeviceMinMax> minMax;
     const bool paths = m.plan.settings.pathTracing;  // per-sample primary rays, no DDA
     if (usesMinMax(m.plan) && view.primary.ddaGrid >= 0 && !paths) {
-        minMax.emplace(view.primary.field, view.primary.ddaGrid, m.plan.ddaGrid->view(),
+        f.minMax.build(view.primary.field, view.primary.ddaGrid, m.plan.ddaGrid->view(),
                        view.primary.camera, m.plan.settings.minMaxResolution);
-        view.primary.minMax = minMax->view();
+        view.primary.minMax = f.minMax.view();
     }
     // The material register file: none read with a uniform material, else the smallest that
     // holds the tape's scalar registers.
@@ -256,24 +350,52 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     RenderStats st;
     st.gpu = true;
     st.gpuKernelMs = timer.elapsedMs();
-    color.download(film.color, 3 * n);
-    if (film.has(Aov::Depth)) depth.download(film.depth, n);
-    if (film.has(Aov::Normal)) normal.download(film.normal, 3 * n);
-    if (film.has(Aov::Error)) error.download(film.error, n);
-    if (film.has(Aov::Shadow)) shadow.download(film.shadow, n);
-    if (film.has(Aov::Ao)) ao.download(film.ao, n);
-    std::vector<float> stepCounts, trav, isect;  // the summary's counters, and AOVs
-    steps.download(stepCounts, n);
-    travSteps.download(trav, n);
-    isectTests.download(isect, n);
-    if (film.has(Aov::Steps)) film.steps = stepCounts;
-    if (film.has(Aov::TravSteps)) film.travSteps = trav;
-    if (film.has(Aov::IsectTests)) film.isectTests = isect;
-    std::vector<uint32_t> c;
-    counters.download(c, kCounters * n);
+    // The counters summed on the device; the colour and the AOVs the film keeps copied into
+    // pinned memory asynchronously, then into the film once.
+    SDFT_CUDA_CHECK(cudaMemsetAsync(f.sums.get(), 0, kSums * sizeof(unsigned long long)));
+    cuda::launchBlocks("sumCountersKernel", std::min<size_t>(1024, (n + 255) / 256), 256,
+                       sumCountersKernel, f.counters.get(), f.steps.get(), f.trav.get(),
+                       f.isect.get(), n, f.sums.get());
+    struct Copy {
+        std::vector<float>* to;
+        const float* from;
+        size_t count;
+    };
+    std::vector<Copy> copies = {{&film.color, f.color.get(), 3 * n}};
+    const std::pair<Aov, Copy> aovs[] = {
+        {Aov::Depth, {&film.depth, f.depth.get(), n}},
+        {Aov::Normal, {&film.normal, f.normal.get(), 3 * n}},
+        {Aov::Error, {&film.error, f.error.get(), n}},
+        {Aov::Shadow, {&film.shadow, f.shadow.get(), n}},
+        {Aov::Ao, {&film.ao, f.ao.get(), n}},
+        {Aov::Steps, {&film.steps, f.steps.get(), n}},
+        {Aov::TravSteps, {&film.travSteps, f.trav.get(), n}},
+        {Aov::IsectTests, {&film.isectTests, f.isect.get(), n}},
+    };
+    for (const auto& [aov, copy] : aovs)
+        if (film.has(aov)) copies.push_back(copy);
+    size_t floats = 0;
+    for (const Copy& c : copies) floats += c.count;
+    f.staging.reserve(floats);
+    f.sumsHost.reserve(kSums);
+    size_t offset = 0;
+    for (const Copy& c : copies) {
+        SDFT_CUDA_CHECK(cudaMemcpyAsync(f.staging.get() + offset, c.from, c.count * sizeof(float),
+                                        cudaMemcpyDeviceToHost));
+        offset += c.count;
+    }
+    SDFT_CUDA_CHECK(cudaMemcpyAsync(f.sumsHost.get(), f.sums.get(),
+                                    kSums * sizeof(unsigned long long), cudaMemcpyDeviceToHost));
+    SDFT_CUDA_CHECK(cudaStreamSynchronize(nullptr));
+    offset = 0;
+    for (const Copy& c : copies) {
+        c.to->assign(f.staging.get() + offset, f.staging.get() + offset + c.count);
+        offset += c.count;
+    }
+    st.gpuBytesMoved = floats * sizeof(float) + kSums * sizeof(unsigned long long);
     st.primaryRays = paths ? n * static_cast<uint64_t>(pathView.samplesPerPixel) : n;
     uint64_t triangleHits = 0;
-    addCounters(c, stepCounts, trav, isect, paths, st, triangleHits);
+    addCounters(f.sumsHost.get(), paths, st, triangleHits);
     st.gridTracer = m.plan.ddaGrid != nullptr && !paths;
     // The DDA's normals read the grid, not the tape, and a triangle's are its own (neither
     // counted, as on the CPU).

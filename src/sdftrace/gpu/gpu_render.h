@@ -16,7 +16,7 @@
 
 namespace sdft {
 
-struct GpuMeshSurface;  // gpu_bake.h
+struct RtsdfDeviceState;  // gpu_bake.h
 
 class GpuDirectRenderer {
   public:
@@ -35,9 +35,11 @@ class GpuDirectRenderer {
     RenderStats render(const FrameView& view, Film& film) const;
     // A bound grid's view anew, in every tape that reads it (after its refresh).
     void rebind(const GpuGridBinding& binding);
-    // Triangle primaries: mesh `mesh` of the plan (in its order) as `surface` now holds it (a
-    // baker's posed mesh in the same coordinates, GpuMeshBaker::surface), in place of its upload.
-    void rebind(int mesh, const GpuMeshSurface& surface);
+    // Triangle primaries: mesh `mesh` of the plan (in its order) as `state`'s baker poses it (in
+    // the same coordinates), in place of its upload. The renderer keeps `state` alive and takes
+    // the baker's arrays anew whenever it has posed since (GpuMeshBaker::poses), as it does for
+    // the plan's own device meshes.
+    void followMesh(int mesh, std::shared_ptr<RtsdfDeviceState> state);
 
   private:
     struct Impl;

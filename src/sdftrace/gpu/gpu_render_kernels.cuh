@@ -4,6 +4,7 @@
 #pragma once
 
 #include "cuda_check.h"
+#include "cuda_launch.cuh"
 #include "gpu_render_launch.cuh"
 
 namespace sdft::gpu_render {
@@ -99,18 +100,15 @@ __global__ void pathKernel(PathPixelView view, int width, int height, DirectOut 
 template <int kMaterialRegs, bool kWhitted>
 void launchDirect(const DirectPixelView& view, const WhittedPixelView& whitted, int width,
                   int height, const DirectOut& out) {
-    const dim3 block(16, 8);
-    const dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y);
-    directKernel<kMaterialRegs, kWhitted><<<grid, block>>>(view, whitted, width, height, out);
-    SDFT_CUDA_CHECK(cudaGetLastError());
+    cuda::launchImage(kWhitted ? "directKernel (Whitted)" : "directKernel", width, height,
+                      dim3(16, 8), directKernel<kMaterialRegs, kWhitted>, view, whitted, width,
+                      height, out);
 }
 
 template <int kMaterialRegs>
 void launchPath(const PathPixelView& view, int width, int height, const DirectOut& out) {
-    const dim3 block(16, 8);
-    const dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y);
-    pathKernel<kMaterialRegs><<<grid, block>>>(view, width, height, out);
-    SDFT_CUDA_CHECK(cudaGetLastError());
+    cuda::launchImage("pathKernel", width, height, dim3(16, 8), pathKernel<kMaterialRegs>, view,
+                      width, height, out);
 }
 
 }  // namespace sdft::gpu_render
