@@ -128,7 +128,8 @@ TriangleMesh meshArgument(const pyb::handle& mesh, const pyb::handle& faces, Mes
 PyGrid bake(const pyb::handle& mesh, const pyb::handle& faces, int resolution,
             const std::string& method, float band, bool dense, const std::string& sign, int block,
             float padding, bool progress, const std::string& closest, const std::string& jfaVariant,
-            float beta, int rays, float mask) {
+            float beta, int rays, float mask, const std::string& device) {
+    const Device asked = deviceArgument(device, "bake");
     // Checked by the bake option table (bake/bake_options.h), as the CLI's flags and scene files.
     MeshBakeOptions o;
     setBakeOption(o, "resolution", resolution, "bake");
@@ -145,10 +146,12 @@ PyGrid bake(const pyb::handle& mesh, const pyb::handle& faces, int resolution,
     setBakeOption(o, "mask", mask, "bake");
     o.progress = progress;
     validateMeshBakeOptions(o);
+    const DeviceChoice choice = chooseBakeDevice(asked, o, "bake: device = '" + device + "'");
+    if (asked == Device::Auto && !choice.gpu) warnCpuFallback("bake", choice.why);
     MeshReport report;
     const TriangleMesh m = meshArgument(mesh, faces, report);
     pyb::gil_scoped_release release;
-    return PyGrid{std::make_shared<const Grid>(bakeMesh(m, o).grid)};
+    return PyGrid{std::make_shared<const Grid>(bakeMeshOn(choice.gpu, m, o).grid)};
 }
 
 PyGrid gridFromNumpy(const pyb::handle& values, std::array<float, 3> origin, float voxelSize,
@@ -225,6 +228,18 @@ pyb::tuple gridToMesh(const PyGrid& g, float adaptivity, float isovalue) {
 }
 
 }  // namespace
+
+Device deviceArgument(const std::string& name, const std::string& where) {
+    Device d = Device::Cpu;
+    if (!parseDevice(name, d))
+        throw InputError(where + ": device = '" + name + "': expected one of " + kDevices);
+    return d;
+}
+
+void warnCpuFallback(const std::string& where, const std::string& why) {
+    const std::string message = where + ": device = 'auto': running on the CPU (" + why + ")";
+    if (PyErr_WarnEx(PyExc_RuntimeWarning, message.c_str(), 1) < 0) throw pyb::error_already_set();
+}
 
 double bakeDefaultNumber(const char* key) { return findBakeOption(key)->defaultValue(); }
 
@@ -319,6 +334,9 @@ void bindGrid(pyb::module_& m) {
         bakeOptionsDoc({"resolution", "method", "band", "dense", "sign", "block", "padding"}) +
         "progress: print the bake's stages and percentage on stderr.\n" +
         bakeOptionsDoc({"closest", "jfa_variant", "beta", "rays", "mask"}) +
+        "device: where the bake runs: 'cpu'; 'cuda' (the GPU: method 'jfa' or 'rtsdf', signs by "
+        "winding, or beta for jfa; ValueError saying why not); 'auto' (the GPU where it bakes "
+        "the method, else the CPU with a warning saying why).\n"
         "\nRaises ValueError naming the argument for bad input.";
     m.def(
         "bake", &bake, pyb::arg("mesh"), pyb::arg("faces") = pyb::none(),
@@ -331,7 +349,7 @@ void bindGrid(pyb::module_& m) {
         pyb::arg("closest") = bakeDefaultText("closest"),
         pyb::arg("jfa_variant") = bakeDefaultText("jfa_variant"),
         pyb::arg("beta") = bakeDefault<float>("beta"), pyb::arg("rays") = bakeDefault<int>("rays"),
-        pyb::arg("mask") = bakeDefault<float>("mask"), bakeDoc.c_str());
+        pyb::arg("mask") = bakeDefault<float>("mask"), pyb::arg("device") = "cpu", bakeDoc.c_str());
 }
 
 }  // namespace sdft::py

@@ -125,7 +125,8 @@ pyb::object render(const pyb::handle& sceneArg, std::optional<int> width, std::o
                    const pyb::handle& eye, const pyb::handle& target, const pyb::handle& up,
                    std::optional<float> fov, const std::vector<std::string>& aovs, int frames,
                    bool classic, std::optional<int> threads, bool returnStats,
-                   const pyb::kwargs& options) {
+                   const std::string& device, const pyb::kwargs& options) {
+    const Device asked = deviceArgument(device, "render");
     Scene scene = *sceneArgument(sceneArg);
     CameraDesc& cam = scene.camera;
     if (!eye.is_none()) cam.eye = vec3Argument(eye, "render: eye");
@@ -161,18 +162,22 @@ pyb::object render(const pyb::handle& sceneArg, std::optional<int> width, std::o
     }
     RenderStats st;
     std::optional<Film> film;
+    std::string fellBack;
     {
         pyb::gil_scoped_release release;
         const RenderPlan plan = planRender(scene);
         film.emplace(plan.camera.width, plan.camera.height, kept);
+        const PlanRenderer renderer(plan, asked, "render: device = '" + device + "'");
+        fellBack = renderer.why();
         if (frames == 1) {
-            st = sdft::render(plan, *film);
+            st = renderer.render(FrameView{plan.camera}, *film);
         } else {
             TemporalOptions t;
             t.frames = frames;
-            st = renderFrames(plan, *film, t);
+            st = renderFrames(plan, *film, t, nullptr, false, renderer.frames());
         }
     }
+    if (asked == Device::Auto && !fellBack.empty()) warnCpuFallback("render", fellBack);
     pyb::dict images;
     for (Aov aov : wanted) {
         const std::vector<float>& data = film->channel(aov);
@@ -247,7 +252,7 @@ void bindScene(pyb::module_& m) {
           pyb::arg("target") = pyb::none(), pyb::arg("up") = pyb::none(),
           pyb::arg("fov") = pyb::none(), pyb::arg("aovs") = std::vector<std::string>{"color"},
           pyb::arg("frames") = 1, pyb::arg("classic") = false, pyb::arg("threads") = pyb::none(),
-          pyb::arg("return_stats") = false,
+          pyb::arg("return_stats") = false, pyb::arg("device") = "cpu",
           "Ray traces a Scene, a Grid or a file to a dict of H x W x C float32 arrays, one per "
           "name in `aovs` (color: linear radiance; depth, normal, steps, error, trav_steps, "
           "isect_tests, shadow, ao). Keyword arguments set the render options by their scene "
@@ -264,7 +269,11 @@ void bindScene(pyb::module_& m) {
           "frames: jittered frames accumulated (temporal accumulation).\n"
           "classic: start from Hart's plain sphere tracing instead of the enhanced tracer.\n"
           "threads: worker threads (default: all cores).\n"
-          "return_stats: also return the render's counters as a dict.");
+          "return_stats: also return the render's counters as a dict.\n"
+          "device: where the frames render: 'cpu'; 'cuda' (the GPU, or ValueError saying why "
+          "not: no CUDA backend in this build, no device, or what the GPU does not render); "
+          "'auto' (the GPU where it can, else the CPU with a warning saying why). gpu_info() "
+          "tells what GPU there is.");
     m.def(
         "render_options",
         [] {

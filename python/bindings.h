@@ -12,6 +12,7 @@
 
 #include "sdftrace/field/grid.h"
 #include "sdftrace/field/tape.h"
+#include "sdftrace/gpu/device.h"
 #include "sdftrace/scene/scene.h"
 
 namespace sdft::py {
@@ -65,6 +66,11 @@ T bakeDefault(const char* key) {
     return static_cast<T>(bakeDefaultNumber(key));
 }
 std::string bakeOptionsDoc(std::initializer_list<const char*> keys);
+
+// The `device` keyword ("cpu", "cuda", "auto"; gpu/device.h), named in the error by `where`.
+Device deviceArgument(const std::string& name, const std::string& where);
+// Where `auto` fell back to the CPU: a Python warning saying why (the GIL held).
+void warnCpuFallback(const std::string& where, const std::string& why);
 
 void bindField(pyb::module_& m);
 void bindGrid(pyb::module_& m);

@@ -7,6 +7,7 @@
 #include "sdftrace/core/build_info.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/exec/simd.h"
+#include "sdftrace/gpu/gpu_device.h"
 
 PYBIND11_MODULE(_sdftrace, m) {
     m.doc() = "sdftrace: signed distance fields, baked and ray traced (C++ core)";
@@ -47,4 +48,19 @@ PYBIND11_MODULE(_sdftrace, m) {
         "with version, revision (git), build_type, compiler, cuda (bool), cuda_version, "
         "cuda_architectures, openvdb, embree, tbb (their versions), mpi, video, viewer (bool) and "
         "simd (the SIMD level chosen at run time).");
+    m.def(
+        "gpu_info",
+        [] {
+            const sdft::GpuInfo& g = sdft::gpuInfo();
+            pybind11::dict d;
+            d["present"] = g.present;
+            d["name"] = g.name;
+            d["memory_bytes"] = g.memoryBytes;
+            d["compute_capability"] = pybind11::make_tuple(g.computeMajor, g.computeMinor);
+            d["why"] = g.why;
+            return d;
+        },
+        "The GPU that device='cuda' or 'auto' would use: a dict with present (bool), name, "
+        "memory_bytes, compute_capability (major, minor) and why (when not present: what is "
+        "missing, in one sentence).");
 }

@@ -22,8 +22,7 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/field/sample_grid.h"
-#include "sdftrace/gpu/gpu_bake.h"
-#include "sdftrace/gpu/gpu_device.h"
+#include "sdftrace/gpu/device.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_file.h"
@@ -266,21 +265,22 @@ void printMeshBakeSummary(const BakeArgs& a, const MeshBakeResult& r,
 // anything is loaded), auto takes it where a GPU is present and bakes the method, else says why
 // not on stderr.
 bool bakeOnGpu(const BakeArgs& a, const MeshBakeOptions& o, bool distributed) {
-    if (a.device == "cpu") return false;
-    std::string why = gpuBakeUnsupported(o);
-    if (a.device == "cuda") {
-        if (distributed)
+    Device d = Device::Cpu;
+    parseDevice(a.device, d);  // CLI11 checked the name
+    if (distributed) {
+        if (d == Device::Cuda)
             throw InputError("--device cuda: cannot be combined with mpirun yet; use --device cpu");
-        if (!why.empty()) throw InputError("--device cuda: " + why);
-        requireGpu("--device cuda");
-        return true;
+        if (d == Device::Auto && !a.quiet)
+            std::fprintf(stderr,
+                         "sdftrace bake: --device auto: baking on the CPU (a distributed job "
+                         "bakes on its ranks' CPUs)\n");
+        return false;
     }
-    if (distributed) why = "a distributed job bakes on its ranks' CPUs";
-    if (why.empty() && !gpuInfo().present) why = gpuInfo().why;
-    if (why.empty()) return true;
-    if (!a.quiet)
-        std::fprintf(stderr, "sdftrace bake: --device auto: baking on the CPU (%s)\n", why.c_str());
-    return false;
+    const DeviceChoice c = chooseBakeDevice(d, o, "--device " + a.device);
+    if (d == Device::Auto && !c.gpu && !a.quiet)
+        std::fprintf(stderr, "sdftrace bake: --device auto: baking on the CPU (%s)\n",
+                     c.why.c_str());
+    return c.gpu;
 }
 
 int bakeMesh(const BakeArgs& a, Communicator& comm) {
@@ -323,7 +323,7 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
         r = bakeExactAcross(farm, mesh, o);
         farm.end();
     } else {
-        r = gpu ? bakeMeshGpu(mesh, o) : bakeMesh(mesh, o);
+        r = bakeMeshOn(gpu, mesh, o);
     }
     auto t2 = std::chrono::steady_clock::now();
     if (a.verify) {

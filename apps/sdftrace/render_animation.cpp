@@ -356,11 +356,11 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
     std::string taaText;
     if (!comm.distributed()) {
         // --device: each frame's plan uploaded to the GPU (or the CPU renders it).
-        std::unique_ptr<GpuDirectRenderer> gpu;
+        std::unique_ptr<PlanRenderer> gpu;
         taaText = renderFramesInOrder(*job, sink, assets,
                                       [&](long long i, const RenderPlan& plan) -> FrameRenderFn {
                                           gpu = deviceRenderer(a, plan, false, i == 0);
-                                          return gpu ? gpuFrames(*gpu) : nullptr;
+                                          return gpu ? gpu->frames() : nullptr;
                                       });
     } else {
         WorkFarm farm(comm);

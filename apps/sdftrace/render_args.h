@@ -10,7 +10,7 @@
 
 #include "commands.h"
 #include "sdftrace/cluster/communicator.h"
-#include "sdftrace/gpu/gpu_render.h"
+#include "sdftrace/gpu/device.h"
 #include "sdftrace/render/film.h"
 #include "sdftrace/render/motion.h"
 #include "sdftrace/render/render_plan.h"
@@ -88,16 +88,17 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
 // --device: the GPU renderer of `plan` (null: the CPU renders it). cuda: the GPU or one clear
 // error; auto: the GPU where one is present and renders the plan, else the CPU, saying why on
 // stderr when `note`. Not under mpirun (`distributed`): cuda is refused, auto takes the CPU.
-std::unique_ptr<GpuDirectRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
-                                                  bool distributed, bool note);
+// The library's choice (gpu/device.h) with the CLI's note.
+std::unique_ptr<PlanRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
+                                             bool distributed, bool note);
 // How the scene's meshes bake under --device (prepare_scene.h): cuda, or auto with a GPU present,
 // bake on the GPU what it bakes (jfa and rtsdf: RTSDF's per-frame regeneration of dynamic meshes),
 // the rest on the CPU; cpu, mpirun or no GPU: empty (bakeMesh on the CPU). Under cuda, RTSDF's
 // per-frame grids stay on the device (MeshBakeOptions::gpuResident) unless `hostFields`: motion
 // vectors evaluate the objects' fields on the host (SceneMotion::objectAt).
 PrepareOptions prepareOptions(const RenderArgs& a, bool distributed, bool hostFields = false);
-// The frames of `gpu` as renderImage's and renderFrames' per-frame hook.
-FrameRenderFn gpuFrames(const GpuDirectRenderer& gpu);
+// The --device flag as the library's Device (CLI11 checked the name).
+Device deviceOf(const RenderArgs& a);
 
 // The scene of --time: a scene file, or the demo.
 AnimatedScene loadAnimation(const std::string& input);

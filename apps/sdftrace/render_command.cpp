@@ -17,14 +17,12 @@
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/tape.h"
-#include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/image_io.h"
 #include "sdftrace/io/mesh_file.h"
 #include "sdftrace/io/video_writer.h"
-#include "sdftrace/render/direct_pixel.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/render/temporal.h"
 #include "sdftrace/scene/animated_scene.h"
@@ -212,44 +210,43 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
 
 PrepareOptions prepareOptions(const RenderArgs& a, bool distributed, bool hostFields) {
     PrepareOptions o{.progress = !a.quiet && stderrIsTerminal(), .bakeMesh = {}};
-    if (a.device == "cpu" || distributed || !gpuInfo().present) return o;
+    if (deviceOf(a) == Device::Cpu || distributed || !gpuInfo().present) return o;
     // With --device cuda the GPU renders every frame: RTSDF's per-frame grids stay on the device
     // (MeshBakeOptions::gpuResident). --device auto may fall back to the CPU, which needs them,
     // as do motion vectors.
-    const bool resident = a.device == "cuda" && !hostFields;
+    const bool resident = deviceOf(a) == Device::Cuda && !hostFields;
     o.bakeMesh = [resident](const TriangleMesh& mesh, const MeshBakeOptions& bake) {
-        if (!gpuBakeUnsupported(bake).empty()) return bakeMesh(mesh, bake);
         MeshBakeOptions b = bake;
         b.gpuResident = resident;
-        return bakeMeshGpu(mesh, b);
+        // What the GPU bakes (jfa, rtsdf) it bakes; the rest the CPU.
+        return bakeMeshOn(chooseBakeDevice(Device::Auto, bake, "").gpu, mesh, b);
     };
     return o;
 }
 
-std::unique_ptr<GpuDirectRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
-                                                  bool distributed, bool note) {
-    if (a.device == "cpu") return nullptr;
-    if (a.device == "cuda") {
-        if (distributed) throw InputError("--device cuda: cannot be combined with mpirun yet");
-        return std::make_unique<GpuDirectRenderer>(plan, "--device cuda");
-    }
-    std::string why;
-    if (distributed) {
-        why = "a distributed job renders on its ranks' CPUs";
-    } else if (!gpuInfo().present) {
-        why = gpuInfo().why;
-    } else if (std::string unsupported = directPixelUnsupported(plan); !unsupported.empty()) {
-        why = "the GPU does not render " + unsupported + " yet";
-    }
-    if (why.empty()) return std::make_unique<GpuDirectRenderer>(plan, "--device auto");
-    if (note && !a.quiet)
-        std::fprintf(stderr, "sdftrace render: --device auto: rendering on the CPU (%s)\n",
-                     why.c_str());
-    return nullptr;
+Device deviceOf(const RenderArgs& a) {
+    Device d = Device::Cpu;
+    parseDevice(a.device, d);
+    return d;
 }
 
-FrameRenderFn gpuFrames(const GpuDirectRenderer& gpu) {
-    return [&gpu](const FrameView& view, Film& film, bool) { return gpu.render(view, film); };
+std::unique_ptr<PlanRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
+                                             bool distributed, bool note) {
+    const Device d = deviceOf(a);
+    std::string why;
+    std::unique_ptr<PlanRenderer> r;
+    if (distributed) {
+        if (d == Device::Cuda)
+            throw InputError("--device cuda: cannot be combined with mpirun yet");
+        why = "a distributed job renders on its ranks' CPUs";
+    } else {
+        r = std::make_unique<PlanRenderer>(plan, d, "--device " + a.device);
+        why = r->why();
+    }
+    if (d == Device::Auto && !why.empty() && note && !a.quiet)
+        std::fprintf(stderr, "sdftrace render: --device auto: rendering on the CPU (%s)\n",
+                     why.c_str());
+    return r && r->gpu() ? std::move(r) : nullptr;
 }
 
 namespace {
@@ -355,9 +352,9 @@ StillScene loadStill(const RenderArgs& a, const std::optional<TimeSpan>& span, b
 RenderStats renderStill(const RenderArgs& a, const RenderPlan& plan, Film& film,
                         Communicator& comm) {
     if (!comm.distributed()) {
-        const std::unique_ptr<GpuDirectRenderer> gpu = deviceRenderer(a, plan, false, true);
+        const std::unique_ptr<PlanRenderer> gpu = deviceRenderer(a, plan, false, true);
         return renderImage(a, plan, film, a.framePattern, showProgress(a),
-                           gpu ? gpuFrames(*gpu) : nullptr);
+                           gpu ? gpu->frames() : nullptr);
     }
     deviceRenderer(a, plan, true, comm.root());  // refuses --device cuda
     WorkFarm farm(comm);
@@ -389,7 +386,7 @@ int runRender(const RenderArgs& args) {
                              " is not a scene file; only scene files have keyframes "
                              "(docs/scene-format.md, \"Animation\")");
         aovs = validateOutputs(a, span && span->range, comm.root());  // rank 0 writes them
-        if (a.device == "cuda") {                                     // before loading anything
+        if (deviceOf(a) == Device::Cuda) {                            // before loading anything
             if (comm.distributed())
                 throw InputError(
                     "--device cuda: cannot be combined with mpirun yet (each rank renders its "

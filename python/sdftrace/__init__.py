@@ -8,11 +8,12 @@ import os as _os
 
 import numpy as _np
 
-from ._sdftrace import (Field, Grid, Scene, __version__, bake, build_info, render,
+from ._sdftrace import (Field, Grid, Scene, __version__, bake, build_info, gpu_info, render,
                         render_options, srgb, write_image)
 
-__all__ = ["Field", "Grid", "Scene", "bake", "build_info", "render", "render_options", "srgb",
-           "write_image", "slice_points", "slice_field", "colorize_distance", "__version__"]
+__all__ = ["Field", "Grid", "Scene", "bake", "build_info", "gpu_info", "render", "render_options",
+           "srgb", "write_image", "slice_points", "slice_field", "colorize_distance",
+           "__version__"]
 
 
 def _scene_from_dict(description, base_dir="."):

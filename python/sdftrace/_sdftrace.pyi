@@ -101,7 +101,7 @@ progress: print each asset's loading and baking on stderr."""
     def source(self) -> str:
         ...
 
-def bake(mesh: object, faces: object = None, resolution: int = 128, method: str = 'exact', band: float = 3.0, dense: bool = False, sign: str = 'winding', block: int = 4, padding: float = 2.0, progress: bool = False, closest: str = 'transform', jfa_variant: str = 'plain', beta: float = 0.5, rays: int = 64, mask: float = 3.0) -> Grid:
+def bake(mesh: object, faces: object = None, resolution: int = 128, method: str = 'exact', band: float = 3.0, dense: bool = False, sign: str = 'winding', block: int = 4, padding: float = 2.0, progress: bool = False, closest: str = 'transform', jfa_variant: str = 'plain', beta: float = 0.5, rays: int = 64, mask: float = 3.0, device: str = 'cpu') -> Grid:
     """Bakes a triangle mesh to a signed distance Grid.
 
 mesh: a file path (OBJ, PLY, STL, OFF, glTF), or an N x 3 array of vertex positions.
@@ -119,6 +119,7 @@ jfa_variant: jfa: the pass sequence (plain N/2 ... 1; 1+jfa an extra pass of off
 beta: sign beta: the shell's half thickness in voxels (RTSDF §2.2); a half thickness in voxels in [0, 100] [0.5].
 rays: rtsdf: rays per vertex near the surface (x); an integer in [1, 4096] [64].
 mask: rtsdf: vertices whose coarse distance is within this many voxels cast rays (d); a distance in voxels in [0, 64] [3].
+device: where the bake runs: 'cpu'; 'cuda' (the GPU: method 'jfa' or 'rtsdf', signs by winding, or beta for jfa; ValueError saying why not); 'auto' (the GPU where it bakes the method, else the CPU with a warning saying why).
 
 Raises ValueError naming the argument for bad input."""
     ...
@@ -127,7 +128,11 @@ def build_info() -> dict:
     """What this build of sdftrace is and includes, as `sdftrace --version` prints it: a dict with version, revision (git), build_type, compiler, cuda (bool), cuda_version, cuda_architectures, openvdb, embree, tbb (their versions), mpi, video, viewer (bool) and simd (the SIMD level chosen at run time)."""
     ...
 
-def render(scene: object, width: Optional[int] = None, height: Optional[int] = None, *, eye: object = None, target: object = None, up: object = None, fov: Optional[float] = None, aovs: List[str] = ['color'], frames: int = 1, classic: bool = False, threads: Optional[int] = None, return_stats: bool = False, **kwargs) -> object:
+def gpu_info() -> dict:
+    """The GPU that device='cuda' or 'auto' would use: a dict with present (bool), name, memory_bytes, compute_capability (major, minor) and why (when not present: what is missing, in one sentence)."""
+    ...
+
+def render(scene: object, width: Optional[int] = None, height: Optional[int] = None, *, eye: object = None, target: object = None, up: object = None, fov: Optional[float] = None, aovs: List[str] = ['color'], frames: int = 1, classic: bool = False, threads: Optional[int] = None, return_stats: bool = False, device: str = 'cpu', **kwargs) -> object:
     """Ray traces a Scene, a Grid or a file to a dict of H x W x C float32 arrays, one per name in `aovs` (color: linear radiance; depth, normal, steps, error, trav_steps, isect_tests, shadow, ao). Keyword arguments set the render options by their scene keys (render_options()): omega=1.6, shadow_method='soft', ao=True, ... classic=True starts from plain sphere tracing. frames=N accumulates N jittered frames. return_stats=True returns (images, stats).
 
 scene: an sdftrace.Scene, an sdftrace.Grid (framed automatically) or a path to a scene, grid or mesh file.
@@ -138,7 +143,8 @@ aovs: the outputs to return, by name.
 frames: jittered frames accumulated (temporal accumulation).
 classic: start from Hart's plain sphere tracing instead of the enhanced tracer.
 threads: worker threads (default: all cores).
-return_stats: also return the render's counters as a dict."""
+return_stats: also return the render's counters as a dict.
+device: where the frames render: 'cpu'; 'cuda' (the GPU, or ValueError saying why not: no CUDA backend in this build, no device, or what the GPU does not render); 'auto' (the GPU where it can, else the CPU with a warning saying why). gpu_info() tells what GPU there is."""
     ...
 
 def render_options() -> list:

@@ -113,3 +113,33 @@ def test_images_are_written_atomically_in_the_asked_format(tmp_path):
     with pytest.raises(ValueError):
         sdftrace.write_image(tmp_path / "no-such-dir" / "x.png", img["color"])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.exr", "c.png", "d.png", "s.png"]
+
+
+def test_the_device_is_a_keyword_of_render_and_bake():
+    """device='cpu' | 'cuda' | 'auto', resolved by the library as the CLI's --device: cuda insists
+    (a ValueError saying why not), auto falls back to the CPU with a warning saying why."""
+    info = sdftrace.gpu_info()
+    assert set(info) >= {"present", "name", "why", "memory_bytes", "compute_capability"}
+    scene = sdftrace.Scene.from_dict({"objects": [{"type": "sphere", "radius": 1}]})
+    cpu = sdftrace.render(scene, 24, 16, device="cpu")["color"]
+    with pytest.raises(ValueError, match=r"render: device = 'tpu': expected one of cpu, cuda, auto"):
+        sdftrace.render(scene, 24, 16, device="tpu")
+    from conftest import cube_mesh
+    v, f = cube_mesh()
+    # What the GPU does not bake is refused wherever this runs.
+    with pytest.raises(ValueError, match=r"bake: device = 'cuda': .*exact"):
+        sdftrace.bake(v, f, resolution=16, method="exact", device="cuda")
+    if info["present"]:
+        gpu = sdftrace.render(scene, 24, 16, device="cuda")["color"]
+        assert np.mean(np.abs(gpu - cpu)) < 2e-3
+        return
+    assert info["why"]
+    with pytest.raises(ValueError, match=r"render: device = 'cuda': "):
+        sdftrace.render(scene, 24, 16, device="cuda")
+    with pytest.warns(RuntimeWarning, match=r"render: device = 'auto': running on the CPU \("):
+        auto = sdftrace.render(scene, 24, 16, device="auto")["color"]
+    np.testing.assert_array_equal(auto, cpu)
+    with pytest.warns(RuntimeWarning, match=r"bake: device = 'auto': running on the CPU"):
+        grid = sdftrace.bake(v, f, resolution=16, method="jfa", device="auto")
+    np.testing.assert_array_equal(
+        grid.to_numpy(), sdftrace.bake(v, f, resolution=16, method="jfa").to_numpy())
