@@ -206,5 +206,21 @@ TEST(DeviceCli, RtsdfMeshesOfAnAnimationBakeOnTheGpu) {
     }
 }
 
+// The viewer takes --device too: without a GPU, cuda is one line before any window opens (the
+// check runs before the viewer, so a build without one answers the same). An mpirun job refuses
+// cuda with one line (each rank renders its tiles on its CPU).
+TEST(DeviceCli, TheViewerAsksForTheGpuAsRenderDoes) {
+    if (gpuInfo().present) GTEST_SKIP() << "a GPU is present: the viewer would open a window";
+    TempDir dir;
+    const RunResult r = runCli("view " + example("shadows") + " --device cuda", dir);
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.err.rfind("sdftrace: error: --device cuda: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(gpuInfo().why), std::string::npos) << r.err;
+    const RunResult bad = runCli("view " + example("shadows") + " --device tpu", dir);
+    EXPECT_NE(bad.status, 0);
+    EXPECT_NE(bad.err.find("--device"), std::string::npos) << bad.err;
+}
+
 }  // namespace
 }  // namespace sdft::e2e

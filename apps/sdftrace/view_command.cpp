@@ -2,6 +2,7 @@
 // (docs/viewer.md). The session (src/sdftrace/view) does the work; the window is in viewer/.
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -9,6 +10,8 @@
 
 #include "commands.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/gpu/device.h"
+#include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/view/view_script.h"
 #include "sdftrace/view/viewer_session.h"
 #ifdef SDFT_HAVE_VIEWER
@@ -29,7 +32,31 @@ struct ViewArgs {
     std::string script;
     std::string screenshotDir = ".";
     bool noPanel = false;
+    std::string device = "cpu";
 };
+
+// view --device: each plan's passes on the chosen device (gpu/device.h). cuda without a GPU is
+// one line before any window opens; auto falls back to the CPU and says why once.
+std::function<FrameRenderFn(const RenderPlan&)> deviceRenderers(const std::string& name) {
+    Device d = Device::Cpu;
+    parseDevice(name, d);  // CLI11 checked the name
+    if (d == Device::Cpu) return nullptr;
+    if (d == Device::Cuda) requireGpu("--device cuda");
+    auto noted = std::make_shared<bool>(false);
+    return [d, name, noted](const RenderPlan& plan) -> FrameRenderFn {
+        auto r = std::make_shared<PlanRenderer>(plan, d, "--device " + name);
+        if (!r->gpu()) {
+            if (!*noted)
+                std::fprintf(stderr, "sdftrace view: --device auto: rendering on the CPU (%s)\n",
+                             r->why().c_str());
+            *noted = true;
+            return nullptr;
+        }
+        return [r](const FrameView& view, Film& film, bool progress) {
+            return r->render(view, film, progress);
+        };
+    };
+}
 
 std::string readScript(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -54,6 +81,7 @@ int runView(const ViewArgs& a) {
     o.fov = a.fov;
     o.progressive.frames = a.frames;
     o.progressive.previewDivisor = a.preview;
+    o.progressive.renderer = deviceRenderers(a.device);
     o.threads = a.threads.value_or(0);
     // The script and the input are checked before any window opens.
     std::vector<ViewCommand> script;
@@ -107,6 +135,11 @@ void addViewCommand(CLI::App& app, Action& action) {
                     "Where F12 writes sdftrace-view-NNNN.png")
         ->capture_default_str();
     cmd->add_flag("--no-panel", args->noPanel, "Start with the panel hidden (Tab shows it)");
+    cmd->add_option("--device", args->device,
+                    "Where the passes render: cpu; cuda (the GPU, or one line saying why not); "
+                    "auto (the GPU where it renders the scene, else the CPU, saying why)")
+        ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+        ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, 1024));
     cmd->callback([&action, args] { action = [args] { return runView(*args); }; });

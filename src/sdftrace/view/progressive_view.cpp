@@ -9,9 +9,16 @@ namespace sdft {
 void ProgressiveView::setPlan(RenderPlan plan) {
     const std::optional<CameraDesc> camera =
         m_plan ? std::optional<CameraDesc>(m_plan->camera) : std::nullopt;
+    m_render = nullptr;  // the last plan's renderer refers to it: gone first
     m_plan.emplace(std::move(plan));
     if (camera) setCamera(*camera);
+    // The renderer refers to the plan, which stays in place until the next setPlan.
+    if (m_options.renderer) m_render = m_options.renderer(*m_plan);
     restart();
+}
+
+RenderStats ProgressiveView::renderPass(const FrameView& view, Film& film) const {
+    return m_render ? m_render(view, film, false) : render(*m_plan, view, film);
 }
 
 void ProgressiveView::setCamera(const CameraDesc& camera) {
@@ -47,13 +54,13 @@ RenderStats ProgressiveView::step() {
         view.camera.height = std::max(1, cam.height / d);
         m_preview.emplace(view.camera.width, view.camera.height);
         m_previewDone = true;
-        return render(*m_plan, view, *m_preview);
+        return renderPass(view, *m_preview);
     }
     m_previewDone = true;
     // Frame k as renderFrames renders it, blended into a running mean.
     const FrameView view = accumulationFrame(cam, m_framesDone, m_options.frames);
     Film current(cam.width, cam.height);
-    const RenderStats stats = render(*m_plan, view, current);
+    const RenderStats stats = renderPass(view, current);
     if (!m_history) m_history.emplace(0.0f, false);
     m_history->add(current);
     m_film = std::move(current);

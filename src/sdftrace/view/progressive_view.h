@@ -4,6 +4,7 @@
 // running mean), so a view that stopped moving ends as the CLI's image of the same camera and
 // settings, bit for bit.
 #pragma once
+#include <functional>
 #include <optional>
 
 #include "sdftrace/render/film.h"
@@ -16,6 +17,9 @@ namespace sdft {
 struct ProgressiveOptions {
     int frames = 8;          // full-resolution frames accumulated (render --frames)
     int previewDivisor = 4;  // the preview's pixels: 1/4 of the width and of the height
+    // What renders each plan's passes (view --device: a GPU's, gpu/device.h PlanRenderer), made
+    // anew for each plan; null, or a null result: the CPU renderer.
+    std::function<FrameRenderFn(const RenderPlan&)> renderer = nullptr;
 };
 
 class ProgressiveView {
@@ -46,11 +50,13 @@ class ProgressiveView {
 
   private:
     void restart();
+    RenderStats renderPass(const FrameView& view, Film& film) const;
 
     ProgressiveOptions m_options;
     std::optional<RenderPlan> m_plan;
     std::optional<Film> m_preview, m_film;
     std::optional<TemporalAccumulator> m_history;
+    FrameRenderFn m_render;  // the plan's renderer (options.renderer), or null: the CPU
     bool m_previewDone = false;
     int m_framesDone = 0;
 };
