@@ -4,6 +4,10 @@
 BUILD ?= build/release
 JOBS ?= $(shell nproc)
 PREFIX ?= /usr/local
+# Ninja (Debian's ninja-build, which make deps installs) where present: it starts a target's units
+# before the libraries it links are done, so both cores stay busy. A build tree keeps the
+# generator it was configured with.
+GENERATOR = $(if $(and $(shell command -v ninja),$(if $(wildcard $(1)/CMakeCache.txt),,yes)),-G Ninja)
 
 .PHONY: deps configure build cli run test test-sanitize bench install clean
 
@@ -11,7 +15,7 @@ deps:
 	bash scripts/install-deps.sh
 
 configure:
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+	cmake -S . -B $(BUILD) $(call GENERATOR,$(BUILD)) -DCMAKE_BUILD_TYPE=Release
 
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -28,7 +32,7 @@ test: build
 
 # Every test built with AddressSanitizer and UndefinedBehaviorSanitizer (a separate build tree).
 test-sanitize:
-	cmake -S . -B build/sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSDFT_SANITIZE=ON -DSDFT_BUILD_BENCH=OFF
+	cmake -S . -B build/sanitize $(call GENERATOR,build/sanitize) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSDFT_SANITIZE=ON -DSDFT_BUILD_BENCH=OFF
 	cmake --build build/sanitize -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 		ctest --test-dir build/sanitize --output-on-failure -j $(JOBS)

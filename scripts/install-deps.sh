@@ -3,6 +3,7 @@
 set -euo pipefail
 packages=(
     build-essential cmake make pkg-config
+    ninja-build           # the build (make uses it where present)
     libtbb-dev            # parallel tiles (oneTBB)
     libopenexr-dev        # EXR output
     libstb-dev            # PNG output (stb_image_write), legend text (stb_easy_font)
