@@ -259,6 +259,38 @@ std::string bakeOptionsDoc(std::initializer_list<const char*> keys) {
     return doc;
 }
 
+namespace {
+
+// sdftrace.bake: its keywords, defaults and docstring from the bake option table.
+void bindBake(pyb::module_& m) {
+    static const std::string bakeDoc =
+        "Bakes a triangle mesh to a signed distance Grid.\n\n"
+        "mesh: a file path (OBJ, PLY, STL, OFF, glTF), or an N x 3 array of vertex positions.\n"
+        "faces: with a vertex array, the M x 3 array of triangle vertex indices; None with a "
+        "path.\n" +
+        bakeOptionsDoc({"resolution", "method", "band", "dense", "sign", "block", "padding"}) +
+        "progress: print the bake's stages and percentage on stderr.\n" +
+        bakeOptionsDoc({"closest", "jfa_variant", "beta", "rays", "mask"}) +
+        "device: where the bake runs: 'cpu'; 'cuda' (the GPU: method 'jfa' or 'rtsdf', signs by "
+        "winding, or beta for jfa; ValueError saying why not); 'auto' (the GPU where it bakes "
+        "the method, else the CPU with a warning saying why).\n"
+        "\nRaises ValueError naming the argument for bad input.";
+    m.def(
+        "bake", &bake, pyb::arg("mesh"), pyb::arg("faces") = pyb::none(),
+        pyb::arg("resolution") = bakeDefault<int>("resolution"),
+        pyb::arg("method") = bakeDefaultText("method"),
+        pyb::arg("band") = bakeDefault<float>("band"),
+        pyb::arg("dense") = bakeDefault<bool>("dense"), pyb::arg("sign") = bakeDefaultText("sign"),
+        pyb::arg("block") = std::stoi(bakeDefaultText("block")),
+        pyb::arg("padding") = bakeDefault<float>("padding"), pyb::arg("progress") = false,
+        pyb::arg("closest") = bakeDefaultText("closest"),
+        pyb::arg("jfa_variant") = bakeDefaultText("jfa_variant"),
+        pyb::arg("beta") = bakeDefault<float>("beta"), pyb::arg("rays") = bakeDefault<int>("rays"),
+        pyb::arg("mask") = bakeDefault<float>("mask"), pyb::arg("device") = "cpu", bakeDoc.c_str());
+}
+
+}  // namespace
+
 void bindGrid(pyb::module_& m) {
     pyb::class_<PyGrid>(m, "Grid",
                         "A sampled signed distance field: dense, or a sparse block grid with "
@@ -325,31 +357,7 @@ void bindGrid(pyb::module_& m) {
                    std::to_string(s.cells[2]) + " cells, voxel " + std::to_string(s.voxelSize) +
                    ">";
         });
-
-    static const std::string bakeDoc =
-        "Bakes a triangle mesh to a signed distance Grid.\n\n"
-        "mesh: a file path (OBJ, PLY, STL, OFF, glTF), or an N x 3 array of vertex positions.\n"
-        "faces: with a vertex array, the M x 3 array of triangle vertex indices; None with a "
-        "path.\n" +
-        bakeOptionsDoc({"resolution", "method", "band", "dense", "sign", "block", "padding"}) +
-        "progress: print the bake's stages and percentage on stderr.\n" +
-        bakeOptionsDoc({"closest", "jfa_variant", "beta", "rays", "mask"}) +
-        "device: where the bake runs: 'cpu'; 'cuda' (the GPU: method 'jfa' or 'rtsdf', signs by "
-        "winding, or beta for jfa; ValueError saying why not); 'auto' (the GPU where it bakes "
-        "the method, else the CPU with a warning saying why).\n"
-        "\nRaises ValueError naming the argument for bad input.";
-    m.def(
-        "bake", &bake, pyb::arg("mesh"), pyb::arg("faces") = pyb::none(),
-        pyb::arg("resolution") = bakeDefault<int>("resolution"),
-        pyb::arg("method") = bakeDefaultText("method"),
-        pyb::arg("band") = bakeDefault<float>("band"),
-        pyb::arg("dense") = bakeDefault<bool>("dense"), pyb::arg("sign") = bakeDefaultText("sign"),
-        pyb::arg("block") = std::stoi(bakeDefaultText("block")),
-        pyb::arg("padding") = bakeDefault<float>("padding"), pyb::arg("progress") = false,
-        pyb::arg("closest") = bakeDefaultText("closest"),
-        pyb::arg("jfa_variant") = bakeDefaultText("jfa_variant"),
-        pyb::arg("beta") = bakeDefault<float>("beta"), pyb::arg("rays") = bakeDefault<int>("rays"),
-        pyb::arg("mask") = bakeDefault<float>("mask"), pyb::arg("device") = "cpu", bakeDoc.c_str());
+    bindBake(m);
 }
 
 }  // namespace sdft::py

@@ -2,6 +2,7 @@
 #include <csignal>
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "commands.h"
 #include "sdftrace/cluster/communicator.h"
@@ -18,6 +19,13 @@ void onTerminatingSignal(int sig) {
     sdft::removeTemporaryOutputs();
     std::signal(sig, SIG_DFL);
     std::raise(sig);
+}
+
+// --version: the version, the git revision and what this build includes (core/build_info.h).
+std::string versionText() {
+    std::string text = sdft::describeBuild(sdft::simdLevelName(sdft::simdLevel()));
+    if (!text.empty() && text.back() == '\n') text.pop_back();
+    return text;
 }
 }  // namespace
 
@@ -36,12 +44,7 @@ int run(int argc, char** argv) {
     CLI::App app{"sdftrace: build and ray trace signed distance fields"};
     app.name("sdftrace");
     app.require_subcommand(1);
-    // The version, the git revision and what this build includes (core/build_info.h).
-    app.set_version_flag("--version", [] {
-        std::string text = sdft::describeBuild(sdft::simdLevelName(sdft::simdLevel()));
-        if (!text.empty() && text.back() == '\n') text.pop_back();
-        return text;
-    });
+    app.set_version_flag("--version", versionText);
     app.fallthrough();  // --max-memory may follow the subcommand
     app.add_option_function<std::string>(
            "--max-memory",

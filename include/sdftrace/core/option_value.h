@@ -5,8 +5,10 @@
 // files, Python keywords, the viewer) says the same thing about the same option.
 #pragma once
 
+#include <initializer_list>
 #include <span>
 #include <string>
+#include <string_view>
 #include <type_traits>
 
 namespace sdft {
@@ -70,5 +72,11 @@ T fromOptionNumber(double v) {
 std::string showNumber(double v);
 // A table cell: '|' escaped.
 std::string markdownCell(const std::string& text);
+// Text as code: `text`.
+std::string markdownCode(std::string_view text);
+// One row of a Markdown table: "| a | b |\n".
+std::string markdownRow(std::initializer_list<std::string> cells);
+// The main one of a row's CLI names, the first of "--res,--resolution".
+std::string mainFlagOf(const char* flags);
 
 }  // namespace sdft

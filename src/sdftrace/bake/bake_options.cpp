@@ -1,7 +1,6 @@
 #include "sdftrace/bake/bake_options.h"
 
 #include <cmath>
-#include <string_view>
 
 #include "sdftrace/core/error.h"
 
@@ -140,10 +139,7 @@ const BakeOption* findBakeOption(const std::string& key) {
     return nullptr;
 }
 
-std::string BakeOption::mainFlag() const {
-    const std::string f = flags;
-    return f.substr(0, f.find(','));
-}
+std::string BakeOption::mainFlag() const { return mainFlagOf(flags); }
 
 namespace {
 
@@ -183,26 +179,15 @@ std::string bakeOptionsMarkdown() {
     std::string md =
         "| key | flag | default | accepted | bakes | meaning |\n"
         "| --- | --- | --- | --- | --- | --- |\n";
-    auto code = [](std::string_view text) {
-        std::string c = "`";
-        c += text;
-        c += '`';
-        return c;
-    };
     for (const BakeOption& o : bakeOptions()) {
-        std::string flag = code(o.mainFlag());
+        std::string flag = markdownCode(o.mainFlag());
         if (o.falseFlag) {
             flag += " / ";
-            flag += code(o.falseFlag);
+            flag += markdownCode(o.falseFlag);
         }
-        for (const std::string& cell :
-             {code(o.key), flag, code(o.defaultText()), markdownCell(o.accepted()),
-              std::string(o.meshOnly ? "meshes" : "all"), markdownCell(o.doc)}) {
-            md += "| ";
-            md += cell;
-            md += ' ';
-        }
-        md += "|\n";
+        md += markdownRow({markdownCode(o.key), flag, markdownCode(o.defaultText()),
+                           markdownCell(o.accepted()), o.meshOnly ? "meshes" : "all",
+                           markdownCell(o.doc)});
     }
     return md;
 }

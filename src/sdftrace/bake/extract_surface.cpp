@@ -3,8 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "../field/openvdb_plugin.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/field/openvdb_plugin.h"
 
 namespace sdft {
 

@@ -20,6 +20,29 @@ std::string markdownCell(const std::string& text) {
     return out;
 }
 
+std::string markdownCode(std::string_view text) {
+    std::string c = "`";
+    c += text;
+    c += '`';
+    return c;
+}
+
+std::string markdownRow(std::initializer_list<std::string> cells) {
+    std::string row;
+    for (const std::string& cell : cells) {
+        row += "| ";
+        row += cell;
+        row += ' ';
+    }
+    row += "|\n";
+    return row;
+}
+
+std::string mainFlagOf(const char* flags) {
+    const std::string f = flags;
+    return f.substr(0, f.find(','));
+}
+
 std::string OptionValue::choiceList() const {
     std::string list;
     for (const char* c : choices) list += (list.empty() ? "" : ", ") + std::string(c);

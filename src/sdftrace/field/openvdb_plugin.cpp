@@ -4,8 +4,8 @@
 
 #include <string>
 
-#include "../core/plugin_dirs.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/plugin_dirs.h"
 
 namespace sdft {
 

@@ -7,12 +7,12 @@
 #include <optional>
 #include <vector>
 
-#include "../core/plugin_dirs.h"
 #include "cuda_launch.cuh"
 #include "device_buffer.h"
 #include "gpu_kernel_table.h"
 #include "gpu_minmax.cuh"
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/plugin_dirs.h"
 #include "sdftrace/gpu/gpu_bake.h"
 #include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/gpu/gpu_render.h"
@@ -130,7 +130,85 @@ struct FrameBuffers {
         counters = cuda::DeviceArray<uint32_t>(kCounters * n);
         capacity = n;
     }
+
+    DirectOut out() const {
+        return {color.get(),  depth.get(), normal.get(), steps.get(), error.get(),
+                shadow.get(), ao.get(),    trav.get(),   isect.get(), counters.get()};
+    }
+
+    // The device array the kernels write `aov` into (every AOV but motion).
+    const float* output(Aov aov) const {
+        const DirectOut o = out();
+        switch (aov) {
+            case Aov::Color:
+                return o.color;
+            case Aov::Depth:
+                return o.depth;
+            case Aov::Normal:
+                return o.normal;
+            case Aov::Steps:
+                return o.steps;
+            case Aov::Error:
+                return o.error;
+            case Aov::TravSteps:
+                return o.travSteps;
+            case Aov::IsectTests:
+                return o.isectTests;
+            case Aov::Shadow:
+                return o.shadow;
+            case Aov::Ao:
+                return o.ao;
+            case Aov::Motion:
+                break;
+        }
+        return nullptr;
+    }
+
+    // After a frame of n pixels: its counters summed on the device into sumsHost, and the colour
+    // and the AOVs `film` keeps copied into pinned memory asynchronously, then into the film once.
+    // Returns the bytes that crossed to the host.
+    size_t download(Film& film, size_t n) {
+        SDFT_CUDA_CHECK(cudaMemsetAsync(sums.get(), 0, kSums * sizeof(unsigned long long)));
+        cuda::launchBlocks("sumCountersKernel", std::min<size_t>(1024, (n + 255) / 256), 256,
+                           sumCountersKernel, counters.get(), steps.get(), trav.get(), isect.get(),
+                           n, sums.get());
+        std::vector<Aov> copied;
+        size_t floats = 0;
+        for (int a = 0; a < static_cast<int>(Aov::Motion); ++a) {
+            const Aov aov = static_cast<Aov>(a);
+            if (aov != Aov::Color && !film.has(aov)) continue;
+            copied.push_back(aov);
+            floats += static_cast<size_t>(aovChannels(aov)) * n;
+        }
+        staging.reserve(floats);
+        sumsHost.reserve(kSums);
+        size_t offset = 0;
+        for (Aov aov : copied) {
+            const size_t count = static_cast<size_t>(aovChannels(aov)) * n;
+            SDFT_CUDA_CHECK(cudaMemcpyAsync(staging.get() + offset, output(aov),
+                                            count * sizeof(float), cudaMemcpyDeviceToHost));
+            offset += count;
+        }
+        SDFT_CUDA_CHECK(cudaMemcpyAsync(sumsHost.get(), sums.get(),
+                                        kSums * sizeof(unsigned long long),
+                                        cudaMemcpyDeviceToHost));
+        SDFT_CUDA_CHECK(cudaStreamSynchronize(nullptr));
+        offset = 0;
+        for (Aov aov : copied) {
+            const size_t count = static_cast<size_t>(aovChannels(aov)) * n;
+            film.channel(aov).assign(staging.get() + offset, staging.get() + offset + count);
+            offset += count;
+        }
+        return floats * sizeof(float) + kSums * sizeof(unsigned long long);
+    }
 };
+
+// A mesh view's arrays: those of a baker's posed mesh.
+void setSurface(MeshPrimaryMesh& v, const GpuMeshSurface& s) {
+    v.bvh = s.bvh;
+    v.normals = s.normals;
+    v.indices = s.indices;
+}
 
 // Frame buffers outlive their renderer in this pool and go to the next one.
 std::shared_ptr<FrameBuffers> takeFrameBuffers() {
@@ -190,11 +268,7 @@ struct GpuDirectRenderer::Impl {
         for (PosedMesh& p : posed) {
             const uint64_t now = p.owner->baker.poses();
             if (now == p.poses) continue;
-            const GpuMeshSurface s = p.owner->baker.surface();
-            MeshPrimaryMesh& v = meshViews[p.index];
-            v.bvh = s.bvh;
-            v.normals = s.normals;
-            v.indices = s.indices;
+            setSurface(meshViews[p.index], p.owner->baker.surface());
             p.poses = now;
             changed = true;
         }
@@ -222,10 +296,11 @@ struct GpuDirectRenderer::Impl {
         if (p.primaryField) primaryTape.emplace(*p.primaryField, bound);
         for (const MeshPrimaryTables::Mesh& mesh : tables.meshes.meshes) {
             if (mesh.device) {  // posed on the device with its field: the baker's arrays
-                const GpuMeshSurface s = mesh.device->baker.surface();
                 posed.push_back({meshViews.size(), mesh.device, mesh.device->baker.poses()});
-                meshViews.push_back(
-                    {s.bvh, s.normals, s.indices, mesh.toLocal, mesh.normalToWorld, mesh.bias});
+                MeshPrimaryMesh v{{},       nullptr, nullptr, mesh.toLocal, mesh.normalToWorld,
+                                  mesh.bias};
+                setSurface(v, mesh.device->baker.surface());
+                meshViews.push_back(v);
                 continue;
             }
             meshNodes.emplace_back(mesh.nodes);
@@ -314,9 +389,7 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     whitted.convexCount = static_cast<int>(m.convex.size());
     FrameBuffers& f = *m.frames;
     f.ensure(n);
-    const DirectOut out{f.color.get(), f.depth.get(),   f.normal.get(), f.steps.get(),
-                        f.error.get(), f.shadow.get(),  f.ao.get(),     f.trav.get(),
-                        f.isect.get(), f.counters.get()};
+    const DirectOut out = f.out();
     const cuda::EventTimer& timer = f.timer;
     SDFT_CUDA_CHECK(cudaEventRecord(timer.start));
     // A lone grid's primary rays narrowed by Jamriška §6's min/max buffer, built on the device
@@ -350,49 +423,7 @@ RenderStats GpuDirectRenderer::render(const FrameView& frame, Film& film) const 
     RenderStats st;
     st.gpu = true;
     st.gpuKernelMs = timer.elapsedMs();
-    // The counters summed on the device; the colour and the AOVs the film keeps copied into
-    // pinned memory asynchronously, then into the film once.
-    SDFT_CUDA_CHECK(cudaMemsetAsync(f.sums.get(), 0, kSums * sizeof(unsigned long long)));
-    cuda::launchBlocks("sumCountersKernel", std::min<size_t>(1024, (n + 255) / 256), 256,
-                       sumCountersKernel, f.counters.get(), f.steps.get(), f.trav.get(),
-                       f.isect.get(), n, f.sums.get());
-    struct Copy {
-        std::vector<float>* to;
-        const float* from;
-        size_t count;
-    };
-    std::vector<Copy> copies = {{&film.color, f.color.get(), 3 * n}};
-    const std::pair<Aov, Copy> aovs[] = {
-        {Aov::Depth, {&film.depth, f.depth.get(), n}},
-        {Aov::Normal, {&film.normal, f.normal.get(), 3 * n}},
-        {Aov::Error, {&film.error, f.error.get(), n}},
-        {Aov::Shadow, {&film.shadow, f.shadow.get(), n}},
-        {Aov::Ao, {&film.ao, f.ao.get(), n}},
-        {Aov::Steps, {&film.steps, f.steps.get(), n}},
-        {Aov::TravSteps, {&film.travSteps, f.trav.get(), n}},
-        {Aov::IsectTests, {&film.isectTests, f.isect.get(), n}},
-    };
-    for (const auto& [aov, copy] : aovs)
-        if (film.has(aov)) copies.push_back(copy);
-    size_t floats = 0;
-    for (const Copy& c : copies) floats += c.count;
-    f.staging.reserve(floats);
-    f.sumsHost.reserve(kSums);
-    size_t offset = 0;
-    for (const Copy& c : copies) {
-        SDFT_CUDA_CHECK(cudaMemcpyAsync(f.staging.get() + offset, c.from, c.count * sizeof(float),
-                                        cudaMemcpyDeviceToHost));
-        offset += c.count;
-    }
-    SDFT_CUDA_CHECK(cudaMemcpyAsync(f.sumsHost.get(), f.sums.get(),
-                                    kSums * sizeof(unsigned long long), cudaMemcpyDeviceToHost));
-    SDFT_CUDA_CHECK(cudaStreamSynchronize(nullptr));
-    offset = 0;
-    for (const Copy& c : copies) {
-        c.to->assign(f.staging.get() + offset, f.staging.get() + offset + c.count);
-        offset += c.count;
-    }
-    st.gpuBytesMoved = floats * sizeof(float) + kSums * sizeof(unsigned long long);
+    st.gpuBytesMoved = f.download(film, n);
     st.primaryRays = paths ? n * static_cast<uint64_t>(pathView.samplesPerPixel) : n;
     uint64_t triangleHits = 0;
     addCounters(f.sumsHost.get(), paths, st, triangleHits);

@@ -6,8 +6,8 @@
 #include <bit>
 #include <cstring>
 
-#include "../field/block_apron_layout.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/field/block_apron_layout.h"
 
 namespace sdft {
 

@@ -10,10 +10,10 @@
 #include <cstring>
 #include <limits>
 
-#include "../field/openvdb_plugin.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/huge_pages.h"
+#include "sdftrace/field/openvdb_plugin.h"
 #include "sdftrace/field/sparse_grid_builder.h"
 #include "sdftrace/io/atomic_file.h"
 #include "vdb_reader.h"

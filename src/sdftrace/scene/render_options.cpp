@@ -444,31 +444,19 @@ const RenderOption* findRenderOption(const std::string& key) {
     return nullptr;
 }
 
-std::string RenderOption::mainFlag() const {
-    const std::string f = flags;
-    return f.substr(0, f.find(','));
-}
+std::string RenderOption::mainFlag() const { return mainFlagOf(flags); }
 
 std::string renderOptionsMarkdown() {
     std::string md =
         "| key | flag | default | accepted | meaning |\n| --- | --- | --- | --- | --- |\n";
     for (const RenderOption& o : renderOptions()) {
-        std::string flag = "`";
-        flag += o.mainFlag();
-        flag += "`";
+        std::string flag = markdownCode(o.mainFlag());
         if (o.type == OptionType::Bool) {
-            flag += " / `--no-";
-            flag.append(o.mainFlag(), 2);
-            flag += "`";
+            flag += " / ";
+            flag += markdownCode("--no-" + o.mainFlag().substr(2));
         }
-        for (const std::string& cell :
-             {std::string("`") + o.key + "`", flag, std::string("`") + o.defaultText() + "`",
-              markdownCell(o.accepted()), markdownCell(o.doc)}) {
-            md += "| ";
-            md += cell;
-            md += " ";
-        }
-        md += "|\n";
+        md += markdownRow({markdownCode(o.key), flag, markdownCode(o.defaultText()),
+                           markdownCell(o.accepted()), markdownCell(o.doc)});
     }
     return md;
 }
