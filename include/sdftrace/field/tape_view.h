@@ -79,7 +79,7 @@ SDFT_HOST_DEVICE inline float binary(Op op, float a, float b, const float* k, fl
     }
 }
 
-SDFT_HOST_DEVICE inline Vec3 pointOp(Op op, Vec3 p, const float* k) {
+SDFT_HOST_DEVICE SDFT_HOT_INLINE Vec3 pointOp(Op op, Vec3 p, const float* k) {
     switch (op) {
         case Op::Translate:
             return p - Vec3(k[0], k[1], k[2]);

@@ -1,13 +1,15 @@
-// One pixel of the direct-lighting integrator: its primary ray and normal (primary_pixel.h), the
-// material blend at the hit, ambient occlusion, and each light's Lambert + Blinn-Phong term where
-// its shadow method lets it through. What the CPU renderer's tile loop does for a packet of
-// pixels (renderer.cpp's shadeDirect and its shadow passes), as one function a device thread runs
-// for its pixel; held to the renderer's film on the examples (direct_pixel_test.cpp). The shadow
-// methods are the renderer's: hard rays with Keinert et al. 2014 §3.3's dynamic origin offset,
-// RTSDF's SDF soft shadows (§2.4-2.5, soft_shadow.h) and distributed rays to points sampled on
-// the light (Cook et al. 1984), seeded per pixel and frame as the renderer seeds them.
+// The direct-lighting integrator, the one both devices run: a hit's material blend, ambient
+// occlusion, and each light's Lambert + Blinn-Phong term where its shadow method lets it through.
+// The pieces (materialAt, ambientLight, shadowRays, softShadowRay, lightTerm) are shared: a device
+// thread runs them for its pixel in order (shadeDirectPixel, each shadow ray traced as it comes);
+// the CPU renderer runs them for a tile's hits, tracing the tile's shadow rays and marches of a
+// light together as packets (renderer.cpp). direct_pixel_test.cpp holds the two orders to each
+// other on the examples. The shadow methods: hard rays with Keinert et al. 2014 §3.3's dynamic
+// origin offset, RTSDF's SDF soft shadows (§2.4-2.5, soft_shadow.h) and distributed rays to
+// points sampled on the light (Cook et al. 1984), seeded per pixel and frame.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -189,42 +191,127 @@ SDFT_HOST_DEVICE inline bool occluded(const DirectPixelView& v, Vec3 origin, Vec
     return r.hit;
 }
 
-// How much of light `li` the hit at p (unit normal n) sees, in [0, 1]; `offset` is the shadow
-// ray's origin offset along n.
+// Keinert et al. 2014, §3.3: shadow rays start 2 max(eps_min, |f(p)| / L) off the surface (along
+// its normal), so they clear it however far from it the march stopped. A DDA hit has f = 0 by
+// construction: its eps_min is at least half a voxel (shadowOffsetMin).
+SDFT_HOST_DEVICE inline float shadowOffset(const DirectPixelView& v, float value) {
+    return 2.0f * std::fmax(v.shadowOffsetMin, std::fabs(value) / v.primary.field.lipschitz);
+}
+
+// Pixel (x, y)'s index, which seeds its random numbers.
+SDFT_HOST_DEVICE inline uint32_t pixelSeed(const DirectPixelView& v, int x, int y) {
+    return static_cast<uint32_t>(y) * static_cast<uint32_t>(v.filmWidth) + static_cast<uint32_t>(x);
+}
+
+// The ambient light leaving the hit p (unit normal n) of material m: the ambient colour times the
+// material's, scaled by ambient occlusion where it is on (`ao` its factor, its evaluations added).
+SDFT_HOST_DEVICE inline Vec3 ambientLight(const DirectPixelView& v, Vec3 p, Vec3 n,
+                                          const PixelMaterial& m, float& ao,
+                                          uint32_t& evaluations) {
+    Vec3 radiance = v.ambient * m.color;
+    ao = 1;
+    if (v.ambientOcclusion) {
+        const AmbientOcclusionResult r = ambientOcclusionTape(v.primary.field, p, n, v.ao);
+        ao = r.ao;
+        radiance *= r.ao;
+        evaluations += static_cast<uint32_t>(r.evaluations);
+    }
+    return radiance;
+}
+
+// Light `light`'s Lambert + Blinn-Phong term at p (unit normal n) seen along d, the share
+// `visible` of it unblocked; nothing where the light is below the horizon.
+SDFT_HOST_DEVICE inline Vec3 lightTerm(const Light& light, const PixelMaterial& m, Vec3 p, Vec3 n,
+                                       Vec3 d, float visible) {
+    if (visible == 0) return Vec3(0.0f);
+    const LightDirection to = towardLight(light, p);
+    if (dot(n, to.dir) <= 0) return Vec3(0.0f);
+    return blinnPhong(m.color, m.diffuse, m.specular, m.shininess, n, to.dir, d) * light.color *
+           (to.scale * visible);
+}
+
+// Whether light `light` is seen by shadow rays (hard, or distributed; a point light's distributed
+// rays are one hard ray), rather than by a soft-shadow march or a shadow map.
+SDFT_HOST_DEVICE inline bool seenByShadowRays(const DirectPixelView& v, const Light& light) {
+    return v.shadowMethod == ShadowMethod::Hard ||
+           (v.shadowMethod == ShadowMethod::Distributed && !light.hasSize());
+}
+
+// The shadow rays by which the hit p (unit normal n) sees light `li`: hard, one ray to the
+// light's centre; distributed (Cook et al. 1984), v.shadowRays rays to points on the light along
+// a per-pixel rotated Halton sequence continued from frame to frame, so accumulated frames
+// converge as one frame with all their rays would. Each ray above the surface's tangent plane is
+// handed to emit(origin, dir, tMax); the visibility is the share of `rays` that reach the light:
+// `seen` (points inside the light, seen without a ray) plus the emitted rays that are not
+// blocked. A device traces each ray as it comes; the CPU renderer gathers a tile's into packets.
+struct ShadowRayShare {
+    int rays = 1, seen = 0;
+};
+template <class Emit>
+SDFT_HOST_DEVICE inline ShadowRayShare shadowRays(const DirectPixelView& v, const Light& light,
+                                                  int li, Vec3 p, Vec3 n, float offset,
+                                                  uint32_t pixel, Emit&& emit) {
+    const Vec3 origin = p + n * offset;
+    ShadowRayShare share;
+    if (seenByShadowRays(v, light)) {
+        const LightDirection to = towardLight(light, p);
+        if (dot(n, to.dir) > 0) emit(origin, to.dir, to.dist);  // else below the horizon
+        return share;
+    }
+    share.rays = v.shadowRays > 1 ? v.shadowRays : 1;
+    Rng rng(pixel, 0xD157u + static_cast<uint32_t>(li));
+    const float r1 = rng.uniform(), r2 = rng.uniform();
+    for (int k = 0; k < share.rays; ++k) {
+        float u1, u2;
+        rotatedHalton(v.frame * static_cast<uint32_t>(share.rays) + static_cast<uint32_t>(k), r1,
+                      r2, u1, u2);
+        const LightSample ls = sampleLight(light, p, u1, u2);
+        if (ls.dist <= 0) {  // inside the light
+            ++share.seen;
+        } else if (dot(n, ls.dir) > 0) {
+            emit(origin, ls.dir, ls.dist);
+        }
+    }
+    return share;
+}
+
+// RTSDF §2.4-2.5: the soft-shadow march from the hit p (unit normal n) towards light `li`'s
+// centre, its start jittered per pixel and frame; false where the light is below the horizon
+// (visibility 0).
+SDFT_HOST_DEVICE inline bool softShadowRay(const DirectPixelView& v, const Light& light, int li,
+                                           Vec3 p, Vec3 n, float offset, uint32_t pixel,
+                                           SoftShadowRay& ray) {
+    const LightDirection to = towardLight(light, p);
+    if (dot(n, to.dir) <= 0) return false;
+    Rng rng(pixel, v.frame, 0x50F7u + static_cast<uint32_t>(li));
+    ray.origin = p + n * offset;
+    ray.dir = to.dir;
+    ray.tMin = 0;
+    ray.tMax = std::fmin(to.dist, v.primary.maxDistance);
+    ray.tanRadius = lightTanRadius(light, p);
+    ray.jitter01 = rng.uniform();
+    return true;
+}
+
+// How much of light `li` the hit at p (unit normal n) sees, in [0, 1], each ray traced as it
+// comes (a device thread's order; the CPU renderer traces a tile's rays together).
 SDFT_HOST_DEVICE inline float visibility(const DirectPixelView& v, const Light& light, int li,
                                          Vec3 p, Vec3 n, float offset, uint32_t pixel,
                                          ShadowCounters& counters) {
-    const Vec3 origin = p + n * offset;
-    const bool hard = v.shadowMethod == ShadowMethod::Hard ||
-                      (v.shadowMethod == ShadowMethod::Distributed && !light.hasSize());
-    if (hard || v.shadowMethod == ShadowMethod::Soft) {
-        const LightDirection to = towardLight(light, p);
-        if (dot(n, to.dir) <= 0) return 0.0f;  // facing away: the light is below the horizon
-        if (hard) return occluded(v, origin, to.dir, to.dist, counters) ? 0.0f : 1.0f;
-        Rng rng(pixel, v.frame, 0x50F7u + static_cast<uint32_t>(li));
-        const SoftShadowResult s = softShadowTape(v.primary.field, origin, to.dir, 0.0f,
-                                                  std::fmin(to.dist, v.primary.maxDistance),
-                                                  lightTanRadius(light, p), v.soft, rng.uniform());
+    if (v.shadowMethod == ShadowMethod::Soft) {
+        SoftShadowRay r;
+        if (!softShadowRay(v, light, li, p, n, offset, pixel, r)) return 0.0f;
+        const SoftShadowResult s = softShadowTape(v.primary.field, r.origin, r.dir, r.tMin, r.tMax,
+                                                  r.tanRadius, v.soft, r.jitter01);
         counters.evaluations += static_cast<uint32_t>(s.evaluations);
         return s.visibility;
     }
-    // Distributed: a per-pixel rotated Halton sequence continued from frame to frame.
-    const int rays = v.shadowRays > 1 ? v.shadowRays : 1;
-    Rng rng(pixel, 0xD157u + static_cast<uint32_t>(li));
-    const float r1 = rng.uniform(), r2 = rng.uniform();
     int seen = 0;
-    for (int k = 0; k < rays; ++k) {
-        float u1, u2;
-        rotatedHalton(v.frame * static_cast<uint32_t>(rays) + static_cast<uint32_t>(k), r1, r2, u1,
-                      u2);
-        const LightSample ls = sampleLight(light, p, u1, u2);
-        if (ls.dist <= 0) {  // inside the light
-            ++seen;
-        } else if (dot(n, ls.dir) > 0) {
-            seen += !occluded(v, origin, ls.dir, ls.dist, counters);
-        }
-    }
-    return static_cast<float>(seen) / static_cast<float>(rays);
+    const ShadowRayShare share =
+        shadowRays(v, light, li, p, n, offset, pixel, [&](Vec3 origin, Vec3 dir, float tMax) {
+            seen += !occluded(v, origin, dir, tMax, counters);
+        });
+    return static_cast<float>(share.seen + seen) / static_cast<float>(share.rays);
 }
 
 }  // namespace direct_pixel
@@ -233,6 +320,7 @@ SDFT_HOST_DEVICE inline float visibility(const DirectPixelView& v, const Light& 
 // registers unless the view has a uniform material; a device picks the smallest that fits).
 template <int kMaterialRegs>
 SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, int x, int y) {
+    using namespace direct_pixel;
     DirectPixel out;
     out.primary = tracePrimaryPixel(v.primary, x, y);
     out.color = v.background;
@@ -242,36 +330,22 @@ SDFT_HOST_DEVICE inline DirectPixel shadeDirectPixel(const DirectPixelView& v, i
     // On a triangle (hybrid mode) the shading point lies a voxel of the mesh's grid off it
     // (RTSDF §2.5.3), as the renderer's placeTriangleHits puts it.
     const Vec3 p = ray.at(out.primary.trace.t) + n * out.primary.bias;
-    const PixelMaterial m = direct_pixel::materialAt<kMaterialRegs>(v, p, n);
+    const PixelMaterial m = materialAt<kMaterialRegs>(v, p, n);
     out.material = m;
-    Vec3 radiance = v.ambient * m.color;
-    if (v.ambientOcclusion) {
-        const AmbientOcclusionResult ao = ambientOcclusionTape(v.primary.field, p, n, v.ao);
-        out.ao = ao.ao;
-        radiance *= ao.ao;
-        out.aoEvaluations = static_cast<uint32_t>(ao.evaluations);
-    }
-    // Keinert et al. 2014, §3.3: shadow rays start 2 max(eps_min, |f(p)|) off the surface.
-    const float offset = 2.0f * std::fmax(v.shadowOffsetMin, std::fabs(out.primary.trace.value) /
-                                                                 v.primary.field.lipschitz);
-    const uint32_t pixel =
-        static_cast<uint32_t>(y) * static_cast<uint32_t>(v.filmWidth) + static_cast<uint32_t>(x);
+    Vec3 radiance = ambientLight(v, p, n, m, out.ao, out.aoEvaluations);
+    const float offset = shadowOffset(v, out.primary.trace.value);
+    const uint32_t pixel = pixelSeed(v, x, y);
     bool firstShadow = true;
-    direct_pixel::ShadowCounters counters;
+    ShadowCounters counters;
     for (int li = 0; li < v.lightCount; ++li) {
         const Light& light = v.lights[li];
         float visible = 1;
         if (v.shadows && light.castShadows) {
-            visible = direct_pixel::visibility(v, light, li, p, n, offset, pixel, counters);
+            visible = visibility(v, light, li, p, n, offset, pixel, counters);
             if (firstShadow) out.shadow = visible;
             firstShadow = false;
         }
-        if (visible == 0) continue;
-        const LightDirection to = towardLight(light, p);
-        if (dot(n, to.dir) <= 0) continue;
-        const Vec3 c =
-            blinnPhong(m.color, m.diffuse, m.specular, m.shininess, n, to.dir, ray.direction);
-        radiance += c * light.color * (to.scale * visible);
+        radiance += lightTerm(light, m, p, n, ray.direction, visible);
     }
     out.color = isFinite(radiance) ? radiance : Vec3(0.0f);
     out.shadowEvaluations = counters.evaluations;

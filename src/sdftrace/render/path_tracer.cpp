@@ -12,9 +12,7 @@
 #include "sdftrace/math/camera.h"
 #include "sdftrace/math/sampling.h"
 #include "sdftrace/render/light_sample.h"
-#include "sdftrace/render/material_at.h"
 #include "sdftrace/render/path_pixel.h"
-#include "sdftrace/render/whitted.h"
 #include "sdftrace/trace/field_tracer.h"
 #include "sdftrace/trace/sphere_tracer.h"
 
@@ -22,19 +20,17 @@ namespace sdft {
 
 namespace {
 
-// The CPU's paths: pathRadiance (path_pixel.h) with the plan's materialAt (textures included),
-// its counters added to the frame's.
+// The CPU's paths: pathRadiance (path_pixel.h) with direct_pixel.h's materialAt (textures
+// included), its counters added to the frame's.
 class PathTracer {
   public:
     PathTracer(const RenderPlan& plan, const FrameView& view)
-        : m_plan(plan),
-          m_tables(directPixelTables(plan)),
-          m_view(pathPixelView(plan, view, m_tables)) {}
+        : m_tables(directPixelTables(plan)), m_view(pathPixelView(plan, view, m_tables)) {}
 
     Vec3 radiance(int x, int y, int sample, RenderStats& st, float* depth, Vec3* normal,
                   int* steps) const {
         const auto materialAt = [this](Vec3 p, Vec3 n) {
-            return pixelMaterial(sdft::materialAt(m_plan, p, n));
+            return direct_pixel::materialAt<kTapeMaxScalarRegs>(m_view.direct, p, n);
         };
         PathCounters c;
         const Vec3 L = pathRadiance(m_view, materialAt, x, y, sample, c, depth, normal, steps);
@@ -50,7 +46,6 @@ class PathTracer {
     }
 
   private:
-    const RenderPlan& m_plan;
     DirectPixelTables m_tables;
     PathPixelView m_view;
 };

@@ -19,7 +19,6 @@
 #include "sdftrace/render/normal_stencil.h"
 #include "sdftrace/render/path_tracer.h"
 #include "sdftrace/render/primary_pixel.h"
-#include "sdftrace/render/whitted.h"
 #include "sdftrace/render/whitted_pixel.h"
 #include "sdftrace/trace/field_tracer.h"
 #include "sdftrace/trace/grid_tracer.h"
@@ -45,10 +44,11 @@ struct TileScratch {
     std::vector<SoftShadowResult> softResults;
     SoftShadowScratch soft;
     std::vector<Vec3> radiance;
-    std::vector<Material> materials;  // per hit
-    std::vector<float> visible;       // per hit: the current light's visibility
-    std::vector<float> shadow, ao;    // per hit: the first shadowing light's visibility; AO
-    int x0 = 0, y0 = 0, tw = 0;       // the tile being rendered
+    std::vector<PixelMaterial> materials;  // per hit
+    std::vector<float> visible;            // per hit: the current light's visibility
+    std::vector<int> seen;                 // per hit: the current light's shadow rays that reach it
+    std::vector<float> shadow, ao;         // per hit: the first shadowing light's visibility; AO
+    int x0 = 0, y0 = 0, tw = 0;            // the tile being rendered
     RenderStats stats;
 };
 
@@ -60,13 +60,15 @@ class TileRenderer {
           m_tape(plan.tape),
           m_film(film),
           m_camera(view.camera),
-          m_settings(plan.settings) {
+          m_settings(plan.settings),
+          m_tables(directPixelTables(plan)),
+          m_pixel(directPixelView(plan, view, m_tables, film.width)),
+          m_whittedTables(whittedPixelTables(plan)),
+          m_whittedView(whittedPixelView(plan, m_whittedTables)) {
         m_primary = m_settings.trace;
         m_primary.pixelRadius = m_camera.pixelRadius();
         // Shadow rays need only a yes/no answer: plain threshold, relaxation kept, no refinement.
-        m_shadow = m_settings.trace.occlusion();  // hit or miss only: no root refinement
-        m_shadowOffsetMin = shadowOffsetMin(plan);
-        m_soft = softShadowOptions(plan);
+        m_shadow = m_pixel.shadowRay;  // hit or miss only: no root refinement
         if (plan.ddaGrid) {
             m_gridView = plan.ddaGrid->view();
             m_grid = &m_gridView;
@@ -77,11 +79,12 @@ class TileRenderer {
                 m_gridHitValue |= m.kind != Material::Kind::Plastic;
             m_minMax = primaryMinMax(plan, m_camera);  // none where the settings turn it off
         }
-        m_secondaryShadows = secondaryShadows(m_settings);
-        m_whitted = std::make_unique<WhittedTracer>(
-            plan, [this](Vec3 p, Vec3 n, const Light& light, int li, uint64_t& evaluations) {
-                return visibilityAt(p, n, light, li, evaluations);
-            });
+        if (planHasWhitted(plan) &&
+            m_settings.maxReflections + m_settings.maxRefractions > kWhittedMaxBouncesCpu)
+            throw InputError(
+                "render: max_reflections + max_refractions must be at most 128 (the options' "
+                "ranges, 64 each, sum to it)");
+        static_assert(kWhittedMaxBouncesCpu == 128);
         const ShadowMethod method = m_settings.shadowMethod;
         if (m_settings.shadows && (method == ShadowMethod::Pcf || method == ShadowMethod::Evsm)) {
             const Bounds3 region = shadowRegion();
@@ -109,22 +112,24 @@ class TileRenderer {
     // visible[h] in [0, 1]: how much of `light` hit h sees, by the settings' shadow method.
     void lightVisibility(TileScratch& s, std::vector<float>& visible, const Light& light,
                          int lightIndex);
-    void traceShadows(TileScratch& s, std::vector<float>& visible, const Light& light);
+    // Hard and distributed shadows: the hits' shadow rays (direct_pixel::shadowRays) as packets.
+    void shadowRayVisibility(TileScratch& s, std::vector<float>& visible, const Light& light,
+                             int lightIndex);
     // Traces s.shadowSegments into s.shadowResults (grid DDA or sphere-traced packets).
     void traceShadowSegments(TileScratch& s);
+    // RTSDF soft shadows: the hits' marches (direct_pixel::softShadowRay) stepped together.
     void softShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
                      int lightIndex);
-    void distributedShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
-                            int lightIndex);
-    // One point's visibility of a light by the shadow method (secondary hits of Whitted rays).
-    float visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex,
-                       uint64_t& evaluations) const;
+    // One secondary hit's visibility of a light by a shadow map (Whitted rays' plastic hits).
+    float mapVisibility(Vec3 p, Vec3 n, const Light& light, int lightIndex) const;
     // The shadow ray's origin offset along the normal (Keinert et al. 2014, §3.3).
-    float shadowOffset(const TileScratch& s, int h) const;
+    float shadowOffset(const TileScratch& s, int h) const {
+        return direct_pixel::shadowOffset(m_pixel, s.results[s.hitPixel[h]].value);
+    }
     // A pixel's index in the film, for seeding its random numbers.
     uint32_t pixelIndex(const TileScratch& s, int h) const {
         const int i = s.hitPixel[h];
-        return static_cast<uint32_t>((s.y0 + i / s.tw) * m_film.width + (s.x0 + i % s.tw));
+        return direct_pixel::pixelSeed(m_pixel, s.x0 + i % s.tw, s.y0 + i / s.tw);
     }
     void tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1);
     void tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw);
@@ -142,9 +147,12 @@ class TileRenderer {
     Film& m_film;
     Camera m_camera;
     const RenderSettings& m_settings;
+    // The shading functions' view of the plan (direct_pixel.h, whitted_pixel.h): the GPU's.
+    DirectPixelTables m_tables;
+    DirectPixelView m_pixel;
+    WhittedPixelTables m_whittedTables;
+    WhittedPixelView m_whittedView;
     TraceOptions m_primary, m_shadow;
-    float m_shadowOffsetMin = 0;  // eps_min of shadow-ray offsets (direct_pixel.h)
-    SoftShadowOptions m_soft;     // the soft-shadow march (direct_pixel.h)
     // Set when the scene is a single grid traced by Jamriška's DDA (RenderSettings::gridTracer).
     const GridView* m_grid = nullptr;
     GridView m_gridView;
@@ -152,24 +160,13 @@ class TileRenderer {
     MinMaxBuffer m_minMax;  // Jamriška §6, built once per render; an empty view without one
     std::vector<std::unique_ptr<ShadowMap>> m_maps;  // per light, shadow-map methods
     uint64_t m_mapEvaluations = 0;
-    std::unique_ptr<WhittedTracer> m_whitted;  // mirrors and dielectrics (Keinert §4)
-    SecondaryShadows m_secondaryShadows;       // how its secondary hits see the lights
 };
 
-float TileRenderer::visibilityAt(Vec3 p, Vec3 n, const Light& light, int lightIndex,
-                                 uint64_t& evaluations) const {
-    if (m_settings.shadowMethod == ShadowMethod::Pcf ||
-        m_settings.shadowMethod == ShadowMethod::Evsm) {
-        const LightDirection to = towardLight(light, p);
-        if (dot(n, to.dir) <= 0) return 0.0f;
-        const ShadowMap* map = m_maps[lightIndex].get();
-        return map ? map->visibility(p, n) : 1.0f;
-    }
-    uint32_t count = 0;
-    const float visible =
-        secondaryVisibility(m_tape.view(), m_secondaryShadows, p, n, light, count);
-    evaluations += count;
-    return visible;
+float TileRenderer::mapVisibility(Vec3 p, Vec3 n, const Light& light, int lightIndex) const {
+    const LightDirection to = towardLight(light, p);
+    if (dot(n, to.dir) <= 0) return 0.0f;
+    const ShadowMap* map = m_maps[lightIndex].get();
+    return map ? map->visibility(p, n) : 1.0f;
 }
 
 Bounds3 TileRenderer::shadowRegion() const {
@@ -268,25 +265,21 @@ void TileRenderer::placeTriangleHits(TileScratch& s) {
     }
 }
 
-// Ambient (scaled by SDF ambient occlusion) + for each light, Lambert + Blinn-Phong where the
-// light is visible by the shadow method.
+// The hits shaded by direct_pixel.h's functions, the GPU's: material, ambient (scaled by SDF
+// ambient occlusion), and each light's Lambert + Blinn-Phong term where the shadow method lets it
+// through; a tile's shadow rays and marches are traced together, light by light.
 void TileRenderer::shadeDirect(TileScratch& s) {
     const int hits = static_cast<int>(s.hitPixel.size());
-    s.radiance.assign(hits, Vec3(0.0f));
+    s.radiance.resize(hits);
     s.materials.resize(hits);
+    s.ao.resize(hits);
     for (int h = 0; h < hits; ++h) {
-        s.materials[h] = m_whitted->materialAt(s.hitPoint[h], s.hitNormal[h]);
-        s.radiance[h] = m_plan.lighting.ambient * s.materials[h].color;
-    }
-    s.ao.assign(hits, 1.0f);
-    if (m_settings.ambientOcclusion) {
-        for (int h = 0; h < hits; ++h) {
-            const AmbientOcclusionResult ao =
-                ambientOcclusion(m_tape, s.hitPoint[h], s.hitNormal[h], m_settings.ao);
-            s.ao[h] = ao.ao;
-            s.radiance[h] *= ao.ao;
-            s.stats.aoEvaluations += ao.evaluations;
-        }
+        s.materials[h] =
+            direct_pixel::materialAt<kTapeMaxScalarRegs>(m_pixel, s.hitPoint[h], s.hitNormal[h]);
+        uint32_t evaluations = 0;
+        s.radiance[h] = direct_pixel::ambientLight(m_pixel, s.hitPoint[h], s.hitNormal[h],
+                                                   s.materials[h], s.ao[h], evaluations);
+        s.stats.aoEvaluations += evaluations;
     }
     std::vector<float>& visible = s.visible;
     s.shadow.assign(hits, 1.0f);
@@ -299,33 +292,43 @@ void TileRenderer::shadeDirect(TileScratch& s) {
             if (firstShadow) s.shadow = visible;
             firstShadow = false;
         }
-        for (int h = 0; h < hits; ++h) {
-            if (visible[h] == 0) continue;
-            const Material& m = s.materials[h];
-            const LightDirection to = towardLight(light, s.hitPoint[h]);
-            const Vec3 n = s.hitNormal[h];
-            if (dot(n, to.dir) <= 0) continue;
-            const Vec3 c = blinnPhong(m.color, m.diffuse, m.specular, m.shininess, n, to.dir,
-                                      s.segments[s.hitPixel[h]].ray.direction);
-            s.radiance[h] += c * light.color * (to.scale * visible[h]);
-        }
+        for (int h = 0; h < hits; ++h)
+            s.radiance[h] +=
+                direct_pixel::lightTerm(light, s.materials[h], s.hitPoint[h], s.hitNormal[h],
+                                        s.segments[s.hitPixel[h]].ray.direction, visible[h]);
     }
 }
 
-// Mirrors and dielectrics: Whitted rays from the hit (Keinert §4).
+// Mirrors and dielectrics: Whitted rays from the hit (Keinert §4), by whitted_pixel.h's ray tree
+// on a stack that holds every budget; secondary hits see the lights by the shadow method, shadow
+// maps included.
 void TileRenderer::shadeSpecular(TileScratch& s) {
     const int hits = static_cast<int>(s.hitPixel.size());
-    WhittedStats ws;
+    const bool maps = m_settings.shadowMethod == ShadowMethod::Pcf ||
+                      m_settings.shadowMethod == ShadowMethod::Evsm;
+    const auto vis = [&](Vec3 p, Vec3 n, const Light& light, int li, uint32_t& evaluations) {
+        return maps ? mapVisibility(p, n, light, li)
+                    : secondaryVisibility(m_pixel.primary.field, m_whittedView.shadows, p, n, light,
+                                          evaluations);
+    };
+    // The device's stack where the budget fits it (2 KB), else one for every budget (16 KB).
+    const bool deep =
+        m_whittedView.maxReflections + m_whittedView.maxRefractions > kWhittedMaxBounces;
     for (int h = 0; h < hits; ++h) {
         if (s.materials[h].kind == Material::Kind::Plastic) continue;
         const int i = s.hitPixel[h];
-        s.radiance[h] = m_whitted->shadeSpecular(s.hitPoint[h], s.hitNormal[h], s.results[i].value,
-                                                 s.segments[i].ray.direction, s.materials[h], ws);
+        WhittedCounters c;
+        const Vec3 p = s.hitPoint[h], n = s.hitNormal[h], d = s.segments[i].ray.direction;
+        const float f = s.results[i].value;
+        s.radiance[h] = deep ? shadeWhitted<kTapeMaxScalarRegs, kWhittedStackCpu>(
+                                   m_pixel, m_whittedView, p, n, f, d, s.materials[h], c, vis)
+                             : shadeWhitted<kTapeMaxScalarRegs, kWhittedStack>(
+                                   m_pixel, m_whittedView, p, n, f, d, s.materials[h], c, vis);
+        s.stats.secondaryRays += c.rays;
+        s.stats.secondaryEvaluations += c.evaluations;
+        s.stats.selfIntersections += c.selfIntersections;
+        s.stats.shadowEvaluations += c.shadowEvaluations;
     }
-    s.stats.secondaryRays += ws.rays;
-    s.stats.secondaryEvaluations += ws.evaluations;
-    s.stats.selfIntersections += ws.selfIntersections;
-    s.stats.shadowEvaluations += ws.shadowEvaluations;
 }
 
 // Colour and AOVs of the tile: the background where rays missed; no NaN or Inf pixel.
@@ -435,24 +438,27 @@ void TileRenderer::gridNormals(TileScratch& s) {
     }
 }
 
-void TileRenderer::traceShadows(TileScratch& s, std::vector<float>& visible, const Light& light) {
-    int hits = static_cast<int>(s.hitPixel.size());
+void TileRenderer::shadowRayVisibility(TileScratch& s, std::vector<float>& visible,
+                                       const Light& light, int lightIndex) {
+    const int hits = static_cast<int>(visible.size());
     s.shadowSegments.clear();
     s.shadowOwner.clear();
+    s.seen.resize(hits);
+    int rays = 1;
     for (int h = 0; h < hits; ++h) {
-        const LightDirection to = towardLight(light, s.hitPoint[h]);
-        Vec3 n = s.hitNormal[h];
-        if (dot(n, to.dir) <= 0) {  // facing away: the light is below the horizon
-            visible[h] = 0;
-            continue;
-        }
-        s.shadowSegments.push_back(
-            {{s.hitPoint[h] + n * shadowOffset(s, h), to.dir}, 0.0f, to.dist});
-        s.shadowOwner.push_back(h);
+        const direct_pixel::ShadowRayShare share = direct_pixel::shadowRays(
+            m_pixel, light, lightIndex, s.hitPoint[h], s.hitNormal[h], shadowOffset(s, h),
+            pixelIndex(s, h), [&](Vec3 origin, Vec3 dir, float tMax) {
+                s.shadowSegments.push_back({{origin, dir}, 0.0f, tMax});
+                s.shadowOwner.push_back(h);
+            });
+        s.seen[h] = share.seen;
+        rays = share.rays;  // the same for every hit of the light
     }
     traceShadowSegments(s);
     for (size_t j = 0; j < s.shadowSegments.size(); ++j)
-        if (s.shadowResults[j].hit) visible[s.shadowOwner[j]] = 0.0f;
+        s.seen[s.shadowOwner[j]] += !s.shadowResults[j].hit;
+    for (int h = 0; h < hits; ++h) visible[h] = static_cast<float>(s.seen[h]) / rays;
 }
 
 void TileRenderer::traceShadowSegments(TileScratch& s) {
@@ -479,105 +485,45 @@ void TileRenderer::traceShadowSegments(TileScratch& s) {
     s.stats.shadowRays += s.shadowSegments.size();
 }
 
-float TileRenderer::shadowOffset(const TileScratch& s, int h) const {
-    // Keinert et al. 2014, §3.3: offset the origin by 2 max(eps_min, |f(p)|) along the normal,
-    // so it clears the surface however far from it the march stopped.
-    // (A DDA hit has f = 0 by construction: its eps_min is at least half a voxel.)
-    const float f = std::fabs(s.results[s.hitPixel[h]].value) / m_tape.lipschitz();
-    return 2.0f * std::fmax(m_shadowOffsetMin, f);
-}
-
 void TileRenderer::lightVisibility(TileScratch& s, std::vector<float>& visible, const Light& light,
                                    int lightIndex) {
     switch (m_settings.shadowMethod) {
         case ShadowMethod::Hard:
-            traceShadows(s, visible, light);
+        case ShadowMethod::Distributed:
+            shadowRayVisibility(s, visible, light, lightIndex);
             return;
         case ShadowMethod::Soft:
             softShadows(s, visible, light, lightIndex);
             return;
-        case ShadowMethod::Distributed:
-            if (!light.hasSize()) {
-                traceShadows(s, visible, light);  // one point: one ray is exact
-            } else {
-                distributedShadows(s, visible, light, lightIndex);
-            }
-            return;
         case ShadowMethod::Pcf:
-        case ShadowMethod::Evsm: {
-            const ShadowMap* map = m_maps[lightIndex].get();
-            if (!map) return;
-            for (size_t h = 0; h < visible.size(); ++h) {
-                visible[h] = dot(s.hitNormal[h], towardLight(light, s.hitPoint[h]).dir) <= 0
-                                 ? 0.0f
-                                 : map->visibility(s.hitPoint[h], s.hitNormal[h]);
-            }
+        case ShadowMethod::Evsm:
+            for (size_t h = 0; h < visible.size(); ++h)
+                visible[h] = mapVisibility(s.hitPoint[h], s.hitNormal[h], light, lightIndex);
             return;
-        }
     }
 }
 
-// RTSDF §2.4-2.5: one march per point towards the light's centre, the tile's marches stepped
-// together.
 void TileRenderer::softShadows(TileScratch& s, std::vector<float>& visible, const Light& light,
                                int lightIndex) {
-    const SoftShadowOptions& o = m_soft;
     s.softRays.clear();
     s.shadowOwner.clear();
     for (size_t h = 0; h < visible.size(); ++h) {
-        const LightDirection to = towardLight(light, s.hitPoint[h]);
-        const Vec3 n = s.hitNormal[h];
-        if (dot(n, to.dir) <= 0) {
+        const int hi = static_cast<int>(h);
+        SoftShadowRay ray;
+        if (!direct_pixel::softShadowRay(m_pixel, light, lightIndex, s.hitPoint[h], s.hitNormal[h],
+                                         shadowOffset(s, hi), pixelIndex(s, hi), ray)) {
             visible[h] = 0;
             continue;
         }
-        Rng rng(pixelIndex(s, static_cast<int>(h)), m_view.frame, 0x50F7u + lightIndex);
-        s.softRays.push_back({s.hitPoint[h] + n * shadowOffset(s, static_cast<int>(h)), to.dir,
-                              0.0f, std::fmin(to.dist, m_settings.maxDistance),
-                              lightTanRadius(light, s.hitPoint[h]), rng.uniform()});
-        s.shadowOwner.push_back(static_cast<int>(h));
+        s.softRays.push_back(ray);
+        s.shadowOwner.push_back(hi);
     }
-    softShadowPacket(m_tape, s.softRays, o, s.softResults, s.soft);
+    softShadowPacket(m_tape, s.softRays, m_pixel.soft, s.softResults, s.soft);
     for (size_t j = 0; j < s.softRays.size(); ++j) {
         visible[s.shadowOwner[j]] = s.softResults[j].visibility;
         s.stats.shadowEvaluations += s.softResults[j].evaluations;
     }
     s.stats.shadowRays += s.softRays.size();
-}
-
-// Cook et al. 1984: the share of points on the light the point sees (a light point below the
-// surface's tangent plane counts as hidden). The points follow a per-pixel rotated Halton
-// sequence continued from frame to frame, so accumulated frames converge as one frame with
-// their rays together would.
-void TileRenderer::distributedShadows(TileScratch& s, std::vector<float>& visible,
-                                      const Light& light, int lightIndex) {
-    const int hits = static_cast<int>(visible.size());
-    const int n = std::max(1, m_settings.shadowRays);
-    s.shadowSegments.clear();
-    s.shadowOwner.clear();
-    std::vector<int> seen(hits, 0);
-    for (int h = 0; h < hits; ++h) {
-        const Vec3 nrm = s.hitNormal[h];
-        const Vec3 origin = s.hitPoint[h] + nrm * shadowOffset(s, h);
-        Rng rng(pixelIndex(s, h), 0xD157u + lightIndex);
-        const float r1 = rng.uniform(), r2 = rng.uniform();
-        for (int k = 0; k < n; ++k) {
-            float u1, u2;
-            rotatedHalton(m_view.frame * static_cast<uint32_t>(n) + k, r1, r2, u1, u2);
-            const LightSample ls = sampleLight(light, s.hitPoint[h], u1, u2);
-            if (ls.dist <= 0) {  // inside the light
-                ++seen[h];
-                continue;
-            }
-            if (dot(nrm, ls.dir) <= 0) continue;
-            s.shadowSegments.push_back({{origin, ls.dir}, 0.0f, ls.dist});
-            s.shadowOwner.push_back(h);
-        }
-    }
-    traceShadowSegments(s);
-    for (size_t j = 0; j < s.shadowSegments.size(); ++j)
-        if (!s.shadowResults[j].hit) ++seen[s.shadowOwner[j]];
-    for (int h = 0; h < hits; ++h) visible[h] = static_cast<float>(seen[h]) / n;
 }
 
 }  // namespace

@@ -1,12 +1,23 @@
-// Whitted rays per pixel (Whitted 1980, as Keinert et al. 2014 §4 use them): WhittedTracer's
-// recursion (whitted.cpp) as a loop over a bounded explicit stack of pending rays, each carrying
-// the weight its path multiplies in, so that a device thread can run it (no recursion, no
-// std::function). Mirrors reflect; dielectrics split into Fresnel-weighted reflection and
-// refraction, rays inside are sphere traced on -f to the exit or jump through Keinert §3.5's convex
-// bound, attenuated by Beer-Lambert; secondary rays start off the surface by §3.3's dynamic
-// epsilon. Secondary hits on plastic see the lights by the renderer's visibilityAt (hard rays,
-// soft shadows without jitter, distributed rays on a fixed Halton rotation). Held to the CPU
-// renderer's film by whitted_pixel_test.cpp.
+// Whitted ray tracing (Whitted 1980) over distance bounds, as Keinert et al. 2014 §4 use it for
+// their translucent scenes, per pixel: the one implementation, which the CPU renderer runs for its
+// tiles' mirror and glass hits and a device thread for its pixel. Mirrors reflect; dielectrics
+// split into Fresnel-weighted reflection and refraction (Snell, total internal reflection,
+// Beer-Lambert absorption inside); rays inside an object are sphere traced on -f to the exit.
+// Each kind of bounce has its own budget (Keinert: 2 reflections, 8 refractions); a ray out of
+// budget is dark. Secondary rays start off the surface by Keinert §3.3's dynamic epsilon,
+// 2 max(eps_min, |f(p)|), or by a global epsilon (selectable, to show the acne the global one
+// gives when hits lie up to half a pixel from the surface).
+//
+// Keinert §3.5, convex objects in convex bounds: a refracted ray inside a convex object (a
+// top-level object built from convex primitives by intersections and transforms) does not march
+// through the interior; it jumps to where it leaves the object's bounding box and sphere traces
+// back along -d on the object's own field, which finds the same exit point in fewer steps.
+//
+// The ray tree is a loop over a bounded explicit stack of pending rays, each carrying the weight
+// its path multiplies in (no recursion, no std::function: a device thread runs it). Secondary
+// hits on plastic see the lights by the settings' shadow method without per-pixel random numbers
+// (secondaryVisibility: hard rays, soft shadows without jitter, distributed rays on a fixed Halton
+// rotation), or by the CPU renderer's shadow maps.
 #pragma once
 
 #include <cmath>
@@ -23,11 +34,16 @@ namespace sdft {
 
 struct RenderPlan;
 
-// Reflection and refraction bounces in all (max_reflections + max_refractions) the stack holds:
-// a path alternates at most 2 (R + F) + 1 rays deep (an exit keeps the budgets, the next entry
-// spends one), and each level leaves at most one ray pending.
+// The pending rays a budget of `bounces` reflections and refractions in all (max_reflections +
+// max_refractions) needs: a path alternates at most 2 (R + F) + 1 rays deep (an exit keeps the
+// budgets, the next entry spends one), and each level leaves at most one ray pending.
+constexpr int whittedStackFor(int bounces) { return 2 * bounces + 2; }
+// A device thread's stack holds budgets of up to kWhittedMaxBounces (directPixelUnsupported
+// names deeper ones); the CPU renderer's holds every budget the render options accept (64 + 64).
 inline constexpr int kWhittedMaxBounces = 16;
-inline constexpr int kWhittedStack = 2 * kWhittedMaxBounces + 2;
+inline constexpr int kWhittedStack = whittedStackFor(kWhittedMaxBounces);
+inline constexpr int kWhittedMaxBouncesCpu = 128;
+inline constexpr int kWhittedStackCpu = whittedStackFor(kWhittedMaxBouncesCpu);
 
 // A convex top-level object (Keinert §3.5): its own tape and bounding box.
 struct ConvexView {
@@ -126,21 +142,23 @@ SDFT_HOST_DEVICE inline Vec3 normalAt(const DirectPixelView& v, Vec3 p) {
     return length(n) > 0 ? n : Vec3(0, 1, 0);
 }
 
-// Ambient + Lambert + Blinn-Phong at a secondary hit on plastic (WhittedTracer::shadeDirect).
+// Ambient + Lambert + Blinn-Phong at a secondary hit on plastic, each light seen by
+// vis(p, n, light, li, evaluations) -> [0, 1].
+template <class Visibility>
 SDFT_HOST_DEVICE inline Vec3 shadeDirect(const DirectPixelView& v, const WhittedPixelView& w,
                                          Vec3 p, Vec3 n, Vec3 d, const PixelMaterial& m,
-                                         WhittedCounters& c) {
+                                         WhittedCounters& c, const Visibility& vis) {
     Vec3 color = v.ambient * m.color;
     for (int li = 0; li < v.lightCount; ++li) {
         const Light& light = v.lights[li];
         const LightDirection to = towardLight(light, p);
         if (dot(n, to.dir) <= 0) continue;
-        float vis = 1;
+        float seen = 1;
         if (w.shadows.enabled && light.castShadows)
-            vis = secondaryVisibility(v.primary.field, w.shadows, p, n, light, c.shadowEvaluations);
-        if (vis <= 0) continue;
+            seen = vis(p, n, light, li, c.shadowEvaluations);
+        if (seen <= 0) continue;
         color += blinnPhong(m.color, m.diffuse, m.specular, maxf(m.shininess, 1.0f), n, to.dir, d) *
-                 light.color * (to.scale * vis);
+                 light.color * (to.scale * seen);
     }
     return color;
 }
@@ -188,28 +206,37 @@ SDFT_HOST_DEVICE inline bool exitDistance(const DirectPixelView& v, const Whitte
     return true;
 }
 
-// A bounded stack of pending rays; a push beyond kWhittedStack (budgets above kWhittedMaxBounces,
-// which directPixelUnsupported refuses) is dropped.
+// A bounded stack of pending rays; a push beyond kCapacity (a budget deeper than the stack was
+// sized for, which directPixelUnsupported and the CPU renderer refuse) is dropped.
+// The slots are left uninitialised (PendingRay's Vec3s would zero them: 2 KB per device thread,
+// 16 KB per CPU hit, written for every shaded pixel).
+template <int kCapacity>
 struct RayStack {
-    PendingRay rays[kWhittedStack];
+    union Slot {
+        PendingRay ray;
+        SDFT_HOST_DEVICE Slot() {}
+    };
+    Slot slots[kCapacity];
     int top = 0;
     SDFT_HOST_DEVICE void push(const PendingRay& r) {
-        if (top < kWhittedStack) rays[top++] = r;
+        if (top < kCapacity) slots[top++].ray = r;
     }
+    SDFT_HOST_DEVICE PendingRay pop() { return slots[--top].ray; }
 };
 
 // The hit at p (unit normal n, field value f) of a ray along d with material m: plastic adds its
-// direct light, a mirror or dielectric pushes its reflected and refracted rays (WhittedTracer::
-// shade).
+// direct light (each light seen by `vis`), a mirror or dielectric pushes its reflected and
+// refracted rays.
+template <class Stack, class Visibility>
 SDFT_HOST_DEVICE inline void shadeHit(const DirectPixelView& v, const WhittedPixelView& w, Vec3 p,
                                       Vec3 n, float f, Vec3 d, const PixelMaterial& m, Vec3 weight,
                                       int reflections, int refractions, Vec3& radiance,
-                                      RayStack& stack, WhittedCounters& c) {
+                                      Stack& stack, WhittedCounters& c, const Visibility& vis) {
     if (dot(n, d) > 0) n = -n;  // seen from behind (an open or thin surface)
     const float eps = offset(v, w, f);
     const int8_t refl = static_cast<int8_t>(reflections), refr = static_cast<int8_t>(refractions);
     if (m.kind == Material::Kind::Plastic) {
-        radiance += weight * shadeDirect(v, w, p, n, d, m, c);
+        radiance += weight * shadeDirect(v, w, p, n, d, m, c, vis);
     } else if (m.kind == Material::Kind::Mirror) {
         if (reflections > 0)
             stack.push({p + n * eps, reflect(d, n), weight * m.color, Vec3(0.0f), 1.0f, eps,
@@ -230,18 +257,20 @@ SDFT_HOST_DEVICE inline void shadeHit(const DirectPixelView& v, const WhittedPix
 }  // namespace whitted_pixel
 
 // Radiance leaving the mirror or dielectric hit p (unit normal n, field value f) against the unit
-// ray direction d (WhittedTracer::shadeSpecular).
-template <int kMaterialRegs>
+// ray direction d. Secondary hits on plastic see each light by vis(p, n, light, li, evaluations)
+// (the CPU renderer's handles shadow maps; see the overload below); kStack: the stack's capacity
+// (whittedStackFor the budget).
+template <int kMaterialRegs, int kStack, class Visibility>
 SDFT_HOST_DEVICE inline Vec3 shadeWhitted(const DirectPixelView& v, const WhittedPixelView& w,
                                           Vec3 p, Vec3 n, float f, Vec3 d, const PixelMaterial& m,
-                                          WhittedCounters& c) {
+                                          WhittedCounters& c, const Visibility& vis) {
     using namespace whitted_pixel;
     Vec3 radiance(0.0f);
-    RayStack stack;
+    RayStack<kStack> stack;
     shadeHit(v, w, p, n, f, d, m, Vec3(1.0f), w.maxReflections, w.maxRefractions, radiance, stack,
-             c);
+             c, vis);
     while (stack.top > 0) {
-        const PendingRay r = stack.rays[--stack.top];
+        const PendingRay r = stack.pop();
         ++c.rays;
         if (!r.inside) {
             const TraceResult hit = traceTapeRay(
@@ -256,11 +285,11 @@ SDFT_HOST_DEVICE inline Vec3 shadeWhitted(const DirectPixelView& v, const Whitte
             const Vec3 nq = normalAt(v, q);
             const PixelMaterial mq = direct_pixel::materialAt<kMaterialRegs>(v, q, nq);
             shadeHit(v, w, q, nq, hit.value, r.dir, mq, r.weight, r.reflections, r.refractions,
-                     radiance, stack, c);
+                     radiance, stack, c, vis);
             continue;
         }
         // Inside a dielectric: the exit, attenuated, splits into the refracted ray out and the
-        // internal reflection (WhittedTracer::traceInside).
+        // internal reflection.
         float dist = 0, value = 0;
         if (!exitDistance(v, w, r.origin, r.dir, dist, value, c)) continue;
         if (dist <= 2 * r.eps) ++c.selfIntersections;
@@ -280,6 +309,18 @@ SDFT_HOST_DEVICE inline Vec3 shadeWhitted(const DirectPixelView& v, const Whitte
                         r.refractions, false});
     }
     return radiance;
+}
+
+// The same, secondary hits seeing the lights by the settings' shadow method (secondaryVisibility),
+// on a device thread's stack.
+template <int kMaterialRegs>
+SDFT_HOST_DEVICE inline Vec3 shadeWhitted(const DirectPixelView& v, const WhittedPixelView& w,
+                                          Vec3 p, Vec3 n, float f, Vec3 d, const PixelMaterial& m,
+                                          WhittedCounters& c) {
+    const auto vis = [&](Vec3 q, Vec3 nq, const Light& light, int, uint32_t& evaluations) {
+        return secondaryVisibility(v.primary.field, w.shadows, q, nq, light, evaluations);
+    };
+    return shadeWhitted<kMaterialRegs, kWhittedStack>(v, w, p, n, f, d, m, c, vis);
 }
 
 // One pixel, shaded: shadeDirectPixel, then Whitted rays where the hit is a mirror or dielectric

@@ -1,8 +1,8 @@
-// Whitted rays per pixel (whitted_pixel.h), the device path's mirrors and glass, run here on the
-// CPU against the CPU renderer's WhittedTracer: the same ray tree (secondary rays, their field
-// evaluations, self-intersections and the shadow evaluations of primary and secondary hits counted
-// alike, pixel by pixel summed over the film) and the same colours to float rounding (the stack
-// adds the paths' contributions in another order than the recursion: 1e-4 on colours of order 1).
+// Whitted rays per pixel (whitted_pixel.h) as a device thread runs them, shadePixel: primary ray,
+// normal and shadows one pixel at a time, on the CPU against the CPU renderer, which runs the same
+// ray tree for its tiles' hits after packets of primary and shadow rays: the same secondary rays,
+// their field evaluations, self-intersections and the shadow evaluations of primary and secondary
+// hits (summed over the film) and the same colours to float rounding (1e-4 on colours of order 1).
 #include "sdftrace/render/whitted_pixel.h"
 
 #include <gtest/gtest.h>

@@ -1,10 +1,9 @@
-#include "sdftrace/render/whitted.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "sdftrace/field/node.h"
+#include "sdftrace/render/optics.h"
 #include "test_scenes/shadow_test_scenes.h"
 
 namespace sdft {

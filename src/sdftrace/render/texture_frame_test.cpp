@@ -1,9 +1,8 @@
-#include "sdftrace/render/material_at.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "sdftrace/render/renderer.h"
 #include "test_scenes/shadow_test_scenes.h"
 
 namespace sdft {
