@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "cli_runner.h"
+#include "sdftrace/gpu/gpu_device.h"
 
 namespace sdft::e2e {
 namespace {
@@ -233,6 +234,40 @@ TEST(Cluster, AFailureOnOneRankStopsEveryRankWithOneErrorAndNoOutput) {
                  " --max-memory 64K" + bake);
     expectJobFailed(r, "", dir, 0);
     EXPECT_NE(r.err.find("budget of 64 KiB"), std::string::npos) << r.err;
+}
+
+// One GPU per rank: every rank asks for its own (the machine's GPUs in turn), as one process
+// asks. Without a GPU, --device cuda stops the job before any work with one error line that says
+// why, and writes nothing; auto renders on the ranks' CPUs, the still's tiles and the
+// animation's frames shared as without --device, saying so once.
+TEST(Cluster, EveryRankAsksForItsGpuAsOneProcessDoes) {
+    REQUIRE_MPI();
+    if (gpuInfo().present) GTEST_SKIP() << "a GPU is present: cuda would render";
+    TempDir dir;
+    const std::string csg = "render " + kSource + "/examples/csg.json --width 64 --height 40 ";
+    const RunResult cuda = mpirun(2, csg + "--device cuda -o " + dir.file("out.png"));
+    EXPECT_NE(cuda.status, 0);
+    EXPECT_EQ(linesWith(cuda.err, "sdftrace: error:"), 1) << cuda.err;
+    EXPECT_EQ(linesWith(cuda.err, "--device cuda: " + gpuInfo().why), 1) << cuda.err;
+    EXPECT_EQ(dir.count(), 0) << "an output or temporary file was left";
+
+    ASSERT_EQ(single(csg + "-q -o " + dir.file("one.pfm")).status, 0);
+    const RunResult still = mpirun(2, csg + "--device auto -o " + dir.file("many.pfm"));
+    ASSERT_EQ(still.status, 0) << still.err;
+    EXPECT_EQ(linesWith(still.err, "--device auto: rendering on the CPU"), 1) << still.err;
+    EXPECT_NE(still.err.find("on 2 ranks"), std::string::npos) << still.err;
+    expectSameFile(dir.file("one.pfm"), dir.file("many.pfm"));
+
+    const std::string frames = "render " + kSource +
+                               "/examples/animated.json --time 0:0.2 --fps 10 --width 48 "
+                               "--height 32 --frame-pattern ";
+    ASSERT_EQ(single(frames + dir.file("one-%d.pfm") + " -q").status, 0);
+    const RunResult dealt = mpirun(2, frames + dir.file("many-%d.pfm") + " --device auto");
+    ASSERT_EQ(dealt.status, 0) << dealt.err;
+    EXPECT_EQ(linesWith(dealt.err, "--device auto: rendering on the CPU"), 1) << dealt.err;
+    for (int i = 0; i < 2; ++i)
+        expectSameFile(dir.file("one-" + std::to_string(i) + ".pfm"),
+                       dir.file("many-" + std::to_string(i) + ".pfm"));
 }
 
 // Without mpirun nothing changes: the summary names threads, not ranks.

@@ -168,7 +168,10 @@ struct Animation {
         FinishedFrame f{i, Film(plan.camera.width, plan.camera.height, kept), {}};
         FrameView view{plan.camera};
         view.frame = static_cast<uint32_t>(frames.first + i);
-        f.stats = renderImage(a, plan, f.film, "", !a.quiet && stderrIsTerminal());
+        // Each rank's own GPU under --device (useGpuOfLocalRank), or its CPU.
+        const std::unique_ptr<PlanRenderer> gpu = deviceRenderer(a, plan, i == 0);
+        f.stats = renderImage(a, plan, f.film, "", !a.quiet && stderrIsTerminal(),
+                              gpu ? gpu->frames() : nullptr);
         if (f.film.has(Aov::Motion)) {
             const double t = frames.at(i);
             f.film.motion =
@@ -359,14 +362,19 @@ int renderAnimation(const RenderArgs& a, const TimeSpan& span,
         std::unique_ptr<PlanRenderer> gpu;
         taaText = renderFramesInOrder(*job, sink, assets,
                                       [&](long long i, const RenderPlan& plan) -> FrameRenderFn {
-                                          gpu = deviceRenderer(a, plan, false, i == 0);
+                                          gpu = deviceRenderer(a, plan, i == 0);
                                           return gpu ? gpu->frames() : nullptr;
                                       });
     } else {
         WorkFarm farm(comm);
         if (ordered) {
+            // Frames that depend on the ones before: each on rank 0's GPU, or its tiles across
+            // the ranks' CPUs.
+            std::unique_ptr<PlanRenderer> gpu;
             taaText = renderFramesInOrder(
                 *job, sink, assets, [&](long long i, const RenderPlan& plan) -> FrameRenderFn {
+                    gpu = deviceRenderer(a, plan, i == 0);
+                    if (gpu) return gpu->frames();
                     return [&farm, &plan, i](const FrameView& view, Film& film, bool progress) {
                         ByteWriter prefix;
                         prefix.put(i);

@@ -87,10 +87,10 @@ RenderStats renderImage(const RenderArgs& a, const RenderPlan& plan, Film& film,
 
 // --device: the GPU renderer of `plan` (null: the CPU renders it). cuda: the GPU or one clear
 // error; auto: the GPU where one is present and renders the plan, else the CPU, saying why on
-// stderr when `note`. Not under mpirun (`distributed`): cuda is refused, auto takes the CPU.
-// The library's choice (gpu/device.h) with the CLI's note.
+// stderr when `note`. Under mpirun each rank's own GPU (useGpuOfLocalRank). The library's choice
+// (gpu/device.h) with the CLI's note.
 std::unique_ptr<PlanRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
-                                             bool distributed, bool note);
+                                             bool note);
 // How the scene's meshes bake under --device (prepare_scene.h): cuda, or auto with a GPU present,
 // bake on the GPU what it bakes (jfa and rtsdf: RTSDF's per-frame regeneration of dynamic meshes),
 // the rest on the CPU; cpu, mpirun or no GPU: empty (bakeMesh on the CPU). Under cuda, RTSDF's

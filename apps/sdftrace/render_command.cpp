@@ -231,22 +231,14 @@ Device deviceOf(const RenderArgs& a) {
 }
 
 std::unique_ptr<PlanRenderer> deviceRenderer(const RenderArgs& a, const RenderPlan& plan,
-                                             bool distributed, bool note) {
+                                             bool note) {
     const Device d = deviceOf(a);
-    std::string why;
-    std::unique_ptr<PlanRenderer> r;
-    if (distributed) {
-        if (d == Device::Cuda)
-            throw InputError("--device cuda: cannot be combined with mpirun yet");
-        why = "a distributed job renders on its ranks' CPUs";
-    } else {
-        r = std::make_unique<PlanRenderer>(plan, d, "--device " + a.device);
-        why = r->why();
-    }
-    if (d == Device::Auto && !why.empty() && note && !a.quiet)
+    if (d == Device::Cpu) return nullptr;
+    auto r = std::make_unique<PlanRenderer>(plan, d, "--device " + a.device);
+    if (d == Device::Auto && !r->why().empty() && note && !a.quiet)
         std::fprintf(stderr, "sdftrace render: --device auto: rendering on the CPU (%s)\n",
-                     why.c_str());
-    return r && r->gpu() ? std::move(r) : nullptr;
+                     r->why().c_str());
+    return r->gpu() ? std::move(r) : nullptr;
 }
 
 namespace {
@@ -351,17 +343,19 @@ StillScene loadStill(const RenderArgs& a, const std::optional<TimeSpan>& span, b
 // The still on this process, or (rank 0 of an mpirun job) its tiles across the ranks.
 RenderStats renderStill(const RenderArgs& a, const RenderPlan& plan, Film& film,
                         Communicator& comm) {
-    if (!comm.distributed()) {
-        const std::unique_ptr<PlanRenderer> gpu = deviceRenderer(a, plan, false, true);
+    const std::unique_ptr<PlanRenderer> gpu = deviceRenderer(a, plan, true);
+    if (!comm.distributed())
         return renderImage(a, plan, film, a.framePattern, showProgress(a),
                            gpu ? gpu->frames() : nullptr);
-    }
-    deviceRenderer(a, plan, true, comm.root());  // refuses --device cuda
+    // A GPU renders a frame faster than its tiles would travel: rank 0's renders the still and
+    // the other ranks wait (an animation's frames are dealt to every rank's GPU).
     WorkFarm farm(comm);
-    const RenderStats st = renderImage(a, plan, film, a.framePattern, showProgress(a),
-                                       [&](const FrameView& view, Film& f, bool progress) {
-                                           return renderAcross(farm, plan, view, f, progress);
-                                       });
+    const RenderStats st =
+        gpu ? renderImage(a, plan, film, a.framePattern, showProgress(a), gpu->frames())
+            : renderImage(a, plan, film, a.framePattern, showProgress(a),
+                          [&](const FrameView& view, Film& f, bool progress) {
+                              return renderAcross(farm, plan, view, f, progress);
+                          });
     farm.end();
     return st;
 }
@@ -386,13 +380,10 @@ int runRender(const RenderArgs& args) {
                              " is not a scene file; only scene files have keyframes "
                              "(docs/scene-format.md, \"Animation\")");
         aovs = validateOutputs(a, span && span->range, comm.root());  // rank 0 writes them
-        if (deviceOf(a) == Device::Cuda) {                            // before loading anything
-            if (comm.distributed())
-                throw InputError(
-                    "--device cuda: cannot be combined with mpirun yet (each rank renders its "
-                    "tiles on its CPU); use --device cpu or auto");
-            requireGpu("--device cuda");
-        }
+        // Before loading anything: under mpirun one GPU per rank (the machine's GPUs in turn),
+        // and cuda needs one on every rank.
+        if (deviceOf(a) != Device::Cpu && comm.distributed()) useGpuOfLocalRank(comm.localRank());
+        if (deviceOf(a) == Device::Cuda) requireGpu("--device cuda");
     });
     if (span && span->range) return renderAnimation(a, *span, aovs, comm);
     using Clock = std::chrono::steady_clock;

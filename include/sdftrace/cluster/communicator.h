@@ -55,6 +55,9 @@ class Communicator {
     bool root() const { return m_rank == 0; }
     // Ranks of this job on this machine (OMPI_COMM_WORLD_LOCAL_SIZE), to share its cores.
     int localSize() const { return m_localSize; }
+    // This rank's index among them (OMPI_COMM_WORLD_LOCAL_RANK, MPI_LOCALRANKID; else its rank
+    // modulo localSize), which picks its GPU (gpu_device.h, gpuOfLocalRank).
+    int localRank() const { return m_localRank; }
     const std::string& host() const { return m_host; }
     // "rank 1 (node7)"
     std::string name(int rank) const;
@@ -82,7 +85,7 @@ class Communicator {
   private:
     Communicator() = default;
     Message receivePieces(int source, int tag, size_t firstPieceSize);
-    int m_rank = 0, m_size = 1, m_localSize = 1;
+    int m_rank = 0, m_size = 1, m_localSize = 1, m_localRank = 0;
     bool m_mpi = false, m_othersDone = false;
     std::string m_host;
 };

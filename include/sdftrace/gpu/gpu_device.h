@@ -14,11 +14,24 @@ struct GpuInfo {
     int computeMajor = 0, computeMinor = 0;
     int multiprocessors = 0;
     size_t memoryBytes = 0;
-    std::string why;  // when !present: what is missing, in one sentence
+    int device = 0, count = 0;  // the device this process uses, of `count` present
+    std::string why;            // when !present: what is missing, in one sentence
 };
 
-// Asked once per process (the first call initializes the CUDA runtime).
+// Asked once per process (the first call initializes the CUDA runtime): the device this process
+// uses (useGpuOfLocalRank's, or the first).
 const GpuInfo& gpuInfo();
+
+// One GPU per rank: the ranks of a job on one machine take its `count` GPUs in turn, local rank r
+// the device r mod count (-1 without any).
+inline int gpuOfLocalRank(int localRank, int count) {
+    return count > 0 ? (localRank < 0 ? 0 : localRank) % count : -1;
+}
+// Makes this process use gpuOfLocalRank(localRank, <the devices present>) for all its GPU work;
+// called before any other GPU call (gpuInfo() included), by each rank of an mpirun job that
+// renders on GPUs. Returns the device's index, -1 where none is present or this build has no
+// CUDA backend (gpuInfo().why says which).
+int useGpuOfLocalRank(int localRank);
 
 // Throws InputError "<what>: <why>" when no GPU can be used; `what` names the flag or key that
 // asked for one (e.g. "--device cuda").

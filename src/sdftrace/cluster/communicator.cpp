@@ -27,12 +27,12 @@ bool launchedByMpi() {
     return false;
 }
 
-int envInt(const char* name, int fallback) {
+int envInt(const char* name, int fallback, int least = 1) {
     const char* v = std::getenv(name);
     if (!v) return fallback;
     char* end = nullptr;
     long n = std::strtol(v, &end, 10);
-    return end != v && n > 0 && n < (1 << 20) ? static_cast<int>(n) : fallback;
+    return end != v && n >= least && n < (1 << 20) ? static_cast<int>(n) : fallback;
 }
 
 }  // namespace
@@ -59,6 +59,8 @@ void Communicator::init(int& argc, char**& argv) {
     MPI_Comm_rank(MPI_COMM_WORLD, &c.m_rank);
     MPI_Comm_size(MPI_COMM_WORLD, &c.m_size);
     c.m_localSize = envInt("OMPI_COMM_WORLD_LOCAL_SIZE", envInt("MPI_LOCALNRANKS", 1));
+    c.m_localRank = envInt("OMPI_COMM_WORLD_LOCAL_RANK",
+                           envInt("MPI_LOCALRANKID", c.m_rank % c.m_localSize, 0), 0);
     c.m_mpi = true;
 #else
     (void)argc;

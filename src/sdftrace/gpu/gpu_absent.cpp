@@ -21,6 +21,8 @@ const GpuInfo& gpuInfo() {
     return info;
 }
 
+int useGpuOfLocalRank(int) { return -1; }
+
 void requireGpu(const std::string& what) { throw InputError(what + ": " + gpuInfo().why); }
 
 struct GpuTape::Impl {};

@@ -16,8 +16,10 @@ const GpuInfo& gpuInfo() {
                     (status != cudaSuccess ? cudaGetErrorString(status) : "none found") + ")";
             return i;
         }
+        i.count = count;
+        if (cudaGetDevice(&i.device) != cudaSuccess) i.device = 0;
         cudaDeviceProp prop{};
-        if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess) {
+        if (cudaGetDeviceProperties(&prop, i.device) != cudaSuccess) {
             i.why = "the CUDA device did not answer";
             return i;
         }
@@ -30,6 +32,13 @@ const GpuInfo& gpuInfo() {
         return i;
     }();
     return info;
+}
+
+int useGpuOfLocalRank(int localRank) {
+    int count = 0;
+    if (cudaGetDeviceCount(&count) != cudaSuccess || count == 0) return -1;
+    const int device = gpuOfLocalRank(localRank, count);
+    return cudaSetDevice(device) == cudaSuccess ? device : -1;
 }
 
 void requireGpu(const std::string& what) {
