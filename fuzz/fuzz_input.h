@@ -41,13 +41,12 @@ inline void limitMemoryForFuzzing() {
     (void)once;
 }
 
-// A file of this process's own (in TMPDIR, or /tmp) that each input overwrites.
+// A file of this process's own (in TMPDIR, or /tmp), one per extension, that each input
+// overwrites.
 inline std::string writeScratchFile(const uint8_t* data, size_t size, const char* extension) {
-    static const std::string path = [extension] {
-        const char* dir = std::getenv("TMPDIR");
-        return std::string(dir && *dir ? dir : "/tmp") + "/sdftrace-fuzz-" +
-               std::to_string(getpid()) + extension;
-    }();
+    const char* dir = std::getenv("TMPDIR");
+    const std::string path = std::string(dir && *dir ? dir : "/tmp") + "/sdftrace-fuzz-" +
+                             std::to_string(getpid()) + extension;
     std::FILE* f = std::fopen(path.c_str(), "wb");
     if (!f) std::abort();
     if (size && std::fwrite(data, 1, size, f) != size) std::abort();

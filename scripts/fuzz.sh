@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes sdftrace's input paths with libFuzzer (clang from Debian) for SECONDS each:
-#   scripts/fuzz.sh SECONDS [TARGET ...]      targets: scene sdfg vdb mesh (default: all)
+#   scripts/fuzz.sh SECONDS [TARGET ...]      targets: scene sdfg vdb mesh mesh_ply mesh_stl
+#                                             mesh_off mesh_obj mesh_gltf (default: all)
 # Builds build/fuzz (clang, coverage instrumentation, AddressSanitizer, UndefinedBehaviorSanitizer),
 # runs the targets side by side (FUZZ_JOBS at a time, default: the number of cores), each on a
 # working copy of its stored corpus (fuzz/corpus/TARGET). Prints executions per target and exits
@@ -12,7 +13,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:?usage: scripts/fuzz.sh SECONDS [TARGET ...]}
 shift
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(scene sdfg vdb mesh)
+[ ${#targets[@]} -eq 0 ] && targets=(scene sdfg vdb mesh mesh_ply mesh_stl mesh_off mesh_obj mesh_gltf)
 build=build/fuzz
 jobs=${FUZZ_JOBS:-$(nproc)}
 
@@ -33,9 +34,11 @@ run() {
     # Leaks are not findings here (OpenVDB keeps process-lifetime registries); timeouts and
     # inputs over 2 GB of memory are. The targets replace operator new with the allocation guard
     # (apps/sdftrace/allocation_guard.cpp) while libFuzzer's own code keeps ASan's, so ASan's
-    # new/free pairing check cannot apply.
+    # new/free pairing check cannot apply. A target's dictionary is fuzz/dict/TARGET.dict.
+    local dict=()
+    [ -f fuzz/dict/"$t".dict ] && dict=(-dict=fuzz/dict/"$t".dict)
     ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:alloc_dealloc_mismatch=0 UBSAN_OPTIONS=print_stacktrace=1 \
-        "$build/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+        "$build/fuzz_$t" "${dict[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
         -print_final_stats=1 -artifact_prefix="$findings" "$work" >"$build/$t.log" 2>&1
 }
 
@@ -51,7 +54,7 @@ for t in "${targets[@]}"; do
 done
 for p in "${pids[@]}"; do wait "$p" || status=1; done
 
-printf '%-6s %14s %10s %9s  %s\n' target executions exec/s corpus result
+printf '%-10s %14s %10s %9s  %s\n' target executions exec/s corpus result
 for t in "${targets[@]}"; do
     log="$build/$t.log"
     execs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
@@ -59,7 +62,7 @@ for t in "${targets[@]}"; do
     corpus=$(find "$build/corpus/$t" -type f | wc -l)
     result="no finding"
     if ls "$build/findings/$t/"* >/dev/null 2>&1; then result="FINDING: $(ls "$build/findings/$t/")"; status=1; fi
-    printf '%-6s %14s %10s %9s  %s\n' "$t" "$execs" "$rate" "$corpus" "$result"
+    printf '%-10s %14s %10s %9s  %s\n' "$t" "$execs" "$rate" "$corpus" "$result"
     if [ "${FUZZ_MERGE:-0}" = 1 ]; then
         ASAN_OPTIONS=detect_leaks=0:alloc_dealloc_mismatch=0 "$build/fuzz_$t" -merge=1 fuzz/corpus/"$t" "$build/corpus/$t" \
             >>"$log" 2>&1

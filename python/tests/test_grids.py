@@ -230,3 +230,23 @@ def test_bad_grid_files_are_value_errors(tmp_path):
     with pytest.raises(ValueError, match="unknown grid file extension"):
         sdftrace.bake(v, f, resolution=8).save(tmp_path / "cube.txt")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["junk.sdfg"]  # nothing half-written
+
+
+def test_damaged_mesh_files_are_value_errors_naming_the_file(tmp_path):
+    """The CLI's readers: a PLY cut short, a binary STL whose count does not fit, an OFF index
+    past its vertices: one ValueError each, naming the file and what is wrong."""
+    import struct
+    ply = tmp_path / "cut.ply"
+    ply.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 1000\n"
+                    b"property float x\nproperty float y\nproperty float z\nelement face 2000\n"
+                    b"property list uchar int vertex_indices\nend_header\n" + struct.pack("<9f", *range(9)))
+    with pytest.raises(ValueError, match=r"cut.ply: PLY: the header declares 1000 vertex and 2000 face"):
+        sdftrace.bake(ply, resolution=8)
+    stl = tmp_path / "short.stl"
+    stl.write_bytes(b"\0" * 80 + struct.pack("<I", 12) + b"\0" * 100)
+    with pytest.raises(ValueError, match=r"short.stl: STL: binary STL declares 12 triangles"):
+        sdftrace.bake(stl, resolution=8)
+    off = tmp_path / "index.off"
+    off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")
+    with pytest.raises(ValueError, match=r"index.off:6: OFF: face 0 uses vertex 7, but there are 3"):
+        sdftrace.bake(off, resolution=8)

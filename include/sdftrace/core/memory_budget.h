@@ -4,6 +4,7 @@
 // --max-memory sets it; the default is half of this machine's physical memory.
 #pragma once
 
+#include <new>
 #include <string>
 
 namespace sdft {
@@ -23,6 +24,19 @@ bool memoryBudgetIsSet();
 void checkMemoryBudget(double bytes, const std::string& what, const std::string& forWhat,
                        const std::string& advice);
 
+// Throws InputError "<what>: reading it needs more memory than the budget of <budget> (...)".
+[[noreturn]] void throwOverBudget(const std::string& what);
+// read(), an allocation failure in it (the allocation guard's std::bad_alloc for one allocation
+// over the budget, a third-party reader's, or the machine's memory exhausted) thrown as
+// throwOverBudget(what)'s InputError: file readers end in one line, never std::bad_alloc.
+template <class Read>
+auto readWithinBudget(const std::string& what, Read&& read) -> decltype(read()) {
+    try {
+        return read();
+    } catch (const std::bad_alloc&) {
+        throwOverBudget(what);
+    }
+}
 // "1.5 GiB", "820 MiB", "12 KiB", "100 bytes".
 std::string formatBytes(double bytes);
 // "8G", "8GiB", "512M", "1.5g", "123456" (bytes); false on anything else or on a size <= 0.

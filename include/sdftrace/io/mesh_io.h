@@ -1,5 +1,7 @@
-// Triangle meshes from files through assimp (OBJ, PLY ascii + binary, STL, OFF, glTF), cleaned the
-// way real scans need: exactly-duplicate vertices welded, degenerate and zero-area triangles
+// Triangle meshes from files: PLY, STL and OFF by sdftrace's own readers, which hold every count a
+// file declares to its size (a file cut short or damaged is one error, never a crash), the other
+// formats (OBJ, glTF/GLB, ...) through assimp with its scene validated; cleaned the way real scans
+// need: exactly-duplicate vertices welded, degenerate and zero-area triangles
 // dropped, and what was found reported (duplicate and opposite-winding triangles, open boundary
 // edges, components). An unreadable, empty or non-finite mesh is an InputError naming the file.
 #pragma once

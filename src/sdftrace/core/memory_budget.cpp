@@ -53,6 +53,13 @@ std::string formatBytes(double bytes) {
     return buf;
 }
 
+void throwOverBudget(const std::string& what) {
+    throw InputError(what + ": reading it needs more memory than the budget of " +
+                     formatBytes(memoryBudgetBytes()) + " (" +
+                     (memoryBudgetIsSet() ? "--max-memory" : "half of this machine's memory") +
+                     "), or the file is damaged; raise --max-memory if it is not");
+}
+
 void checkMemoryBudget(double bytes, const std::string& what, const std::string& forWhat,
                        const std::string& advice) {
     const double budget = memoryBudgetBytes();

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/io/raw_grid_io.h"
 #include "sdftrace/io/sdfg_io.h"
 #include "sdftrace/io/sdfgen_io.h"
@@ -24,8 +25,8 @@ bool isGridFile(const std::string& path) {
 Grid loadGridFile(const std::string& path) {
     std::string e = extensionOf(path);
     if (e == ".sdfg") return loadSdfg(path);
-    if (e == ".sdf") return loadSdfgen(path);
-    if (e == ".raw") return loadRawGrid(path);
+    if (e == ".sdf") return readWithinBudget(path, [&] { return loadSdfgen(path); });
+    if (e == ".raw") return readWithinBudget(path, [&] { return loadRawGrid(path); });
     if (e == ".vdb") {
         if (!std::filesystem::exists(path))
             throw InputError(path + ": cannot open grid file (does it exist?)");

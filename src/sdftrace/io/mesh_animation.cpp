@@ -124,8 +124,13 @@ Mesh readMesh(const aiMesh* m, const std::vector<Node>& nodes, const std::string
         checkFinite(mesh.positions[v], path, "vertex " + std::to_string(v));
     for (unsigned f = 0; f < m->mNumFaces; ++f) {
         const aiFace& face = m->mFaces[f];
-        if (face.mNumIndices == 3)
-            mesh.triangles.push_back({face.mIndices[0], face.mIndices[1], face.mIndices[2]});
+        if (face.mNumIndices != 3 || !face.mIndices) continue;  // points and lines
+        for (int k = 0; k < 3; ++k)
+            if (face.mIndices[k] >= m->mNumVertices)
+                throw InputError(path + ": face " + std::to_string(f) + " uses vertex " +
+                                 std::to_string(face.mIndices[k]) + " of " +
+                                 std::to_string(m->mNumVertices));
+        mesh.triangles.push_back({face.mIndices[0], face.mIndices[1], face.mIndices[2]});
     }
     for (unsigned b = 0; b < m->mNumBones; ++b) {
         const aiBone* bone = m->mBones[b];
@@ -233,10 +238,15 @@ AnimatedMesh AnimatedMesh::load(const std::string& path) {
     Assimp::Importer importer;
     // Triangulated; the hierarchy kept (no pre-transformed vertices): joints and animated nodes
     // move parts of it. Joint weights beyond 4 per vertex are kept as the file has them.
-    const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
-    if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
-        throw InputError(path + ": cannot read mesh (" + std::string(importer.GetErrorString()) +
+    // The scene validated first (counts, indices, pointers) as loadMesh's is.
+    const aiScene* scene =
+        importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate);
+    if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
+        std::string why = importer.GetErrorString();
+        std::replace(why.begin(), why.end(), '\n', ' ');
+        throw InputError(path + ": cannot read mesh (" + why +
                          "); animated meshes: glTF, Collada, FBX, DirectX .x");
+    }
     auto impl = std::make_shared<Impl>();
     impl->path = path;
     addNodes(scene->mRootNode, -1, impl->nodes);

@@ -14,6 +14,8 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
+#include "sdftrace/io/mesh_readers.h"
+#include "sdftrace/io/text_cursor.h"
 
 namespace sdft {
 
@@ -136,14 +138,18 @@ TriangleMesh cleanMesh(const std::vector<Vec3>& positions,
     return mesh;
 }
 
-TriangleMesh loadMesh(const std::string& path, MeshReport* report) {
-    if (!std::filesystem::exists(path))
-        throw InputError(path + ": cannot open mesh file (does it exist?)");
+namespace {
+
+// The long tail of formats (OBJ, glTF/GLB, Collada, FBX, .x, ...) through assimp, its scene
+// validated (aiProcess_ValidateDataStructure: counts, indices and pointers checked before any
+// post-processing step reads them) and its arrays checked again as they are copied.
+MeshArrays readWithAssimp(const std::string& path) {
     Assimp::Importer importer;
     // Triangulate polygons and flatten the node hierarchy so every mesh is in world space. The
     // importer may split vertices per face corner; welding by exact position is ours (cleanMesh).
     const aiScene* scene =
-        importer.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices);
+        importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate |
+                                    aiProcess_PreTransformVertices);
     if (!scene && std::string(importer.GetErrorString()).find("bad_alloc") != std::string::npos) {
         // assimp turns std::bad_alloc into an error string; the allocation guard of the CLI
         // throws it for any single allocation over the memory budget.
@@ -152,34 +158,60 @@ TriangleMesh loadMesh(const std::string& path, MeshReport* report) {
                          " (raise --max-memory, or simplify the mesh)");
     }
     if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
-        throw InputError(path + ": cannot read mesh (" + std::string(importer.GetErrorString()) +
-                         "); accepted: OBJ, PLY, STL, OFF, glTF");
+        std::string why = importer.GetErrorString();
+        std::replace(why.begin(), why.end(), '\n', ' ');
+        throw InputError(path + ": cannot read mesh (" + TextCursor::printable(why) +
+                         "); accepted: OBJ, PLY, STL, OFF, glTF/GLB and the other formats of "
+                         "assimp");
     }
-    std::vector<Vec3> positions;
-    std::vector<std::array<uint32_t, 3>> triangles;
+    MeshArrays out;
     for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
         const aiMesh* mesh = scene->mMeshes[m];
-        uint32_t base = static_cast<uint32_t>(positions.size());
+        if (!mesh || (mesh->mNumVertices && !mesh->mVertices) || (mesh->mNumFaces && !mesh->mFaces))
+            throw InputError(path + ": cannot read mesh (mesh " + std::to_string(m) +
+                             " has no vertex or face arrays)");
+        const auto base = static_cast<uint32_t>(out.positions.size());
         for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
             const aiVector3D& p = mesh->mVertices[v];
-            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-                throw InputError(path + ": vertex " + std::to_string(base + v) + " is not finite");
-            }
-            positions.push_back({p.x, p.y, p.z});
+            out.positions.push_back({p.x, p.y, p.z});
         }
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const aiFace& face = mesh->mFaces[f];
-            if (face.mNumIndices != 3) continue;  // points and lines
-            triangles.push_back(
+            if (face.mNumIndices != 3 || !face.mIndices) continue;  // points and lines
+            for (int k = 0; k < 3; ++k)
+                if (face.mIndices[k] >= mesh->mNumVertices)
+                    throw InputError(path + ": mesh " + std::to_string(m) + ", face " +
+                                     std::to_string(f) + " uses vertex " +
+                                     std::to_string(face.mIndices[k]) + " of " +
+                                     std::to_string(mesh->mNumVertices));
+            out.triangles.push_back(
                 {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
         }
+    }
+    return out;
+}
+
+}  // namespace
+
+TriangleMesh loadMesh(const std::string& path, MeshReport* report) {
+    if (!std::filesystem::exists(path))
+        throw InputError(path + ": cannot open mesh file (does it exist?)");
+    MeshArrays arrays = readWithinBudget(path, [&] {
+        const MeshReader own = ownMeshReader(path);
+        return own ? own(path) : readWithAssimp(path);
+    });
+    for (size_t v = 0; v < arrays.positions.size(); ++v) {
+        const Vec3& p = arrays.positions[v];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            throw InputError(path + ": vertex " + std::to_string(v) + " is not finite");
     }
     MeshReport local;
     MeshReport& r = report ? *report : local;
     // Before cleaning: its area tests would call a mesh out of range degenerate.
-    if (std::string problem = meshRangeProblem({positions, triangles}); !problem.empty())
+    if (std::string problem = meshRangeProblem({arrays.positions, arrays.triangles});
+        !problem.empty())
         throw InputError(path + ": " + problem);
-    TriangleMesh mesh = cleanMesh(positions, triangles, r);
+    TriangleMesh mesh = cleanMesh(arrays.positions, arrays.triangles, r);
     if (mesh.triangles.empty())
         throw InputError(path + ": the mesh has no (non-degenerate) triangles");
     return mesh;

@@ -83,7 +83,7 @@ TEST(MeshIo, BadFilesAreRejectedByName) {
     };
     expectError(dir + "/missing.obj", "cannot open");
     std::ofstream(dir + "/garbage.stl") << "this is not a mesh at all";
-    expectError(dir + "/garbage.stl", "cannot read mesh");
+    expectError(dir + "/garbage.stl", "not ascii STL");
     std::ofstream(dir + "/points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
     expectError(dir + "/points.obj", "");
     std::ofstream(dir + "/flat.obj") << "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n";

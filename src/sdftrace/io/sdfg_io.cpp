@@ -575,7 +575,9 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
 
 }  // namespace
 
-Grid loadSdfg(const std::string& path) {
+namespace {
+
+Grid readSdfg(const std::string& path) {
     const MappedFile file(path);
     const uint64_t fileBytes = file.size();
     const Header h = readHeader(file, path);
@@ -627,6 +629,12 @@ Grid loadSdfg(const std::string& path) {
     if (l.texcoords)
         grid.setExpandedTexcoords(static_cast<TexcoordKind>(texHeader[0]), texcoords, path);
     return grid;
+}
+
+}  // namespace
+
+Grid loadSdfg(const std::string& path) {
+    return readWithinBudget(path, [&] { return readSdfg(path); });
 }
 
 }  // namespace sdft

@@ -508,8 +508,10 @@ class TreeToGrid {
 }  // namespace
 
 Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
-    const vdb::FloatGrid g = vdb::readVdbFile(path);
-    return TreeToGrid(g, path, options).build();
+    return readWithinBudget(path, [&] {
+        const vdb::FloatGrid g = vdb::readVdbFile(path);
+        return TreeToGrid(g, path, options).build();
+    });
 }
 
 void saveVdb(const Grid& grid, const std::string& path) {

@@ -1,0 +1,19 @@
+#include "sdftrace/io/mesh_readers.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+
+namespace sdft {
+
+MeshReader ownMeshReader(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".ply") return readPly;
+    if (ext == ".stl") return readStl;
+    if (ext == ".off") return readOff;
+    return nullptr;
+}
+
+}  // namespace sdft
