@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,15 @@ struct MeshArrays {
 // assimp reads.
 using MeshReader = MeshArrays (*)(const std::string& path);
 MeshReader ownMeshReader(const std::string& path);
+
+// A coordinate read as a double, as a float: beyond float's range it is an infinity (loadMesh
+// then names the vertex as not finite), never the undefined behaviour of an overflowing cast.
+inline float toFloatCoordinate(double v) {
+    constexpr double kMax = 3.4028234663852886e38;  // FLT_MAX
+    if (v > kMax) return std::numeric_limits<float>::infinity();
+    if (v < -kMax) return -std::numeric_limits<float>::infinity();
+    return static_cast<float>(v);  // NaN stays NaN
+}
 
 MeshArrays readPly(const std::string& path);
 MeshArrays readStl(const std::string& path);

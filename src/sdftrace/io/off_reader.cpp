@@ -29,7 +29,7 @@ MeshArrays readOff(const std::string& path) {
     out.positions.reserve(static_cast<size_t>(nv));
     for (int64_t v = 0; v < nv; ++v) {
         Vec3 p;
-        for (int a = 0; a < 3; ++a) p[a] = static_cast<float>(c.number("OFF vertex"));
+        for (int a = 0; a < 3; ++a) p[a] = toFloatCoordinate(c.number("OFF vertex"));
         out.positions.push_back(p);
         while (c.moreOnLine()) c.token();  // colour or normal
     }

@@ -259,10 +259,8 @@ class PlyReader {
             counts += std::to_string(e.count) + " " + e.name;
         }
         if (need > body + 1)
-            fail("the header declares " + counts + " records, at least " +
-                 std::to_string(static_cast<uint64_t>(need)) + " bytes, but " +
-                 std::to_string(static_cast<uint64_t>(body)) +
-                 " bytes follow it (is the file cut short?)");
+            fail("the header declares " + counts + " records, at least " + formatCount(need) +
+                 " bytes, but " + formatCount(body) + " bytes follow it (is the file cut short?)");
     }
 
     void readElement(const Element& e, MeshArrays& out) {
@@ -309,14 +307,15 @@ class PlyReader {
                         out.triangles.push_back({poly[0], poly[j - 1], poly[j]});
             }
             if (vertex)
-                out.positions.push_back({static_cast<float>(xyz[0]), static_cast<float>(xyz[1]),
-                                         static_cast<float>(xyz[2])});
+                out.positions.push_back({toFloatCoordinate(xyz[0]), toFloatCoordinate(xyz[1]),
+                                         toFloatCoordinate(xyz[2])});
         }
     }
 
+    // A count or index as read (any double: no cast that could overflow).
     static std::string formatCount(double v) {
         char buf[48];
-        std::snprintf(buf, sizeof buf, "%.17g", v);
+        std::snprintf(buf, sizeof buf, v >= 0 && v < 1e18 ? "%.0f" : "%.17g", v);
         return buf;
     }
 

@@ -43,7 +43,7 @@ MeshArrays asciiStl(const char* begin, const char* end, const std::string& path)
         if (t == "vertex") {
             if (!inLoop) c.fail("STL: 'vertex' outside 'outer loop'");
             Vec3 p;
-            for (int a = 0; a < 3; ++a) p[a] = static_cast<float>(c.number("STL vertex"));
+            for (int a = 0; a < 3; ++a) p[a] = toFloatCoordinate(c.number("STL vertex"));
             loop.push_back(static_cast<uint32_t>(out.positions.size()));
             out.positions.push_back(p);
         } else if (t == "outer") {
