@@ -157,7 +157,7 @@ void precheckForAssimp(const std::string& path) {
     const size_t n = file.size();
     auto fail = [&](const std::string& what) { throw InputError(path + ": " + what); };
     if (ext == ".obj") {
-        if (std::memchr(d, 0, n)) fail("OBJ: a NUL byte in a text format (a damaged file?)");
+        if (n && std::memchr(d, 0, n)) fail("OBJ: a NUL byte in a text format (a damaged file?)");
         return;
     }
     if (ext == ".gltf") {
@@ -245,6 +245,9 @@ MeshArrays readWithAssimp(const std::string& path) {
 TriangleMesh loadMesh(const std::string& path, MeshReport* report) {
     if (!std::filesystem::exists(path))
         throw InputError(path + ": cannot open mesh file (does it exist?)");
+    std::error_code ec;
+    if (std::filesystem::file_size(path, ec) == 0 && !ec)
+        throw InputError(path + ": the mesh file is empty");
     MeshArrays arrays = readWithinBudget(path, [&] {
         const MeshReader own = ownMeshReader(path);
         return own ? own(path) : readWithAssimp(path);

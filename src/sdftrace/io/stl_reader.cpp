@@ -86,7 +86,7 @@ MeshArrays readStl(const std::string& path) {
         ++i;
     // A binary file's header may start with "solid" too: one with NUL bytes near its start whose
     // count does not fit is reported as binary.
-    const bool text = std::memchr(data, 0, std::min<size_t>(size, 512)) == nullptr;
+    const bool text = size == 0 || std::memchr(data, 0, std::min<size_t>(size, 512)) == nullptr;
     if (size - i >= 5 && std::memcmp(data + i, "solid", 5) == 0 && (text || size < 84))
         return asciiStl(data, data + size, path);
     if (size < 84)
