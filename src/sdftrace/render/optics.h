@@ -1,5 +1,5 @@
-// Reflection and refraction at a smooth interface (Fresnel, Snell), shared by the Whitted tracer
-// (whitted.cpp, whitted_pixel.h) and the path tracer. GPU-ready.
+// Reflection and refraction at a smooth interface (Fresnel, Snell), shared by Whitted rays
+// (whitted_pixel.h) and the path tracer (path_pixel.h), on both devices.
 #pragma once
 
 #include <cmath>
