@@ -148,9 +148,7 @@ namespace {
 // those (Blender's among them) read damaged bytes out of bounds. A .glb is its header's length,
 // chunk by chunk, with JSON in its first chunk; a .gltf is JSON; an .obj is text.
 void precheckForAssimp(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string ext = lowerExtension(path);
     if (ext != ".glb" && ext != ".gltf" && ext != ".obj") return;
     const MappedFile file(path);
     const char* d = file.data();

@@ -6,10 +6,15 @@
 
 namespace sdft {
 
-MeshReader ownMeshReader(const std::string& path) {
+std::string lowerExtension(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
+}
+
+MeshReader ownMeshReader(const std::string& path) {
+    const std::string ext = lowerExtension(path);
     if (ext == ".ply") return readPly;
     if (ext == ".stl") return readStl;
     if (ext == ".off") return readOff;

@@ -22,6 +22,9 @@ struct MeshArrays {
     std::vector<std::array<uint32_t, 3>> triangles;
 };
 
+// `path`'s extension in lower case (".ply"), which picks its reader.
+std::string lowerExtension(const std::string& path);
+
 // The reader for `path`'s extension (.ply, .stl, .off, case-insensitive), or null for the formats
 // assimp reads.
 using MeshReader = MeshArrays (*)(const std::string& path);

@@ -77,48 +77,35 @@ struct Element {
 
 enum class Format { Ascii, Little, Big };
 
-// One binary value at p, as a double.
+// One binary value of type T at p (byte-swapped where `swap`), as a double.
+template <class T>
+double binaryAs(const char* p, bool swap) {
+    uint8_t b[sizeof(T)];
+    std::memcpy(b, p, sizeof b);
+    if (swap) std::reverse(b, b + sizeof b);
+    T v;
+    std::memcpy(&v, b, sizeof v);
+    return static_cast<double>(v);
+}
+
 double binaryValue(const char* p, PlyType t, bool swap) {
-    uint8_t b[8];
-    const size_t n = typeBytes(t);
-    std::memcpy(b, p, n);
-    if (swap)
-        for (size_t i = 0; i < n / 2; ++i) std::swap(b[i], b[n - 1 - i]);
     switch (t) {
         case PlyType::Int8:
-            return static_cast<int8_t>(b[0]);
+            return binaryAs<int8_t>(p, swap);
         case PlyType::Uint8:
-            return b[0];
-        case PlyType::Int16: {
-            int16_t v;
-            std::memcpy(&v, b, 2);
-            return v;
-        }
-        case PlyType::Uint16: {
-            uint16_t v;
-            std::memcpy(&v, b, 2);
-            return v;
-        }
-        case PlyType::Int32: {
-            int32_t v;
-            std::memcpy(&v, b, 4);
-            return v;
-        }
-        case PlyType::Uint32: {
-            uint32_t v;
-            std::memcpy(&v, b, 4);
-            return v;
-        }
-        case PlyType::Float32: {
-            float v;
-            std::memcpy(&v, b, 4);
-            return v;
-        }
-        case PlyType::Float64: {
-            double v;
-            std::memcpy(&v, b, 8);
-            return v;
-        }
+            return binaryAs<uint8_t>(p, swap);
+        case PlyType::Int16:
+            return binaryAs<int16_t>(p, swap);
+        case PlyType::Uint16:
+            return binaryAs<uint16_t>(p, swap);
+        case PlyType::Int32:
+            return binaryAs<int32_t>(p, swap);
+        case PlyType::Uint32:
+            return binaryAs<uint32_t>(p, swap);
+        case PlyType::Float32:
+            return binaryAs<float>(p, swap);
+        case PlyType::Float64:
+            return binaryAs<double>(p, swap);
     }
     return 0;
 }
@@ -213,6 +200,11 @@ class PlyReader {
         if (!haveFormat) fail("the header has no 'format' line");
         m_body = m_binary = c.position();
         m_end = end;
+        findMeshElements();
+    }
+
+    // The vertex element with its x, y, z, and the face element with its index list.
+    void findMeshElements() {
         for (size_t i = 0; i < m_elements.size(); ++i) {
             Element& e = m_elements[i];
             if (e.name == "vertex" && m_vertex < 0) {
