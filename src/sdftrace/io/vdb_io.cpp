@@ -89,6 +89,8 @@ class TreeToGrid {
         const float h = m_shape.voxelSize;
         m_bandVoxels = std::max(o.minBandVoxels, std::fabs(m_t.background) / h * 0.999f);
         m_band = m_bandVoxels * h;
+        m_tileFloor = std::min(m_band, std::fabs(m_t.background) / h * 0.999f * h);
+        checkTiles();
         for (int a = 0; a < 3; ++a) {
             m_blocks[a] = (m_shape.cells[a] + m_B - 1) / m_B;
             m_tiles[a] = (m_blocks[a] + kTileBlocks - 1) >> kTileShift;
@@ -120,6 +122,35 @@ class TreeToGrid {
     }
 
   private:
+    // A level set's tiles hold +-background: the band lies wholly in its leaves. A tile inside
+    // the band would turn every block of its region into a surface block (a 12 KB file can hold
+    // tiles over billions of voxels), so it is refused here, before anything is sized by it.
+    void checkTiles() const {
+        auto check = [&](float v, int32_t x, int32_t y, int32_t z, int extent) {
+            if (std::fabs(v) >= m_tileFloor) return;
+            const std::string e = std::to_string(extent);
+            throw InputError(m_path + ": grid '" + m_gridName + "' has a tile of " + e +
+                             "^3 voxels at (" + std::to_string(x) + ", " + std::to_string(y) +
+                             ", " + std::to_string(z) + ") holding " + std::to_string(v) +
+                             ", inside the narrow band (|value| < " + std::to_string(m_tileFloor) +
+                             "): not a level set (accepted: level sets whose tiles hold "
+                             "+-background, as openvdb::tools::pruneLevelSet leaves them)");
+        };
+        for (const vdb::RootTile& tile : m_t.tiles)
+            check(tile.value, tile.origin[0], tile.origin[1], tile.origin[2], 4096);
+        auto internal = [&](const std::vector<vdb::Internal>& nodes, int log2, int shift) {
+            for (const vdb::Internal& n : nodes)
+                for (int i = 0; i < (1 << (3 * log2)); ++i)
+                    if (n.children[static_cast<size_t>(i)] < 0)
+                        check(n.values[static_cast<size_t>(i)],
+                              n.origin[0] + ((i >> (2 * log2)) << shift),
+                              n.origin[1] + (((i >> log2) & ((1 << log2) - 1)) << shift),
+                              n.origin[2] + ((i & ((1 << log2) - 1)) << shift), 1 << shift);
+        };
+        internal(m_t.upper, 5, 7);
+        internal(m_t.lower, 4, 3);
+    }
+
     void makeShape(const vdb::FloatGrid& g) {
         for (int a = 0; a < 3; ++a) {
             const int64_t dim = static_cast<int64_t>(m_hi[a]) - m_lo[a] + 1;
@@ -282,7 +313,7 @@ class TreeToGrid {
         auto take = [&](float v) {
             anyNeg |= v < 0;
             anyPos |= !(v < 0);
-            return std::fabs(v) < m_band;
+            return std::fabs(v) < m_tileFloor;
         };
         for (int32_t uz = v0[2] >> kUnitLog2; uz <= v1[2] >> kUnitLog2; ++uz)
             for (int32_t uy = v0[1] >> kUnitLog2; uy <= v1[1] >> kUnitLog2; ++uy)
@@ -307,6 +338,15 @@ class TreeToGrid {
                                 if (lower.children[slot] >= 0 || take(lower.values[slot])) return 2;
                             }
                 }
+        // Tiles of both signs and no leaf between them: two neighbouring voxels hold -background
+        // and +background, which no distance field does (they are one voxel apart). Refused, as
+        // each block along the meeting would otherwise be a surface block.
+        if (anyNeg && anyPos && m_tileFloor > 0.5f * m_shape.voxelSize)
+            throw InputError(m_path + ": grid '" + m_gridName +
+                             "' has tiles of opposite sign meeting near voxel (" +
+                             std::to_string(v0[0]) + ", " + std::to_string(v0[1]) + ", " +
+                             std::to_string(v0[2]) +
+                             ") with no narrow band between them: not a level set");
         return anyNeg && anyPos ? 2 : anyNeg ? 1 : 0;
     }
 
@@ -374,7 +414,7 @@ class TreeToGrid {
             if (leaf < 0) {
                 anyNeg |= v < 0;
                 anyPos |= !(v < 0);
-                near |= std::fabs(v) < m_band;
+                near |= std::fabs(v) < m_tileFloor;
                 continue;
             }
             // The y rows (bytes) and z bits of the box inside each x word.
@@ -495,6 +535,7 @@ class TreeToGrid {
     std::array<int32_t, 3> m_lo{}, m_hi{};
     GridShape m_shape;
     float m_bandVoxels = 0, m_band = 0;
+    float m_tileFloor = 0;  // tiles hold at least this magnitude (min(band, background))
     static constexpr int kUnitLog2 = 7;  // a lower internal node: 128 voxels
     int m_blocks[3] = {0, 0, 0}, m_tiles[3] = {0, 0, 0};
     size_t m_numTiles = 0;

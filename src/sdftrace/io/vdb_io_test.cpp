@@ -194,6 +194,78 @@ TEST(Vdb, RejectsUnusableFiles) {
     for (const auto& p : {garbage, vec, stretched, nan}) std::filesystem::remove(p);
 }
 
+// Cost follows the file's content: a level set's tiles hold +-background, so a tile of any size
+// becomes constant blocks (or a shared constant page), never blocks sampled voxel by voxel; a
+// tile inside the band or tiles of opposite sign with no band between them are not a level set
+// and are refused before anything is sized by them (a 4096^3 root tile at 0 once took 20 s and
+// 1.1 GB to classify, then ran out of budget).
+TEST(Vdb, TilesCostWhatTheFileHoldsNotTheVoxelsTheyCover) {
+    openvdb::initialize();
+    const std::string path = tempPath("tiles.vdb");
+    auto write = [&](openvdb::FloatGrid::Ptr g) {
+        g->setGridClass(openvdb::GRID_LEVEL_SET);
+        openvdb::io::File(path).write({g});
+    };
+    // A sphere 500 voxels across: OpenVDB fills its inside with tiles at -background, up to
+    // 128^3 voxels each; they import as constant blocks, not sampled voxel by voxel.
+    {
+        auto g = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(250.0f, openvdb::Vec3f(0),
+                                                                          1.0f, 3.0f);
+        openvdb::Index64 tileVoxels = 0;
+        for (auto it = g->tree().cbeginValueAll(); it; ++it)
+            if (!it.isVoxelValue() && it.getLevel() >= 2 && *it < 0)
+                tileVoxels += it.getBoundingBox().volume();
+        ASSERT_GT(tileVoxels, openvdb::Index64{4} << 21);  // several 128^3 tiles
+        write(g);
+        const Grid grid = loadVdb(path);
+        size_t in, out, surf;
+        grid.blockCounts(in, out, surf);
+        EXPECT_GT(in, tileVoxels / 64);
+        // The band: about 4 pi r^2 * 6 voxels / 4^3, well below the sphere's 1.04e6 blocks.
+        EXPECT_LT(surf, 150000u);
+        EXPECT_LT(grid.memoryBytes(), size_t{96} << 20);
+    }
+    // Refused, one line each, naming the tile.
+    {
+        auto g = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(12.0f, openvdb::Vec3f(0),
+                                                                          1.0f, 3.0f);
+        g->tree().addTile(3, openvdb::Coord(4096, 0, 0), 0.5f, true);
+        write(g);
+        try {
+            loadVdb(path);
+            ADD_FAILURE() << "a tile inside the band was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("tile of 4096^3 voxels at (4096, 0, 0)"),
+                      std::string::npos)
+                << e.what();
+            EXPECT_NE(std::string(e.what()).find("not a level set"), std::string::npos);
+        }
+        for (int level : {1, 2}) {
+            auto h = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+                12.0f, openvdb::Vec3f(0), 1.0f, 3.0f);
+            h->tree().addTile(level, openvdb::Coord(256, 0, 0), -0.25f, false);
+            write(h);
+            EXPECT_THROW(loadVdb(path), InputError) << level;
+        }
+    }
+    {
+        // Inside and outside tiles side by side, no leaf between them.
+        auto g = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(12.0f, openvdb::Vec3f(0),
+                                                                          1.0f, 3.0f);
+        g->tree().addTile(2, openvdb::Coord(1024, 0, 0), -g->background(), true);
+        g->tree().addTile(2, openvdb::Coord(1152, 0, 0), g->background(), true);
+        write(g);
+        try {
+            loadVdb(path);
+            ADD_FAILURE() << "tiles of opposite sign without a band were accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("tiles of opposite sign"), std::string::npos)
+                << e.what();
+        }
+    }
+    std::filesystem::remove(path);
+}
+
 // The import as it was through OpenVDB's reader: the dense active region, sparsified. The native
 // reader must give the same grid, block for block.
 Grid importThroughOpenVdb(const openvdb::FloatGrid& grid, const VdbImportOptions& o) {
