@@ -45,6 +45,8 @@ class NumberReader {
         skipSpace();
         return m_pos >= m_text.size();
     }
+    // The most numbers the rest of the text can hold: each is a character and a separator.
+    size_t mostNumbersLeft() const { return (m_text.size() - m_pos + 1) / 2; }
     [[noreturn]] void fail(const std::string& what) const {
         throw InputError(m_path + ": line " + std::to_string(m_line) + ": " + what +
                          " (SDFGen format: 'ni nj nk', the origin, dx, then ni*nj*nk values)");
@@ -86,6 +88,12 @@ Grid loadSdfgen(const std::string& path) {
     for (double& o : origin) o = r.next<double>("the origin (three numbers)");
     const double dx = r.next<double>("the spacing dx");
     const GridShape shape = io_detail::denseShape(dims, origin, dx, path);
+    // Held to the file's length before the samples are allocated: a 20-byte file cannot ask for
+    // gigabytes.
+    if (shape.vertexCount() > r.mostNumbersLeft())
+        r.fail("the file ends before its " + std::to_string(shape.vertexCount()) + " values (its " +
+               std::to_string(text.size()) + " bytes hold at most " +
+               std::to_string(r.mostNumbersLeft()) + ")");
     std::vector<float> samples(shape.vertexCount());
     for (size_t i = 0; i < samples.size(); ++i) {
         samples[i] = r.next<float>("a distance value");

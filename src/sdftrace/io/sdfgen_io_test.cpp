@@ -70,7 +70,10 @@ TEST(SdfgenIo, MalformedFilesFailWithTheLine) {
         const char* text;
         const char* fragment;
     } cases[] = {
-        {"2 2 2\n0 0 0\n1\n1 2 3 4 5 6 7\n", "line 5: the file ends before a distance value"},
+        {"2 2 2\n0 0 0\n1\n1 2 3 4 5 6 7      \n", "line 5: the file ends before a distance value"},
+        // Held to the file's length before anything is allocated.
+        {"2 2 2\n0 0 0\n1\n1 2 3 4 5 6\n", "the file ends before its 8 values"},
+        {"300 300 300\n0 0 0\n1\n1 2\n", "the file ends before its 27000000 values"},
         {"2 2 2\n0 0 0\n1\n1 2 3 4 5 6 7 8 9\n", "more values than ni*nj*nk = 8"},
         {"2 2 2\n0 0 0\n1\n1 2 3 x 5 6 7 8\n", "line 4: expected a distance value, found 'x'"},
         {"2 2 2\n0 0 0\n1\n1 2 3 nan 5 6 7 8\n", "non-finite distance value"},
