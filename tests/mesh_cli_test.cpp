@@ -245,8 +245,8 @@ TEST(MeshCli, BadMeshInputFailsClearly) {
          "--res 512: needs 515 MiB"},
         {"bake " + scene + " --res 16 --max-memory lots -o " + dir.file("x.sdfg"),
          "--max-memory: lots: expected a size such as 8G"},
-        {"render -q " + mesh("bunny_npm.obj") + " --max-memory 1M -o " + dir.file("x.png"),
-         "needs more memory than the budget of 1 MiB (raise --max-memory"},
+        {"render -q " + mesh("stanford-bunny.obj") + " --max-memory 1M -o " + dir.file("x.png"),
+         "stanford-bunny.obj: reading it needs more memory than the budget of 1 MiB"},
     };
     for (const Case& c : cases) {
         RunResult r = runCli(c.args, dir);

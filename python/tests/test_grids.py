@@ -234,7 +234,8 @@ def test_bad_grid_files_are_value_errors(tmp_path):
 
 def test_damaged_mesh_files_are_value_errors_naming_the_file(tmp_path):
     """The CLI's readers: a PLY cut short, a binary STL whose count does not fit, an OFF index
-    past its vertices: one ValueError each, naming the file and what is wrong."""
+    past its vertices, an OBJ index before its first vertex: one ValueError each, naming the file
+    and what is wrong."""
     import struct
     ply = tmp_path / "cut.ply"
     ply.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 1000\n"
@@ -250,3 +251,7 @@ def test_damaged_mesh_files_are_value_errors_naming_the_file(tmp_path):
     off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")
     with pytest.raises(ValueError, match=r"index.off:6: OFF: face 0 uses vertex 7, but there are 3"):
         sdftrace.bake(off, resolution=8)
+    obj = tmp_path / "index.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n")
+    with pytest.raises(ValueError, match=r"index.obj:4: OBJ: a face uses vertex -4 with 3 vertices read"):
+        sdftrace.bake(obj, resolution=8)

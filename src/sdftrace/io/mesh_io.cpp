@@ -146,18 +146,14 @@ namespace {
 // What assimp is handed is first held to its extension's signature: when the importer of a
 // file's extension declines it, assimp tries every other importer on its content, and some of
 // those (Blender's among them) read damaged bytes out of bounds. A .glb is its header's length,
-// chunk by chunk, with JSON in its first chunk; a .gltf is JSON; an .obj is text.
+// chunk by chunk, with JSON in its first chunk; a .gltf is JSON.
 void precheckForAssimp(const std::string& path) {
     const std::string ext = lowerExtension(path);
-    if (ext != ".glb" && ext != ".gltf" && ext != ".obj") return;
+    if (ext != ".glb" && ext != ".gltf") return;
     const MappedFile file(path);
     const char* d = file.data();
     const size_t n = file.size();
     auto fail = [&](const std::string& what) { throw InputError(path + ": " + what); };
-    if (ext == ".obj") {
-        if (n && std::memchr(d, 0, n)) fail("OBJ: a NUL byte in a text format (a damaged file?)");
-        return;
-    }
     if (ext == ".gltf") {
         if (!nlohmann::json::accept(std::string_view(d, n)))
             fail("glTF: not valid JSON (a damaged file?)");
@@ -186,7 +182,7 @@ void precheckForAssimp(const std::string& path) {
     }
 }
 
-// The long tail of formats (OBJ, glTF/GLB, Collada, FBX, .x, ...) through assimp, its scene
+// The long tail of formats (glTF/GLB, Collada, FBX, .x, ...) through assimp, its scene
 // validated (aiProcess_ValidateDataStructure: counts, indices and pointers checked before any
 // post-processing step reads them) and its arrays checked again as they are copied.
 MeshArrays readWithAssimp(const std::string& path) {

@@ -18,6 +18,7 @@ MeshReader ownMeshReader(const std::string& path) {
     if (ext == ".ply") return readPly;
     if (ext == ".stl") return readStl;
     if (ext == ".off") return readOff;
+    if (ext == ".obj") return readObj;
     return nullptr;
 }
 

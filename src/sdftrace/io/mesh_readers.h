@@ -1,7 +1,7 @@
-// sdftrace's own readers for the mesh formats users bring most whose files declare their sizes:
-// PLY (ascii, binary little- and big-endian), STL (ascii and binary) and OFF. Every count a file
-// declares is checked against what the file can hold before anything is allocated or read, every
-// index against the vertex count, so that a file cut short or with a few bytes changed (what an
+// sdftrace's own readers for the mesh formats users bring most: PLY (ascii, binary little- and
+// big-endian), STL (ascii and binary), OFF and OBJ. Every count a file declares is checked against
+// what the file can hold before anything is allocated or read, every index against the vertex
+// count, so that a file cut short or with a few bytes changed (what an
 // interrupted download leaves) is one InputError "<path>: <what is wrong>" and never a crash or a
 // gigabyte allocation. loadMesh (mesh_io.h) uses them and keeps assimp for the other formats.
 #pragma once
@@ -16,7 +16,7 @@
 
 namespace sdft {
 
-// A mesh file's vertices and triangles as read (polygons fan-triangulated), before cleaning.
+// A mesh file's vertices and triangles as read (polygons triangulated), before cleaning.
 struct MeshArrays {
     std::vector<Vec3> positions;
     std::vector<std::array<uint32_t, 3>> triangles;
@@ -25,8 +25,8 @@ struct MeshArrays {
 // `path`'s extension in lower case (".ply"), which picks its reader.
 std::string lowerExtension(const std::string& path);
 
-// The reader for `path`'s extension (.ply, .stl, .off, case-insensitive), or null for the formats
-// assimp reads.
+// The reader for `path`'s extension (.ply, .stl, .off, .obj, case-insensitive), or null for the
+// formats assimp reads.
 using MeshReader = MeshArrays (*)(const std::string& path);
 MeshReader ownMeshReader(const std::string& path);
 
@@ -42,5 +42,6 @@ inline float toFloatCoordinate(double v) {
 MeshArrays readPly(const std::string& path);
 MeshArrays readStl(const std::string& path);
 MeshArrays readOff(const std::string& path);
+MeshArrays readObj(const std::string& path);
 
 }  // namespace sdft

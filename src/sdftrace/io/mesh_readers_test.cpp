@@ -140,6 +140,38 @@ std::string off(const TriangleMesh& m) {
     return s;
 }
 
+// OBJ as tools write it: groups, texture coordinates and normals, corners of every form, negative
+// indices, quads, a face continued on the next line.
+std::string obj(const TriangleMesh& m) {
+    std::string s = "# written by a test\nmtllib cube.mtl\no cube\n";
+    char line[160];
+    for (const Vec3& p : m.positions) {
+        std::snprintf(line, sizeof line, "v %.9g %.9g %.9g 1.0\n", p.x, p.y, p.z);
+        s += line;
+    }
+    s += "vt 0 0\nvt 1 0\nvn 0 0 1\ng side\nusemtl grey\ns off\n";
+    const char* forms[] = {"%u", "%u/1", "%u//1", "%u/2/1"};
+    int k = 0;
+    for (size_t f = 0; f + 1 < m.triangles.size(); f += 2, ++k) {  // the cube's quads
+        const uint32_t q[4] = {m.triangles[f][0], m.triangles[f][1], m.triangles[f][2],
+                               m.triangles[f + 1][2]};
+        s += "f";
+        for (int j = 0; j < 4; ++j) {
+            // Face 1 by negative indices, face 2 continued after its second corner.
+            const long index = k == 1
+                                   ? static_cast<long>(q[j]) - static_cast<long>(m.positions.size())
+                                   : static_cast<long>(q[j]) + 1;
+            std::snprintf(line, sizeof line, forms[(j + k) % 4], static_cast<unsigned>(index));
+            if (k == 1) std::snprintf(line, sizeof line, "%ld", index);
+            s += " ";
+            s += line;
+            if (k == 2 && j == 1) s += " \\\n  ";
+        }
+        s += "\n";
+    }
+    return s + "l 1 2\np 3\n";
+}
+
 struct Variant {
     const char* name;
     std::string bytes;
@@ -147,9 +179,13 @@ struct Variant {
 
 std::vector<Variant> variants() {
     const TriangleMesh m = cube();
-    return {{"ascii.ply", plyAscii(m)},      {"little.ply", plyBinary(m, false)},
-            {"big.ply", plyBinary(m, true)}, {"binary.stl", stlBinary(m)},
-            {"ascii.stl", stlAscii(m)},      {"quads.off", off(m)}};
+    return {{"ascii.ply", plyAscii(m)},
+            {"little.ply", plyBinary(m, false)},
+            {"big.ply", plyBinary(m, true)},
+            {"binary.stl", stlBinary(m)},
+            {"ascii.stl", stlAscii(m)},
+            {"quads.off", off(m)},
+            {"quads.obj", obj(m)}};
 }
 
 TEST(MeshReaders, EveryVariantReadsTheSameMesh) {
@@ -167,7 +203,7 @@ TEST(MeshReaders, EveryVariantReadsTheSameMesh) {
         EXPECT_EQ(report.components, 1u);
         EXPECT_EQ(report.degenerateTriangles, 0u);
     }
-    EXPECT_EQ(ownMeshReader("x.obj"), nullptr);
+    EXPECT_EQ(ownMeshReader("x.gltf"), nullptr);
     EXPECT_NE(ownMeshReader("X.PLY"), nullptr);
 }
 
@@ -188,6 +224,94 @@ TEST(MeshReaders, APlyCutShortIsOneLine) {
         const std::string what = e.what();
         EXPECT_EQ(what.rfind(path + ": PLY: ", 0), 0u) << what;
         EXPECT_NE(what.find("1000 vertex and 2000 face records"), std::string::npos) << what;
+    }
+}
+
+// OBJ's own errors: each one line with the file and line, what is wrong and what is accepted.
+TEST(MeshReaders, ObjIndicesAreCheckedAgainstTheVerticesDefined) {
+    TempDir dir;
+    const std::string v = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    struct Case {
+        std::string text, fragment;
+    } cases[] = {
+        {v + "f 1 2 0\n", ":4: OBJ: a face uses vertex 0 with 3 vertices read"},
+        {v + "f 1 2 -4\n", ":4: OBJ: a face uses vertex -4"},
+        {v + "f 1 2 4\n", ":4: OBJ: a face uses vertex 4, but the file defines 3 vertices"},
+        {v + "f 1 2 x/1\n", ":4: OBJ: a face corner 'x/1'"},
+        {"v 0 0\n", ":2: OBJ vertex: expected a number, found the end"},
+        {"v 0 0 zero\n", ":1: OBJ vertex: expected a number, found 'zero'"},
+        {v + "f 1 2 99999999999999999999\n", "a face corner"},
+    };
+    for (const Case& c : cases) {
+        const std::string path = dir.write("bad.obj", c.text);
+        try {
+            loadMesh(path);
+            ADD_FAILURE() << "read: " << c.text;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(what.rfind(path + ":", 0), 0u) << what;
+            EXPECT_NE(what.find(c.fragment), std::string::npos) << what;
+        }
+    }
+    // A face may name a vertex defined after it.
+    const TriangleMesh m = loadMesh(dir.write("late.obj", "f 1 2 3\n" + v));
+    EXPECT_EQ(m.triangles.size(), 1u);
+}
+
+// Concave polygons are cut inside themselves: the triangles cover the polygon's area exactly,
+// all with its winding (a fan from a reflex corner would overlap and flip one).
+TEST(MeshReaders, ConcavePolygonsTriangulateInsideThemselves) {
+    TempDir dir;
+    // An L, a dart (a concave quad) and a U in the plane z = 2, each starting at a corner from
+    // which a fan leaves the polygon, in OBJ, OFF and ascii PLY.
+    const std::vector<std::vector<std::array<float, 2>>> shapes = {
+        {{1, 2}, {0, 2}, {0, 0}, {2, 0}, {2, 1}, {1, 1}},
+        {{0, 0}, {2, 1}, {0, 2}, {1, 1}},
+        {{1, 1}, {1, 3}, {0, 3}, {0, 0}, {3, 0}, {3, 3}, {2, 3}, {2, 1}},
+    };
+    for (size_t s = 0; s < shapes.size(); ++s) {
+        const auto& shape = shapes[s];
+        double area2 = 0;  // twice the signed area
+        for (size_t j = 0; j < shape.size(); ++j) {
+            const auto& a = shape[j];
+            const auto& b = shape[(j + 1) % shape.size()];
+            area2 += static_cast<double>(a[0]) * b[1] - static_cast<double>(b[0]) * a[1];
+        }
+        std::string objText,
+            offText = "OFF\n" + std::to_string(shape.size()) + " 1 0\n",
+            plyText = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(shape.size()) +
+                      "\nproperty float x\nproperty float y\nproperty float "
+                      "z\nelement face 1\nproperty list uchar int "
+                      "vertex_indices\nend_header\n";
+        std::string face = "f", offFace = std::to_string(shape.size()),
+                    plyFace = std::to_string(shape.size());
+        for (size_t j = 0; j < shape.size(); ++j) {
+            const std::string xyz =
+                std::to_string(shape[j][0]) + " " + std::to_string(shape[j][1]) + " 2\n";
+            objText += "v " + xyz;
+            offText += xyz;
+            plyText += xyz;
+            face += " " + std::to_string(j + 1);
+            offFace += " " + std::to_string(j);
+            plyFace += " " + std::to_string(j);
+        }
+        const std::pair<std::string, std::string> files[] = {
+            {"shape.obj", objText + face + "\n"},
+            {"shape.off", offText + offFace + "\n"},
+            {"shape.ply", plyText + plyFace + "\n"}};
+        for (const auto& [name, text] : files) {
+            SCOPED_TRACE(name + " shape " + std::to_string(s));
+            const MeshArrays a = ownMeshReader(name)(dir.write(name, text));
+            ASSERT_EQ(a.triangles.size(), shape.size() - 2);
+            double sum = 0;
+            for (const auto& t : a.triangles) {
+                const Vec3 n = cross(a.positions[t[1]] - a.positions[t[0]],
+                                     a.positions[t[2]] - a.positions[t[0]]);
+                EXPECT_GT(n.z * area2, 0) << "a triangle against the polygon's winding";
+                sum += n.z;
+            }
+            EXPECT_NEAR(sum, area2, 1e-4);
+        }
     }
 }
 

@@ -4,6 +4,7 @@
 // to the file's bytes before anything is read (a vertex line takes at least 6 bytes, a face 8).
 #include <string_view>
 
+#include "polygon_triangulation.h"
 #include "sdftrace/io/mapped_file.h"
 #include "sdftrace/io/mesh_readers.h"
 #include "sdftrace/io/text_cursor.h"
@@ -47,8 +48,7 @@ MeshArrays readOff(const std::string& path) {
             poly.push_back(static_cast<uint32_t>(i));
         }
         while (c.moreOnLine()) c.token();  // a colour
-        for (size_t j = 2; j < poly.size(); ++j)
-            out.triangles.push_back({poly[0], poly[j - 1], poly[j]});
+        triangulatePolygon(out.positions, poly, out.triangles);
     }
     return out;
 }

@@ -11,6 +11,7 @@
 #include <optional>
 #include <string_view>
 
+#include "polygon_triangulation.h"
 #include "sdftrace/io/mapped_file.h"
 #include "sdftrace/io/mesh_readers.h"
 #include "sdftrace/io/text_cursor.h"
@@ -294,9 +295,8 @@ class PlyReader {
                              " vertices (accepted: whole numbers below the vertex count)");
                     poly.push_back(static_cast<uint32_t>(v));
                 }
-                if (indices)  // a polygon as a fan; points and lines make no triangle
-                    for (size_t j = 2; j < poly.size(); ++j)
-                        out.triangles.push_back({poly[0], poly[j - 1], poly[j]});
+                if (indices)  // points and lines make no triangle
+                    triangulatePolygon(out.positions, poly, out.triangles);
             }
             if (vertex)
                 out.positions.push_back({toFloatCoordinate(xyz[0]), toFloatCoordinate(xyz[1]),

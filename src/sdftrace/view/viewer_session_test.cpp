@@ -134,6 +134,56 @@ TEST(ViewerSession, AnEditedFileReloadsAndABrokenOneKeepsTheLastGoodView) {
     EXPECT_EQ(s.picture(w, h, range), before);
 }
 
+// A scene's mesh goes through the same readers as `bake` and Python: a damaged mesh file is the
+// one line that names the scene, the object and the mesh file (and its line, for text formats),
+// and the last good view stays.
+TEST(ViewerSession, ADamagedMeshIsOneLineAndTheLastGoodViewStays) {
+    TempScene t;
+    const fs::path obj = t.dir / "tetra.obj", ply = t.dir / "tetra.ply";
+    const std::string tetra =
+        "v 1 1 1\nv -1 -1 1\nv -1 1 -1\nv 1 -1 -1\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n";
+    std::ofstream(obj, std::ios::binary) << tetra;
+    auto sceneWith = [&](const fs::path& mesh) {
+        return R"({"camera": {"eye": [0, 0, 4], "target": [0, 0, 0], "width": 40, "height": 30},
+  "objects": [{"mesh": ")" +
+               mesh.string() + R"(", "resolution": 16, "method": "exact"}]})";
+    };
+    t.write(sceneWith(obj));
+    ViewerOptions o;
+    o.input = t.file.string();
+    o.progressive.frames = 1;
+    ViewerSession s(o);
+    ASSERT_TRUE(s.error().empty()) << s.error();
+    refine(s);
+    int w, h;
+    float range[2];
+    const auto before = s.picture(w, h, range);
+    struct Damage {
+        fs::path file;
+        std::string bytes, expected;
+    } damages[] = {
+        {obj, tetra.substr(0, tetra.size() - 4) + "9\n",
+         obj.string() + ":8: OBJ: a face uses vertex 9"},
+        {obj, tetra + "f 1 2 x\n", obj.string() + ":9: OBJ: a face corner 'x'"},
+        {ply,
+         "ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
+         "property float y\nproperty float z\nelement face 2000\n"
+         "property list uchar int vertex_indices\nend_header\n\x01\x02",
+         ply.string() + ": PLY: "},
+    };
+    for (const Damage& d : damages) {
+        std::ofstream(d.file, std::ios::binary) << d.bytes;
+        t.write(sceneWith(d.file));
+        EXPECT_TRUE(s.pollInput());
+        // The scene file and the JSON path of the object, then the mesh reader's line.
+        EXPECT_EQ(s.error().find(t.file.string() + ": /objects/0/mesh: " + d.expected), 0u)
+            << s.error();
+        EXPECT_EQ(s.error().find('\n'), std::string::npos) << s.error();
+        EXPECT_FALSE(s.step());
+        EXPECT_EQ(s.picture(w, h, range), before);
+    }
+}
+
 TEST(ViewerSession, ScreenshotsAreTheAovAsRenderWritesIt) {
     TempScene t;
     ViewerOptions o;
