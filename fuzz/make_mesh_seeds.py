@@ -3,8 +3,8 @@
 fuzz/corpus/mesh_<format>/: a cube and a tetrahedron in every variant of each format family
 (PLY ascii, binary little- and big-endian with extra properties and elements; STL binary and
 ascii; OFF and COFF with quads; OBJ with v/vt/vn corners, negative indices and groups; glTF with a
-data URI and GLB), each under 4 KB (libFuzzer's default input length). Run once; libFuzzer's
-merged corpora grow from them.
+data URI and GLB; for mesh_anim, glTF with a moving node and with a morph target), each under
+4 KB (libFuzzer's default input length). Run once; libFuzzer's merged corpora grow from them.
 
     python3 fuzz/make_mesh_seeds.py
 """
@@ -124,6 +124,41 @@ def glb(v, f):
             + struct.pack("<II", len(buf), 0x004E4942) + buf)
 
 
+def gltf_animated(v, f, kind):
+    """A glTF whose node moves (kind "node": translation keys) or whose mesh morphs (kind "morph":
+    one target, weight keys): the mesh_anim target's seeds."""
+    doc, buf = gltf_parts(v, f)
+    buf += b"\0" * ((4 - len(buf) % 4) % 4)
+    views, accessors = doc["bufferViews"], doc["accessors"]
+
+    def add(data, count, typ, extra=None):
+        nonlocal buf
+        views.append({"buffer": 0, "byteOffset": len(buf), "byteLength": len(data)})
+        acc = {"bufferView": len(views) - 1, "componentType": 5126, "count": count, "type": typ}
+        acc.update(extra or {})
+        accessors.append(acc)
+        buf += data
+        return len(accessors) - 1
+
+    times = add(struct.pack("<3f", 0, 0.5, 1), 3, "SCALAR", {"min": [0], "max": [1]})
+    if kind == "node":
+        out = add(struct.pack("<9f", 0, 0, 0, 0, 1, 0, 0, 0, 1), 3, "VEC3")
+        channel = {"sampler": 0, "target": {"node": 0, "path": "translation"}}
+    else:
+        delta = [(0.0, 0.5 * p[1], 0.0) for p in v]
+        target = add(b"".join(struct.pack("<3f", *d) for d in delta), len(v), "VEC3",
+                     {"min": [0, min(d[1] for d in delta), 0], "max": [0, max(d[1] for d in delta), 0]})
+        doc["meshes"][0]["primitives"][0]["targets"] = [{"POSITION": target}]
+        doc["meshes"][0]["weights"] = [0]
+        out = add(struct.pack("<3f", 0, 1, 0), 3, "SCALAR")
+        channel = {"sampler": 0, "target": {"node": 0, "path": "weights"}}
+    doc["animations"] = [{"name": kind, "channels": [channel],
+                          "samplers": [{"input": times, "output": out, "interpolation": "LINEAR"}]}]
+    doc["buffers"][0] = {"byteLength": len(buf),
+                         "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}
+    return json.dumps(doc).encode()
+
+
 def main():
     seeds = {}
     for name, v, q in (("cube", CUBE_V, CUBE_Q), ("tet", TET_V, TET_F)):
@@ -142,6 +177,8 @@ def main():
                                             name + "-corners.obj": obj(v, q, "corners"),
                                             name + "-negative.obj": obj(v, q, "negative")})
         seeds.setdefault("gltf", {}).update({name + ".gltf": gltf(v, t), name + ".glb": glb(v, t)})
+        seeds.setdefault("anim", {}).update({name + "-node.gltf": gltf_animated(v, t, "node"),
+                                             name + "-morph.gltf": gltf_animated(v, t, "morph")})
     for family, files in seeds.items():
         d = os.path.join(HERE, "corpus", "mesh_" + family)
         os.makedirs(d, exist_ok=True)

@@ -1,6 +1,6 @@
 // Fuzz target: mesh files as the CLI reads them. The input is written to a file with the format's
 // extension and loaded by loadMesh (mesh_io.h), the function `sdftrace bake`, scenes and Python
-// call: sdftrace's own readers for PLY, STL and OFF, assimp (its scene validated) for OBJ and
+// call: sdftrace's own readers for PLY, STL, OFF and OBJ, assimp (its scene validated) for
 // glTF/GLB. Built once per format family (SDFT_FUZZ_MESH_EXT: ply, stl, off, obj, gltf; the gltf
 // target writes an input that starts with the GLB magic as .glb). Every input loads a finite,
 // non-empty mesh or fails with an InputError; nothing else may escape.

@@ -11,6 +11,7 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
+#include "sdftrace/io/mesh_readers.h"
 
 namespace sdft {
 
@@ -235,6 +236,7 @@ std::vector<float> morphWeights(const Clip& clip, const Mesh& mesh, const std::s
 AnimatedMesh AnimatedMesh::load(const std::string& path) {
     if (!std::filesystem::exists(path))
         throw InputError(path + ": cannot open mesh file (does it exist?)");
+    precheckForAssimp(path);
     Assimp::Importer importer;
     // Triangulated; the hierarchy kept (no pre-transformed vertices): joints and animated nodes
     // move parts of it. Joint weights beyond 4 per vertex are kept as the file has them.
