@@ -54,6 +54,7 @@ for t in "${targets[@]}"; do
 done
 for p in "${pids[@]}"; do wait "$p" || status=1; done
 
+echo "revision $(git describe --always --dirty 2>/dev/null || echo unknown), $(date -u +%Y-%m-%d), ${seconds} s per target"
 printf '%-10s %14s %10s %9s  %s\n' target executions exec/s corpus result
 for t in "${targets[@]}"; do
     log="$build/$t.log"
