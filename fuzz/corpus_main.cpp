@@ -333,5 +333,10 @@ int main(int argc, char** argv) {
     }
     std::printf("%zu inputs and %ld mutants (seed %llu) ran without a finding\n", corpus.size(),
                 mutants, static_cast<unsigned long long>(seed));
+    std::fflush(stdout);
+    // Mutants may take the error paths of third-party readers that keep memory (assimp, OpenVDB's
+    // registries): leaks are not what the smoke looks for (the campaigns run with detect_leaks=0
+    // too), so it ends without LeakSanitizer's exit check. The corpus alone keeps that check.
+    if (seconds > 0) _exit(0);
     return 0;
 }
