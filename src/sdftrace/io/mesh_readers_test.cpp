@@ -240,6 +240,7 @@ TEST(MeshReaders, ObjIndicesAreCheckedAgainstTheVerticesDefined) {
         {v + "f 1 2 x/1\n", ":4: OBJ: a face corner 'x/1'"},
         {"v 0 0\n", ":2: OBJ vertex: expected a number, found the end"},
         {"v 0 0 zero\n", ":1: OBJ vertex: expected a number, found 'zero'"},
+        {"v 1e400 0 0\n", ":1: OBJ vertex: '1e400' is outside the range of double-precision"},
         {v + "f 1 2 99999999999999999999\n", "a face corner"},
     };
     for (const Case& c : cases) {

@@ -65,6 +65,9 @@ class TextCursor {
         const char* first = t.data();
         if (!t.empty() && *first == '+') ++first;  // from_chars does not take a leading '+'
         const auto [ptr, ec] = std::from_chars(first, t.data() + t.size(), v);
+        if (ec == std::errc::result_out_of_range && ptr == t.data() + t.size())
+            fail(std::string(what) + ": '" + printable(t.substr(0, 32)) +
+                 "' is outside the range of double-precision numbers");
         if (t.empty() || ec != std::errc() || ptr != t.data() + t.size())
             fail(expected(what, t, "a number"));
         return v;
