@@ -88,6 +88,16 @@ TEST(MeshIo, BadFilesAreRejectedByName) {
     expectError(dir + "/points.obj", "");
     std::ofstream(dir + "/flat.obj") << "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n";
     expectError(dir + "/flat.obj", "no (non-degenerate) triangles");
+    // assimp is never left to guess a format from the bytes (some of its importers read damaged
+    // ones out of bounds): an extension no importer claims is refused, and so is a file that
+    // none of the importers of its extension recognises (glTF 1 and 2 both claim .gltf).
+    const std::string gltf = R"({"asset": {"version": "2.0"}, "meshes": []})";
+    std::ofstream(dir + "/scene.anim") << gltf;
+    expectError(dir + "/scene.anim", "unknown mesh format '.anim' (accepted: .obj, .ply");
+    std::ofstream(dir + "/scene.mymesh") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    expectError(dir + "/scene.mymesh", "unknown mesh format '.mymesh'");
+    std::ofstream(dir + "/not.gltf") << R"({"neither": "glTF 1 nor 2"})";
+    expectError(dir + "/not.gltf", "no importer of the extension recognises its content");
     std::filesystem::remove_all(dir);
 }
 

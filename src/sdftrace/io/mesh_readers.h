@@ -47,8 +47,9 @@ MeshArrays readObj(const std::string& path);
 // What assimp is handed (loadMesh's long tail, AnimatedMesh::load) is first held to its
 // extension's signature: when the importer of a file's extension declines it, assimp tries every
 // other importer on its content, and some of those (Blender's among them) read damaged bytes out
-// of bounds. A .glb must be its header's length, chunk by chunk, with JSON in its first chunk; a
-// .gltf must be JSON. Throws InputError naming the file; other extensions pass.
+// of bounds. So an importer must claim the extension and, where several do (glTF 1 and 2), one of
+// them must recognise the content; a .glb must be its header's length, chunk by chunk, with JSON
+// in its first chunk, and a .gltf JSON. Throws InputError naming the file.
 void precheckForAssimp(const std::string& path);
 
 }  // namespace sdft
