@@ -98,6 +98,17 @@ TEST(MeshIo, BadFilesAreRejectedByName) {
     expectError(dir + "/scene.mymesh", "unknown mesh format '.mymesh'");
     std::ofstream(dir + "/not.gltf") << R"({"neither": "glTF 1 nor 2"})";
     expectError(dir + "/not.gltf", "no importer of the extension recognises its content");
+    // glTF references are held to their arrays before assimp follows them (it dereferences
+    // what is missing or out of range); a skin without inverse bind matrices is refused by name.
+    std::ofstream(dir + "/node.gltf") << R"({"asset": {"version": "2.0"}, "nodes": [{"mesh": 3}]})";
+    expectError(dir + "/node.gltf", "glTF: /nodes/0/mesh is 3, not an index of meshes (0 of them)");
+    std::ofstream(dir + "/skin.gltf")
+        << R"({"asset": {"version": "2.0"}, "nodes": [{}], "skins": [{"joints": [0]}]})";
+    expectError(dir + "/skin.gltf", "glTF: /skins/0 has no inverseBindMatrices");
+    std::ofstream(dir + "/anim.gltf")
+        << R"({"asset": {"version": "2.0"}, "animations": [{"channels": [{"sampler": 1,
+              "target": {"node": 0, "path": "rotation"}}], "samplers": []}]})";
+    expectError(dir + "/anim.gltf", "/animations/0/channels/0/sampler is 1");
     std::filesystem::remove_all(dir);
 }
 
