@@ -310,7 +310,10 @@ TEST(GridCli, BadGridInputFailsClearly) {
         std::vector<std::string> expected;
     };
     std::string truncated = dir.write("trunc.sdfg", "SDFG\x01\x00\x00\x00");
-    std::string shortSdf = dir.write("short.sdf", "2 2 2\n0 0 0\n0.5\n1 2 3");
+    // Three values of eight, with room for more (padding): it ends at line 4.
+    std::string shortSdf = dir.write("short.sdf", "2 2 2\n0 0 0\n0.5\n1 2 3          ");
+    // Fewer bytes than eight values take: refused before the samples are allocated.
+    std::string cutSdf = dir.write("cut.sdf", "2 2 2\n0 0 0\n0.5\n1 2 3");
     std::string rawNoSidecar = dir.write("lonely.raw", std::string(32, '\0'));
     std::vector<Case> cases = {
         {"bake " + scene + " --res 2 -o " + dir.file("x.sdfg"), {"--res"}},
@@ -328,6 +331,7 @@ TEST(GridCli, BadGridInputFailsClearly) {
         {"render -q " + shortSdf + " -o " + dir.file("x.png"), {shortSdf, "line 4"}},
         {"info " + rawNoSidecar, {rawNoSidecar + ".json", "cannot open the sidecar"}},
         {"convert " + shortSdf + " " + dir.file("x.sdfg"), {shortSdf, "line 4"}},
+        {"info " + cutSdf, {cutSdf, "the file ends before its 8 values"}},
     };
     for (const Case& c : cases) {
         RunResult r = runCli(c.args, dir);
