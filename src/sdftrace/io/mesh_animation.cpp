@@ -34,7 +34,8 @@ void bracket(const std::vector<Key>& keys, double tick, size_t& a, size_t& b, fl
     }
     auto it = std::upper_bound(keys.begin(), keys.end(), tick,
                                [](double t, const Key& k) { return t < keyTime(k); });
-    b = static_cast<size_t>(it - keys.begin());
+    // Key times are finite and increasing (readClip); the clamp keeps a and b keys regardless.
+    b = std::clamp<size_t>(static_cast<size_t>(it - keys.begin()), 1, keys.size() - 1);
     a = b - 1;
     const double span = keyTime(keys[b]) - keyTime(keys[a]);
     u = span > 0 ? static_cast<float>((tick - keyTime(keys[a])) / span) : 0.0f;
@@ -160,7 +161,23 @@ Mesh readMesh(const aiMesh* m, const std::vector<Node>& nodes, const std::string
     return mesh;
 }
 
-Clip readClip(const aiAnimation* a, const std::vector<Node>& nodes) {
+// Key times must be finite and never decrease (glTF requires increasing ones; assimp passes
+// what the file holds): sampling looks keys up by binary search.
+template <class Key>
+void checkKeyTimes(const Key* keys, unsigned count, const std::string& path,
+                   const std::string& what) {
+    if (!keys && count) throw InputError(path + ": " + what + ": keys missing");
+    for (unsigned k = 0; k < count; ++k) {
+        const double t = keyTime(keys[k]);
+        if (!std::isfinite(t) || (k > 0 && t < keyTime(keys[k - 1])))
+            throw InputError(
+                path + ": " + what + ": key " + std::to_string(k) + "'s time " + std::to_string(t) +
+                (std::isfinite(t) ? " comes before the key's before it" : " is not finite") +
+                " (accepted: finite, increasing times)");
+    }
+}
+
+Clip readClip(const aiAnimation* a, const std::vector<Node>& nodes, const std::string& path) {
     Clip clip;
     clip.info.name = a->mName.C_Str();
     // assimp leaves the rate 0 where a format stores none; 25 ticks per second is its convention.
@@ -171,6 +188,11 @@ Clip readClip(const aiAnimation* a, const std::vector<Node>& nodes) {
         NodeChannel out;
         out.node = findNode(nodes, ch->mNodeName.C_Str());
         if (out.node < 0) continue;  // animates a node the file does not have
+        const std::string what = "animation '" + std::string(a->mName.C_Str()) + "', node '" +
+                                 ch->mNodeName.C_Str() + "'";
+        checkKeyTimes(ch->mPositionKeys, ch->mNumPositionKeys, path, what + " translation");
+        checkKeyTimes(ch->mRotationKeys, ch->mNumRotationKeys, path, what + " rotation");
+        checkKeyTimes(ch->mScalingKeys, ch->mNumScalingKeys, path, what + " scale");
         out.positions.assign(ch->mPositionKeys, ch->mPositionKeys + ch->mNumPositionKeys);
         out.rotations.assign(ch->mRotationKeys, ch->mRotationKeys + ch->mNumRotationKeys);
         out.scalings.assign(ch->mScalingKeys, ch->mScalingKeys + ch->mNumScalingKeys);
@@ -180,6 +202,9 @@ Clip readClip(const aiAnimation* a, const std::vector<Node>& nodes) {
         const aiMeshMorphAnim* ch = a->mMorphMeshChannels[c];
         MorphChannel out;
         out.node = ch->mName.C_Str();
+        checkKeyTimes(ch->mKeys, ch->mNumKeys, path,
+                      "animation '" + std::string(a->mName.C_Str()) + "', morph weights of '" +
+                          out.node + "'");
         for (unsigned k = 0; k < ch->mNumKeys; ++k) {
             const aiMeshMorphKey& key = ch->mKeys[k];
             MorphKey mk;
@@ -255,7 +280,7 @@ AnimatedMesh AnimatedMesh::load(const std::string& path) {
     for (unsigned m = 0; m < scene->mNumMeshes; ++m)
         impl->meshes.push_back(readMesh(scene->mMeshes[m], impl->nodes, path));
     for (unsigned a = 0; a < scene->mNumAnimations; ++a) {
-        Clip clip = readClip(scene->mAnimations[a], impl->nodes);
+        Clip clip = readClip(scene->mAnimations[a], impl->nodes, path);
         // Skeletal when it moves nodes (joints, or nodes holding meshes) of this file.
         clip.info.skeletal = !clip.channels.empty();
         if (!clip.info.skeletal && !clip.info.morph) continue;  // animates cameras or lights
