@@ -18,12 +18,8 @@ namespace {
 
 // A face corner's vertex index (the part before the first '/').
 int64_t cornerIndex(std::string_view corner, TextCursor& c) {
-    const std::string_view i = corner.substr(0, corner.find('/'));
     int64_t v = 0;
-    const char* first = i.data();
-    if (!i.empty() && *first == '+') ++first;
-    const auto [ptr, ec] = std::from_chars(first, i.data() + i.size(), v);
-    if (i.empty() || ec != std::errc() || ptr != i.data() + i.size())
+    if (!TextCursor::toInteger(corner.substr(0, corner.find('/')), v))
         c.fail("OBJ: a face corner '" + TextCursor::printable(corner.substr(0, 32)) +
                "' (accepted: i, i/t, i//n, i/t/n with integer indices)");
     return v;

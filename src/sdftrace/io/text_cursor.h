@@ -75,12 +75,15 @@ class TextCursor {
     int64_t integer(const char* what) {
         const std::string_view t = token();
         int64_t v = 0;
+        if (!toInteger(t, v)) fail(expected(what, t, "an integer"));
+        return v;
+    }
+    // `t` whole as a decimal integer (a leading '+' allowed); false if it is not one.
+    static bool toInteger(std::string_view t, int64_t& v) {
         const char* first = t.data();
         if (!t.empty() && *first == '+') ++first;
         const auto [ptr, ec] = std::from_chars(first, t.data() + t.size(), v);
-        if (t.empty() || ec != std::errc() || ptr != t.data() + t.size())
-            fail(expected(what, t, "an integer"));
-        return v;
+        return !t.empty() && ec == std::errc() && ptr == t.data() + t.size();
     }
     const char* position() const { return m_p; }
     int line() const { return m_line; }

@@ -27,6 +27,27 @@ constexpr double kBytesPerSurfaceBlock(int B) {
     return B * B * B * sizeof(float) + 8 * sizeof(int32_t);
 }
 
+// Every tile of the tree, root tiles and internal nodes' tile slots alike:
+// f(value, active, x, y, z, extent) with the tile's first voxel and its edge in voxels.
+template <class F>
+void forEachTile(const vdb::Tree& t, F&& f) {
+    for (const vdb::RootTile& tile : t.tiles)
+        f(tile.value, tile.active, tile.origin[0], tile.origin[1], tile.origin[2], 4096);
+    auto internal = [&](const std::vector<vdb::Internal>& nodes, int log2, int shift) {
+        for (const vdb::Internal& n : nodes)
+            for (int i = 0; i < (1 << (3 * log2)); ++i) {
+                const auto slot = static_cast<size_t>(i);
+                if (n.children[slot] >= 0) continue;
+                f(n.values[slot], ((n.valueMask[slot >> 6] >> (slot & 63)) & 1u) != 0,
+                  n.origin[0] + ((i >> (2 * log2)) << shift),
+                  n.origin[1] + (((i >> log2) & ((1 << log2) - 1)) << shift),
+                  n.origin[2] + ((i & ((1 << log2) - 1)) << shift), 1 << shift);
+            }
+    };
+    internal(t.upper, 5, 7);
+    internal(t.lower, 4, 3);
+}
+
 // The active voxels' index bounds (leaves' value masks, active tiles); false if none.
 bool activeBounds(const vdb::Tree& t, std::array<int32_t, 3>& lo, std::array<int32_t, 3>& hi) {
     bool any = false;
@@ -60,18 +81,9 @@ bool activeBounds(const vdb::Tree& t, std::array<int32_t, 3>& lo, std::array<int
         include(leaf.origin[0] + x0, leaf.origin[1] + y0, leaf.origin[2] + z0, 1);
         include(leaf.origin[0] + x1, leaf.origin[1] + y1, leaf.origin[2] + z1, 1);
     }
-    for (const vdb::RootTile& tile : t.tiles)
-        if (tile.active) include(tile.origin[0], tile.origin[1], tile.origin[2], 4096);
-    auto tiles = [&](const std::vector<vdb::Internal>& nodes, int log2, int shift) {
-        for (const vdb::Internal& n : nodes)
-            for (int i = 0; i < (1 << (3 * log2)); ++i)
-                if (((n.valueMask[i >> 6] >> (i & 63)) & 1u) && n.children[i] < 0)
-                    include(n.origin[0] + ((i >> (2 * log2)) << shift),
-                            n.origin[1] + (((i >> log2) & ((1 << log2) - 1)) << shift),
-                            n.origin[2] + ((i & ((1 << log2) - 1)) << shift), 1 << shift);
-    };
-    tiles(t.upper, 5, 7);
-    tiles(t.lower, 4, 3);
+    forEachTile(t, [&](float, bool active, int32_t x, int32_t y, int32_t z, int extent) {
+        if (active) include(x, y, z, extent);
+    });
     return any;
 }
 
@@ -136,19 +148,9 @@ class TreeToGrid {
                              "): not a level set (accepted: level sets whose tiles hold "
                              "+-background, as openvdb::tools::pruneLevelSet leaves them)");
         };
-        for (const vdb::RootTile& tile : m_t.tiles)
-            check(tile.value, tile.origin[0], tile.origin[1], tile.origin[2], 4096);
-        auto internal = [&](const std::vector<vdb::Internal>& nodes, int log2, int shift) {
-            for (const vdb::Internal& n : nodes)
-                for (int i = 0; i < (1 << (3 * log2)); ++i)
-                    if (n.children[static_cast<size_t>(i)] < 0)
-                        check(n.values[static_cast<size_t>(i)],
-                              n.origin[0] + ((i >> (2 * log2)) << shift),
-                              n.origin[1] + (((i >> log2) & ((1 << log2) - 1)) << shift),
-                              n.origin[2] + ((i & ((1 << log2) - 1)) << shift), 1 << shift);
-        };
-        internal(m_t.upper, 5, 7);
-        internal(m_t.lower, 4, 3);
+        forEachTile(m_t, [&](float v, bool, int32_t x, int32_t y, int32_t z, int extent) {
+            check(v, x, y, z, extent);
+        });
     }
 
     void makeShape(const vdb::FloatGrid& g) {
