@@ -189,53 +189,12 @@ class Mutator {
                                 b.begin() + static_cast<ptrdiff_t>(to));
                 break;
             }
-            case 4: {  // an integer of 1, 2, 4 or 8 bytes, either byte order
-                static const int64_t kValues[] = {0,
-                                                  1,
-                                                  -1,
-                                                  2,
-                                                  3,
-                                                  8,
-                                                  16,
-                                                  255,
-                                                  256,
-                                                  0x7fff,
-                                                  0xffff,
-                                                  0x10000,
-                                                  0x7fffffff,
-                                                  INT64_C(0x80000000),
-                                                  INT64_C(0xffffffff),
-                                                  INT64_MAX,
-                                                  INT64_MIN};
-                const size_t width = size_t{1} << pick(4);
-                if (b.size() < width) break;
-                int64_t v = kValues[pick(sizeof(kValues) / sizeof(kValues[0]))];
-                if (pick(4) == 0)
-                    v = static_cast<int64_t>(b.size()) + static_cast<int64_t>(pick(5)) - 2;
-                uint8_t bytes[8];
-                std::memcpy(bytes, &v, 8);
-                if (pick(2)) std::reverse(bytes, bytes + width);
-                std::memcpy(b.data() + pick(b.size() - width + 1), bytes, width);
+            case 4:  // an integer of 1, 2, 4 or 8 bytes, either byte order
+                writeInteger(b);
                 break;
-            }
-            case 5: {  // a decimal number in text replaced
-                if (b.empty()) break;
-                size_t at = pick(b.size());
-                while (at < b.size() && !(b[at] >= '0' && b[at] <= '9')) ++at;
-                if (at == b.size()) break;
-                size_t end = at;
-                while (end < b.size() && b[end] >= '0' && b[end] <= '9') ++end;
-                static const char* kNumbers[] = {
-                    "0",    "1",   "-1",  "4294967295",           "4294967296", "2147483648",
-                    "1e39", "nan", "inf", "99999999999999999999", "3"};
-                const std::string n = pick(3)
-                                          ? std::to_string(pick(1000))
-                                          : kNumbers[pick(sizeof(kNumbers) / sizeof(kNumbers[0]))];
-                b.erase(b.begin() + static_cast<ptrdiff_t>(at),
-                        b.begin() + static_cast<ptrdiff_t>(end));
-                b.insert(b.begin() + static_cast<ptrdiff_t>(at), n.begin(), n.end());
+            case 5:  // a decimal number in text replaced
+                replaceNumber(b);
                 break;
-            }
             case 6: {  // a dictionary token, inserted or written over
                 if (m_dictionary.empty()) break;
                 const Bytes& t = m_dictionary[pick(m_dictionary.size())];
@@ -265,6 +224,50 @@ class Mutator {
                 break;
             }
         }
+    }
+
+    void writeInteger(Bytes& b) {
+        static const int64_t kValues[] = {0,
+                                          1,
+                                          -1,
+                                          2,
+                                          3,
+                                          8,
+                                          16,
+                                          255,
+                                          256,
+                                          0x7fff,
+                                          0xffff,
+                                          0x10000,
+                                          0x7fffffff,
+                                          INT64_C(0x80000000),
+                                          INT64_C(0xffffffff),
+                                          INT64_MAX,
+                                          INT64_MIN};
+        const size_t width = size_t{1} << pick(4);
+        if (b.size() < width) return;
+        int64_t v = kValues[pick(sizeof(kValues) / sizeof(kValues[0]))];
+        if (pick(4) == 0) v = static_cast<int64_t>(b.size()) + static_cast<int64_t>(pick(5)) - 2;
+        uint8_t bytes[8];
+        std::memcpy(bytes, &v, 8);
+        if (pick(2)) std::reverse(bytes, bytes + width);
+        std::memcpy(b.data() + pick(b.size() - width + 1), bytes, width);
+    }
+
+    void replaceNumber(Bytes& b) {
+        if (b.empty()) return;
+        size_t at = pick(b.size());
+        while (at < b.size() && !(b[at] >= '0' && b[at] <= '9')) ++at;
+        if (at == b.size()) return;
+        size_t end = at;
+        while (end < b.size() && b[end] >= '0' && b[end] <= '9') ++end;
+        static const char* kNumbers[] = {
+            "0",    "1",   "-1",  "4294967295",           "4294967296", "2147483648",
+            "1e39", "nan", "inf", "99999999999999999999", "3"};
+        const std::string n = pick(3) ? std::to_string(pick(1000))
+                                      : kNumbers[pick(sizeof(kNumbers) / sizeof(kNumbers[0]))];
+        b.erase(b.begin() + static_cast<ptrdiff_t>(at), b.begin() + static_cast<ptrdiff_t>(end));
+        b.insert(b.begin() + static_cast<ptrdiff_t>(at), n.begin(), n.end());
     }
 
     const std::vector<Bytes>& m_corpus;
