@@ -10,6 +10,7 @@
 #include "sdftrace/bake/exact_bake.h"
 #include "sdftrace/bake/segment_crossing.h"
 #include "sdftrace/bake/winding_number.h"
+#include "sdftrace/bake/winding_sign.h"
 
 namespace sdft::detail {
 
@@ -47,39 +48,16 @@ class RowSampler {
     // by its films (closing_film.h), carried between neighbours.
     bool hasWinding() const { return m_useWinding; }
 
-    // The winding numbers carried from sample to sample (closing_film.h): W of the mesh closed
-    // by its films, exact; the mesh's own, w_M = W - w_F, within `error`.
-    struct Carried {
-        int32_t closed = 0;
-        float winding = 0, error = 0;
-        bool inside() const { return winding > 0.5f; }
-        // Whether the carried value can decide the sign.
-        bool decided() const { return std::fabs(winding - 0.5f) > error; }
-    };
+    // The winding numbers carried from sample to sample (winding_sign.h).
+    using Carried = WindingSign::Carried;
 
     // Whether p is inside: from the winding number, or by ray parity.
     bool inside(Vec3 p) const {
         return m_winding ? evaluate(p).inside() : m_bvh->insideByParity(p);
     }
-    // From scratch: W is the hierarchical sum of mesh and films at a coarse beta (1.5), rounded
-    // (at the default beta where that lands within 0.3 of a half).
-    Carried evaluate(Vec3 p) const {
-        double w = m_winding->fast(p, 1.5);
-        if (std::fabs(w - std::round(w)) > 0.2) w = m_winding->fast(p);
-        return refresh(p, static_cast<int32_t>(std::lround(w)));
-    }
-    // With W known: w_M from the films' float sum, or their exact one when that is within its
-    // error of 1/2.
+    Carried evaluate(Vec3 p) const { return WindingSign(*m_film, *m_winding).evaluate(p); }
     Carried refresh(Vec3 p, int32_t closed) const {
-        if (m_film->empty()) return {closed, static_cast<float>(closed), 0.0f};
-        // Far cones only bounded first, then all summed, then the exact sum.
-        float slack = 0;
-        const float near = m_film->windingFast(p, &slack);
-        Carried c{closed, static_cast<float>(closed) - near, m_film->fastError() + slack};
-        if (!c.decided() && slack > 0)
-            c = {closed, static_cast<float>(closed) - m_film->windingFast(p), m_film->fastError()};
-        if (!c.decided()) c = {closed, static_cast<float>(closed - m_film->winding(p)), 1e-6f};
-        return c;
+        return WindingSign::refresh(*m_film, p, closed);
     }
     // From a neighbour's values across a segment with the given signed crossings (of mesh and
     // films, and of the mesh alone) along which w_M may drift by `drift`; summed over the films
