@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <memory>
 
 #include "sdftrace/bake/triangle_mesh.h"
@@ -25,8 +26,10 @@ class MeshBvh {
     struct Closest {
         float distance = INFINITY;
         Vec3 point;
+        uint32_t triangle = UINT32_MAX;  // index into mesh().triangles
     };
-    // The nearest point itself (distance +infinity when none is within `radius`).
+    // The nearest point itself (distance +infinity when none is within `radius`). A zero-area
+    // triangle counts as its longest edge.
     Closest closest(Vec3 p, float radius = INFINITY) const;
     // The first hit of the ray r(t), t > 0: t (+infinity on a miss) and whether it struck the
     // front of the triangle (against its counter-clockwise normal).
@@ -36,8 +39,9 @@ class MeshBvh {
         uint32_t triangle = 0;  // index into mesh().triangles
         float u = 0, v = 0;     // barycentric coordinates of the hit: a (1-u-v) + b u + c v
     };
-    // tnear < 0 also reports hits just behind the origin (origins on the surface).
-    Hit firstHit(const Ray& ray, float tnear = 0) const;
+    // tnear < 0 also reports hits just behind the origin (origins on the surface); hits beyond
+    // tfar are misses. The direction need not be unit length: t is in its units.
+    Hit firstHit(const Ray& ray, float tnear = 0, float tfar = INFINITY) const;
     // Surface crossings of the ray r(t), t > 0.
     int crossings(const Ray& ray) const;
     // Inside by crossing parity, the majority of three fixed, non-axis directions (robust to a ray

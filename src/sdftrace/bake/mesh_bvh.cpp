@@ -25,7 +25,7 @@ struct MeshBvh::Impl {
 
 namespace {
 
-RTCRayHit rayHit(Vec3 origin, Vec3 direction, float tnear) {
+RTCRayHit rayHit(Vec3 origin, Vec3 direction, float tnear, float tfar = INFINITY) {
     RTCRayHit rh;
     rh.ray.org_x = origin.x;
     rh.ray.org_y = origin.y;
@@ -34,7 +34,7 @@ RTCRayHit rayHit(Vec3 origin, Vec3 direction, float tnear) {
     rh.ray.dir_y = direction.y;
     rh.ray.dir_z = direction.z;
     rh.ray.tnear = tnear;
-    rh.ray.tfar = INFINITY;
+    rh.ray.tfar = tfar;
     rh.ray.mask = 0xFFFFFFFF;
     rh.ray.flags = 0;
     rh.ray.time = 0;
@@ -56,9 +56,22 @@ bool closestCallback(RTCPointQueryFunctionArguments* args) {
     if (dot(out, out) > r * r) return false;
     Vec3 c = closestPointOnTriangle(p, t.a, t.b, t.c);
     float d = length(p - c);
+    if (std::isnan(d)) {  // zero area: Ericson's face region divides by it; the edges remain
+        const Vec3 corners[3] = {t.a, t.b, t.c};
+        for (int e = 0; e < 3; ++e) {
+            const Vec3 a = corners[e], ab = corners[(e + 1) % 3] - a;
+            const float len2 = dot(ab, ab);
+            const float s = len2 > 0 ? clampf(dot(p - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+            const Vec3 on = a + ab * s;
+            if (const float de = length(p - on); !(de >= d)) {
+                d = de;
+                c = on;
+            }
+        }
+    }
     if (d <= args->query->radius) {
         args->query->radius = d;  // shrink the search
-        q->best = {d, c};
+        q->best = {d, c, args->primID};
         return true;
     }
     return false;
@@ -118,12 +131,13 @@ MeshBvh::Closest MeshBvh::closest(Vec3 p, float radius) const {
     return data.best;
 }
 
-MeshBvh::Hit MeshBvh::firstHit(const Ray& ray, float tnear) const {
+MeshBvh::Hit MeshBvh::firstHit(const Ray& ray, float tnear, float tfar) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     // Embree wants tnear >= 0: start from the origin moved back by -tnear instead.
     float back = std::fmin(tnear, 0.0f);
-    RTCRayHit rh = rayHit(ray.origin + ray.direction * back, ray.direction, std::fmax(tnear, 0.0f));
+    RTCRayHit rh = rayHit(ray.origin + ray.direction * back, ray.direction, std::fmax(tnear, 0.0f),
+                          tfar - back);
     rtcIntersect1(m_impl->scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
     const PackedTriangle& t = m_impl->triangles[rh.hit.primID];
