@@ -1,0 +1,431 @@
+#include "sdftrace/query/mesh_query.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <mutex>
+#include <unordered_map>
+
+#include "sdftrace/bake/closing_film.h"
+#include "sdftrace/bake/lbvh.h"
+#include "sdftrace/bake/mesh_bvh.h"
+#include "sdftrace/bake/winding_number.h"
+#include "sdftrace/bake/winding_sign.h"
+#include "sdftrace/core/error.h"
+#include "sdftrace/exec/progress.h"
+#include "sdftrace/io/mesh_io.h"
+#include "sdftrace/query/triangle_closest.h"
+
+namespace sdft {
+
+bool parseMeshSign(const std::string& name, MeshSign& out) {
+    if (name == "winding")
+        out = MeshSign::Winding;
+    else if (name == "parity")
+        out = MeshSign::Parity;
+    else if (name == "pseudonormal")
+        out = MeshSign::PseudoNormal;
+    else
+        return false;
+    return true;
+}
+
+namespace {
+
+Vec3 toFloat(Vec3d v) {
+    return Vec3(static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z));
+}
+Vec3d unit(Vec3d v) {
+    const double l = norm(v);
+    return l > 0 ? v * (1 / l) : Vec3d{};
+}
+
+// Points in a chunk: their Morton order fits 16 bits of index under the 30-bit code.
+constexpr size_t kChunk = size_t{1} << 16;
+// Points a task walks in Morton order, each search bounded by its predecessor's answer.
+constexpr size_t kRun = 256;
+
+}  // namespace
+
+struct MeshQuery::Impl {
+    std::vector<Vec3d> vertices;
+    std::vector<std::array<uint32_t, 3>> faces;
+    Vec3d lo, hi, origin;  // origin: the box's centre, which the float copy is relative to
+    double diagonal = 0;
+    TriangleMesh local;  // float, relative to origin, the faces as given
+    std::unique_ptr<MeshBvh> bvh;
+
+    // Winding: the welded, cleaned mesh, its films and the closed mesh's winding tree.
+    mutable std::once_flag windingOnce;
+    mutable TriangleMesh cleaned;
+    mutable std::unique_ptr<ClosingFilm> film;
+    mutable std::unique_ptr<WindingNumber> closedWinding;
+
+    // Pseudonormals: per face, its unit normal, its edges' (ab, bc, ca) and its corners'.
+    mutable std::once_flag normalsOnce;
+    mutable std::vector<Vec3d> faceNormal, edgeNormal, cornerNormal;
+    mutable bool watertight = false;
+
+    Vec3 toLocal(Vec3d p) const { return toFloat(p - origin); }
+
+    void buildWinding() const {
+        std::call_once(windingOnce, [this] {
+            MeshReport report;
+            cleaned = cleanMesh(local.positions, local.triangles, report);
+            if (cleaned.triangles.empty()) return;  // all zero-area: nothing is inside
+            film = std::make_unique<ClosingFilm>(cleaned);
+            closedWinding = std::make_unique<WindingNumber>(film->closedMesh());
+        });
+    }
+    void buildNormals() const;
+};
+
+// Angle-weighted pseudonormals (Baerentzen and Aanaes 2005, "Signed distance computation using
+// the angle weighted pseudonormal"): vertices welded by position, a vertex's normal the sum of its
+// faces' unit normals weighted by their angles there, an edge's the sum of its faces' normals.
+void MeshQuery::Impl::buildNormals() const {
+    std::call_once(normalsOnce, [this] {
+        struct Key {
+            double x, y, z;
+            bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+        };
+        struct KeyHash {
+            size_t operator()(const Key& k) const {
+                uint64_t h = 0;
+                for (double d : {k.x, k.y, k.z}) {
+                    uint64_t b;
+                    std::memcpy(&b, &d, 8);
+                    h = (h ^ b) * 0x9E3779B97F4A7C15ull;
+                    h ^= h >> 29;
+                }
+                return h;
+            }
+        };
+        std::unordered_map<Key, uint32_t, KeyHash> ids;
+        std::vector<uint32_t> weld(vertices.size());
+        for (size_t i = 0; i < vertices.size(); ++i) {
+            const Vec3d& v = vertices[i];
+            weld[i] = ids.try_emplace(Key{v.x + 0.0, v.y + 0.0, v.z + 0.0},
+                                      static_cast<uint32_t>(ids.size()))
+                          .first->second;
+        }
+        std::vector<Vec3d> vertexNormal(ids.size());
+        faceNormal.assign(faces.size(), {});
+        struct EdgeUse {
+            Vec3d normal;
+            int forward = 0, backward = 0;  // uses from the lower to the higher welded id, back
+        };
+        std::unordered_map<uint64_t, EdgeUse> edges;
+        edges.reserve(faces.size() * 2);
+        auto edgeKey = [&](uint32_t a, uint32_t b) {
+            return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+        };
+        for (size_t f = 0; f < faces.size(); ++f) {
+            const auto& t = faces[f];
+            const Vec3d p[3] = {vertices[t[0]], vertices[t[1]], vertices[t[2]]};
+            const Vec3d n = unit(cross(p[1] - p[0], p[2] - p[0]));
+            faceNormal[f] = n;
+            for (int c = 0; c < 3; ++c) {
+                const Vec3d e1 = unit(p[(c + 1) % 3] - p[c]), e2 = unit(p[(c + 2) % 3] - p[c]);
+                const double angle = std::acos(std::clamp(dot(e1, e2), -1.0, 1.0));
+                vertexNormal[weld[t[c]]] = vertexNormal[weld[t[c]]] + n * angle;
+                const uint32_t a = weld[t[c]], b = weld[t[(c + 1) % 3]];
+                EdgeUse& e = edges[edgeKey(a, b)];
+                e.normal = e.normal + n;
+                (a < b ? e.forward : e.backward) += 1;
+            }
+        }
+        watertight = !faces.empty();
+        for (const auto& [key, e] : edges)
+            if (e.forward != 1 || e.backward != 1) watertight = false;
+        edgeNormal.assign(faces.size() * 3, {});
+        cornerNormal.assign(faces.size() * 3, {});
+        for (size_t f = 0; f < faces.size(); ++f)
+            for (int c = 0; c < 3; ++c) {
+                const uint32_t a = weld[faces[f][c]], b = weld[faces[f][(c + 1) % 3]];
+                edgeNormal[3 * f + c] = edges[edgeKey(a, b)].normal;
+                cornerNormal[3 * f + c] = vertexNormal[a];
+            }
+    });
+}
+
+MeshQuery::MeshQuery(std::vector<Vec3d> vertices, std::vector<std::array<uint32_t, 3>> faces,
+                     const std::string& what)
+    : m_impl(std::make_unique<Impl>()) {
+    Impl& m = *m_impl;
+    if (faces.empty()) throw InputError(what + ": faces: no face; expected at least one");
+    if (faces.size() > static_cast<size_t>(kMaxLbvhTriangles))
+        throw InputError(what + ": faces: " + std::to_string(faces.size()) + " faces; at most " +
+                         std::to_string(kMaxLbvhTriangles) + " are accepted");
+    for (size_t f = 0; f < faces.size(); ++f)
+        for (int c = 0; c < 3; ++c)
+            if (faces[f][c] >= vertices.size())
+                throw InputError(what + ": faces: face " + std::to_string(f) + " names vertex " +
+                                 std::to_string(faces[f][c]) + "; expected indices in [0, " +
+                                 std::to_string(vertices.size()) + ")");
+    m.lo = {INFINITY, INFINITY, INFINITY};
+    m.hi = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < vertices.size(); ++i) {
+        const Vec3d& v = vertices[i];
+        if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z) ||
+            std::fabs(v.x) > 1e30 || std::fabs(v.y) > 1e30 || std::fabs(v.z) > 1e30)
+            throw InputError(what + ": vertices: vertex " + std::to_string(i) +
+                             " is not finite or beyond 1e30; expected finite coordinates");
+        m.lo = {std::min(m.lo.x, v.x), std::min(m.lo.y, v.y), std::min(m.lo.z, v.z)};
+        m.hi = {std::max(m.hi.x, v.x), std::max(m.hi.y, v.y), std::max(m.hi.z, v.z)};
+    }
+    m.origin = (m.lo + m.hi) * 0.5;
+    m.diagonal = norm(m.hi - m.lo);
+    // Relative to the centre the float copy keeps 7 digits of the mesh's own size, wherever it is.
+    const double half = 0.5 * std::max({m.hi.x - m.lo.x, m.hi.y - m.lo.y, m.hi.z - m.lo.z});
+    if (half > 1e18)
+        throw InputError(what + ": vertices: the mesh is " + std::to_string(2 * half) +
+                         " across; at most 2e18 is accepted");
+    m.local.positions.resize(vertices.size());
+    for (size_t i = 0; i < vertices.size(); ++i) m.local.positions[i] = m.toLocal(vertices[i]);
+    m.local.triangles = faces;
+    m.vertices = std::move(vertices);
+    m.faces = std::move(faces);
+    m.bvh = std::make_unique<MeshBvh>(m.local);
+}
+
+MeshQuery::~MeshQuery() = default;
+
+const std::vector<Vec3d>& MeshQuery::vertices() const { return m_impl->vertices; }
+const std::vector<std::array<uint32_t, 3>>& MeshQuery::faces() const { return m_impl->faces; }
+std::array<Vec3d, 2> MeshQuery::bounds() const { return {m_impl->lo, m_impl->hi}; }
+double MeshQuery::diagonal() const { return m_impl->diagonal; }
+bool MeshQuery::watertight() const {
+    m_impl->buildNormals();
+    return m_impl->watertight;
+}
+
+void MeshQuery::prepare(MeshSign sign) const {
+    if (sign == MeshSign::Winding) m_impl->buildWinding();
+    if (sign == MeshSign::PseudoNormal) m_impl->buildNormals();
+}
+
+MeshQuery::Closest MeshQuery::closest(Vec3d p) const { return closest(p, INFINITY); }
+
+MeshQuery::Closest MeshQuery::closest(Vec3d p, double bound) const {
+    const Impl& m = *m_impl;
+    const Vec3 q = m.toLocal(p);
+    MeshBvh::Closest c;
+    if (std::isfinite(bound)) {
+        // Widened past float rounding of the point, the vertices and the bound itself.
+        const double radius = bound * (1 + 1e-5) + 1e-6 * m.diagonal + 1e-30;
+        c = m.bvh->closest(q, static_cast<float>(radius));
+    }
+    if (c.triangle == UINT32_MAX) c = m.bvh->closest(q);
+    Closest r;
+    if (c.triangle == UINT32_MAX) {  // unreachable for finite points; kept total
+        r.distance = INFINITY;
+        return r;
+    }
+    const auto& t = m.faces[c.triangle];
+    const TriangleClosest tc =
+        closestOnTriangle(p, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
+    r.distance = norm(p - tc.point);
+    r.point = tc.point;
+    r.face = c.triangle;
+    std::copy(tc.bary, tc.bary + 3, r.bary);
+    r.feature = tc.feature;
+    return r;
+}
+
+double MeshQuery::windingNumber(Vec3d p) const {
+    m_impl->buildWinding();
+    if (!m_impl->closedWinding) return 0;
+    return WindingSign(*m_impl->film, *m_impl->closedWinding).winding(m_impl->toLocal(p));
+}
+
+bool MeshQuery::inside(Vec3d p, MeshSign sign, const Closest* known) const {
+    const Impl& m = *m_impl;
+    switch (sign) {
+        case MeshSign::Winding:
+            m.buildWinding();
+            return m.closedWinding &&
+                   WindingSign(*m.film, *m.closedWinding).evaluate(m.toLocal(p)).inside();
+        case MeshSign::Parity:
+            return m.bvh->insideByParity(m.toLocal(p));
+        case MeshSign::PseudoNormal: {
+            m.buildNormals();
+            const Closest c = known ? *known : closest(p);
+            const size_t f = c.face;
+            Vec3d n;
+            if (c.feature < 3)
+                n = m.cornerNormal[3 * f + c.feature];
+            else if (c.feature < 6)
+                n = m.edgeNormal[3 * f + (c.feature - 3)];
+            else
+                n = m.faceNormal[f];
+            return dot(p - c.point, n) < 0;
+        }
+    }
+    return false;
+}
+
+MeshQuery::Hit MeshQuery::rayCast(Vec3d origin, Vec3d direction, double tMax) const {
+    const Impl& m = *m_impl;
+    Hit h;
+    const float tfar = static_cast<float>(std::fmin(tMax, 3.0e38));
+    const MeshBvh::Hit e = m.bvh->firstHit({m.toLocal(origin), toFloat(direction)}, 0, tfar);
+    if (!std::isfinite(e.t)) return h;
+    const auto& t = m.faces[e.triangle];
+    const Vec3d a = m.vertices[t[0]], b = m.vertices[t[1]], c = m.vertices[t[2]];
+    const Vec3d n = cross(b - a, c - a);
+    h.face = e.triangle;
+    h.normal = unit(n);
+    h.t = e.t;
+    h.u = e.u;
+    h.v = e.v;
+    // Refined in double: the plane's t and the hit's barycentrics (Embree found it in float).
+    const double denom = dot(n, direction);
+    if (std::fabs(denom) > 0) {
+        const double t2 = dot(n, a - origin) / denom;
+        const Vec3d x = origin + direction * t2;
+        const double area2 = dot(n, n);
+        const double u = dot(cross(x - a, c - a), n) / area2;  // weight of b
+        const double v = dot(cross(b - a, x - a), n) / area2;  // weight of c
+        if (std::isfinite(t2) && std::fabs(t2 - e.t) <= 1e-3 * std::fabs(e.t) + 1e-6 * m.diagonal &&
+            t2 <= tMax) {
+            h.t = std::max(t2, 0.0);
+            h.u = u;
+            h.v = v;
+        }
+    }
+    return h;
+}
+
+namespace {
+
+template <class T>
+Vec3d pointAt(const T* xyz, size_t i) {
+    return {static_cast<double>(xyz[3 * i]), static_cast<double>(xyz[3 * i + 1]),
+            static_cast<double>(xyz[3 * i + 2])};
+}
+
+template <class T>
+void checkFinite(const T* xyz, size_t n, const char* what) {
+    std::atomic<size_t> bad{SIZE_MAX};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 14), [&](const auto& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i)
+            for (int k = 0; k < 3; ++k)
+                if (!std::isfinite(xyz[3 * i + k]) || std::fabs(xyz[3 * i + k]) > T(1e30)) {
+                    size_t cur = bad.load();
+                    while (i < cur && !bad.compare_exchange_weak(cur, i)) {
+                    }
+                }
+    });
+    if (const size_t i = bad.load(); i != SIZE_MAX)
+        throw InputError(std::string(what) + ": row " + std::to_string(i) +
+                         " is not finite or beyond 1e30; expected finite coordinates");
+}
+
+}  // namespace
+
+template <class T>
+void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
+                            const PointOptions& options) const {
+    const Impl& m = *m_impl;
+    checkFinite(xyz, n, "points");
+    const bool wantSign = options.signedDistance || out.inside;
+    const bool wantClosest = out.distance || out.closest || out.face || out.bary ||
+                             (wantSign && options.sign == MeshSign::PseudoNormal);
+    if (wantSign) prepare(options.sign);
+    if (out.winding) prepare(MeshSign::Winding);
+    auto* distance = static_cast<T*>(out.distance);
+    auto* closestOut = static_cast<T*>(out.closest);
+    auto* bary = static_cast<T*>(out.bary);
+    auto* winding = static_cast<T*>(out.winding);
+    Progress progress(options.progress, n, !options.progress.empty());
+    const Vec3d lo = m.lo, extent = m.hi - m.lo;
+    const Vec3d scale{extent.x > 0 ? 1024 / extent.x : 0, extent.y > 0 ? 1024 / extent.y : 0,
+                      extent.z > 0 ? 1024 / extent.z : 0};
+    std::vector<uint64_t> order;
+    for (size_t first = 0; first < n; first += kChunk) {
+        const size_t count = std::min(kChunk, n - first);
+        order.resize(count);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const auto& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                const Vec3d p = pointAt(xyz, first + i);
+                uint32_t code = 0;
+                const double q[3] = {(p.x - lo.x) * scale.x, (p.y - lo.y) * scale.y,
+                                     (p.z - lo.z) * scale.z};
+                for (int a = 0; a < 3; ++a)
+                    code |= spreadBits10(static_cast<uint32_t>(std::clamp(q[a], 0.0, 1023.0)))
+                            << (2 - a);
+                order[i] = (static_cast<uint64_t>(code) << 16) | i;
+            }
+        });
+        if (wantClosest) tbb::parallel_sort(order.begin(), order.end());
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, count, kRun), [&](const auto& r) {
+            Vec3d prevPoint{INFINITY, 0, 0};
+            for (size_t k = r.begin(); k != r.end(); ++k) {
+                const size_t i = first + (order[k] & 0xFFFF);
+                const Vec3d p = pointAt(xyz, i);
+                Closest c;
+                if (wantClosest) {
+                    // The previous answer's point bounds this distance (1-Lipschitz).
+                    c = std::isfinite(prevPoint.x) ? closest(p, norm(p - prevPoint)) : closest(p);
+                    prevPoint = c.point;
+                }
+                bool in = false;
+                if (wantSign) in = inside(p, options.sign, &c);
+                if (distance)
+                    distance[i] =
+                        static_cast<T>(options.signedDistance && in ? -c.distance : c.distance);
+                if (closestOut)
+                    for (int a = 0; a < 3; ++a) closestOut[3 * i + a] = static_cast<T>(c.point[a]);
+                if (out.face) out.face[i] = c.face;
+                if (bary)
+                    for (int a = 0; a < 3; ++a) bary[3 * i + a] = static_cast<T>(c.bary[a]);
+                if (out.inside) out.inside[i] = in;
+                if (winding) winding[i] = static_cast<T>(windingNumber(p));
+            }
+            progress.advance(r.size());
+        });
+    }
+}
+
+template <class T>
+void MeshQuery::castRays(const T* origins, const T* directions, size_t n, double tMax,
+                         const RayOutputs& out, const std::string& label) const {
+    checkFinite(origins, n, "origins");
+    checkFinite(directions, n, "directions");
+    auto* t = static_cast<T*>(out.t);
+    auto* bary = static_cast<T*>(out.bary);
+    auto* normal = static_cast<T*>(out.normal);
+    Progress progress(label, n, !label.empty());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const auto& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const Hit h = rayCast(pointAt(origins, i), pointAt(directions, i), tMax);
+            const bool hit = h.face != UINT32_MAX;
+            if (t) t[i] = static_cast<T>(h.t);
+            if (out.face) out.face[i] = hit ? static_cast<int64_t>(h.face) : -1;
+            if (bary) {
+                bary[2 * i] = static_cast<T>(hit ? h.u : 0);
+                bary[2 * i + 1] = static_cast<T>(hit ? h.v : 0);
+            }
+            if (normal)
+                for (int a = 0; a < 3; ++a) normal[3 * i + a] = static_cast<T>(h.normal[a]);
+        }
+        progress.advance(r.size());
+    });
+}
+
+template void MeshQuery::queryPoints<float>(const float*, size_t, const PointOutputs&,
+                                            const PointOptions&) const;
+template void MeshQuery::queryPoints<double>(const double*, size_t, const PointOutputs&,
+                                             const PointOptions&) const;
+template void MeshQuery::castRays<float>(const float*, const float*, size_t, double,
+                                         const RayOutputs&, const std::string&) const;
+template void MeshQuery::castRays<double>(const double*, const double*, size_t, double,
+                                          const RayOutputs&, const std::string&) const;
+
+}  // namespace sdft
