@@ -59,6 +59,15 @@ class TextCursor {
         while (m_p < m_end && !isSpace(*m_p)) ++m_p;
         return {start, static_cast<size_t>(m_p - start)};
     }
+    // The next token, left to be read again.
+    std::string_view peekToken() {
+        const char* p = m_p;
+        const auto line = m_line;
+        const std::string_view t = token();
+        m_p = p;
+        m_line = line;
+        return t;
+    }
     double number(const char* what) {
         const std::string_view t = token();
         double v = 0;
