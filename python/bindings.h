@@ -76,5 +76,6 @@ void bindField(pyb::module_& m);
 void bindGrid(pyb::module_& m);
 void bindScene(pyb::module_& m);
 void bindImages(pyb::module_& m);
+void bindQuery(pyb::module_& m);
 
 }  // namespace sdft::py

@@ -22,6 +22,7 @@ PYBIND11_MODULE(_sdftrace, m) {
     sdft::py::bindGrid(m);
     sdft::py::bindScene(m);
     sdft::py::bindImages(m);
+    sdft::py::bindQuery(m);
     m.attr("__version__") = sdft::buildInfo().version;
     m.def(
         "build_info",

@@ -15,6 +15,7 @@ void addInfoCommand(CLI::App& app, Action& action);
 void addConvertCommand(CLI::App& app, Action& action);
 void addMeshCommand(CLI::App& app, Action& action);
 void addViewCommand(CLI::App& app, Action& action);
+void addQueryCommand(CLI::App& app, Action& action);
 
 // Parses "x,y,z" (flag values); throws CLI::ValidationError naming the flag.
 struct Vec3Arg {

@@ -66,6 +66,7 @@ int run(int argc, char** argv) {
     sdft::cli::addInfoCommand(app, action);
     sdft::cli::addConvertCommand(app, action);
     sdft::cli::addMeshCommand(app, action);
+    sdft::cli::addQueryCommand(app, action);
     sdft::cli::addViewCommand(app, action);
     // Under mpirun every rank parses the same flags: rank 0 alone prints help and flag errors.
     const bool printer = sdft::Communicator::world().root();

@@ -8,10 +8,10 @@ import os as _os
 
 import numpy as _np
 
-from ._sdftrace import (Field, Grid, Scene, __version__, bake, build_info, gpu_info, render,
-                        render_options, srgb, write_image)
+from ._sdftrace import (Field, Grid, MeshQuery, Scene, __version__, bake, build_info, gpu_info,
+                        render, render_options, srgb, write_image)
 
-__all__ = ["Field", "Grid", "Scene", "bake", "build_info", "gpu_info", "render", "render_options",
+__all__ = ["Field", "Grid", "MeshQuery", "Scene", "bake", "build_info", "gpu_info", "render", "render_options",
            "srgb", "write_image", "slice_points", "slice_field", "colorize_distance",
            "__version__"]
 
