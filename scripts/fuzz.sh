@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fuzzes sdftrace's input paths with libFuzzer (clang from Debian) for SECONDS each:
-#   scripts/fuzz.sh SECONDS [TARGET ...]      targets: scene sdfg vdb grid_text mesh mesh_anim mesh_ply mesh_stl
+#   scripts/fuzz.sh SECONDS [TARGET ...]      targets: scene sdfg vdb grid_text mesh mesh_anim points mesh_ply mesh_stl
 #                                             mesh_off mesh_obj mesh_gltf (default: all)
 # Builds build/fuzz (clang, coverage instrumentation, AddressSanitizer, UndefinedBehaviorSanitizer),
 # runs the targets side by side (FUZZ_JOBS at a time, default: the number of cores), each on a
@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:?usage: scripts/fuzz.sh SECONDS [TARGET ...]}
 shift
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(scene sdfg vdb grid_text mesh mesh_anim mesh_ply mesh_stl mesh_off mesh_obj mesh_gltf)
+[ ${#targets[@]} -eq 0 ] && targets=(scene sdfg vdb grid_text mesh mesh_anim points mesh_ply mesh_stl mesh_off mesh_obj mesh_gltf)
 build=build/fuzz
 jobs=${FUZZ_JOBS:-$(nproc)}
 
