@@ -265,7 +265,8 @@ void bindSampling(pyb::class_<PyMeshQuery>& c) {
          },
          pyb::arg("n"), pyb::arg("seed") = 0, pyb::arg("dtype") = "float32",
          "n points on the surface, uniform by area: (points n x 3, the faces' unit normals "
-         "n x 3, face ids n). The same seed gives the same points on any number of threads.")
+         "n x 3, face ids n), in dtype (float32 or float64). The same seed gives the same "
+         "points on any number of threads.")
         .def(
             "sample_near_surface",
             [](const PyMeshQuery& q, int64_t n, std::optional<std::vector<double>> sigmas,
@@ -292,7 +293,8 @@ void bindSampling(pyb::class_<PyMeshQuery>& c) {
             "DeepSDF's near-surface samples (Park et al. 2019): n surface points, point i moved "
             "by an isotropic Gaussian of standard deviation sigmas[i % len(sigmas)] (mesh units; "
             "default: DeepSDF's 0.05 and 0.0158 times half the bounding box's diagonal), with "
-            "their signed distances: (points n x 3, sdf n).")
+            "their signed distances by sign: (points n x 3, sdf n) in dtype (float32 or "
+            "float64); the same seed gives the same points.")
         .def(
             "sample_volume",
             [](const PyMeshQuery& q, int64_t n,
@@ -330,7 +332,8 @@ void bindSampling(pyb::class_<PyMeshQuery>& c) {
             pyb::arg("n"), pyb::arg("bounds") = pyb::none(), pyb::arg("seed") = 0,
             pyb::arg("sign") = "winding", pyb::arg("dtype") = "float32",
             "n points uniform in bounds ((x0, y0, z0), (x1, y1, z1)) (default: the mesh's box "
-            "grown by 5 % of its diagonal) with their signed distances: (points n x 3, sdf n).");
+            "grown by 5 % of its diagonal) with their signed distances by sign: (points n x 3, "
+            "sdf n) in dtype (float32 or float64); the same seed gives the same points.");
 }
 
 }  // namespace
@@ -352,31 +355,36 @@ void bindQuery(pyb::module_& m) {
             [](const PyMeshQuery& q, const pyb::handle& points) {
                 return distances(q, points, false, "winding", "distance");
             },
-            pyb::arg("points"), "Unsigned distances to the mesh (N).")
+            pyb::arg("points"), "Unsigned distances from points (N x 3) to the mesh (N).")
         .def(
             "signed_distance",
             [](const PyMeshQuery& q, const pyb::handle& points, const std::string& sign) {
                 return distances(q, points, true, sign, "signed_distance");
             },
             pyb::arg("points"), pyb::arg("sign") = "winding",
-            "Distances, negative inside by `sign` (N).")
+            "Distances from points (N x 3), negative inside by sign ('winding', 'parity' or "
+            "'pseudonormal') (N).")
         .def("closest_points", &closestPoints, pyb::arg("points"),
-             "(closest points N x 3, face ids N, barycentric coordinates N x 3 of the face's "
-             "corners)")
+             "For points (N x 3): (closest points N x 3, face ids N, barycentric coordinates "
+             "N x 3 of the face's corners)")
         .def("winding_number", &windingNumbers, pyb::arg("points"),
-             "The generalized winding number of the mesh (Jacobson et al. 2013), about 1 inside "
-             "and 0 outside, fractional near holes (N).")
+             "The generalized winding number of the mesh (Jacobson et al. 2013) at points "
+             "(N x 3), about 1 inside and 0 outside, fractional near holes (N).")
         .def("contains", &contains, pyb::arg("points"), pyb::arg("sign") = "winding",
-             "Inside by `sign` (N booleans).")
+             "Whether points (N x 3) are inside by sign ('winding', 'parity' or "
+             "'pseudonormal') (N booleans).")
         .def("ray_cast", &rayCast, pyb::arg("origins"), pyb::arg("directions"),
              pyb::arg("t_max") = INFINITY,
-             "First hits of rays origin + t direction, 0 < t <= t_max (t in units of the "
+             "First hits of rays origins + t directions (N x 3 each), 0 < t <= t_max (t in "
+             "units of the "
              "direction's length): (t N (inf: miss), face ids N (-1: miss), barycentrics N x 2 "
              "(u, v of corners 1 and 2), unit face normals N x 3).")
-        .def_property_readonly("vertex_count",
-                               [](const PyMeshQuery& q) { return q.query->vertices().size(); })
-        .def_property_readonly("face_count",
-                               [](const PyMeshQuery& q) { return q.query->faces().size(); })
+        .def_property_readonly(
+            "vertex_count", [](const PyMeshQuery& q) { return q.query->vertices().size(); },
+            "Vertices of the mesh, as given")
+        .def_property_readonly(
+            "face_count", [](const PyMeshQuery& q) { return q.query->faces().size(); },
+            "Faces of the mesh, as given (face ids index them)")
         .def_property_readonly(
             "bounds",
             [](const PyMeshQuery& q) {
@@ -384,7 +392,7 @@ void bindQuery(pyb::module_& m) {
                 return pyb::make_tuple(pyb::make_tuple(lo.x, lo.y, lo.z),
                                        pyb::make_tuple(hi.x, hi.y, hi.z));
             },
-            "((x0, y0, z0), (x1, y1, z1))")
+            "The mesh's bounding box ((x0, y0, z0), (x1, y1, z1))")
         .def_property_readonly(
             "watertight", [](const PyMeshQuery& q) { return q.query->watertight(); },
             "Every edge shared by two faces, once each way (vertices welded by position)")
