@@ -140,34 +140,36 @@ TEST(MeshQuery, WindingOfOpenMeshesIsTheGeneralizedWindingNumber) {
 // The batch walks points in Morton order with neighbour bounds: the same answers as one at a
 // time, in float and in double, for any subset of outputs.
 TEST(MeshQuery, BatchesAnswerAsSinglePointsDo) {
-    const TriangleMesh mesh = load("suzanne.obj");
-    const MeshQuery q = queryOf(mesh);
-    const std::vector<Vec3d> pts = testPoints(q, 2000, 13);
-    const size_t n = pts.size();
-    std::vector<double> xyz;
-    for (const Vec3d& p : pts) xyz.insert(xyz.end(), {p.x, p.y, p.z});
-    std::vector<float> xyzf(xyz.begin(), xyz.end());
-    for (MeshSign sign : {MeshSign::Winding, MeshSign::Parity, MeshSign::PseudoNormal}) {
-        std::vector<double> d(n), cp(3 * n), bary(3 * n);
-        std::vector<int64_t> face(n);
-        std::unique_ptr<bool[]> in(new bool[n]);
-        MeshQuery::PointOutputs out{d.data(),    cp.data(), face.data(),
-                                    bary.data(), nullptr,   in.get()};
-        q.queryPoints(xyz.data(), n, out, {true, sign, ""});
-        std::vector<float> df(n);
-        q.queryPoints(xyzf.data(), n, {df.data()}, {true, sign, ""});
-        for (size_t i = 0; i < n; ++i) {
-            const MeshQuery::Closest c = q.closest(pts[i]);
-            const bool inside = q.inside(pts[i], sign, &c);
-            ASSERT_NEAR(std::fabs(d[i]), c.distance, 1e-9 * q.diagonal());
-            ASSERT_EQ(in[i], inside);
-            ASSERT_EQ(d[i] < 0, inside && c.distance > 0);
-            ASSERT_NEAR(df[i], d[i], 1e-6 * q.diagonal());
-            const Vec3d on = q.vertices()[q.faces()[face[i]][0]] * bary[3 * i] +
-                             q.vertices()[q.faces()[face[i]][1]] * bary[3 * i + 1] +
-                             q.vertices()[q.faces()[face[i]][2]] * bary[3 * i + 2];
-            ASSERT_NEAR(norm(on - Vec3d{cp[3 * i], cp[3 * i + 1], cp[3 * i + 2]}), 0,
-                        1e-9 * q.diagonal());
+    for (const char* name : {"suzanne.obj", "bunny_npm.obj"}) {  // open; closed (signs carried)
+        const TriangleMesh mesh = load(name);
+        const MeshQuery q = queryOf(mesh);
+        const std::vector<Vec3d> pts = testPoints(q, 2000, 13);
+        const size_t n = pts.size();
+        std::vector<double> xyz;
+        for (const Vec3d& p : pts) xyz.insert(xyz.end(), {p.x, p.y, p.z});
+        std::vector<float> xyzf(xyz.begin(), xyz.end());
+        for (MeshSign sign : {MeshSign::Winding, MeshSign::Parity, MeshSign::PseudoNormal}) {
+            std::vector<double> d(n), cp(3 * n), bary(3 * n);
+            std::vector<int64_t> face(n);
+            std::unique_ptr<bool[]> in(new bool[n]);
+            MeshQuery::PointOutputs out{d.data(),    cp.data(), face.data(),
+                                        bary.data(), nullptr,   in.get()};
+            q.queryPoints(xyz.data(), n, out, {true, sign, ""});
+            std::vector<float> df(n);
+            q.queryPoints(xyzf.data(), n, {df.data()}, {true, sign, ""});
+            for (size_t i = 0; i < n; ++i) {
+                const MeshQuery::Closest c = q.closest(pts[i]);
+                const bool inside = q.inside(pts[i], sign, &c);
+                ASSERT_NEAR(std::fabs(d[i]), c.distance, 1e-9 * q.diagonal());
+                ASSERT_EQ(in[i], inside);
+                ASSERT_EQ(d[i] < 0, inside && c.distance > 0);
+                ASSERT_NEAR(df[i], d[i], 1e-6 * q.diagonal());
+                const Vec3d on = q.vertices()[q.faces()[face[i]][0]] * bary[3 * i] +
+                                 q.vertices()[q.faces()[face[i]][1]] * bary[3 * i + 1] +
+                                 q.vertices()[q.faces()[face[i]][2]] * bary[3 * i + 2];
+                ASSERT_NEAR(norm(on - Vec3d{cp[3 * i], cp[3 * i + 1], cp[3 * i + 2]}), 0,
+                            1e-9 * q.diagonal());
+            }
         }
     }
 }
