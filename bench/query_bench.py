@@ -86,8 +86,9 @@ def thin_part():
                     for j in range(n + 1):
                         p = [0.0, 0.0, 0.0]
                         p[axis] = hi[axis] if side else lo[axis]
-                        p[u] = lo[u] + (hi[u] - lo[u]) * i / n
-                        p[w] = lo[w] + (hi[w] - lo[w]) * j / n
+                        # The last row exactly at hi: shared edges weld (a closed part).
+                        p[u] = hi[u] if i == n else lo[u] + (hi[u] - lo[u]) * i / n
+                        p[w] = hi[w] if j == n else lo[w] + (hi[w] - lo[w]) * j / n
                         verts.append(p)
                 for i in range(n):
                     for j in range(n):

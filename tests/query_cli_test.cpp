@@ -159,6 +159,7 @@ TEST(QueryCli, BadInputIsOneLineAndNoOutput) {
         {"-o out.npz", "give a points file or --sample"},
         {"--sample near -o out.npz", "needs --count"},
         {"--sample volume --count 10 --bounds 1,1,1,0,0,0 -o out.npz", "--bounds"},
+        {"--sample near --count 100000000000 -o out.npz", "more than the memory budget"},
     };
     for (const Case& c : cases) {
         RunResult r = runCli("query -q " + mesh + " " + c.args, dir);

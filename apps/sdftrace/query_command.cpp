@@ -13,6 +13,7 @@
 
 #include "commands.h"
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/io/mesh_io.h"
 #include "sdftrace/io/npy_io.h"
@@ -192,6 +193,10 @@ int runQuery(const QueryArgs& a) {
             arrays = queryPoints(q, p.values, n, a, {});
     } else {
         n = static_cast<size_t>(a.count);
+        // Points, answers (closest points and barycentrics at most) and the output's bytes.
+        checkMemoryBudget(static_cast<double>(n) * (a.float64 ? 8 : 4) * 3 * 6,
+                          "--count " + std::to_string(a.count), "the sampled points and answers",
+                          "sample fewer points per run (--seed keeps runs apart)");
         if (a.float64) {
             std::vector<double> xyz;
             std::vector<NamedArray> s = sampled(q, a, xyz);

@@ -221,7 +221,8 @@ MeshQuery::Closest MeshQuery::closest(Vec3d p, double bound) const {
     MeshBvh::Closest c;
     if (std::isfinite(bound)) {
         // Widened past float rounding of the point, the vertices and the bound itself.
-        const double radius = bound * (1 + 1e-5) + 1e-6 * m.diagonal + 1e-30;
+        const double radius =
+            std::fmin(bound * (1 + 1e-5) + 1e-6 * m.diagonal + 1e-30, 3.0e38);  // a float
         c = m.bvh->closest(q, static_cast<float>(radius));
     }
     if (c.triangle == UINT32_MAX) c = m.bvh->closest(q);
