@@ -31,6 +31,8 @@ const std::map<std::string, std::set<std::string>>& allowedIncludes() {
         {"io", {"core", "math", "exec", "field", "render", "bake"}},
         {"scene", {"core", "math", "exec", "field", "trace", "render", "bake", "io"}},
         {"gpu", {"core", "math", "exec", "field", "trace", "render", "bake"}},
+        // Exact queries of meshes at points: the bakers' BVHs and winding numbers, point files.
+        {"query", {"core", "math", "exec", "field", "bake", "io"}},
         {"view", {"core", "math", "exec", "field", "trace", "render", "bake", "io", "scene"}},
         // Renders and bakes across the ranks of an MPI job.
         {"cluster", {"core", "math", "exec", "field", "trace", "render", "bake", "io", "scene"}},
