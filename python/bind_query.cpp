@@ -341,7 +341,8 @@ void bindSampling(pyb::class_<PyMeshQuery>& c) {
 void bindQuery(pyb::module_& m) {
     pyb::class_<PyMeshQuery> c(
         m, "MeshQuery",
-        "Exact queries of a triangle mesh at arbitrary points (docs/query.md): distances, "
+        "Exact queries of a triangle mesh at arbitrary points (docs/guide/10-mesh-queries.md): "
+        "distances, "
         "closest points, signed distances, winding numbers, ray casts and sampling. Built once "
         "from vertices (N x 3) and faces (M x 3 indices); every method releases the GIL, runs on "
         "all cores and may be called from several threads. float32 points give float32 results, "

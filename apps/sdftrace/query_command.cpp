@@ -1,7 +1,8 @@
 // sdftrace query mesh.obj points.npy -o result.npz [--sign S] [--closest] [--winding-number]
 //   [--inside] | --rays directions.npy [--t-max T] | --sample surface|near|volume --count N
-// Exact mesh distance queries at arbitrary points (query/mesh_query.h, docs/query.md): the SDF
-// data pipeline without a bake, answers written as NumPy arrays or CSV.
+// Exact mesh distance queries at arbitrary points (query/mesh_query.h,
+// docs/guide/10-mesh-queries.md): the SDF data pipeline without a bake, answers written as NumPy
+// arrays or CSV.
 #include <tbb/global_control.h>
 
 #include <chrono>
@@ -227,7 +228,7 @@ void addQueryCommand(CLI::App& app, Action& action) {
         "query",
         "Exact distances, signs, closest points, winding numbers or ray hits of a mesh at "
         "points from a file (.npy or CSV) or sampled for learning; answers as .npz, .npy or "
-        ".csv (docs/query.md)");
+        ".csv (docs/guide/10-mesh-queries.md)");
     cmd->add_option("mesh", args->mesh, "Mesh (.obj, .ply, .stl, .off, .gltf, .glb)")->required();
     cmd->add_option("points", args->points,
                     "N x 3 points (ray origins with --rays): .npy (float32 in, float32 out; "

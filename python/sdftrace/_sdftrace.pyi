@@ -69,7 +69,7 @@ class Grid:
         ...
 
 class MeshQuery:
-    """Exact queries of a triangle mesh at arbitrary points (docs/query.md): distances, closest points, signed distances, winding numbers, ray casts and sampling. Built once from vertices (N x 3) and faces (M x 3 indices); every method releases the GIL, runs on all cores and may be called from several threads. float32 points give float32 results, float64 (or other numbers) float64. Signs: 'winding' (the generalized winding number of the mesh with its holes spanned, > 1/2 inside: right on closed meshes, robust on open scans), 'parity' (three rays' crossings), 'pseudonormal' (the closest feature's angle-weighted normal: closed, manifold meshes only)."""
+    """Exact queries of a triangle mesh at arbitrary points (docs/guide/10-mesh-queries.md): distances, closest points, signed distances, winding numbers, ray casts and sampling. Built once from vertices (N x 3) and faces (M x 3 indices); every method releases the GIL, runs on all cores and may be called from several threads. float32 points give float32 results, float64 (or other numbers) float64. Signs: 'winding' (the generalized winding number of the mesh with its holes spanned, > 1/2 inside: right on closed meshes, robust on open scans), 'parity' (three rays' crossings), 'pseudonormal' (the closest feature's angle-weighted normal: closed, manifold meshes only)."""
     def __init__(self: MeshQuery, vertices: object, faces: object) -> None:
         ...
     def __repr__(self: MeshQuery) -> str:

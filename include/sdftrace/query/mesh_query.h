@@ -8,7 +8,7 @@
 // exact to double rounding up to ties between triangles within float rounding of each other
 // (about 1e-7 of the mesh's extent).
 //
-// Signs (docs/query.md):
+// Signs (docs/guide/10-mesh-queries.md):
 //  - Winding: the generalized winding number (Jacobson et al. 2013) of the mesh closed by its
 //    films (bake/closing_film.h), > 1/2 inside. Exact on closed meshes; on scans with holes the
 //    holes are spanned by the films, so the sign is the winding-number bake's.
