@@ -19,26 +19,17 @@ Per mesh, with 1M points uniform in the mesh's box (float32, all cores for both)
 """
 import argparse
 import resource
-import statistics
 import time
 
 import numpy as np
 
 import sdftrace
+from python_evaluate_bench import median_seconds  # bench/, beside this script
 
 try:
     import open3d as o3d
 except ImportError:  # the comparison needs Debian's python3-open3d
     o3d = None
-
-
-def median_seconds(fn, reps):
-    times = []
-    for _ in range(reps):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
 
 
 def obj_mesh(path):

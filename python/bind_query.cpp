@@ -240,100 +240,101 @@ pyb::array signedAt(const PyMeshQuery& q, const Points& p, MeshSign sign) {
     return d;
 }
 
+pyb::tuple sampleSurfacePy(const PyMeshQuery& q, int64_t n, uint64_t seed,
+                           const pyb::handle& dtype) {
+    Points p;
+    p.n = countOf(n, "sample_surface");
+    p.single = singleOf(dtype, "sample_surface");
+    p.array = result(p, 3);
+    pyb::array normals = result(p, 3);
+    pyb::array_t<int64_t> faces(std::vector<pyb::ssize_t>{static_cast<pyb::ssize_t>(p.n)});
+    void *pp = p.array.mutable_data(), *np = normals.mutable_data();
+    int64_t* fp = faces.mutable_data();
+    {
+        pyb::gil_scoped_release release;
+        if (p.single)
+            sampleSurface(*q.query, p.n, seed, static_cast<float*>(pp), static_cast<float*>(np),
+                          fp);
+        else
+            sampleSurface(*q.query, p.n, seed, static_cast<double*>(pp), static_cast<double*>(np),
+                          fp);
+    }
+    return pyb::make_tuple(p.array, normals, faces);
+}
+
+pyb::tuple sampleNearSurfacePy(const PyMeshQuery& q, int64_t n,
+                               std::optional<std::vector<double>> sigmas, uint64_t seed,
+                               const std::string& sign, const pyb::handle& dtype) {
+    Points p;
+    p.n = countOf(n, "sample_near_surface");
+    p.single = singleOf(dtype, "sample_near_surface");
+    const MeshSign s = signOf(sign, "sample_near_surface");
+    const std::vector<double> widths = sigmas ? *sigmas : defaultNearSurfaceSigmas(*q.query);
+    p.array = result(p, 3);
+    void* pp = p.array.mutable_data();
+    {
+        pyb::gil_scoped_release release;
+        if (p.single)
+            sampleNearSurface(*q.query, p.n, widths, seed, static_cast<float*>(pp));
+        else
+            sampleNearSurface(*q.query, p.n, widths, seed, static_cast<double*>(pp));
+    }
+    return pyb::make_tuple(p.array, signedAt(q, p, s));
+}
+
+pyb::tuple sampleVolumePy(
+    const PyMeshQuery& q, int64_t n,
+    std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> bounds, uint64_t seed,
+    const std::string& sign, const pyb::handle& dtype) {
+    Points p;
+    p.n = countOf(n, "sample_volume");
+    p.single = singleOf(dtype, "sample_volume");
+    const MeshSign s = signOf(sign, "sample_volume");
+    auto [lo, hi] = q.query->bounds();
+    if (bounds) {
+        lo = {bounds->first[0], bounds->first[1], bounds->first[2]};
+        hi = {bounds->second[0], bounds->second[1], bounds->second[2]};
+        for (int a = 0; a < 3; ++a)
+            if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || lo[a] > hi[a])
+                throw InputError(
+                    "sample_volume: bounds: expected ((x0, y0, z0), (x1, y1, z1)) "
+                    "finite with x0 <= x1, y0 <= y1, z0 <= z1");
+    } else {  // the box grown by 5 % of its diagonal
+        const double g = 0.05 * q.query->diagonal();
+        lo = lo - Vec3d{g, g, g};
+        hi = hi + Vec3d{g, g, g};
+    }
+    p.array = result(p, 3);
+    void* pp = p.array.mutable_data();
+    {
+        pyb::gil_scoped_release release;
+        if (p.single)
+            sampleVolume(p.n, lo, hi, seed, static_cast<float*>(pp));
+        else
+            sampleVolume(p.n, lo, hi, seed, static_cast<double*>(pp));
+    }
+    return pyb::make_tuple(p.array, signedAt(q, p, s));
+}
+
 void bindSampling(pyb::class_<PyMeshQuery>& c) {
-    c.def(
-         "sample_surface",
-         [](const PyMeshQuery& q, int64_t n, uint64_t seed, const pyb::handle& dtype) {
-             Points p;
-             p.n = countOf(n, "sample_surface");
-             p.single = singleOf(dtype, "sample_surface");
-             p.array = result(p, 3);
-             pyb::array normals = result(p, 3);
-             pyb::array_t<int64_t> faces(std::vector<pyb::ssize_t>{static_cast<pyb::ssize_t>(p.n)});
-             void *pp = p.array.mutable_data(), *np = normals.mutable_data();
-             int64_t* fp = faces.mutable_data();
-             {
-                 pyb::gil_scoped_release release;
-                 if (p.single)
-                     sampleSurface(*q.query, p.n, seed, static_cast<float*>(pp),
-                                   static_cast<float*>(np), fp);
-                 else
-                     sampleSurface(*q.query, p.n, seed, static_cast<double*>(pp),
-                                   static_cast<double*>(np), fp);
-             }
-             return pyb::make_tuple(p.array, normals, faces);
-         },
-         pyb::arg("n"), pyb::arg("seed") = 0, pyb::arg("dtype") = "float32",
-         "n points on the surface, uniform by area: (points n x 3, the faces' unit normals "
-         "n x 3, face ids n), in dtype (float32 or float64). The same seed gives the same "
-         "points on any number of threads.")
-        .def(
-            "sample_near_surface",
-            [](const PyMeshQuery& q, int64_t n, std::optional<std::vector<double>> sigmas,
-               uint64_t seed, const std::string& sign, const pyb::handle& dtype) {
-                Points p;
-                p.n = countOf(n, "sample_near_surface");
-                p.single = singleOf(dtype, "sample_near_surface");
-                const MeshSign s = signOf(sign, "sample_near_surface");
-                const std::vector<double> widths =
-                    sigmas ? *sigmas : defaultNearSurfaceSigmas(*q.query);
-                p.array = result(p, 3);
-                void* pp = p.array.mutable_data();
-                {
-                    pyb::gil_scoped_release release;
-                    if (p.single)
-                        sampleNearSurface(*q.query, p.n, widths, seed, static_cast<float*>(pp));
-                    else
-                        sampleNearSurface(*q.query, p.n, widths, seed, static_cast<double*>(pp));
-                }
-                return pyb::make_tuple(p.array, signedAt(q, p, s));
-            },
-            pyb::arg("n"), pyb::arg("sigmas") = pyb::none(), pyb::arg("seed") = 0,
-            pyb::arg("sign") = "winding", pyb::arg("dtype") = "float32",
-            "DeepSDF's near-surface samples (Park et al. 2019): n surface points, point i moved "
-            "by an isotropic Gaussian of standard deviation sigmas[i % len(sigmas)] (mesh units; "
-            "default: DeepSDF's 0.05 and 0.0158 times half the bounding box's diagonal), with "
-            "their signed distances by sign: (points n x 3, sdf n) in dtype (float32 or "
-            "float64); the same seed gives the same points.")
-        .def(
-            "sample_volume",
-            [](const PyMeshQuery& q, int64_t n,
-               std::optional<std::pair<std::array<double, 3>, std::array<double, 3>>> bounds,
-               uint64_t seed, const std::string& sign, const pyb::handle& dtype) {
-                Points p;
-                p.n = countOf(n, "sample_volume");
-                p.single = singleOf(dtype, "sample_volume");
-                const MeshSign s = signOf(sign, "sample_volume");
-                auto [lo, hi] = q.query->bounds();
-                if (bounds) {
-                    lo = {bounds->first[0], bounds->first[1], bounds->first[2]};
-                    hi = {bounds->second[0], bounds->second[1], bounds->second[2]};
-                    for (int a = 0; a < 3; ++a)
-                        if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || lo[a] > hi[a])
-                            throw InputError(
-                                "sample_volume: bounds: expected ((x0, y0, z0), (x1, y1, z1)) "
-                                "finite with x0 <= x1, y0 <= y1, z0 <= z1");
-                } else {  // the box grown by 5 % of its diagonal
-                    const double g = 0.05 * q.query->diagonal();
-                    lo = lo - Vec3d{g, g, g};
-                    hi = hi + Vec3d{g, g, g};
-                }
-                p.array = result(p, 3);
-                void* pp = p.array.mutable_data();
-                {
-                    pyb::gil_scoped_release release;
-                    if (p.single)
-                        sampleVolume(p.n, lo, hi, seed, static_cast<float*>(pp));
-                    else
-                        sampleVolume(p.n, lo, hi, seed, static_cast<double*>(pp));
-                }
-                return pyb::make_tuple(p.array, signedAt(q, p, s));
-            },
-            pyb::arg("n"), pyb::arg("bounds") = pyb::none(), pyb::arg("seed") = 0,
-            pyb::arg("sign") = "winding", pyb::arg("dtype") = "float32",
-            "n points uniform in bounds ((x0, y0, z0), (x1, y1, z1)) (default: the mesh's box "
-            "grown by 5 % of its diagonal) with their signed distances by sign: (points n x 3, "
-            "sdf n) in dtype (float32 or float64); the same seed gives the same points.");
+    c.def("sample_surface", &sampleSurfacePy, pyb::arg("n"), pyb::arg("seed") = 0,
+          pyb::arg("dtype") = "float32",
+          "n points on the surface, uniform by area: (points n x 3, the faces' unit normals "
+          "n x 3, face ids n), in dtype (float32 or float64). The same seed gives the same "
+          "points on any number of threads.")
+        .def("sample_near_surface", &sampleNearSurfacePy, pyb::arg("n"),
+             pyb::arg("sigmas") = pyb::none(), pyb::arg("seed") = 0, pyb::arg("sign") = "winding",
+             pyb::arg("dtype") = "float32",
+             "DeepSDF's near-surface samples (Park et al. 2019): n surface points, point i moved "
+             "by an isotropic Gaussian of standard deviation sigmas[i % len(sigmas)] (mesh units; "
+             "default: DeepSDF's 0.05 and 0.0158 times half the bounding box's diagonal), with "
+             "their signed distances by sign: (points n x 3, sdf n) in dtype (float32 or "
+             "float64); the same seed gives the same points.")
+        .def("sample_volume", &sampleVolumePy, pyb::arg("n"), pyb::arg("bounds") = pyb::none(),
+             pyb::arg("seed") = 0, pyb::arg("sign") = "winding", pyb::arg("dtype") = "float32",
+             "n points uniform in bounds ((x0, y0, z0), (x1, y1, z1)) (default: the mesh's box "
+             "grown by 5 % of its diagonal) with their signed distances by sign: (points n x 3, "
+             "sdf n) in dtype (float32 or float64); the same seed gives the same points.");
 }
 
 }  // namespace

@@ -3,11 +3,17 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <functional>
 
 namespace sdft::cli {
 
 using Action = std::function<int()>;
+
+// Seconds since t0, for the summary lines' phase times.
+inline double since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 void addRenderCommand(CLI::App& app, Action& action);
 void addBakeCommand(CLI::App& app, Action& action);

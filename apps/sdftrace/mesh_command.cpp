@@ -47,10 +47,6 @@ struct MeshArgs {
     bool quiet = false;
 };
 
-double since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 SampleOptions sampling(const MeshArgs& a, bool progress) {
     SampleOptions o;
     o.resolution = a.resolution > 0 ? a.resolution : kDefaultRes;

@@ -140,10 +140,6 @@ std::vector<NamedArray> sampled(const MeshQuery& q, const QueryArgs& a, std::vec
     return arrays;
 }
 
-double since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 int runQuery(const QueryArgs& a) {
     std::optional<tbb::global_control> threads;
     if (a.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, a.threads);

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace sdft {
@@ -22,7 +23,7 @@ struct PointTable {
 // A .npy file or a CSV file (any other extension) of N rows of `cols` numbers; `what` names the
 // argument in errors ("points").
 PointTable readPointTable(const std::string& path, size_t cols);
-PointTable parsePointTable(const std::string& bytes, const std::string& path, size_t cols);
+PointTable parsePointTable(std::string_view bytes, const std::string& path, size_t cols);
 
 // One output array: little-endian values of `kind` 'f' (float32 / float64 by itemsize), 'i'
 // (int64) or 'b' (bool), rows x cols (cols 0: a vector).

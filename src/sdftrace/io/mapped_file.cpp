@@ -15,8 +15,7 @@ namespace sdft {
 MappedFile::MappedFile(const std::string& path) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0)
-        throw InputError(path + ": cannot open grid file (" + std::strerror(errno) +
-                         "; does it exist?)");
+        throw InputError(path + ": cannot open (" + std::strerror(errno) + "; does it exist?)");
     struct stat st {};
     if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         ::close(fd);

@@ -5,9 +5,9 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 
+#include "mapped_file.h"
+#include "mesh_readers.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/io/atomic_file.h"
 #include "text_cursor.h"
@@ -15,22 +15,6 @@
 namespace sdft {
 
 namespace {
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-    if (s.size() < suffix.size()) return false;
-    std::string tail = s.substr(s.size() - suffix.size());
-    std::transform(tail.begin(), tail.end(), tail.begin(), ::tolower);
-    return tail == suffix;
-}
-
-std::string readWhole(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
-    std::ostringstream s;
-    s << in.rdbuf();
-    if (in.bad()) throw InputError(path + ": cannot read: " + std::strerror(errno));
-    return std::move(s).str();
-}
 
 // The header dictionary of a .npy file: {'descr': '<f8', 'fortran_order': False, 'shape': (N, 3), }
 struct NpyHeader {
@@ -163,84 +147,95 @@ Element elementOf(const std::string& descr, const std::string& path) {
 
 }  // namespace
 
-PointTable parsePointTable(const std::string& bytes, const std::string& path, size_t cols) {
+namespace {
+
+// A .npy file (magic already matched) into t.
+void parseNpy(std::string_view bytes, const std::string& path, size_t cols, PointTable& t) {
+    if (bytes.size() < 10) throw InputError(path + ": .npy file cut short in its header");
+    const int major = static_cast<uint8_t>(bytes[6]);
+    if (major < 1 || major > 3)
+        throw InputError(path + ": .npy format version " + std::to_string(major) +
+                         "; versions 1 to 3 are read");
+    size_t headerLen, start;
+    if (major == 1) {
+        headerLen = static_cast<uint8_t>(bytes[8]) | (static_cast<uint8_t>(bytes[9]) << 8);
+        start = 10;
+    } else {
+        if (bytes.size() < 12) throw InputError(path + ": .npy file cut short in its header");
+        headerLen = 0;
+        for (int i = 0; i < 4; ++i)
+            headerLen |= static_cast<size_t>(static_cast<uint8_t>(bytes[8 + i])) << (8 * i);
+        start = 12;
+    }
+    if (headerLen > bytes.size() - start)
+        throw InputError(path + ": .npy header of " + std::to_string(headerLen) +
+                         " bytes runs past the end of the file");
+    const NpyHeader h = parseHeader(std::string(bytes.substr(start, headerLen)), path);
+    const Element e = elementOf(h.descr, path);
+    if (h.shape.size() != 2 || h.shape[1] != cols)
+        throw InputError(path + ": array of shape (" +
+                         [&] {
+                             std::string s;
+                             for (size_t i = 0; i < h.shape.size(); ++i)
+                                 s += (i ? ", " : "") + std::to_string(h.shape[i]);
+                             return s + (h.shape.size() == 1 ? ",)" : ")");
+                         }() +
+                         "; expected N x " + std::to_string(cols));
+    const uint64_t rows = h.shape[0];
+    const size_t data = start + headerLen;
+    if (rows > (bytes.size() - data) / (cols * e.size) ||
+        rows * cols * e.size != bytes.size() - data)
+        throw InputError(path + ": " + std::to_string(rows) + " x " + std::to_string(cols) +
+                         " values of " + std::to_string(e.size) + " bytes need " +
+                         std::to_string(rows * cols * e.size) + " bytes of data; the file has " +
+                         std::to_string(bytes.size() - data));
+    t.rows = rows;
+    t.single = e.kind == 'f' && e.size == 4;
+    t.values.resize(rows * cols);
+    const auto* p = reinterpret_cast<const uint8_t*>(bytes.data() + data);
+    for (size_t r = 0; r < rows; ++r)
+        for (size_t c = 0; c < cols; ++c)
+            t.values[r * cols + c] = e.read(p + e.size * (h.fortran ? c * rows + r : r * cols + c));
+}
+
+// CSV text into t.
+void parseCsv(std::string_view bytes, const std::string& path, size_t cols, PointTable& t) {
+    // CSV: commas, semicolons and tabs are separators; a first line that is not numbers is
+    // the header.
+    std::string text(bytes);
+    std::replace_if(
+        text.begin(), text.end(), [](char ch) { return ch == ',' || ch == ';'; }, ' ');
+    TextCursor c(text.data(), text.data() + text.size(), path);
+    c.allowComments(true);
+    c.skipSpace();
+    if (!c.atEnd()) {
+        const std::string_view first = c.peekToken();
+        double v;
+        const char* b = first.data() + (!first.empty() && first[0] == '+');
+        const auto [ptr, ec] = std::from_chars(b, first.data() + first.size(), v);
+        if (ec != std::errc() || ptr != first.data() + first.size()) c.skipLine();
+    }
+    while (!c.atEnd()) {
+        for (size_t k = 0; k < cols; ++k) {
+            if (!c.moreOnLine())
+                c.fail("expected " + std::to_string(cols) + " numbers on the line, found " +
+                       std::to_string(k));
+            t.values.push_back(c.number("value"));
+        }
+        if (c.moreOnLine()) c.fail("more than " + std::to_string(cols) + " numbers on the line");
+        ++t.rows;
+    }
+}
+
+}  // namespace
+
+PointTable parsePointTable(std::string_view bytes, const std::string& path, size_t cols) {
     PointTable t;
     t.cols = cols;
-    if (bytes.size() >= 6 && std::memcmp(bytes.data(), "\x93NUMPY", 6) == 0) {
-        if (bytes.size() < 10) throw InputError(path + ": .npy file cut short in its header");
-        const int major = static_cast<uint8_t>(bytes[6]);
-        if (major < 1 || major > 3)
-            throw InputError(path + ": .npy format version " + std::to_string(major) +
-                             "; versions 1 to 3 are read");
-        size_t headerLen, start;
-        if (major == 1) {
-            headerLen = static_cast<uint8_t>(bytes[8]) | (static_cast<uint8_t>(bytes[9]) << 8);
-            start = 10;
-        } else {
-            if (bytes.size() < 12) throw InputError(path + ": .npy file cut short in its header");
-            headerLen = 0;
-            for (int i = 0; i < 4; ++i)
-                headerLen |= static_cast<size_t>(static_cast<uint8_t>(bytes[8 + i])) << (8 * i);
-            start = 12;
-        }
-        if (headerLen > bytes.size() - start)
-            throw InputError(path + ": .npy header of " + std::to_string(headerLen) +
-                             " bytes runs past the end of the file");
-        const NpyHeader h = parseHeader(bytes.substr(start, headerLen), path);
-        const Element e = elementOf(h.descr, path);
-        if (h.shape.size() != 2 || h.shape[1] != cols)
-            throw InputError(path + ": array of shape (" +
-                             [&] {
-                                 std::string s;
-                                 for (size_t i = 0; i < h.shape.size(); ++i)
-                                     s += (i ? ", " : "") + std::to_string(h.shape[i]);
-                                 return s + (h.shape.size() == 1 ? ",)" : ")");
-                             }() +
-                             "; expected N x " + std::to_string(cols));
-        const uint64_t rows = h.shape[0];
-        const size_t data = start + headerLen;
-        if (rows > (bytes.size() - data) / (cols * e.size) ||
-            rows * cols * e.size != bytes.size() - data)
-            throw InputError(path + ": " + std::to_string(rows) + " x " + std::to_string(cols) +
-                             " values of " + std::to_string(e.size) + " bytes need " +
-                             std::to_string(rows * cols * e.size) +
-                             " bytes of data; the file has " + std::to_string(bytes.size() - data));
-        t.rows = rows;
-        t.single = e.kind == 'f' && e.size == 4;
-        t.values.resize(rows * cols);
-        const auto* p = reinterpret_cast<const uint8_t*>(bytes.data() + data);
-        for (size_t r = 0; r < rows; ++r)
-            for (size_t c = 0; c < cols; ++c)
-                t.values[r * cols + c] =
-                    e.read(p + e.size * (h.fortran ? c * rows + r : r * cols + c));
-    } else {
-        // CSV: commas, semicolons and tabs are separators; a first line that is not numbers is
-        // the header.
-        std::string text = bytes;
-        std::replace_if(
-            text.begin(), text.end(), [](char ch) { return ch == ',' || ch == ';'; }, ' ');
-        TextCursor c(text.data(), text.data() + text.size(), path);
-        c.allowComments(true);
-        c.skipSpace();
-        if (!c.atEnd()) {
-            const std::string_view first = c.peekToken();
-            double v;
-            const char* b = first.data() + (!first.empty() && first[0] == '+');
-            const auto [ptr, ec] = std::from_chars(b, first.data() + first.size(), v);
-            if (ec != std::errc() || ptr != first.data() + first.size()) c.skipLine();
-        }
-        while (!c.atEnd()) {
-            for (size_t k = 0; k < cols; ++k) {
-                if (!c.moreOnLine())
-                    c.fail("expected " + std::to_string(cols) + " numbers on the line, found " +
-                           std::to_string(k));
-                t.values.push_back(c.number("value"));
-            }
-            if (c.moreOnLine())
-                c.fail("more than " + std::to_string(cols) + " numbers on the line");
-            ++t.rows;
-        }
-    }
+    if (bytes.size() >= 6 && std::memcmp(bytes.data(), "\x93NUMPY", 6) == 0)
+        parseNpy(bytes, path, cols, t);
+    else
+        parseCsv(bytes, path, cols, t);
     for (size_t i = 0; i < t.values.size(); ++i)
         if (!std::isfinite(t.values[i]))
             throw InputError(path + ": row " + std::to_string(i / cols) +
@@ -249,7 +244,8 @@ PointTable parsePointTable(const std::string& bytes, const std::string& path, si
 }
 
 PointTable readPointTable(const std::string& path, size_t cols) {
-    return parsePointTable(readWhole(path), path, cols);
+    const MappedFile file(path);
+    return parsePointTable({file.data(), file.size()}, path, cols);
 }
 
 std::string npyBytes(const NamedArray& a) {
@@ -416,15 +412,16 @@ void writeCsv(AtomicOutput& out, const std::vector<NamedArray>& arrays) {
 void writeArrays(const std::string& path, const std::vector<NamedArray>& arrays) {
     static_assert(std::endian::native == std::endian::little, "the .npy writer assumes it");
     AtomicOutput out(path);
-    if (endsWith(path, ".npz")) {
+    const std::string ext = lowerExtension(path);
+    if (ext == ".npz") {
         writeNpz(out, arrays);
-    } else if (endsWith(path, ".npy")) {
+    } else if (ext == ".npy") {
         if (arrays.size() != 1)
             throw InputError(path + ": a .npy file holds one array and the query gives " +
                              std::to_string(arrays.size()) + "; write .npz (or .csv)");
         const std::string data = npyBytes(arrays[0]);
         out.write(data.data(), data.size());
-    } else if (endsWith(path, ".csv")) {
+    } else if (ext == ".csv") {
         writeCsv(out, arrays);
     } else {
         throw InputError(path + ": unknown output extension; expected .npz, .npy or .csv");

@@ -86,6 +86,7 @@ struct MeshQuery::Impl {
         });
     }
     void buildNormals() const;
+    struct SignWalk;
 
     // An open mesh's own winding number at local point q with a bound on its error: the
     // hierarchical sum where it is clearly off 1/2 (trusted to 0.3 at beta 1.5 and to 0.1 at beta
@@ -361,6 +362,52 @@ void checkFinite(const T* xyz, size_t n, const char* what) {
 
 }  // namespace
 
+// The signs of a run of points in Morton order (one task's): each decided from scratch by
+// inside(), or carried from the previous point where no surface can lie between them.
+struct MeshQuery::Impl::SignWalk {
+    const MeshQuery& query;
+    const Impl& m;
+    MeshSign sign;
+    bool carry;      // signs carried between neighbours (a closed mesh)
+    bool carryOpen;  // an open mesh's winding number carried within its gradient bound
+
+    bool havePrev = false, prevIn = false;
+    Vec3d prevP;
+    double prevD = 0;
+    double carriedWinding = 0, carriedError = INFINITY;
+
+    // Inside at p, whose closest answer is c (distance 0 when distances are not wanted).
+    bool decide(Vec3d p, const Closest& c) {
+        // When the balls of the two distances overlap along the segment from the previous
+        // point, no surface lies between them (the exact bakes' rule).
+        const double step = norm(p - prevP);
+        const bool clear = havePrev && step < 0.999 * (c.distance + prevD);
+        bool in;
+        if (carry && clear) {
+            in = prevIn;
+        } else if (carryOpen) {
+            const Vec3 b = m.toLocal(p);
+            if (clear && std::isfinite(carriedError)) {
+                // Off the mesh its winding number is smooth, |grad w| bounded by the rim
+                // (closing_film.h): the previous estimate carries while it stays farther from
+                // 1/2 than its error grown by the step.
+                const Vec3 a = m.toLocal(prevP);
+                carriedError += m.film->gradientBound(min(a, b), max(a, b)) * step * 1.001;
+            }
+            if (!clear || !(std::fabs(carriedWinding - 0.5) > carriedError))
+                carriedWinding = m.openWindingEstimate(b, carriedError);
+            in = carriedWinding > 0.5;
+        } else {
+            in = query.inside(p, sign, &c);
+        }
+        havePrev = true;
+        prevP = p;
+        prevD = c.distance;
+        prevIn = in;
+        return in;
+    }
+};
+
 template <class T>
 void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
                             const PointOptions& options) const {
@@ -370,46 +417,37 @@ void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
     const bool wantClosest = out.distance || out.closest || out.face || out.bary ||
                              (wantSign && options.sign == MeshSign::PseudoNormal);
     if (wantSign) prepare(options.sign);
+    if (out.winding) prepare(MeshSign::Winding);
     // Signs carry between neighbours on closed meshes (winding and parity alike are constant off
     // the surface there); pseudonormals cost nothing extra anyway.
-    const bool carry = wantSign && options.sign != MeshSign::PseudoNormal && watertight();
+    const bool carry =
+        wantSign && wantClosest && options.sign != MeshSign::PseudoNormal && watertight();
     // An open mesh's winding number carries too, within its gradient bound, where that bound is
     // cheap: it sums over the rim's pieces (on the elephant's 106 holes it cost more than it
     // saved; on the Stanford bunny's few it halves the signs' time).
-    const bool carryOpen = wantSign && !carry && options.sign == MeshSign::Winding &&
-                           m.openWinding != nullptr && m.film->components() <= 16;
-    if (out.winding) prepare(MeshSign::Winding);
+    const bool carryOpen = wantSign && wantClosest && !carry && options.sign == MeshSign::Winding &&
+                           m.openWinding && m.film->components() <= 16;
     auto* distance = static_cast<T*>(out.distance);
     auto* closestOut = static_cast<T*>(out.closest);
     auto* bary = static_cast<T*>(out.bary);
     auto* winding = static_cast<T*>(out.winding);
     Progress progress(options.progress, n, !options.progress.empty());
-    const Vec3d lo = m.lo, extent = m.hi - m.lo;
-    const Vec3d scale{extent.x > 0 ? 1024 / extent.x : 0, extent.y > 0 ? 1024 / extent.y : 0,
-                      extent.z > 0 ? 1024 / extent.z : 0};
+    // Morton order by the LBVH's keys (bake/lbvh.h) over the mesh's box: code above index.
+    const LbvhFrame frame = lbvhFrame(m.local);
     std::vector<uint64_t> order;
     for (size_t first = 0; first < n; first += kChunk) {
         const size_t count = std::min(kChunk, n - first);
         order.resize(count);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const auto& r) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
-                const Vec3d p = pointAt(xyz, first + i);
-                uint32_t code = 0;
-                const double q[3] = {(p.x - lo.x) * scale.x, (p.y - lo.y) * scale.y,
-                                     (p.z - lo.z) * scale.z};
-                for (int a = 0; a < 3; ++a)
-                    code |= spreadBits10(static_cast<uint32_t>(std::clamp(q[a], 0.0, 1023.0)))
-                            << (2 - a);
-                order[i] = (static_cast<uint64_t>(code) << 32) | i;
+                const Vec3 q = m.toLocal(pointAt(xyz, first + i));
+                order[i] = lbvhKey(q, q, q, frame.lo, frame.invExtent, static_cast<uint32_t>(i));
             }
         });
         if (wantClosest) tbb::parallel_sort(order.begin(), order.end());
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, kRun), [&](const auto& r) {
             Vec3d prevPoint{INFINITY, 0, 0};
-            bool havePrev = false, prevIn = false;
-            double carriedWinding = 0, carriedError = INFINITY;
-            Vec3d prevP;
-            double prevD = 0;
+            Impl::SignWalk signs{*this, m, options.sign, carry, carryOpen};
             for (size_t k = r.begin(); k != r.end(); ++k) {
                 const size_t i = first + (order[k] & 0xFFFFFFFFu);
                 const Vec3d p = pointAt(xyz, i);
@@ -419,40 +457,7 @@ void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
                     c = std::isfinite(prevPoint.x) ? closest(p, norm(p - prevPoint)) : closest(p);
                     prevPoint = c.point;
                 }
-                bool in = false;
-                if (wantSign) {
-                    // On a closed mesh the sign only changes across the surface: when the balls
-                    // of the two distances overlap along the segment from the previous point, no
-                    // surface lies between them and the sign carries over (the exact bakes' rule).
-                    const double step = norm(p - prevP);
-                    const bool clear =
-                        havePrev && wantClosest && step < 0.999 * (c.distance + prevD);
-                    if (carry && clear) {
-                        in = prevIn;
-                    } else if (carryOpen && clear && std::isfinite(carriedError)) {
-                        // Off the mesh its winding number is smooth, |grad w| bounded by the
-                        // rim (closing_film.h): the previous estimate carries while it stays
-                        // farther from 1/2 than its error grown by the step (the exact bakes'
-                        // rule along their rows).
-                        const Vec3 a = m.toLocal(prevP), b = m.toLocal(p);
-                        carriedError += m.film->gradientBound(min(a, b), max(a, b)) * step * 1.001;
-                        if (std::fabs(carriedWinding - 0.5) > carriedError) {
-                            in = carriedWinding > 0.5;
-                        } else {
-                            carriedWinding = m.openWindingEstimate(b, carriedError);
-                            in = carriedWinding > 0.5;
-                        }
-                    } else if (carryOpen) {
-                        carriedWinding = m.openWindingEstimate(m.toLocal(p), carriedError);
-                        in = carriedWinding > 0.5;
-                    } else {
-                        in = inside(p, options.sign, &c);
-                    }
-                    havePrev = true;
-                    prevP = p;
-                    prevD = c.distance;
-                    prevIn = in;
-                }
+                const bool in = wantSign && signs.decide(p, c);
                 if (distance)
                     distance[i] =
                         static_cast<T>(options.signedDistance && in ? -c.distance : c.distance);

@@ -12,7 +12,8 @@ namespace sdft {
 
 namespace {
 
-// SplitMix64 (Steele et al. 2014) over a counter: stream `k` of sample `i` under `seed`.
+// SplitMix64 (Steele et al. 2014) over a counter: stream `k` of sample `i` under `seed`. Not the
+// renderer's pcgHash (math/sampling.h): sample counts and seeds here go past 32 bits.
 uint64_t mix(uint64_t x) {
     x += 0x9E3779B97F4A7C15ull;
     x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
