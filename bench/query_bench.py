@@ -16,6 +16,7 @@ Per mesh, with 1M points uniform in the mesh's box (float32, all cores for both)
   - a DeepSDF-style sampling run of 10M near-surface points: time and peak memory growth.
 
     PYTHONPATH=build/release/python python3 bench/query_bench.py [--quick] [--reps N]
+    ... bench/query_bench.py --distances    # only the distance columns, against Open3D
 """
 import argparse
 import resource
@@ -184,9 +185,29 @@ def deepsdf_run(q, n):
     return seconds, (after - before) / 1024.0, (pts.nbytes + sdf.nbytes) / 2**20
 
 
+def distances_only(meshes, n, reps, rng):
+    """Unsigned and signed distances against Open3D's unsigned compute_distance, nothing else."""
+    print("| mesh | triangles | Open3D compute_distance | ours unsigned | ours signed (winding) |")
+    print("| --- | --- | --- | --- | --- |")
+    for name, v, f in meshes:
+        q = sdftrace.MeshQuery(v, f)
+        pts = rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32)
+        scene = o3d.t.geometry.RaycastingScene()
+        scene.add_triangles(o3d.core.Tensor(v.astype(np.float32)),
+                            o3d.core.Tensor(f.astype(np.uint32)))
+        tp = o3d.core.Tensor(pts)
+        o = median_seconds(lambda: scene.compute_distance(tp), reps)
+        u = median_seconds(lambda: q.distance(pts), reps)
+        s = median_seconds(lambda: q.signed_distance(pts), reps)
+        print("| %s | %d | %.3f s | %.3f s (%.2fx) | %.3f s (%.2fx) |" % (
+            name, len(f), o, u, o / u, s, o / s), flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="100k points, no 1.1M mesh")
+    ap.add_argument("--distances", action="store_true",
+                    help="only distances against Open3D's compute_distance")
     ap.add_argument("--reps", type=int, default=3)
     args = ap.parse_args()
     n = 100_000 if args.quick else 1_000_000
@@ -198,6 +219,8 @@ def main():
     if not args.quick:
         meshes.append(("bunny subdivided (scan, 1.1M)",
                        *subdivide(*obj_mesh("data/meshes/stanford-bunny.obj"), 2)))
+    if args.distances:
+        return distances_only(meshes, n, args.reps, rng)
     print("| mesh | triangles | closed | unsigned: ours / Open3D | signed (winding): ours | "
           "vs Open3D unsigned | rays: ours / Open3D | hits ours / Open3D | max error vs brute "
           "force / vs Open3D (of diagonal) | signed per point / exact bake per sample |")

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "sdftrace/bake/triangle_mesh.h"
 
@@ -31,6 +32,12 @@ class MeshBvh {
     // The nearest point itself (distance +infinity when none is within `radius`). A zero-area
     // triangle counts as its longest edge.
     Closest closest(Vec3 p, float radius = INFINITY) const;
+    // Appends to `out` the triangles whose bounding boxes lie within `reach` of the box [lo, hi]:
+    // the candidates for the closest triangle of every point in the box whose distance is at
+    // most `reach` (one traversal for a cluster of points); a triangle the BVH split between
+    // leaves may come twice. False, the search cut short, where there are more than `limit`.
+    bool near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out,
+              size_t limit = SIZE_MAX) const;
     // The first hit of the ray r(t), t > 0: t (+infinity on a miss) and whether it struck the
     // front of the triangle (against its counter-clockwise normal).
     struct Hit {
@@ -42,6 +49,12 @@ class MeshBvh {
     // tnear < 0 also reports hits just behind the origin (origins on the surface); hits beyond
     // tfar are misses. The direction need not be unit length: t is in its units.
     Hit firstHit(const Ray& ray, float tnear = 0, float tfar = INFINITY) const;
+    // The change of a closed, consistently oriented mesh's winding number from a to b: +1 for each
+    // crossing of the segment against a face's normal, -1 along it. False where a crossing lies
+    // within `margin` (barycentric) of a face's edge or within `margin` of the segment's ends in
+    // t, or where the segment lies in a face's plane: there a crossing might count twice or not
+    // at all.
+    bool windingChange(Vec3 a, Vec3 b, int& change, float margin = 1e-4f) const;
     // Surface crossings of the ray r(t), t > 0.
     int crossings(const Ray& ray) const;
     // Inside by crossing parity, the majority of three fixed, non-axis directions (robust to a ray

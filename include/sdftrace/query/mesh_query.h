@@ -82,10 +82,13 @@ class MeshQuery {
     void prepare(MeshSign sign) const;
 
     // Batches of n points (xyz interleaved, float or double): each output pointer may be null
-    // (not wanted). Points are visited in chunks of a fixed size, in Morton order within a chunk
-    // so that each point's search starts from its neighbour's distance bound: memory beyond the
-    // outputs is bounded by the chunk, not by n. `progress` (may be empty) names a progress line
-    // on stderr.
+    // (not wanted). Points are visited in chunks of a fixed size, in Morton order within a chunk:
+    // clusters of 16 neighbours bound their distances by the previous cluster's faces, gather
+    // their candidate faces in one BVH traversal and measure them eight at a time
+    // (triangle_lanes.h), or search one by one where the candidates are many; on a closed mesh
+    // the sign carries between neighbours, by the faces the segment between them crosses. Memory
+    // beyond the outputs is bounded by the chunk, not by n. `progress` (may be empty) names a
+    // progress line on stderr.
     struct PointOutputs {
         void* distance = nullptr;  // n, signed when `sign` is set
         void* closest = nullptr;   // n x 3

@@ -89,6 +89,8 @@ static RTCDevice sharedDevice() {
 MeshBvh::MeshBvh(const TriangleMesh& mesh) : m_impl(std::make_unique<Impl>()), m_mesh(mesh) {
     m_impl->device = sharedDevice();
     m_impl->scene = rtcNewScene(m_impl->device);
+    // windingChange() hands its intersect context a filter that sees every crossing.
+    rtcSetSceneFlags(m_impl->scene, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
     rtcSetSceneBuildQuality(m_impl->scene, RTC_BUILD_QUALITY_HIGH);
     RTCGeometry geom = rtcNewGeometry(m_impl->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
@@ -131,6 +133,44 @@ MeshBvh::Closest MeshBvh::closest(Vec3 p, float radius) const {
     return data.best;
 }
 
+namespace {
+struct NearQuery {
+    const PackedTriangle* triangles;
+    Vec3 lo, hi;
+    float reach2;
+    std::vector<uint32_t>* out;
+    size_t limit;
+};
+
+bool nearCallback(RTCPointQueryFunctionArguments* args) {
+    auto* q = static_cast<NearQuery*>(args->userPtr);
+    const PackedTriangle& t = q->triangles[args->primID];
+    const Vec3 gap = max(max(t.lo - q->hi, q->lo - t.hi), Vec3(0.0f));
+    if (!(dot(gap, gap) <= q->reach2)) return false;
+    q->out->push_back(args->primID);
+    if (q->out->size() <= q->limit) return false;  // the sphere stays as it is
+    args->query->radius = 0;                       // too many: the search ends
+    return true;
+}
+}  // namespace
+
+bool MeshBvh::near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out, size_t limit) const {
+    const Vec3 centre = (lo + hi) * 0.5f;
+    RTCPointQuery q;
+    q.x = centre.x;
+    q.y = centre.y;
+    q.z = centre.z;
+    q.time = 0;
+    // The sphere about the centre that holds the box grown by `reach` (and float rounding).
+    q.radius = (length(hi - lo) * 0.5f + reach) * (1 + 1e-6f);
+    RTCPointQueryContext ctx;
+    rtcInitPointQueryContext(&ctx);
+    const size_t before = out.size();
+    NearQuery data{m_impl->triangles.data(), lo, hi, reach * reach, &out, before + limit};
+    rtcPointQuery(m_impl->scene, &q, &ctx, nearCallback, &data);
+    return out.size() - before <= limit;
+}
+
 MeshBvh::Hit MeshBvh::firstHit(const Ray& ray, float tnear, float tfar) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -143,6 +183,56 @@ MeshBvh::Hit MeshBvh::firstHit(const Ray& ray, float tnear, float tfar) const {
     const PackedTriangle& t = m_impl->triangles[rh.hit.primID];
     return {rh.ray.tfar + back, dot(ray.direction, cross(t.b - t.a, t.c - t.a)) < 0, rh.hit.primID,
             rh.hit.u, rh.hit.v};
+}
+
+namespace {
+// Every crossing of a segment, gathered by the context filter that rejects each hit so that the
+// traversal goes on (a face met twice, through spatial splits, is counted once).
+struct CrossingContext {
+    RTCIntersectContext base;  // first: Embree hands the filter this pointer
+    const PackedTriangle* triangles;
+    Vec3 dir;
+    float margin;
+    int change = 0;
+    bool sure = true;
+    uint32_t seen[16];
+    int count = 0;
+};
+
+void crossingFilter(const RTCFilterFunctionNArguments* args) {
+    auto* c = reinterpret_cast<CrossingContext*>(args->context);
+    args->valid[0] = 0;
+    const uint32_t prim = RTCHitN_primID(args->hit, args->N, 0);
+    for (int k = 0; k < c->count; ++k)
+        if (c->seen[k] == prim) return;
+    if (c->count == 16) {
+        c->sure = false;
+        return;
+    }
+    c->seen[c->count++] = prim;
+    const float t = RTCRayN_tfar(args->ray, args->N, 0);
+    const float u = RTCHitN_u(args->hit, args->N, 0), v = RTCHitN_v(args->hit, args->N, 0);
+    const PackedTriangle& tri = c->triangles[prim];
+    const Vec3 n = cross(tri.b - tri.a, tri.c - tri.a);
+    const float facing = dot(c->dir, n), m = c->margin;
+    if (t < m || t > 1 - m || u < m || v < m || 1 - u - v < m ||
+        !(std::fabs(facing) > 1e-3f * length(c->dir) * length(n)))
+        c->sure = false;
+    c->change += facing < 0 ? 1 : -1;
+}
+}  // namespace
+
+bool MeshBvh::windingChange(Vec3 a, Vec3 b, int& change, float margin) const {
+    CrossingContext c;
+    rtcInitIntersectContext(&c.base);
+    c.base.filter = crossingFilter;
+    c.triangles = m_impl->triangles.data();
+    c.dir = b - a;
+    c.margin = margin;
+    RTCRayHit rh = rayHit(a, c.dir, 0, 1.0f);
+    rtcIntersect1(m_impl->scene, &c.base, &rh);
+    change = c.change;
+    return c.sure;
 }
 
 int MeshBvh::crossings(const Ray& ray) const {

@@ -2,7 +2,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <atomic>
@@ -20,6 +19,7 @@
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/io/mesh_io.h"
 #include "sdftrace/query/triangle_closest.h"
+#include "sdftrace/query/triangle_lanes.h"
 
 namespace sdft {
 
@@ -50,6 +50,13 @@ Vec3d unit(Vec3d v) {
 constexpr size_t kChunk = size_t{1} << 20;
 // Points a task walks in Morton order, each search bounded by its predecessor's answer.
 constexpr size_t kRun = 256;
+// Neighbours in Morton order that share one search for their candidate triangles.
+constexpr size_t kCluster = 16;
+// More candidates than this per point in a cluster (a fine mesh, flat faces seen from afar, points
+// far apart): the next clusters' points search the BVH one by one, each within its own bound,
+// where the shell of candidates is as thin as the bound is tight.
+constexpr size_t kCandidatesPerPoint = 12;
+constexpr int kSoloClusters = 8;
 
 }  // namespace
 
@@ -58,8 +65,10 @@ struct MeshQuery::Impl {
     std::vector<std::array<uint32_t, 3>> faces;
     Vec3d lo, hi, origin;  // origin: the box's centre, which the float copy is relative to
     double diagonal = 0;
-    TriangleMesh local;  // float, relative to origin, the faces as given
+    TriangleMesh local;     // float, relative to origin, the faces as given
+    float localExtent = 0;  // the largest |coordinate| of `local`
     std::unique_ptr<MeshBvh> bvh;
+    std::unique_ptr<TriangleLanes> lanes;
 
     // Winding: the welded, cleaned mesh, its films and the closed mesh's winding tree.
     mutable std::once_flag windingOnce;
@@ -67,6 +76,7 @@ struct MeshQuery::Impl {
     mutable std::unique_ptr<ClosingFilm> film;
     mutable std::unique_ptr<WindingNumber> closedWinding;
     mutable std::unique_ptr<WindingNumber> openWinding;  // of the open mesh itself (films exist)
+    mutable std::unique_ptr<MeshBvh> closedBvh;          // of film->closedMesh() (films exist)
 
     // Pseudonormals: per face, its unit normal, its edges' (ab, bc, ca) and its corners'.
     mutable std::once_flag normalsOnce;
@@ -87,6 +97,29 @@ struct MeshQuery::Impl {
     }
     void buildNormals() const;
     struct SignWalk;
+
+    // The double-precision answer at p on face f (the float searches pick the face).
+    Closest refine(Vec3d p, uint32_t f) const {
+        const auto& t = faces[f];
+        const TriangleClosest tc =
+            closestOnTriangle(p, vertices[t[0]], vertices[t[1]], vertices[t[2]]);
+        Closest r;
+        r.distance = norm(p - tc.point);
+        r.point = tc.point;
+        r.face = f;
+        std::copy(tc.bary, tc.bary + 3, r.bary);
+        r.feature = tc.feature;
+        return r;
+    }
+
+    struct ClusterScratch {
+        std::vector<uint32_t> ids, winners;
+        std::vector<LaneGroup> groups;
+        int solo = 0;      // clusters still to search point by point
+        int failures = 0;  // clusters in a row with too many candidates
+    };
+    void closestCluster(const MeshQuery& query, const Vec3d* p, size_t n, Closest* out,
+                        ClusterScratch& scratch) const;
 
     // An open mesh's own winding number at local point q with a bound on its error: the
     // hierarchical sum where it is clearly off 1/2 (trusted to 0.3 at beta 1.5 and to 0.1 at beta
@@ -215,6 +248,9 @@ MeshQuery::MeshQuery(std::vector<Vec3d> vertices, std::vector<std::array<uint32_
     m.vertices = std::move(vertices);
     m.faces = std::move(faces);
     m.bvh = std::make_unique<MeshBvh>(m.local);
+    m.lanes = std::make_unique<TriangleLanes>(m.local);
+    for (const Vec3& v : m.local.positions)
+        m.localExtent = std::max({m.localExtent, std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
 }
 
 MeshQuery::~MeshQuery() = default;
@@ -246,20 +282,60 @@ MeshQuery::Closest MeshQuery::closest(Vec3d p, double bound) const {
         c = m.bvh->closest(q, static_cast<float>(radius));
     }
     if (c.triangle == UINT32_MAX) c = m.bvh->closest(q);
-    Closest r;
     if (c.triangle == UINT32_MAX) {  // unreachable for finite points; kept total
+        Closest r;
         r.distance = INFINITY;
         return r;
     }
-    const auto& t = m.faces[c.triangle];
-    const TriangleClosest tc =
-        closestOnTriangle(p, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
-    r.distance = norm(p - tc.point);
-    r.point = tc.point;
-    r.face = c.triangle;
-    std::copy(tc.bary, tc.bary + 3, r.bary);
-    r.feature = tc.feature;
-    return r;
+    return m.refine(p, c.triangle);
+}
+
+// The closest answers of n <= kCluster neighbouring points: their upper bounds from the previous
+// cluster's faces (1-Lipschitz), the candidates for all of them from one BVH traversal about
+// their box, then each point's nearest candidate by the lane test (triangle_lanes.h).
+void MeshQuery::Impl::closestCluster(const MeshQuery& query, const Vec3d* p, size_t n, Closest* out,
+                                     ClusterScratch& s) const {
+    Vec3 q[kCluster];
+    float bound[kCluster];
+    Vec3 lo(INFINITY), hi(-INFINITY);
+    for (size_t i = 0; i < n; ++i) {
+        q[i] = toLocal(p[i]);
+        lo = min(lo, q[i]);
+        hi = max(hi, q[i]);
+    }
+    if (s.winners.empty()) s.winners.push_back(query.closest(p[0]).face);
+    lanes->gather(s.winners.data(), s.winners.size(), s.groups);
+    float reach = 0;
+    for (size_t i = 0; i < n; ++i) {
+        uint32_t id;
+        const float d2 = nearestInGroups(s.groups.data(), s.groups.size(), q[i], INFINITY, id);
+        // Widened past the float test's rounding, which grows with the coordinates.
+        const float far =
+            std::max({localExtent, std::fabs(q[i].x), std::fabs(q[i].y), std::fabs(q[i].z)});
+        bound[i] = std::sqrt(d2) * (1 + 1e-5f) + 4e-6f * far;
+        reach = std::max(reach, bound[i]);
+    }
+    s.ids.clear();
+    bool clustered = false;
+    if (s.solo > 0) {
+        --s.solo;
+    } else if (std::isfinite(reach)) {
+        clustered = bvh->near(lo, hi, reach, s.ids, kCandidatesPerPoint * n) && !s.ids.empty();
+        // Each failure in a row doubles the clusters searched point by point before the next try.
+        s.solo = clustered ? 0 : kSoloClusters << std::min(s.failures++, 5);
+        if (clustered) s.failures = 0;
+    }
+    if (clustered) lanes->gather(s.ids.data(), s.ids.size(), s.groups);
+    s.winners.clear();
+    for (size_t i = 0; i < n; ++i) {
+        uint32_t id = UINT32_MAX;
+        if (clustered)
+            nearestInGroups(s.groups.data(), s.groups.size(), q[i], bound[i] * bound[i], id);
+        out[i] = id != UINT32_MAX ? refine(p[i], id) : query.closest(p[i], bound[i]);
+        s.winners.push_back(out[i].face);
+    }
+    std::sort(s.winners.begin(), s.winners.end());
+    s.winners.erase(std::unique(s.winners.begin(), s.winners.end()), s.winners.end());
 }
 
 double MeshQuery::windingNumber(Vec3d p) const {
@@ -343,6 +419,20 @@ Vec3d pointAt(const T* xyz, size_t i) {
             static_cast<double>(xyz[3 * i + 2])};
 }
 
+// Keys (Morton code above index) in order of their code's top 20 bits, a cell about 1/100 of
+// the box a side: two counting passes of 10 bits (LSD radix), where order within a cell is
+// immaterial to the walk.
+void sortByCell(uint64_t* keys, uint64_t* spare, size_t n) {
+    for (int shift : {42, 52}) {
+        size_t start[1025] = {};
+        for (size_t i = 0; i < n; ++i) ++start[((keys[i] >> shift) & 1023) + 1];
+        for (int b = 0; b < 1024; ++b) start[b + 1] += start[b];
+        for (size_t i = 0; i < n; ++i) spare[start[(keys[i] >> shift) & 1023]++] = keys[i];
+        std::swap(keys, spare);
+    }
+    // An even number of passes: the sorted keys are back in the caller's `keys`.
+}
+
 template <class T>
 void checkFinite(const T* xyz, size_t n, const char* what) {
     std::atomic<size_t> bad{SIZE_MAX};
@@ -368,25 +458,40 @@ struct MeshQuery::Impl::SignWalk {
     const MeshQuery& query;
     const Impl& m;
     MeshSign sign;
-    bool carry;      // signs carried between neighbours (a closed mesh)
+    bool carry;      // a closed mesh: its winding number carried between neighbours
     bool carryOpen;  // an open mesh's winding number carried within its gradient bound
 
-    bool havePrev = false, prevIn = false;
-    Vec3d prevP;
+    bool havePrev = false;
+    Vec3d prevP{};
     double prevD = 0;
-    double carriedWinding = 0, carriedError = INFINITY;
+    int winding = 0;                                     // a closed mesh's, at the previous point
+    double carriedWinding = 0, carriedError = INFINITY;  // an open mesh's
 
     // Inside at p, whose closest answer is c (distance 0 when distances are not wanted).
     bool decide(Vec3d p, const Closest& c) {
-        // When the balls of the two distances overlap along the segment from the previous
-        // point, no surface lies between them (the exact bakes' rule).
-        const double step = norm(p - prevP);
-        const bool clear = havePrev && step < 0.999 * (c.distance + prevD);
         bool in;
-        if (carry && clear) {
-            in = prevIn;
+        if (carry) {
+            // When the balls of the two distances overlap along the segment from the previous
+            // point, no surface lies between them (the exact bakes' rule); else a closed mesh's
+            // winding number, an integer, changes by the faces the segment crosses: counted,
+            // unless a crossing is too near an edge or an end to count surely.
+            const double step = norm(p - prevP);
+            const bool clear = havePrev && step < 0.999 * (c.distance + prevD);
+            int change = 0;
+            if (!clear) {
+                if (havePrev && m.bvh->windingChange(m.toLocal(prevP), m.toLocal(p), change))
+                    winding += change;
+                else if (sign == MeshSign::Winding)
+                    winding = static_cast<int>(std::lround(
+                        WindingSign(*m.film, *m.closedWinding).evaluate(m.toLocal(p)).winding));
+                else
+                    winding = query.inside(p, sign, &c);
+            }
+            in = sign == MeshSign::Parity ? (winding & 1) != 0 : winding > 0;
         } else if (carryOpen) {
             const Vec3 b = m.toLocal(p);
+            const double step = norm(p - prevP);
+            const bool clear = havePrev && step < 0.999 * (c.distance + prevD);
             if (clear && std::isfinite(carriedError)) {
                 // Off the mesh its winding number is smooth, |grad w| bounded by the rim
                 // (closing_film.h): the previous estimate carries while it stays farther from
@@ -403,7 +508,6 @@ struct MeshQuery::Impl::SignWalk {
         havePrev = true;
         prevP = p;
         prevD = c.distance;
-        prevIn = in;
         return in;
     }
 };
@@ -434,40 +538,55 @@ void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
     Progress progress(options.progress, n, !options.progress.empty());
     // Morton order by the LBVH's keys (bake/lbvh.h) over the mesh's box: code above index.
     const LbvhFrame frame = lbvhFrame(m.local);
-    std::vector<uint64_t> order;
+    const size_t chunk = std::min(kChunk, n);
+    // Not value-initialized: every key is written before it is read.
+    std::unique_ptr<uint64_t[]> order(new uint64_t[chunk]), spare(new uint64_t[chunk]);
     for (size_t first = 0; first < n; first += kChunk) {
         const size_t count = std::min(kChunk, n - first);
-        order.resize(count);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const auto& r) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 const Vec3 q = m.toLocal(pointAt(xyz, first + i));
                 order[i] = lbvhKey(q, q, q, frame.lo, frame.invExtent, static_cast<uint32_t>(i));
             }
         });
-        if (wantClosest) tbb::parallel_sort(order.begin(), order.end());
+        if (wantClosest) sortByCell(order.get(), spare.get(), count);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, kRun), [&](const auto& r) {
-            Vec3d prevPoint{INFINITY, 0, 0};
             Impl::SignWalk signs{*this, m, options.sign, carry, carryOpen};
-            for (size_t k = r.begin(); k != r.end(); ++k) {
-                const size_t i = first + (order[k] & 0xFFFFFFFFu);
-                const Vec3d p = pointAt(xyz, i);
-                Closest c;
-                if (wantClosest) {
-                    // The previous answer's point bounds this distance (1-Lipschitz).
-                    c = std::isfinite(prevPoint.x) ? closest(p, norm(p - prevPoint)) : closest(p);
-                    prevPoint = c.point;
+            Impl::ClusterScratch scratch;
+            Vec3d points[kCluster];
+            size_t index[kCluster];
+            Closest answers[kCluster];
+            for (size_t k0 = r.begin(); k0 < r.end(); k0 += kCluster) {
+                const size_t n = std::min(kCluster, r.end() - k0);
+                for (size_t j = 0; j < n; ++j) {
+                    index[j] = first + (order[k0 + j] & 0xFFFFFFFFu);
+                    // Morton order reads the points and writes the answers out of order: the
+                    // next cluster's are fetched while this one is measured.
+                    if (k0 + kCluster + j < r.end()) {
+                        const size_t ahead = first + (order[k0 + kCluster + j] & 0xFFFFFFFFu);
+                        __builtin_prefetch(xyz + 3 * ahead);
+                        if (distance) __builtin_prefetch(distance + ahead, 1);
+                    }
+                    points[j] = pointAt(xyz, index[j]);
                 }
-                const bool in = wantSign && signs.decide(p, c);
-                if (distance)
-                    distance[i] =
-                        static_cast<T>(options.signedDistance && in ? -c.distance : c.distance);
-                if (closestOut)
-                    for (int a = 0; a < 3; ++a) closestOut[3 * i + a] = static_cast<T>(c.point[a]);
-                if (out.face) out.face[i] = c.face;
-                if (bary)
-                    for (int a = 0; a < 3; ++a) bary[3 * i + a] = static_cast<T>(c.bary[a]);
-                if (out.inside) out.inside[i] = in;
-                if (winding) winding[i] = static_cast<T>(windingNumber(p));
+                if (wantClosest) m.closestCluster(*this, points, n, answers, scratch);
+                for (size_t j = 0; j < n; ++j) {
+                    const size_t i = index[j];
+                    const Vec3d& p = points[j];
+                    const Closest c = wantClosest ? answers[j] : Closest{};
+                    const bool in = wantSign && signs.decide(p, c);
+                    if (distance)
+                        distance[i] =
+                            static_cast<T>(options.signedDistance && in ? -c.distance : c.distance);
+                    if (closestOut)
+                        for (int a = 0; a < 3; ++a)
+                            closestOut[3 * i + a] = static_cast<T>(c.point[a]);
+                    if (out.face) out.face[i] = c.face;
+                    if (bary)
+                        for (int a = 0; a < 3; ++a) bary[3 * i + a] = static_cast<T>(c.bary[a]);
+                    if (out.inside) out.inside[i] = in;
+                    if (winding) winding[i] = static_cast<T>(windingNumber(p));
+                }
             }
             progress.advance(r.size());
         });

@@ -139,16 +139,36 @@ TEST(MeshQuery, WindingOfOpenMeshesIsTheGeneralizedWindingNumber) {
 
 // The batch walks points in Morton order with neighbour bounds: the same answers as one at a
 // time, in float and in double, for any subset of outputs.
+// Clusters of neighbours share one candidate search (triangle_lanes.h), or search one by one
+// where candidates are many (the fine sphere, points far away); a closed mesh's signs are carried
+// across crossings counted on the segment between neighbours (two overlapping boxes with a shared
+// face: winding 2 where they overlap).
 TEST(MeshQuery, BatchesAnswerAsSinglePointsDo) {
-    for (const char* name : {"suzanne.obj", "bunny_npm.obj"}) {  // open; closed (signs carried)
-        const TriangleMesh mesh = load(name);
+    TriangleMesh boxes = boxMesh(Vec3(1.0f, 0.5f, 0.5f));
+    const TriangleMesh second = boxMesh(Vec3(0.5f, 0.5f, 1.0f));
+    for (const auto& f : second.triangles)
+        boxes.triangles.push_back({f[0] + 8, f[1] + 8, f[2] + 8});
+    boxes.positions.insert(boxes.positions.end(), second.positions.begin(), second.positions.end());
+    const std::vector<std::pair<std::string, TriangleMesh>> meshes = {
+        {"suzanne", load("suzanne.obj")},      // open
+        {"bunny_npm", load("bunny_npm.obj")},  // closed: signs carried
+        {"boxes", boxes},
+        {"icosphere 5", icosphere(5)}};
+    for (const auto& [name, mesh] : meshes) {
         const MeshQuery q = queryOf(mesh);
-        const std::vector<Vec3d> pts = testPoints(q, 2000, 13);
+        std::vector<Vec3d> pts = testPoints(q, 2000, 13);
+        std::mt19937 rng(17);
+        std::uniform_real_distribution<double> far(-100, 100);
+        for (int k = 0; k < 300; ++k)
+            pts.push_back(Vec3d{far(rng), far(rng), far(rng)} * q.diagonal());
         const size_t n = pts.size();
         std::vector<double> xyz;
         for (const Vec3d& p : pts) xyz.insert(xyz.end(), {p.x, p.y, p.z});
         std::vector<float> xyzf(xyz.begin(), xyz.end());
         for (MeshSign sign : {MeshSign::Winding, MeshSign::Parity, MeshSign::PseudoNormal}) {
+            // Parity rays and pseudonormals are fooled by overlapping shells (the documented
+            // limits of those signs); the winding number is not.
+            if (name == "boxes" && sign != MeshSign::Winding) continue;
             std::vector<double> d(n), cp(3 * n), bary(3 * n);
             std::vector<int64_t> face(n);
             std::unique_ptr<bool[]> in(new bool[n]);
@@ -160,10 +180,11 @@ TEST(MeshQuery, BatchesAnswerAsSinglePointsDo) {
             for (size_t i = 0; i < n; ++i) {
                 const MeshQuery::Closest c = q.closest(pts[i]);
                 const bool inside = q.inside(pts[i], sign, &c);
-                ASSERT_NEAR(std::fabs(d[i]), c.distance, 1e-9 * q.diagonal());
-                ASSERT_EQ(in[i], inside);
+                // Float searches may break a near tie differently: within their rounding.
+                ASSERT_NEAR(std::fabs(d[i]), c.distance, 1e-6 * q.diagonal()) << name;
+                ASSERT_EQ(in[i], inside) << name << " point " << i;
                 ASSERT_EQ(d[i] < 0, inside && c.distance > 0);
-                ASSERT_NEAR(df[i], d[i], 1e-6 * q.diagonal());
+                ASSERT_NEAR(df[i], d[i], 1e-6 * q.diagonal() + 1e-7 * std::fabs(d[i]));
                 const Vec3d on = q.vertices()[q.faces()[face[i]][0]] * bary[3 * i] +
                                  q.vertices()[q.faces()[face[i]][1]] * bary[3 * i + 1] +
                                  q.vertices()[q.faces()[face[i]][2]] * bary[3 * i + 2];

@@ -1,0 +1,148 @@
+#include "sdftrace/query/triangle_lanes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+namespace sdft {
+
+TriangleLanes::TriangleLanes(const TriangleMesh& mesh)
+    : m_records(mesh.triangles.size() * kFields) {
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const auto& t = mesh.triangles[i];
+        const Vec3 a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
+        const Vec3 ab = b - a, ac = c - a, bc = c - b;
+        const Vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
+        // In double: the Gram determinant cancels badly in float for slivers.
+        auto dotd = [](Vec3 u, Vec3 v) {
+            return double{u.x} * v.x + double{u.y} * v.y + double{u.z} * v.z;
+        };
+        const double d00 = dotd(ab, ab), d01 = dotd(ab, ac), d11 = dotd(ac, ac);
+        const double det = d00 * d11 - d01 * d01;
+        const bool face = det > 1e-12 * d00 * d11;
+        auto inv = [](double x) { return x > 0 ? static_cast<float>(1 / x) : 0.0f; };
+        auto weight = [&](double x) { return face ? static_cast<float>(x / det) : 0.0f; };
+        // clang-format off
+        const float r[kFields] = {
+            a.x, a.y, a.z, ab.x, ab.y, ab.z, ac.x, ac.y, ac.z, bc.x, bc.y, bc.z,
+            weight(d11), weight(d01), weight(d00),
+            inv(d00), inv(d11), inv(dotd(bc, bc)), face ? 1.0f : -1.0f,
+            lo.x, lo.y, lo.z, hi.x, hi.y, hi.z};
+        // clang-format on
+        std::copy(r, r + kFields, m_records.begin() + static_cast<ptrdiff_t>(i * kFields));
+    }
+}
+
+void TriangleLanes::gather(const uint32_t* ids, size_t n, std::vector<LaneGroup>& out) const {
+    out.resize((n + kLanes - 1) / kLanes);
+    for (size_t g = 0; g < out.size(); ++g) {
+        LaneGroup& group = out[g];
+        for (int l = 0; l < kLanes; ++l) {
+            const size_t k = g * kLanes + l;
+            const uint32_t id = ids[k < n ? k : g * kLanes];
+            group.id[l] = id;
+            const float* r = &m_records[size_t{id} * kFields];
+            for (int f = 0; f < kFields; ++f) group.f[f][l] = r[f];
+        }
+    }
+}
+
+// Every function passing these vectors is inlined: no call crosses the AVX / SSE ABI boundary.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace {
+
+// Eight floats (and their comparison masks) as GCC's vector extension: one AVX register where the
+// function is compiled for AVX2, two SSE registers otherwise.
+typedef float Floats __attribute__((vector_size(4 * kLanes)));
+typedef int Ints __attribute__((vector_size(4 * kLanes)));
+
+__attribute__((always_inline)) inline Floats load(const float* x) {
+    Floats v;
+    __builtin_memcpy(&v, x, sizeof v);
+    return v;
+}
+__attribute__((always_inline)) inline Floats vmin(Floats a, Floats b) { return a < b ? a : b; }
+__attribute__((always_inline)) inline Floats vmax(Floats a, Floats b) { return a > b ? a : b; }
+
+// Point-triangle distance without branches (after Ericson, Real-Time Collision Detection
+// §5.1.5): the projection onto the plane where its barycentric weights are inside the face, else
+// the nearest of the three edges, each lane computing all four.
+__attribute__((always_inline)) inline float nearestBody(const LaneGroup* groups, size_t count,
+                                                        Vec3 p, float bound2, uint32_t& id) {
+    const Floats zero = {}, one = zero + 1.0f, px = zero + p.x, py = zero + p.y, pz = zero + p.z;
+    Floats best = zero + INFINITY;
+    Ints slot = {};
+    for (size_t g = 0; g < count; ++g) {
+        const auto& f = groups[g].f;
+        const Floats gx = vmax(vmax(load(f[kLox]) - px, px - load(f[kHix])), zero);
+        const Floats gy = vmax(vmax(load(f[kLoy]) - py, py - load(f[kHiy])), zero);
+        const Floats gz = vmax(vmax(load(f[kLoz]) - pz, pz - load(f[kHiz])), zero);
+        const Ints near = gx * gx + gy * gy + gz * gz <= bound2;
+        bool any = false;
+        for (int l = 0; l < kLanes; ++l) any |= near[l] != 0;
+        if (!any) continue;
+        const Floats apx = px - load(f[kAx]), apy = py - load(f[kAy]), apz = pz - load(f[kAz]);
+        const Floats abx = load(f[kAbx]), aby = load(f[kAby]), abz = load(f[kAbz]);
+        const Floats acx = load(f[kAcx]), acy = load(f[kAcy]), acz = load(f[kAcz]);
+        const Floats d20 = apx * abx + apy * aby + apz * abz;
+        const Floats d21 = apx * acx + apy * acy + apz * acz;
+        const Floats s = load(f[kS20]) * d20 - load(f[kS21]) * d21;
+        const Floats t = load(f[kT21]) * d21 - load(f[kS21]) * d20;
+        // The projection as a point of the face (not the plane's distance): never nearer than
+        // the face itself, however a sliver's weights round.
+        const Floats fx = apx - s * abx - t * acx, fy = apy - s * aby - t * acy,
+                     fz = apz - s * abz - t * acz;
+        const Floats faceD2 = fx * fx + fy * fy + fz * fz;
+        const Ints inside = (s >= zero) & (t >= zero) & (s + t <= load(f[kFaceLimit]));
+        // Edge ab.
+        const Floats u0 = vmin(vmax(d20 * load(f[kInvAb]), zero), one);
+        const Floats q0x = apx - u0 * abx, q0y = apy - u0 * aby, q0z = apz - u0 * abz;
+        const Floats e0 = q0x * q0x + q0y * q0y + q0z * q0z;
+        // Edge ac.
+        const Floats u1 = vmin(vmax(d21 * load(f[kInvAc]), zero), one);
+        const Floats q1x = apx - u1 * acx, q1y = apy - u1 * acy, q1z = apz - u1 * acz;
+        const Floats e1 = q1x * q1x + q1y * q1y + q1z * q1z;
+        // Edge bc.
+        const Floats bpx = apx - abx, bpy = apy - aby, bpz = apz - abz;
+        const Floats bcx = load(f[kBcx]), bcy = load(f[kBcy]), bcz = load(f[kBcz]);
+        const Floats u2 =
+            vmin(vmax((bpx * bcx + bpy * bcy + bpz * bcz) * load(f[kInvBc]), zero), one);
+        const Floats q2x = bpx - u2 * bcx, q2y = bpy - u2 * bcy, q2z = bpz - u2 * bcz;
+        const Floats e2 = q2x * q2x + q2y * q2y + q2z * q2z;
+        const Floats edges = vmin(vmin(e0, e1), e2);
+        const Floats d2 = inside ? vmin(faceD2, edges) : edges;
+        const Ints better = d2 < best;
+        best = better ? d2 : best;
+        slot = better ? static_cast<int>(g) + Ints{} : slot;
+    }
+    int lane = 0;
+    for (int l = 1; l < kLanes; ++l)
+        if (best[l] < best[lane]) lane = l;
+    if (best[lane] < INFINITY) id = groups[slot[lane]].id[lane];
+    return best[lane];
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define SDFT_LANES_AVX2 1
+__attribute__((target("avx2,fma"))) float nearestAvx2(const LaneGroup* groups, size_t count, Vec3 p,
+                                                      float bound2, uint32_t& id) {
+    return nearestBody(groups, count, p, bound2, id);
+}
+#endif
+
+float nearestPortable(const LaneGroup* groups, size_t count, Vec3 p, float bound2, uint32_t& id) {
+    return nearestBody(groups, count, p, bound2, id);
+}
+
+}  // namespace
+
+float nearestInGroups(const LaneGroup* groups, size_t count, Vec3 p, float bound2, uint32_t& id) {
+#ifdef SDFT_LANES_AVX2
+    static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    if (avx2) return nearestAvx2(groups, count, p, bound2, id);
+#endif
+    return nearestPortable(groups, count, p, bound2, id);
+}
+
+}  // namespace sdft

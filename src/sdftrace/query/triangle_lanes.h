@@ -1,0 +1,54 @@
+// Triangles eight to a lane group for batched point-triangle distances: a cluster of nearby points
+// (neighbours in Morton order) gathers the triangles any of them can be closest to once, from
+// one BVH traversal, and each point then measures them all with a branch-free test that the
+// compiler vectorizes eight wide (AVX2 where the CPU has it, chosen at run time; SSE otherwise).
+// The test is float, as the BVH search it replaces; MeshQuery refines the winner in double.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "sdftrace/bake/triangle_mesh.h"
+
+namespace sdft {
+
+inline constexpr int kLanes = 8;
+
+// One triangle's precomputed terms, in the order a lane group stores them.
+// clang-format off
+enum TriangleField : int {
+    kAx, kAy, kAz,              // corner a
+    kAbx, kAby, kAbz,           // b - a
+    kAcx, kAcy, kAcz,           // c - a
+    kBcx, kBcy, kBcz,           // c - b
+    kS20, kS21,                 // s = S20 (ap.ab) - S21 (ap.ac): the projection's weight of b
+    kT21,                       // t = T21 (ap.ac) - S21 (ap.ab): of c
+    kInvAb, kInvAc, kInvBc,     // 1 / |edge|^2 (0: zero length)
+    kFaceLimit,                 // inside the face: s + t <= limit, 1 (-1: no area)
+    kLox, kLoy, kLoz, kHix, kHiy, kHiz,  // bounding box
+    kFields
+};
+// clang-format on
+
+struct alignas(32) LaneGroup {
+    float f[kFields][kLanes];
+    uint32_t id[kLanes];  // the triangles' indices (a short last group repeats its first)
+};
+
+class TriangleLanes {
+  public:
+    explicit TriangleLanes(const TriangleMesh& mesh);
+
+    // The lane groups of the triangles `ids` (n > 0), replacing `out`.
+    void gather(const uint32_t* ids, size_t n, std::vector<LaneGroup>& out) const;
+
+  private:
+    std::vector<float> m_records;  // kFields per triangle
+};
+
+// The least squared distance from p to the triangles of `groups` (count > 0), skipping a group
+// whose every box lies farther than sqrt(bound2), and that triangle's id in `id`: +infinity (id
+// untouched) when every group was skipped.
+float nearestInGroups(const LaneGroup* groups, size_t count, Vec3 p, float bound2, uint32_t& id);
+
+}  // namespace sdft
