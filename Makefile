@@ -31,8 +31,12 @@ test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
 # Every test built with AddressSanitizer and UndefinedBehaviorSanitizer (a separate build tree).
+# -O1 with line tables only: the optimisation level the sanitizers are made for, and it compiles
+# in less than half the time of -O2 -g (OpenVDB's templates above all), while reports keep their
+# file and line.
 test-sanitize:
-	cmake -S . -B build/sanitize $(call GENERATOR,build/sanitize) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSDFT_SANITIZE=ON -DSDFT_BUILD_BENCH=OFF
+	cmake -S . -B build/sanitize $(call GENERATOR,build/sanitize) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+		"-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DSDFT_SANITIZE=ON -DSDFT_BUILD_BENCH=OFF
 	cmake --build build/sanitize -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 		ctest --test-dir build/sanitize --output-on-failure -j $(JOBS)
