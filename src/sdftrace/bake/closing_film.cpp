@@ -80,6 +80,45 @@ ClosingFilm::ClosingFilm(const TriangleMesh& mesh) : m_closed(mesh) {
     }
     for (Cone& cone : m_cones)
         cone.root = build(static_cast<int>(cone.first), static_cast<int>(cone.count));
+    std::vector<int> cones(m_cones.size());
+    std::iota(cones.begin(), cones.end(), 0);
+    buildGroups(cones.data(), static_cast<int>(cones.size()));
+}
+
+int ClosingFilm::buildGroups(int* cones, int count) {
+    const int index = static_cast<int>(m_groups.size());
+    m_groups.emplace_back();
+    Group g;
+    Bounds3 box;
+    for (int i = 0; i < count; ++i) {
+        const Node& root = m_nodes[m_cones[cones[i]].root];
+        box.include(root.centre - Vec3(root.radius));
+        box.include(root.centre + Vec3(root.radius));
+    }
+    g.centre = (box.lo + box.hi) * 0.5f;
+    for (int i = 0; i < count; ++i) {
+        const Node& root = m_nodes[m_cones[cones[i]].root];
+        g.radius = std::fmax(g.radius, length(root.centre - g.centre) + root.radius);
+        g.length += root.length;
+        g.lengthRadius += root.length * root.radius;
+    }
+    g.radius *= 1.0001f;
+    g.length *= 1.0001f;
+    g.lengthRadius *= 1.0001f;
+    if (count == 1) {
+        g.cone = cones[0];
+    } else {
+        const Vec3 ext = box.extent();
+        const int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
+        const int mid = count / 2;
+        std::nth_element(cones, cones + mid, cones + count, [&](int x, int y) {
+            return m_nodes[m_cones[x].root].centre[axis] < m_nodes[m_cones[y].root].centre[axis];
+        });
+        g.left = buildGroups(cones, mid);
+        g.right = buildGroups(cones + mid, count - mid);
+    }
+    m_groups[index] = g;
+    return index;
 }
 
 int ClosingFilm::build(int first, int count) {
@@ -167,42 +206,64 @@ float ClosingFilm::windingFast(Vec3 p, float* slack) const {
 }
 
 double ClosingFilm::gradientBound(Vec3 lo, Vec3 hi) const {
-    if (m_nodes.empty()) return 0;
+    if (m_groups.empty()) return 0;
     // Distances from the box are at least those from its centre less its half diagonal.
     const Vec3 centre = (lo + hi) * 0.5f;
     const double half = 0.5 * length(hi - lo) * 1.0001 + 1e-30;
     double sum = 0;
-    for (const Cone& cone : m_cones) {
-        // A far loop: the dipole-like bound (or the plain one where that is smaller).
-        const Node& root = m_nodes[cone.root];
-        double g = length(centre - root.centre) - root.radius - half;
-        if (g > root.radius) {
-            sum += std::min(root.length / (g * g), 2.0 * root.length * root.radius / (g * g * g));
-            continue;
-        }
-        // Near: its edges' tree (balanced, so 64 levels are far more than enough).
-        int stack[64];
-        int top = 0;
-        stack[top++] = cone.root;
-        while (top > 0) {
-            const Node& n = m_nodes[stack[--top]];
-            double g = length(centre - n.centre) - n.radius - half;
-            if (g > 4.0 * n.radius) {
-                sum += n.length / (g * g);  // far: all its length at the ball's distance
-            } else if (n.left < 0) {
-                for (int e = n.first; e < n.first + n.count; ++e) {
-                    double ge =
-                        pointSegmentDistance(centre, m_edges[e].a, m_edges[e].b) * 0.9999 - half;
-                    if (ge <= 0) return INFINITY;
-                    sum += 1.0001 * length(m_edges[e].b - m_edges[e].a) / (ge * ge);
-                }
-            } else {
-                stack[top++] = n.left;
-                stack[top++] = n.right;
-            }
+    // Groups of loops far from the box are bounded together: each loop i lies in a ball of
+    // radius R_i inside the group's, at least g away, so the dipole-like bounds add up to
+    // 2 sum(L_i R_i) / g^3 (and the plain ones to sum(L_i) / g^2).
+    int stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const Group& grp = m_groups[stack[--top]];
+        const double g = length(centre - grp.centre) - grp.radius - half;
+        if (g > 3.0 * grp.radius) {
+            sum += std::min(grp.length / (g * g), 2.0 * grp.lengthRadius / (g * g * g));
+        } else if (grp.cone >= 0) {
+            const double b = coneGradientBound(m_cones[grp.cone], centre, half);
+            if (!std::isfinite(b)) return INFINITY;
+            sum += b;
+        } else {
+            stack[top++] = grp.left;
+            stack[top++] = grp.right;
         }
     }
     return sum / kFourPi;
+}
+
+// One loop's part of the bound (times 4 pi) over the ball of radius `half` about `centre`.
+double ClosingFilm::coneGradientBound(const Cone& cone, Vec3 centre, double half) const {
+    // A far loop: the dipole-like bound (or the plain one where that is smaller).
+    const Node& root = m_nodes[cone.root];
+    const double g = length(centre - root.centre) - root.radius - half;
+    if (g > root.radius)
+        return std::min(root.length / (g * g), 2.0 * root.length * root.radius / (g * g * g));
+    // Near: its edges' tree (balanced, so 64 levels are far more than enough).
+    double sum = 0;
+    int stack[64];
+    int top = 0;
+    stack[top++] = cone.root;
+    while (top > 0) {
+        const Node& n = m_nodes[stack[--top]];
+        const double gn = length(centre - n.centre) - n.radius - half;
+        if (gn > 4.0 * n.radius) {
+            sum += n.length / (gn * gn);  // far: all its length at the ball's distance
+        } else if (n.left < 0) {
+            for (int e = n.first; e < n.first + n.count; ++e) {
+                const double ge =
+                    pointSegmentDistance(centre, m_edges[e].a, m_edges[e].b) * 0.9999 - half;
+                if (ge <= 0) return INFINITY;
+                sum += 1.0001 * length(m_edges[e].b - m_edges[e].a) / (ge * ge);
+            }
+        } else {
+            stack[top++] = n.left;
+            stack[top++] = n.right;
+        }
+    }
+    return sum;
 }
 
 }  // namespace sdft

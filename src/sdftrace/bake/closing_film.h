@@ -15,6 +15,9 @@
 // error from 1/2. Each rim piece is a closed loop, so from afar its field falls off like a
 // dipole's: with the loop in a ball of radius R at distance g and of length L, the integral is at
 // most 2 L R / g^3 (the integrand's variation over the ball, as the loop integral of dl is 0).
+// Many loops (a scan's holes) are grouped by a tree: a group far from p is bounded at once by
+// 2 sum(L_i R_i) / g^3, g its ball's distance, so the bound costs about log(loops) where most are
+// far.
 #pragma once
 
 #include <vector>
@@ -58,6 +61,16 @@ class ClosingFilm {
         int first = 0, count = 0;  // a leaf's edges in m_edges
     };
     int build(int first, int count);
+    // A binary tree over the loops (the rim's pieces), for the bound's far ones.
+    struct Group {
+        Vec3 centre;
+        float radius = 0;        // a ball holding its loops' balls
+        float length = 0;        // sum of its loops' lengths L_i
+        float lengthRadius = 0;  // sum of L_i R_i, R_i the radius of loop i's ball
+        int left = -1, right = -1;
+        int cone = -1;  // a leaf's loop
+    };
+    int buildGroups(int* cones, int count);
 
     TriangleMesh m_closed;
     std::vector<CrossingTriangle> m_films;
@@ -73,6 +86,8 @@ class ClosingFilm {
     std::vector<float> m_corners[6];  // b.x, b.y, b.z, c.x, c.y, c.z
     std::vector<Edge> m_edges;
     std::vector<Node> m_nodes;
+    std::vector<Group> m_groups;
+    double coneGradientBound(const Cone& cone, Vec3 centre, double half) const;
 };
 
 }  // namespace sdft

@@ -71,14 +71,19 @@ inline void load(const Vec3* p, int n, Vec3* lanes) {
     for (int l = 0; l < kLanes; ++l) lanes[l] = p[std::min(l, n - 1)];
 }
 
-inline void numberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out) {
+inline void numberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out,
+                      uint64_t wanted) {
     for (int i = 0; i < n; i += kLanes) {
         const int m = std::min(kLanes, n - i);
+        const uint32_t all = (1u << m) - 1;
+        const uint32_t active = i < 64 ? static_cast<uint32_t>(wanted >> i) & all : all;
+        if (active == 0) continue;
         Vec3 lanes[kLanes];
         load(p + i, m, lanes);
         double sum[kLanes] = {};
-        packetSum(w, lanes, (1u << m) - 1, beta, sum);
-        for (int l = 0; l < m; ++l) out[i + l] = sum[l] / kFourPi;
+        packetSum(w, lanes, active, beta, sum);
+        for (int l = 0; l < m; ++l)
+            if ((active >> l) & 1u) out[i + l] = sum[l] / kFourPi;
     }
 }
 
@@ -111,12 +116,12 @@ SDFT_TARGET_BASELINE void insideRowBaseline(const WindingView& w, const Vec3* p,
     insideRow(w, p, n, beta, out);
 }
 SDFT_TARGET_AVX2 void numberRowAvx2(const WindingView& w, const Vec3* p, int n, double beta,
-                                    double* out) {
-    numberRow(w, p, n, beta, out);
+                                    double* out, uint64_t wanted) {
+    numberRow(w, p, n, beta, out, wanted);
 }
 SDFT_TARGET_BASELINE void numberRowBaseline(const WindingView& w, const Vec3* p, int n, double beta,
-                                            double* out) {
-    numberRow(w, p, n, beta, out);
+                                            double* out, uint64_t wanted) {
+    numberRow(w, p, n, beta, out, wanted);
 }
 
 }  // namespace
@@ -125,8 +130,9 @@ void windingInsideRow(const WindingView& w, const Vec3* p, int n, double beta, u
     (useAvx2() ? insideRowAvx2 : insideRowBaseline)(w, p, n, beta, out);
 }
 
-void windingNumberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out) {
-    (useAvx2() ? numberRowAvx2 : numberRowBaseline)(w, p, n, beta, out);
+void windingNumberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out,
+                      uint64_t wanted) {
+    (useAvx2() ? numberRowAvx2 : numberRowBaseline)(w, p, n, beta, out, wanted);
 }
 
 }  // namespace sdft

@@ -14,7 +14,9 @@ namespace sdft {
 
 // windingInside (winding_view.h) of points p[0..n), any n: out[i] = 1 inside, 0 outside.
 void windingInsideRow(const WindingView& w, const Vec3* p, int n, double beta, uint8_t* out);
-// windingNumberFast of points p[0..n): for tests of the bit-for-bit claim.
-void windingNumberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out);
+// windingNumberFast of points p[0..n), bit for bit. Of the first 64 points, only those whose
+// bits are set in `wanted` (the others' outputs are left as they are).
+void windingNumberRow(const WindingView& w, const Vec3* p, int n, double beta, double* out,
+                      uint64_t wanted = ~uint64_t{0});
 
 }  // namespace sdft

@@ -14,6 +14,7 @@
 #include "sdftrace/bake/lbvh.h"
 #include "sdftrace/bake/mesh_bvh.h"
 #include "sdftrace/bake/winding_number.h"
+#include "sdftrace/bake/winding_packet.h"
 #include "sdftrace/bake/winding_sign.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/exec/progress.h"
@@ -124,13 +125,16 @@ struct MeshQuery::Impl {
     // An open mesh's own winding number at local point q with a bound on its error: the
     // hierarchical sum where it is clearly off 1/2 (trusted to 0.3 at beta 1.5 and to 0.1 at beta
     // 3, the margins inside() decides by), else the films' (closing_film.h).
-    double openWindingEstimate(Vec3 q, double& error) const {
-        double w = openWinding->fast(q, 1.5);
+    // `coarse` and `fine` give openWinding->fast(q, 1.5) and ->fast(q) (the SignWalk's from
+    // rows of neighbours, winding_packet.h, bit for bit).
+    template <class Coarse, class Fine>
+    double openWindingEstimate(Vec3 q, double& error, Coarse coarse, Fine fine) const {
+        double w = coarse();
         if (std::fabs(w - 0.5) > 0.3) {
             error = 0.3;
             return w;
         }
-        w = openWinding->fast(q);
+        w = fine();
         if (std::fabs(w - 0.5) > 0.1) {
             error = 0.1;
             return w;
@@ -138,6 +142,11 @@ struct MeshQuery::Impl {
         const WindingSign::Carried c = WindingSign(*film, *closedWinding).evaluate(q);
         error = c.error;
         return c.winding;
+    }
+    double openWindingEstimate(Vec3 q, double& error) const {
+        return openWindingEstimate(
+            q, error, [&] { return openWinding->fast(q, 1.5); },
+            [&] { return openWinding->fast(q); });
     }
 };
 
@@ -466,9 +475,60 @@ struct MeshQuery::Impl::SignWalk {
     double prevD = 0;
     int winding = 0;                                     // a closed mesh's, at the previous point
     double carriedWinding = 0, carriedError = INFINITY;  // an open mesh's
+    double clusterGradient = INFINITY;  // |grad w| over the box of a cluster and the point before
+    // The cluster's points and their coarse winding numbers, taken eight at a time where a carry
+    // first fails (neighbours walk the tree together, winding_packet.h).
+    const Vec3d* cluster = nullptr;
+    size_t clusterSize = 0;
+    uint32_t haveCoarse = 0, haveFine = 0;
+    double coarse[kCluster] = {}, fine[kCluster] = {};
 
-    // Inside at p, whose closest answer is c (distance 0 when distances are not wanted).
-    bool decide(Vec3d p, const Closest& c) {
+    // An open mesh's gradient bound sums over the rim's pieces: taken once for the box that holds
+    // a cluster's points and the point before them (so every step between them), not per step.
+    void beginCluster(const Vec3d* p, size_t n) {
+        if (!carryOpen) return;
+        cluster = p;
+        clusterSize = n;
+        haveCoarse = haveFine = 0;
+        Vec3 lo = m.toLocal(havePrev ? prevP : p[0]), hi = lo;
+        for (size_t j = 0; j < n; ++j) {
+            const Vec3 q = m.toLocal(p[j]);
+            lo = min(lo, q);
+            hi = max(hi, q);
+        }
+        clusterGradient = m.film->gradientBound(lo, hi);
+    }
+
+    // The coarse winding number of the cluster's j-th point, with those of the next seven.
+    double coarseAt(size_t j) {
+        if (!((haveCoarse >> j) & 1u)) haveCoarse |= row(j, ~0u, 1.5, coarse);
+        return coarse[j];
+    }
+    // The fine one, with those of the next seven whose coarse ones will not do.
+    double fineAt(size_t j) {
+        if (!((haveFine >> j) & 1u)) {
+            uint32_t wanted = 1;
+            for (size_t i = j + 1; i < std::min(j + kLanes, clusterSize); ++i)
+                if (((haveCoarse >> i) & 1u) && !((haveFine >> i) & 1u) &&
+                    std::fabs(coarse[i] - 0.5) <= 0.3)
+                    wanted |= 1u << (i - j);
+            haveFine |= row(j, wanted, m.openWinding->beta(), fine);
+        }
+        return fine[j];
+    }
+    static constexpr size_t kLanes = 8;
+    uint32_t row(size_t j, uint32_t wanted, double beta, double* out) const {
+        const size_t k = std::min(kLanes, clusterSize - j);
+        Vec3 lanes[kLanes];
+        for (size_t i = 0; i < k; ++i) lanes[i] = m.toLocal(cluster[j + i]);
+        wanted &= (1u << k) - 1;
+        windingNumberRow(m.openWinding->view(), lanes, static_cast<int>(k), beta, out + j, wanted);
+        return wanted << j;
+    }
+
+    // Inside at p, the j-th point of the cluster begun, whose closest answer is c (distance 0
+    // when distances are not wanted).
+    bool decide(Vec3d p, size_t j, const Closest& c) {
         bool in;
         if (carry) {
             // When the balls of the two distances overlap along the segment from the previous
@@ -489,18 +549,17 @@ struct MeshQuery::Impl::SignWalk {
             }
             in = sign == MeshSign::Parity ? (winding & 1) != 0 : winding > 0;
         } else if (carryOpen) {
-            const Vec3 b = m.toLocal(p);
             const double step = norm(p - prevP);
-            const bool clear = havePrev && step < 0.999 * (c.distance + prevD);
-            if (clear && std::isfinite(carriedError)) {
-                // Off the mesh its winding number is smooth, |grad w| bounded by the rim
-                // (closing_film.h): the previous estimate carries while it stays farther from
-                // 1/2 than its error grown by the step.
-                const Vec3 a = m.toLocal(prevP);
-                carriedError += m.film->gradientBound(min(a, b), max(a, b)) * step * 1.001;
-            }
+            // Off the mesh its winding number is smooth, |grad w| bounded by the rim
+            // (closing_film.h): the previous estimate carries while it stays farther from 1/2
+            // than its error grown by the step (no carry where the cluster's box meets the rim).
+            const bool clear =
+                havePrev && step < 0.999 * (c.distance + prevD) && std::isfinite(clusterGradient);
+            if (clear) carriedError += clusterGradient * step * 1.001;
             if (!clear || !(std::fabs(carriedWinding - 0.5) > carriedError))
-                carriedWinding = m.openWindingEstimate(b, carriedError);
+                carriedWinding = m.openWindingEstimate(
+                    m.toLocal(p), carriedError, [&] { return coarseAt(j); },
+                    [&] { return fineAt(j); });
             in = carriedWinding > 0.5;
         } else {
             in = query.inside(p, sign, &c);
@@ -526,11 +585,9 @@ void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
     // the surface there); pseudonormals cost nothing extra anyway.
     const bool carry =
         wantSign && wantClosest && options.sign != MeshSign::PseudoNormal && watertight();
-    // An open mesh's winding number carries too, within its gradient bound, where that bound is
-    // cheap: it sums over the rim's pieces (on the elephant's 106 holes it cost more than it
-    // saved; on the Stanford bunny's few it halves the signs' time).
-    const bool carryOpen = wantSign && wantClosest && !carry && options.sign == MeshSign::Winding &&
-                           m.openWinding && m.film->components() <= 16;
+    // An open mesh's winding number carries too, within its gradient bound.
+    const bool carryOpen =
+        wantSign && wantClosest && !carry && options.sign == MeshSign::Winding && m.openWinding;
     auto* distance = static_cast<T*>(out.distance);
     auto* closestOut = static_cast<T*>(out.closest);
     auto* bary = static_cast<T*>(out.bary);
@@ -570,11 +627,12 @@ void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
                     points[j] = pointAt(xyz, index[j]);
                 }
                 if (wantClosest) m.closestCluster(*this, points, n, answers, scratch);
+                signs.beginCluster(points, n);
                 for (size_t j = 0; j < n; ++j) {
                     const size_t i = index[j];
                     const Vec3d& p = points[j];
                     const Closest c = wantClosest ? answers[j] : Closest{};
-                    const bool in = wantSign && signs.decide(p, c);
+                    const bool in = wantSign && signs.decide(p, j, c);
                     if (distance)
                         distance[i] =
                             static_cast<T>(options.signedDistance && in ? -c.distance : c.distance);

@@ -150,8 +150,9 @@ TEST(MeshQuery, BatchesAnswerAsSinglePointsDo) {
         boxes.triangles.push_back({f[0] + 8, f[1] + 8, f[2] + 8});
     boxes.positions.insert(boxes.positions.end(), second.positions.begin(), second.positions.end());
     const std::vector<std::pair<std::string, TriangleMesh>> meshes = {
-        {"suzanne", load("suzanne.obj")},      // open
-        {"bunny_npm", load("bunny_npm.obj")},  // closed: signs carried
+        {"suzanne", load("suzanne.obj")},               // open
+        {"elephant", load("elephant-with-holes.obj")},  // open, 106 holes: carried signs too
+        {"bunny_npm", load("bunny_npm.obj")},           // closed: signs carried
         {"boxes", boxes},
         {"icosphere 5", icosphere(5)}};
     for (const auto& [name, mesh] : meshes) {
