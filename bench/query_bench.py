@@ -17,6 +17,7 @@ Per mesh, with 1M points uniform in the mesh's box (float32, all cores for both)
 
     PYTHONPATH=build/release/python python3 bench/query_bench.py [--quick] [--reps N]
     ... bench/query_bench.py --distances    # only the distance columns, against Open3D
+    ... bench/query_bench.py --rays         # only the ray columns, against Open3D
 """
 import argparse
 import resource
@@ -203,11 +204,32 @@ def distances_only(meshes, n, reps, rng):
             name, len(f), o, u, o / u, s, o / s), flush=True)
 
 
+def rays_only(meshes, n, reps, rng):
+    """Ray casts against Open3D's cast_rays (float32 rays, as both take them), nothing else."""
+    print("| mesh | triangles | Open3D cast_rays | ours | hits ours / Open3D |")
+    print("| --- | --- | --- | --- | --- |")
+    for name, v, f in meshes:
+        q = sdftrace.MeshQuery(v, f)
+        pts = rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32)
+        dirs = rng.normal(size=(n, 3)).astype(np.float32)
+        scene = o3d.t.geometry.RaycastingScene()
+        scene.add_triangles(o3d.core.Tensor(v.astype(np.float32)),
+                            o3d.core.Tensor(f.astype(np.uint32)))
+        rays = o3d.core.Tensor(np.hstack([pts, dirs]))
+        o = median_seconds(lambda: scene.cast_rays(rays), reps)
+        r = median_seconds(lambda: q.ray_cast(pts, dirs), reps)
+        hits = np.isfinite(q.ray_cast(pts, dirs)[0]).mean()
+        o3d_hits = np.isfinite(scene.cast_rays(rays)["t_hit"].numpy()).mean()
+        print("| %s | %d | %.3f s | %.3f s (%.2fx) | %.1f %% / %.1f %% |" % (
+            name, len(f), o, r, o / r, 100 * hits, 100 * o3d_hits), flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="100k points, no 1.1M mesh")
     ap.add_argument("--distances", action="store_true",
                     help="only distances against Open3D's compute_distance")
+    ap.add_argument("--rays", action="store_true", help="only rays against Open3D's cast_rays")
     ap.add_argument("--reps", type=int, default=3)
     args = ap.parse_args()
     n = 100_000 if args.quick else 1_000_000
@@ -221,6 +243,8 @@ def main():
                        *subdivide(*obj_mesh("data/meshes/stanford-bunny.obj"), 2)))
     if args.distances:
         return distances_only(meshes, n, args.reps, rng)
+    if args.rays:
+        return rays_only(meshes, n, args.reps, rng)
     print("| mesh | triangles | closed | unsigned: ours / Open3D | signed (winding): ours | "
           "vs Open3D unsigned | rays: ours / Open3D | hits ours / Open3D | max error vs brute "
           "force / vs Open3D (of diagonal) | signed per point / exact bake per sample |")

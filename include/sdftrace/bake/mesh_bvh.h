@@ -45,6 +45,7 @@ class MeshBvh {
         bool front = false;
         uint32_t triangle = 0;  // index into mesh().triangles
         float u = 0, v = 0;     // barycentric coordinates of the hit: a (1-u-v) + b u + c v
+        Vec3 normal;            // (b - a) x (c - a) as Embree computed it, not unit length
     };
     // tnear < 0 also reports hits just behind the origin (origins on the surface); hits beyond
     // tfar are misses. The direction need not be unit length: t is in its units.

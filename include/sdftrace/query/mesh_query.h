@@ -77,6 +77,8 @@ class MeshQuery {
         Vec3d normal;         // the face's unit normal (counter-clockwise front)
     };
     Hit rayCast(Vec3d origin, Vec3d direction, double tMax = INFINITY) const;
+    // refine: t and barycentrics recomputed in double on the hit face (else Embree's float ones).
+    Hit rayCast(Vec3d origin, Vec3d direction, double tMax, bool refine) const;
 
     // Builds the sign structures for `sign` now (they are otherwise built on first use).
     void prepare(MeshSign sign) const;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <mutex>
+#include <type_traits>
 #include <unordered_map>
 
 #include "sdftrace/bake/closing_film.h"
@@ -389,11 +390,25 @@ bool MeshQuery::inside(Vec3d p, MeshSign sign, const Closest* known) const {
 }
 
 MeshQuery::Hit MeshQuery::rayCast(Vec3d origin, Vec3d direction, double tMax) const {
+    return rayCast(origin, direction, tMax, true);
+}
+
+MeshQuery::Hit MeshQuery::rayCast(Vec3d origin, Vec3d direction, double tMax, bool refine) const {
     const Impl& m = *m_impl;
     Hit h;
     const float tfar = static_cast<float>(std::fmin(tMax, 3.0e38));
     const MeshBvh::Hit e = m.bvh->firstHit({m.toLocal(origin), toFloat(direction)}, 0, tfar);
     if (!std::isfinite(e.t)) return h;
+    if (!refine) {
+        // Embree's float answer as it is (the mesh's frame is a translation of the caller's):
+        // no look at the face's vertices, whose cache misses cost more than the traversal.
+        h.face = e.triangle;
+        h.normal = unit(toDouble(e.normal));
+        h.t = e.t;
+        h.u = e.u;
+        h.v = e.v;
+        return h;
+    }
     const auto& t = m.faces[e.triangle];
     const Vec3d a = m.vertices[t[0]], b = m.vertices[t[1]], c = m.vertices[t[2]];
     const Vec3d n = cross(b - a, c - a);
@@ -662,7 +677,9 @@ void MeshQuery::castRays(const T* origins, const T* directions, size_t n, double
     Progress progress(label, n, !label.empty());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const auto& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
-            const Hit h = rayCast(pointAt(origins, i), pointAt(directions, i), tMax);
+            // Float rays are answered in float: Embree's own t, barycentrics and normal.
+            const Hit h = rayCast(pointAt(origins, i), pointAt(directions, i), tMax,
+                                  std::is_same_v<T, double>);
             const bool hit = h.face != UINT32_MAX;
             if (t) t[i] = static_cast<T>(h.t);
             if (out.face) out.face[i] = hit ? static_cast<int64_t>(h.face) : -1;

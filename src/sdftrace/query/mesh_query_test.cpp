@@ -196,7 +196,8 @@ TEST(MeshQuery, BatchesAnswerAsSinglePointsDo) {
     }
 }
 
-// Ray casts against a brute-force double intersection of every face (Moller-Trumbore).
+// Ray casts against a brute-force double intersection of every face (Moller-Trumbore), refined
+// in double and as Embree answers them in float.
 TEST(MeshQuery, RayCastsMatchBruteForce) {
     const TriangleMesh mesh = load("bunny_npm.obj");
     const MeshQuery q = queryOf(mesh);
@@ -219,21 +220,26 @@ TEST(MeshQuery, RayCastsMatchBruteForce) {
             const double v = dot(dir, qv) / det, t = dot(e2, qv) / det;
             if (u >= 0 && v >= 0 && u + v <= 1 && t > 0 && t < best) best = t, bestFace = f;
         }
-        const MeshQuery::Hit h = q.rayCast(o, dir);
-        if (bestFace == UINT32_MAX) {
-            EXPECT_FALSE(std::isfinite(h.t));
-            continue;
+        // Refined in double (double rays), or Embree's float answer (float rays).
+        for (const bool refine : {true, false}) {
+            const MeshQuery::Hit h = q.rayCast(o, dir, INFINITY, refine);
+            if (bestFace == UINT32_MAX) {
+                EXPECT_FALSE(std::isfinite(h.t));
+                continue;
+            }
+            hits += refine;
+            ASSERT_TRUE(std::isfinite(h.t));
+            EXPECT_NEAR(h.t * norm(dir), best * norm(dir), 1e-5 * q.diagonal());
+            const auto& f = q.faces()[h.face];
+            const Vec3d a = q.vertices()[f[0]], b = q.vertices()[f[1]], c = q.vertices()[f[2]];
+            const Vec3d x = a * (1 - h.u - h.v) + b * h.u + c * h.v;
+            EXPECT_NEAR(norm(x - (o + dir * h.t)), 0, 1e-5 * q.diagonal());
+            EXPECT_NEAR(norm(h.normal), 1, refine ? 1e-12 : 1e-6);
+            const Vec3d n = cross(b - a, c - a);
+            EXPECT_GT(dot(h.normal, n) / norm(n), 1 - 1e-5);
+            // t_max cuts it off.
+            EXPECT_FALSE(std::isfinite(q.rayCast(o, dir, best * 0.99, refine).t));
         }
-        ++hits;
-        ASSERT_TRUE(std::isfinite(h.t));
-        EXPECT_NEAR(h.t * norm(dir), best * norm(dir), 1e-5 * q.diagonal());
-        const auto& f = q.faces()[h.face];
-        const Vec3d x = q.vertices()[f[0]] * (1 - h.u - h.v) + q.vertices()[f[1]] * h.u +
-                        q.vertices()[f[2]] * h.v;
-        EXPECT_NEAR(norm(x - (o + dir * h.t)), 0, 1e-5 * q.diagonal());
-        EXPECT_NEAR(norm(h.normal), 1, 1e-12);
-        // t_max cuts it off.
-        EXPECT_FALSE(std::isfinite(q.rayCast(o, dir, best * 0.99).t));
     }
     EXPECT_GT(hits, 50u);
 }
