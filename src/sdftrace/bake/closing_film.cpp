@@ -80,9 +80,10 @@ ClosingFilm::ClosingFilm(const TriangleMesh& mesh) : m_closed(mesh) {
     }
     for (Cone& cone : m_cones)
         cone.root = build(static_cast<int>(cone.first), static_cast<int>(cone.count));
+    // Every rim piece has its cone, so there is at least one here.
     std::vector<int> cones(m_cones.size());
     std::iota(cones.begin(), cones.end(), 0);
-    buildGroups(cones.data(), static_cast<int>(cones.size()));
+    if (!cones.empty()) buildGroups(cones.data(), static_cast<int>(cones.size()));
 }
 
 int ClosingFilm::buildGroups(int* cones, int count) {
