@@ -127,7 +127,7 @@ struct MeshQuery::Impl {
     // hierarchical sum where it is clearly off 1/2 (trusted to 0.3 at beta 1.5 and to 0.1 at beta
     // 3, the margins inside() decides by), else the films' (closing_film.h).
     // `coarse` and `fine` give openWinding->fast(q, 1.5) and ->fast(q) (the SignWalk's from
-    // rows of neighbours, winding_packet.h, bit for bit).
+    // rows of neighbours, winding_packet.h, to float rounding).
     template <class Coarse, class Fine>
     double openWindingEstimate(Vec3 q, double& error, Coarse coarse, Fine fine) const {
         double w = coarse();
@@ -492,7 +492,7 @@ struct MeshQuery::Impl::SignWalk {
     double carriedWinding = 0, carriedError = INFINITY;  // an open mesh's
     double clusterGradient = INFINITY;  // |grad w| over the box of a cluster and the point before
     // The cluster's points and their coarse winding numbers, taken eight at a time where a carry
-    // first fails (neighbours walk the tree together, winding_packet.h).
+    // first fails (neighbours walk the tree together, winding_packet.h, far terms in float).
     const Vec3d* cluster = nullptr;
     size_t clusterSize = 0;
     uint32_t haveCoarse = 0, haveFine = 0;
@@ -537,7 +537,9 @@ struct MeshQuery::Impl::SignWalk {
         Vec3 lanes[kLanes];
         for (size_t i = 0; i < k; ++i) lanes[i] = m.toLocal(cluster[j + i]);
         wanted &= (1u << k) - 1;
-        windingNumberRow(m.openWinding->view(), lanes, static_cast<int>(k), beta, out + j, wanted);
+        // Far terms in float: the estimates decide by margins of 0.1 and more.
+        windingNumberRowFloat(m.openWinding->view(), lanes, static_cast<int>(k), beta, out + j,
+                              wanted);
         return wanted << j;
     }
 
