@@ -129,6 +129,13 @@ def brute_distance(v, f, p):
     return out
 
 
+def open3d_scene(v, f):
+    """Open3D's RaycastingScene of the mesh (float32 vertices, uint32 faces, as it takes them)."""
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(v.astype(np.float32)), o3d.core.Tensor(f.astype(np.uint32)))
+    return scene
+
+
 def bench_mesh(name, v, f, n, reps, rng):
     q = sdftrace.MeshQuery(v, f)
     lo, hi = v.min(0), v.max(0)
@@ -146,9 +153,7 @@ def bench_mesh(name, v, f, n, reps, rng):
     ref = brute_distance(v, f, pts[:k].astype(np.float64))
     row["brute_err"] = float(np.max(np.abs(q.distance(pts[:k].astype(np.float64)) - ref)) / diag)
     if o3d is not None:
-        scene = o3d.t.geometry.RaycastingScene()
-        scene.add_triangles(o3d.core.Tensor(v.astype(np.float32)),
-                            o3d.core.Tensor(f.astype(np.uint32)))
+        scene = open3d_scene(v, f)
         tp = o3d.core.Tensor(pts)
         rays = o3d.core.Tensor(np.hstack([pts, dirs]))
         row["o3d_unsigned"] = median_seconds(lambda: scene.compute_distance(tp), reps)
@@ -193,9 +198,7 @@ def distances_only(meshes, n, reps, rng):
     for name, v, f in meshes:
         q = sdftrace.MeshQuery(v, f)
         pts = rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32)
-        scene = o3d.t.geometry.RaycastingScene()
-        scene.add_triangles(o3d.core.Tensor(v.astype(np.float32)),
-                            o3d.core.Tensor(f.astype(np.uint32)))
+        scene = open3d_scene(v, f)
         tp = o3d.core.Tensor(pts)
         o = median_seconds(lambda: scene.compute_distance(tp), reps)
         u = median_seconds(lambda: q.distance(pts), reps)
@@ -212,9 +215,7 @@ def rays_only(meshes, n, reps, rng):
         q = sdftrace.MeshQuery(v, f)
         pts = rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32)
         dirs = rng.normal(size=(n, 3)).astype(np.float32)
-        scene = o3d.t.geometry.RaycastingScene()
-        scene.add_triangles(o3d.core.Tensor(v.astype(np.float32)),
-                            o3d.core.Tensor(f.astype(np.uint32)))
+        scene = open3d_scene(v, f)
         rays = o3d.core.Tensor(np.hstack([pts, dirs]))
         o = median_seconds(lambda: scene.cast_rays(rays), reps)
         r = median_seconds(lambda: q.ray_cast(pts, dirs), reps)

@@ -78,7 +78,6 @@ struct MeshQuery::Impl {
     mutable std::unique_ptr<ClosingFilm> film;
     mutable std::unique_ptr<WindingNumber> closedWinding;
     mutable std::unique_ptr<WindingNumber> openWinding;  // of the open mesh itself (films exist)
-    mutable std::unique_ptr<MeshBvh> closedBvh;          // of film->closedMesh() (films exist)
 
     // Pseudonormals: per face, its unit normal, its edges' (ab, bc, ca) and its corners'.
     mutable std::once_flag normalsOnce;
@@ -523,7 +522,7 @@ struct MeshQuery::Impl::SignWalk {
     double fineAt(size_t j) {
         if (!((haveFine >> j) & 1u)) {
             uint32_t wanted = 1;
-            for (size_t i = j + 1; i < std::min(j + kLanes, clusterSize); ++i)
+            for (size_t i = j + 1; i < std::min(j + kRow, clusterSize); ++i)
                 if (((haveCoarse >> i) & 1u) && !((haveFine >> i) & 1u) &&
                     std::fabs(coarse[i] - 0.5) <= 0.3)
                     wanted |= 1u << (i - j);
@@ -531,10 +530,10 @@ struct MeshQuery::Impl::SignWalk {
         }
         return fine[j];
     }
-    static constexpr size_t kLanes = 8;
+    static constexpr size_t kRow = 8;  // points to a row (winding_packet.h's packet)
     uint32_t row(size_t j, uint32_t wanted, double beta, double* out) const {
-        const size_t k = std::min(kLanes, clusterSize - j);
-        Vec3 lanes[kLanes];
+        const size_t k = std::min(kRow, clusterSize - j);
+        Vec3 lanes[kRow];
         for (size_t i = 0; i < k; ++i) lanes[i] = m.toLocal(cluster[j + i]);
         wanted &= (1u << k) - 1;
         // Far terms in float: the estimates decide by margins of 0.1 and more.

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <cstddef>
 
+#include "sdftrace/core/macros.h"
+#include "sdftrace/exec/simd.h"
+
 namespace sdft {
 
 TriangleLanes::TriangleLanes(const TriangleMesh& mesh)
@@ -123,26 +126,20 @@ __attribute__((always_inline)) inline float nearestBody(const LaneGroup* groups,
     return best[lane];
 }
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define SDFT_LANES_AVX2 1
-__attribute__((target("avx2,fma"))) float nearestAvx2(const LaneGroup* groups, size_t count, Vec3 p,
-                                                      float bound2, uint32_t& id) {
+SDFT_TARGET_AVX2 float nearestAvx2(const LaneGroup* groups, size_t count, Vec3 p, float bound2,
+                                   uint32_t& id) {
     return nearestBody(groups, count, p, bound2, id);
 }
-#endif
-
-float nearestPortable(const LaneGroup* groups, size_t count, Vec3 p, float bound2, uint32_t& id) {
+SDFT_TARGET_BASELINE float nearestBaseline(const LaneGroup* groups, size_t count, Vec3 p,
+                                           float bound2, uint32_t& id) {
     return nearestBody(groups, count, p, bound2, id);
 }
 
 }  // namespace
 
 float nearestInGroups(const LaneGroup* groups, size_t count, Vec3 p, float bound2, uint32_t& id) {
-#ifdef SDFT_LANES_AVX2
-    static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-    if (avx2) return nearestAvx2(groups, count, p, bound2, id);
-#endif
-    return nearestPortable(groups, count, p, bound2, id);
+    // The project's run-time dispatch (exec/simd.h): both levels round alike (no FMA).
+    return (useAvx2() ? nearestAvx2 : nearestBaseline)(groups, count, p, bound2, id);
 }
 
 }  // namespace sdft

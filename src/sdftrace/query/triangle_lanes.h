@@ -1,7 +1,7 @@
 // Triangles eight to a lane group for batched point-triangle distances: a cluster of nearby points
 // (neighbours in Morton order) gathers the triangles any of them can be closest to once, from
 // one BVH traversal, and each point then measures them all with a branch-free test that the
-// compiler vectorizes eight wide (AVX2 where the CPU has it, chosen at run time; SSE otherwise).
+// compiler vectorizes eight wide (AVX2 where the CPU has it, SSE otherwise: exec/simd.h's choice).
 // The test is float, as the BVH search it replaces; MeshQuery refines the winner in double.
 #pragma once
 
