@@ -102,10 +102,12 @@ int ClosingFilm::buildGroups(int* cones, int count) {
         g.radius = std::fmax(g.radius, length(root.centre - g.centre) + root.radius);
         g.length += root.length;
         g.lengthRadius += root.length * root.radius;
+        g.area += m_cones[cones[i]].area;
     }
     g.radius *= 1.0001f;
     g.length *= 1.0001f;
     g.lengthRadius *= 1.0001f;
+    g.area *= 1.0001f;
     if (count == 1) {
         g.cone = cones[0];
     } else {
@@ -172,38 +174,43 @@ double ClosingFilm::winding(Vec3 p) const {
 }
 
 float ClosingFilm::windingFast(Vec3 p, float* slack) const {
-    // Van Oosterom & Strackee as in triangleSolidAngle, in float, the apex shared per cone; the
-    // inner loop vectorizes.
     float sum = 0;
-    const float *bx = m_corners[0].data(), *by = m_corners[1].data(), *bz = m_corners[2].data(),
-                *cx = m_corners[3].data(), *cy = m_corners[4].data(), *cz = m_corners[5].data();
     for (const Cone& cone : m_cones) {
-        const float ax = cone.apex.x - p.x, ay = cone.apex.y - p.y, az = cone.apex.z - p.z;
-        const float la = std::sqrt(ax * ax + ay * ay + az * az);
-        if (slack && la > 2 * cone.radius) {
-            const float gap = la - cone.radius;
-            const float bound = cone.area / (static_cast<float>(kFourPi) * gap * gap) * 1.001f;
-            if (bound < 0.01f) {
-                *slack += bound;
-                continue;
+        if (slack) {
+            const float gap = length(cone.apex - p) - cone.radius;
+            if (gap > cone.radius) {
+                const float bound = cone.area / (static_cast<float>(kFourPi) * gap * gap) * 1.001f;
+                if (bound < 0.01f) {
+                    *slack += bound;
+                    continue;
+                }
             }
         }
-        float part = 0;
-#pragma omp simd reduction(+ : part)
-        for (size_t t = cone.first; t < cone.first + cone.count; ++t) {
-            float ux = bx[t] - p.x, uy = by[t] - p.y, uz = bz[t] - p.z;
-            float vx = cx[t] - p.x, vy = cy[t] - p.y, vz = cz[t] - p.z;
-            float lb = std::sqrt(ux * ux + uy * uy + uz * uz);
-            float lc = std::sqrt(vx * vx + vy * vy + vz * vz);
-            float num =
-                ax * (uy * vz - uz * vy) + ay * (uz * vx - ux * vz) + az * (ux * vy - uy * vx);
-            float den = la * lb * lc + (ax * ux + ay * uy + az * uz) * lc +
-                        (ax * vx + ay * vy + az * vz) * lb + (ux * vx + uy * vy + uz * vz) * la;
-            part += fastAtan2(num, den);
-        }
-        sum += part;
+        sum += coneWinding(cone, p);
     }
     return sum * static_cast<float>(2.0 / kFourPi);
+}
+
+float ClosingFilm::coneWinding(const Cone& cone, Vec3 p) const {
+    // Van Oosterom & Strackee as in triangleSolidAngle, in float, the apex shared per cone; the
+    // inner loop vectorizes.
+    const float *bx = m_corners[0].data(), *by = m_corners[1].data(), *bz = m_corners[2].data(),
+                *cx = m_corners[3].data(), *cy = m_corners[4].data(), *cz = m_corners[5].data();
+    const float ax = cone.apex.x - p.x, ay = cone.apex.y - p.y, az = cone.apex.z - p.z;
+    const float la = std::sqrt(ax * ax + ay * ay + az * az);
+    float part = 0;
+#pragma omp simd reduction(+ : part)
+    for (size_t t = cone.first; t < cone.first + cone.count; ++t) {
+        float ux = bx[t] - p.x, uy = by[t] - p.y, uz = bz[t] - p.z;
+        float vx = cx[t] - p.x, vy = cy[t] - p.y, vz = cz[t] - p.z;
+        float lb = std::sqrt(ux * ux + uy * uy + uz * uz);
+        float lc = std::sqrt(vx * vx + vy * vy + vz * vz);
+        float num = ax * (uy * vz - uz * vy) + ay * (uz * vx - ux * vz) + az * (ux * vy - uy * vx);
+        float den = la * lb * lc + (ax * ux + ay * uy + az * uz) * lc +
+                    (ax * vx + ay * vy + az * vz) * lb + (ux * vx + uy * vy + uz * vz) * la;
+        part += fastAtan2(num, den);
+    }
+    return part;
 }
 
 double ClosingFilm::gradientBound(Vec3 lo, Vec3 hi) const {
@@ -235,6 +242,88 @@ double ClosingFilm::gradientBound(Vec3 lo, Vec3 hi) const {
     return sum / kFourPi;
 }
 
+ClosingFilm::Taylor ClosingFilm::taylor(Vec3 centre, float half) const {
+    Taylor t;
+    t.valid = true;
+    if (m_groups.empty()) return t;
+    int stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0 && t.valid) {
+        const Group& grp = m_groups[stack[--top]];
+        const float gap = length(centre - grp.centre) - grp.radius - half;
+        if (gap > grp.radius) {
+            const float bound = grp.area / (static_cast<float>(kFourPi) * gap * gap) * 1.001f;
+            if (bound < 0.01f) {
+                t.error += bound;
+                continue;
+            }
+        }
+        if (grp.cone >= 0) {
+            t.valid = addCone(m_cones[grp.cone], centre, half, t);
+        } else {
+            stack[top++] = grp.left;
+            stack[top++] = grp.right;
+        }
+    }
+    t.value *= static_cast<float>(2.0 / kFourPi);
+    t.gradient = t.gradient * static_cast<float>(1.0 / kFourPi);
+    t.quadratic *= static_cast<float>(1.0 / kFourPi);
+    // The float sums' rounding: the atan2's as in windingFast, the rest relative.
+    t.error += fastError() + 1e-5f * std::fabs(t.value);
+    t.quadratic *= 1.001f;
+    return t;
+}
+
+// One cone's part of a Taylor model (times 4 pi, its value times 2 pi): false where the ball
+// reaches its rim.
+bool ClosingFilm::addCone(const Cone& cone, Vec3 centre, float half, Taylor& t) const {
+    t.value += coneWinding(cone, centre);
+    // The film's boundary runs against the rim (b -> a for rim edge a -> b). The solid angle's
+    // gradient is the Biot-Savart integral of the boundary; a straight piece from a to b gives
+    // (ra x rb)(|ra| + |rb|) / (|ra| |rb| (|ra| |rb| + ra . rb)), ra = a - p, rb = b - p.
+    for (size_t e = cone.first; e < cone.first + cone.count; ++e) {
+        const Vec3 ra = m_edges[e].b - centre, rb = m_edges[e].a - centre;
+        const float la = length(ra), lb = length(rb);
+        const float den = la * lb * (la * lb + dot(ra, rb));
+        if (!(den > 0)) return false;
+        t.gradient = t.gradient + cross(ra, rb) * ((la + lb) / den);
+    }
+    // |H| <= sum over the rim of 2 |dl| / g^3, g the distance from the ball.
+    const double h = rimSum(cone, centre, half, 3);
+    t.quadratic += static_cast<float>(h);  // half the Hessian's bound
+    return std::isfinite(h);
+}
+
+void ClosingFilm::trianglesNear(Vec3 lo, Vec3 hi, float eps, std::vector<uint32_t>& out) const {
+    out.clear();
+    if (m_groups.empty()) return;
+    lo = lo - Vec3(eps);
+    hi = hi + Vec3(eps);
+    int stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const Group& grp = m_groups[stack[--top]];
+        // A group's ball holds its loops' balls, and a loop's ball its cone (the apex is the mean
+        // of the loop's vertices).
+        const Vec3 nearest = min(max(grp.centre, lo), hi);
+        if (length(grp.centre - nearest) > grp.radius) continue;
+        if (grp.cone < 0) {
+            stack[top++] = grp.left;
+            stack[top++] = grp.right;
+            continue;
+        }
+        const Cone& cone = m_cones[grp.cone];
+        for (size_t t = cone.first; t < cone.first + cone.count; ++t) {
+            const CrossingTriangle& f = m_films[t];
+            if (f.lo.x <= hi.x && f.lo.y <= hi.y && f.lo.z <= hi.z && f.hi.x >= lo.x &&
+                f.hi.y >= lo.y && f.hi.z >= lo.z)
+                out.push_back(static_cast<uint32_t>(t));
+        }
+    }
+}
+
 // One loop's part of the bound (times 4 pi) over the ball of radius `half` about `centre`.
 double ClosingFilm::coneGradientBound(const Cone& cone, Vec3 centre, double half) const {
     // A far loop: the dipole-like bound (or the plain one where that is smaller).
@@ -242,7 +331,14 @@ double ClosingFilm::coneGradientBound(const Cone& cone, Vec3 centre, double half
     const double g = length(centre - root.centre) - root.radius - half;
     if (g > root.radius)
         return std::min(root.length / (g * g), 2.0 * root.length * root.radius / (g * g * g));
-    // Near: its edges' tree (balanced, so 64 levels are far more than enough).
+    return rimSum(cone, centre, half, 2);
+}
+
+// The sum over a loop's edges of |dl| / g^power, g the distance from the ball of radius `half`
+// about `centre` (+infinity where the ball reaches the rim), by its edges' tree (balanced, so 64
+// levels are far more than enough).
+double ClosingFilm::rimSum(const Cone& cone, Vec3 centre, double half, int power) const {
+    auto inverse = [power](double g) { return power == 2 ? 1 / (g * g) : 1 / (g * g * g); };
     double sum = 0;
     int stack[64];
     int top = 0;
@@ -251,13 +347,13 @@ double ClosingFilm::coneGradientBound(const Cone& cone, Vec3 centre, double half
         const Node& n = m_nodes[stack[--top]];
         const double gn = length(centre - n.centre) - n.radius - half;
         if (gn > 4.0 * n.radius) {
-            sum += n.length / (gn * gn);  // far: all its length at the ball's distance
+            sum += n.length * inverse(gn);  // far: all its length at the ball's distance
         } else if (n.left < 0) {
             for (int e = n.first; e < n.first + n.count; ++e) {
                 const double ge =
                     pointSegmentDistance(centre, m_edges[e].a, m_edges[e].b) * 0.9999 - half;
                 if (ge <= 0) return INFINITY;
-                sum += 1.0001 * length(m_edges[e].b - m_edges[e].a) / (ge * ge);
+                sum += 1.0001 * length(m_edges[e].b - m_edges[e].a) * inverse(ge);
             }
         } else {
             stack[top++] = n.left;

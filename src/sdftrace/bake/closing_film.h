@@ -47,6 +47,23 @@ class ClosingFilm {
     float fastError() const { return 1e-4f + 1e-6f * static_cast<float>(m_films.size()); }
     // An upper bound of |grad w_M| over the box [lo, hi] (+infinity when it touches the rim).
     double gradientBound(Vec3 lo, Vec3 hi) const;
+    // A first-order model of w_F about `centre` for the ball of radius `half` around it, which no
+    // film triangle may meet (the caller checks, trianglesNear): for p in the ball,
+    // |w_F(p) - value - dot(gradient, p - centre)| <= error + quadratic * |p - centre|^2.
+    // Cones whose films together subtend less than 0.01 from every point of the ball are only
+    // bounded (in error); the others are summed at the centre, their gradient the Biot-Savart
+    // integral over their rims, their Hessian bounded by it (|H| <= integral 2 dl / |p - l|^3).
+    // `valid` is false where the ball reaches the rim.
+    struct Taylor {
+        float value = 0, error = 0;
+        Vec3 gradient;
+        float quadratic = 0;
+        bool valid = false;
+    };
+    Taylor taylor(Vec3 centre, float half) const;
+    // The film triangles (indices into filmTriangles()) whose bounds meet the box [lo, hi] grown
+    // by eps: those a segment inside the box may cross. Found through the loops' tree.
+    void trianglesNear(Vec3 lo, Vec3 hi, float eps, std::vector<uint32_t>& out) const;
 
   private:
     struct Edge {
@@ -67,6 +84,7 @@ class ClosingFilm {
         float radius = 0;        // a ball holding its loops' balls
         float length = 0;        // sum of its loops' lengths L_i
         float lengthRadius = 0;  // sum of L_i R_i, R_i the radius of loop i's ball
+        float area = 0;          // of its cones, which lie in its ball
         int left = -1, right = -1;
         int cone = -1;  // a leaf's loop
     };
@@ -88,6 +106,9 @@ class ClosingFilm {
     std::vector<Node> m_nodes;
     std::vector<Group> m_groups;
     double coneGradientBound(const Cone& cone, Vec3 centre, double half) const;
+    float coneWinding(const Cone& cone, Vec3 p) const;  // times 4 pi / 2
+    bool addCone(const Cone& cone, Vec3 centre, float half, Taylor& t) const;
+    double rimSum(const Cone& cone, Vec3 centre, double half, int power) const;
 };
 
 }  // namespace sdft

@@ -59,6 +59,10 @@ constexpr size_t kCluster = 16;
 // where the shell of candidates is as thin as the bound is tight.
 constexpr size_t kCandidatesPerPoint = 12;
 constexpr int kSoloClusters = 8;
+// Rim loops beyond which an open mesh's hierarchical sums estimate its winding number faster
+// than its films' Taylor models and sums do: between 61 and 106 loops on the meshes measured
+// (docs/performance.md).
+constexpr size_t kManyLoops = 64;
 
 }  // namespace
 
@@ -78,6 +82,8 @@ struct MeshQuery::Impl {
     mutable std::unique_ptr<ClosingFilm> film;
     mutable std::unique_ptr<WindingNumber> closedWinding;
     mutable std::unique_ptr<WindingNumber> openWinding;  // of the open mesh itself (films exist)
+    // So many rim loops that the mesh's own hierarchical sums estimate w_M faster than the films.
+    mutable bool manyFilms = false;
 
     // Pseudonormals: per face, its unit normal, its edges' (ab, bc, ca) and its corners'.
     mutable std::once_flag normalsOnce;
@@ -94,6 +100,7 @@ struct MeshQuery::Impl {
             film = std::make_unique<ClosingFilm>(cleaned);
             closedWinding = std::make_unique<WindingNumber>(film->closedMesh());
             if (!film->empty()) openWinding = std::make_unique<WindingNumber>(cleaned);
+            manyFilms = film->components() > kManyLoops;
         });
     }
     void buildNormals() const;
@@ -125,16 +132,13 @@ struct MeshQuery::Impl {
     // An open mesh's own winding number at local point q with a bound on its error: the
     // hierarchical sum where it is clearly off 1/2 (trusted to 0.3 at beta 1.5 and to 0.1 at beta
     // 3, the margins inside() decides by), else the films' (closing_film.h).
-    // `coarse` and `fine` give openWinding->fast(q, 1.5) and ->fast(q) (the SignWalk's from
-    // rows of neighbours, winding_packet.h, to float rounding).
-    template <class Coarse, class Fine>
-    double openWindingEstimate(Vec3 q, double& error, Coarse coarse, Fine fine) const {
-        double w = coarse();
+    double openWindingEstimate(Vec3 q, double& error) const {
+        double w = openWinding->fast(q, 1.5);
         if (std::fabs(w - 0.5) > 0.3) {
             error = 0.3;
             return w;
         }
-        w = fine();
+        w = openWinding->fast(q);
         if (std::fabs(w - 0.5) > 0.1) {
             error = 0.1;
             return w;
@@ -142,11 +146,6 @@ struct MeshQuery::Impl {
         const WindingSign::Carried c = WindingSign(*film, *closedWinding).evaluate(q);
         error = c.error;
         return c.winding;
-    }
-    double openWindingEstimate(Vec3 q, double& error) const {
-        return openWindingEstimate(
-            q, error, [&] { return openWinding->fast(q, 1.5); },
-            [&] { return openWinding->fast(q); });
     }
 };
 
@@ -482,23 +481,34 @@ struct MeshQuery::Impl::SignWalk {
     const Impl& m;
     MeshSign sign;
     bool carry;      // a closed mesh: its winding number carried between neighbours
-    bool carryOpen;  // an open mesh's winding number carried within its gradient bound
+    bool carryOpen;  // an open mesh: W of it closed by its films carried, w_M = W - w_F bounded
 
     bool havePrev = false;
     Vec3d prevP{};
     double prevD = 0;
-    int winding = 0;                                     // a closed mesh's, at the previous point
-    double carriedWinding = 0, carriedError = INFINITY;  // an open mesh's
-    double clusterGradient = INFINITY;  // |grad w| over the box of a cluster and the point before
-    // The cluster's points and their coarse winding numbers, taken eight at a time where a carry
-    // first fails (neighbours walk the tree together, winding_packet.h, far terms in float).
+    int winding = 0;  // a closed mesh's, at the previous point
+    // An open mesh's (winding_sign.h): W exact, w_M within its error; valid once `haveCarried`.
+    WindingSign::Carried carried{};
+    bool haveCarried = false;
+    // Over the box of a cluster's points and the point before them (so every step between them):
+    // the bound on |grad w_M| (closing_film.h) and the film triangles a step may cross.
+    double clusterGradient = INFINITY;
+    std::vector<uint32_t> films{};
+    float filmEps = 0;
+    // A Taylor model of the films' winding number about the box's centre (closing_film.h), made
+    // where a carry first runs out and no film meets the box: it bounds w_F at every point in it
+    // by the distance to the centre squared, far less than the path walked from the last sum.
+    Vec3 centre{};
+    float half = 0;
+    bool haveModel = false;
+    ClosingFilm::Taylor model{};
+    // The cluster's points and their coarse and fine hierarchical w_M, eight at a time where the
+    // films are many (neighbours walk the tree together, winding_packet.h, far terms in float).
     const Vec3d* cluster = nullptr;
     size_t clusterSize = 0;
     uint32_t haveCoarse = 0, haveFine = 0;
     double coarse[kCluster] = {}, fine[kCluster] = {};
 
-    // An open mesh's gradient bound sums over the rim's pieces: taken once for the box that holds
-    // a cluster's points and the point before them (so every step between them), not per step.
     void beginCluster(const Vec3d* p, size_t n) {
         if (!carryOpen) return;
         cluster = p;
@@ -511,6 +521,82 @@ struct MeshQuery::Impl::SignWalk {
             hi = max(hi, q);
         }
         clusterGradient = m.film->gradientBound(lo, hi);
+        centre = (lo + hi) * 0.5f;
+        half = 0.5f * length(hi - lo) * 1.0001f;
+        haveModel = false;
+        // Past the float rounding of the points and of the film's planes.
+        filmEps = 1e-6f * std::max({m.localExtent, maxComponent(abs(lo)), maxComponent(abs(hi))});
+        m.film->trianglesNear(lo, hi, filmEps, films);
+    }
+
+    // An open mesh's winding numbers at p, the j-th point of the cluster begun: W changes by the
+    // signed crossings of the mesh (none where the two points' balls overlap, else counted along
+    // the step) and of the films near the cluster; w_M by the mesh's crossings and by at most the
+    // gradient bound times the step. Where that leaves its side of 1/2 unsure, w_M is estimated
+    // again (estimate()); everything is evaluated from scratch where a crossing is too near an
+    // edge to count.
+    void carryWinding(Vec3d p, size_t j, const Closest& c) {
+        const Vec3 q = m.toLocal(p);
+        if (haveCarried && havePrev) {
+            const Vec3 from = m.toLocal(prevP);
+            const double step = norm(p - prevP);
+            int meshChange = 0, filmChange = 0;
+            bool counted =
+                step < 0.999 * (c.distance + prevD) || m.bvh->windingChange(from, q, meshChange);
+            for (size_t k = 0; counted && k < films.size(); ++k) {
+                const Crossing x =
+                    segmentCrossing(from, q, m.film->filmTriangles()[films[k]], filmEps);
+                counted = x != Crossing::Undecided;
+                filmChange += x == Crossing::Enter ? 1 : x == Crossing::Leave ? -1 : 0;
+            }
+            if (counted) {
+                carried = {carried.closed + meshChange + filmChange,
+                           carried.winding + static_cast<float>(meshChange),
+                           carried.error + static_cast<float>(clusterGradient * step * 1.001)};
+                if (!carried.decided()) estimate(q, j);
+                return;
+            }
+        }
+        carried = WindingSign(*m.film, *m.closedWinding).evaluate(q);
+        haveCarried = true;
+    }
+
+    // A new w_M at q with W known, by the cheapest that decides: few films, their Taylor model
+    // about the cluster's centre, else their sums at q; many, the hierarchical sums of the mesh
+    // itself (coarse, then fine), else the films' sums at q.
+    void estimate(Vec3 q, size_t j) {
+        if (m.manyFilms) {
+            const double w = coarseAt(j);
+            if (std::fabs(w - 0.5) > 0.3) {
+                carried = {carried.closed, static_cast<float>(w), 0.3f};
+                return;
+            }
+            const double w2 = fineAt(j);
+            if (std::fabs(w2 - 0.5) > 0.1) {
+                carried = {carried.closed, static_cast<float>(w2), 0.1f};
+                return;
+            }
+        } else {
+            fromModel(q);
+            if (carried.decided()) return;
+        }
+        carried = WindingSign::refresh(*m.film, q, carried.closed);
+    }
+
+    // w_M at q as W less the cluster's model of w_F, where that is the closer bound.
+    void fromModel(Vec3 q) {
+        if (!films.empty() || !std::isfinite(clusterGradient)) return;
+        if (!haveModel) {
+            model = m.film->taylor(centre, half);
+            haveModel = true;
+        }
+        if (!model.valid) return;
+        const Vec3 d = q - centre;
+        const float error = model.error + model.quadratic * dot(d, d);
+        if (error < carried.error)
+            carried = {carried.closed,
+                       static_cast<float>(carried.closed) - (model.value + dot(model.gradient, d)),
+                       error};
     }
 
     // The coarse winding number of the cluster's j-th point, with those of the next seven.
@@ -565,18 +651,8 @@ struct MeshQuery::Impl::SignWalk {
             }
             in = sign == MeshSign::Parity ? (winding & 1) != 0 : winding > 0;
         } else if (carryOpen) {
-            const double step = norm(p - prevP);
-            // Off the mesh its winding number is smooth, |grad w| bounded by the rim
-            // (closing_film.h): the previous estimate carries while it stays farther from 1/2
-            // than its error grown by the step (no carry where the cluster's box meets the rim).
-            const bool clear =
-                havePrev && step < 0.999 * (c.distance + prevD) && std::isfinite(clusterGradient);
-            if (clear) carriedError += clusterGradient * step * 1.001;
-            if (!clear || !(std::fabs(carriedWinding - 0.5) > carriedError))
-                carriedWinding = m.openWindingEstimate(
-                    m.toLocal(p), carriedError, [&] { return coarseAt(j); },
-                    [&] { return fineAt(j); });
-            in = carriedWinding > 0.5;
+            carryWinding(p, j, c);
+            in = carried.inside();
         } else {
             in = query.inside(p, sign, &c);
         }
