@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "sdftrace/bake/closest_point.h"
+#include "sdftrace/bake/embree_device.h"
 #include "sdftrace/core/error.h"
 
 namespace sdft {
@@ -80,14 +81,14 @@ bool closestCallback(RTCPointQueryFunctionArguments* args) {
 
 // One Embree device for the process: starting one costs milliseconds (it sets up its task
 // scheduler), more than building a BVH of a small mesh; devices are thread-safe.
-static RTCDevice sharedDevice() {
+RTCDevice embreeDevice() {
     static RTCDevice device = rtcNewDevice(nullptr);
     if (!device) throw InputError("cannot start Embree (rtcNewDevice failed)");
     return device;
 }
 
 MeshBvh::MeshBvh(const TriangleMesh& mesh) : m_impl(std::make_unique<Impl>()), m_mesh(mesh) {
-    m_impl->device = sharedDevice();
+    m_impl->device = embreeDevice();
     m_impl->scene = rtcNewScene(m_impl->device);
     // windingChange() hands its intersect context a filter that sees every crossing.
     rtcSetSceneFlags(m_impl->scene, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
@@ -120,12 +121,7 @@ MeshBvh::~MeshBvh() {
 }
 
 MeshBvh::Closest MeshBvh::closest(Vec3 p, float radius) const {
-    RTCPointQuery q;
-    q.x = p.x;
-    q.y = p.y;
-    q.z = p.z;
-    q.time = 0;
-    q.radius = radius;
+    RTCPointQuery q = pointQueryAt(p, radius);
     RTCPointQueryContext ctx;
     rtcInitPointQueryContext(&ctx);
     ClosestQuery data{m_impl->triangles.data(), {}};
@@ -156,13 +152,8 @@ bool nearCallback(RTCPointQueryFunctionArguments* args) {
 
 bool MeshBvh::near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out, size_t limit) const {
     const Vec3 centre = (lo + hi) * 0.5f;
-    RTCPointQuery q;
-    q.x = centre.x;
-    q.y = centre.y;
-    q.z = centre.z;
-    q.time = 0;
     // The sphere about the centre that holds the box grown by `reach` (and float rounding).
-    q.radius = (length(hi - lo) * 0.5f + reach) * (1 + 1e-6f);
+    RTCPointQuery q = pointQueryAt(centre, (length(hi - lo) * 0.5f + reach) * (1 + 1e-6f));
     RTCPointQueryContext ctx;
     rtcInitPointQueryContext(&ctx);
     const size_t before = out.size();

@@ -20,6 +20,7 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/io/mesh_io.h"
+#include "sdftrace/query/lane_bvh.h"
 #include "sdftrace/query/triangle_closest.h"
 #include "sdftrace/query/triangle_lanes.h"
 
@@ -75,6 +76,7 @@ struct MeshQuery::Impl {
     float localExtent = 0;  // the largest |coordinate| of `local`
     std::unique_ptr<MeshBvh> bvh;
     std::unique_ptr<TriangleLanes> lanes;
+    std::unique_ptr<LaneBvh> laneBvh;  // over lanes' groups: one-point searches
 
     // Winding: the welded, cleaned mesh, its films and the closed mesh's winding tree.
     mutable std::once_flag windingOnce;
@@ -257,6 +259,7 @@ MeshQuery::MeshQuery(std::vector<Vec3d> vertices, std::vector<std::array<uint32_
     m.faces = std::move(faces);
     m.bvh = std::make_unique<MeshBvh>(m.local);
     m.lanes = std::make_unique<TriangleLanes>(m.local);
+    m.laneBvh = std::make_unique<LaneBvh>(*m.lanes);
     for (const Vec3& v : m.local.positions)
         m.localExtent = std::max({m.localExtent, std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
 }
@@ -282,20 +285,21 @@ MeshQuery::Closest MeshQuery::closest(Vec3d p) const { return closest(p, INFINIT
 MeshQuery::Closest MeshQuery::closest(Vec3d p, double bound) const {
     const Impl& m = *m_impl;
     const Vec3 q = m.toLocal(p);
-    MeshBvh::Closest c;
+    uint32_t face = UINT32_MAX;
+    float d2;
     if (std::isfinite(bound)) {
         // Widened past float rounding of the point, the vertices and the bound itself.
         const double radius =
             std::fmin(bound * (1 + 1e-5) + 1e-6 * m.diagonal + 1e-30, 3.0e38);  // a float
-        c = m.bvh->closest(q, static_cast<float>(radius));
+        face = m.laneBvh->closest(q, static_cast<float>(radius), d2);
     }
-    if (c.triangle == UINT32_MAX) c = m.bvh->closest(q);
-    if (c.triangle == UINT32_MAX) {  // unreachable for finite points; kept total
+    if (face == UINT32_MAX) face = m.laneBvh->closest(q, INFINITY, d2);
+    if (face == UINT32_MAX) {  // unreachable for finite points; kept total
         Closest r;
         r.distance = INFINITY;
         return r;
     }
-    return m.refine(p, c.triangle);
+    return m.refine(p, face);
 }
 
 // The closest answers of n <= kCluster neighbouring points: their upper bounds from the previous

@@ -1,17 +1,35 @@
 #include "sdftrace/query/triangle_lanes.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 
+#include "sdftrace/bake/lbvh.h"
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/simd.h"
 
 namespace sdft {
 
-TriangleLanes::TriangleLanes(const TriangleMesh& mesh)
-    : m_records(mesh.triangles.size() * kFields) {
-    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+TriangleLanes::TriangleLanes(const TriangleMesh& mesh) {
+    // Eight neighbours to a group: sorted by the LBVH's keys (Morton code above index).
+    const size_t n = mesh.triangles.size();
+    const LbvhFrame frame = lbvhFrame(mesh);
+    std::vector<uint64_t> keys(n);
+    tbb::parallel_for(size_t{0}, n, [&](size_t i) {
+        const auto& t = mesh.triangles[i];
+        keys[i] = lbvhKey(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]],
+                          frame.lo, frame.invExtent, static_cast<uint32_t>(i));
+    });
+    tbb::parallel_sort(keys.begin(), keys.end());
+    m_groups.resize((n + kLanes - 1) / kLanes);
+    m_place.resize(n);
+    tbb::parallel_for(size_t{0}, m_groups.size() * kLanes, [&](size_t k) {
+        // A short last group repeats its first triangle.
+        const auto i = static_cast<uint32_t>(keys[k < n ? k : k - k % kLanes]);
+        if (k < n) m_place[i] = static_cast<uint32_t>(k);
         const auto& t = mesh.triangles[i];
         const Vec3 a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
         const Vec3 ab = b - a, ac = c - a, bc = c - b;
@@ -32,8 +50,10 @@ TriangleLanes::TriangleLanes(const TriangleMesh& mesh)
             inv(d00), inv(d11), inv(dotd(bc, bc)), face ? 1.0f : -1.0f,
             lo.x, lo.y, lo.z, hi.x, hi.y, hi.z};
         // clang-format on
-        std::copy(r, r + kFields, m_records.begin() + static_cast<ptrdiff_t>(i * kFields));
-    }
+        LaneGroup& g = m_groups[k / kLanes];
+        g.id[k % kLanes] = i;
+        for (int f = 0; f < kFields; ++f) g.f[f][k % kLanes] = r[f];
+    });
 }
 
 void TriangleLanes::gather(const uint32_t* ids, size_t n, std::vector<LaneGroup>& out) const {
@@ -44,8 +64,9 @@ void TriangleLanes::gather(const uint32_t* ids, size_t n, std::vector<LaneGroup>
             const size_t k = g * kLanes + l;
             const uint32_t id = ids[k < n ? k : g * kLanes];
             group.id[l] = id;
-            const float* r = &m_records[size_t{id} * kFields];
-            for (int f = 0; f < kFields; ++f) group.f[f][l] = r[f];
+            const uint32_t place = m_place[id];
+            const LaneGroup& from = m_groups[place / kLanes];
+            for (int f = 0; f < kFields; ++f) group.f[f][l] = from.f[f][place % kLanes];
         }
     }
 }

@@ -42,8 +42,13 @@ class TriangleLanes {
     // The lane groups of the triangles `ids` (n > 0), replacing `out`.
     void gather(const uint32_t* ids, size_t n, std::vector<LaneGroup>& out) const;
 
+    // Every triangle in groups of eight neighbours (in the Morton order of their centroids, a
+    // short last group repeating its first): the leaves of LaneBvh (lane_bvh.h).
+    const std::vector<LaneGroup>& groups() const { return m_groups; }
+
   private:
-    std::vector<float> m_records;  // kFields per triangle
+    std::vector<LaneGroup> m_groups;
+    std::vector<uint32_t> m_place;  // per triangle, its group times kLanes plus its lane
 };
 
 // The least squared distance from p to the triangles of `groups` (count > 0), skipping a group
