@@ -43,7 +43,44 @@ bool groupClosest(RTCPointQueryFunctionArguments* args) {
     return true;
 }
 
+struct Near {
+    const LaneGroup* groups;
+    Vec3 lo, hi;
+    float reach2;
+    std::vector<uint32_t>* out;
+    size_t limit;
+};
+
+bool groupNear(RTCPointQueryFunctionArguments* args) {
+    auto* q = static_cast<Near*>(args->userPtr);
+    const LaneGroup& g = q->groups[args->primID];
+    Vec3 glo(INFINITY), ghi(-INFINITY);
+    for (int l = 0; l < kLanes; ++l) {
+        glo = min(glo, Vec3(g.f[kLox][l], g.f[kLoy][l], g.f[kLoz][l]));
+        ghi = max(ghi, Vec3(g.f[kHix][l], g.f[kHiy][l], g.f[kHiz][l]));
+    }
+    const Vec3 gap = max(max(glo - q->hi, q->lo - ghi), Vec3(0.0f));
+    if (!(dot(gap, gap) <= q->reach2)) return false;
+    q->out->push_back(args->primID);
+    if (q->out->size() <= q->limit) return false;  // the sphere stays as it is
+    args->query->radius = 0;                       // too many: the search ends
+    return true;
+}
+
 }  // namespace
+
+bool LaneBvh::near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out, size_t limit) const {
+    if (m_groups.empty()) return true;
+    // The sphere about the box's centre that holds the box grown by `reach` (and rounding).
+    RTCPointQuery pq =
+        pointQueryAt((lo + hi) * 0.5f, (length(hi - lo) * 0.5f + reach) * (1 + 1e-6f));
+    RTCPointQueryContext ctx;
+    rtcInitPointQueryContext(&ctx);
+    const size_t before = out.size();
+    Near q{m_groups.data(), lo, hi, reach * reach, &out, before + limit};
+    rtcPointQuery(m_scene, &pq, &ctx, groupNear, &q);
+    return out.size() - before <= limit;
+}
 
 LaneBvh::LaneBvh(const TriangleLanes& lanes) : m_groups(lanes.groups()) {
     m_scene = rtcNewScene(embreeDevice());

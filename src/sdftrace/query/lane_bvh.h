@@ -25,6 +25,9 @@ class LaneBvh {
     // The triangle nearest p within `radius` (UINT32_MAX where none is) and its squared distance
     // by the float lane test.
     uint32_t closest(Vec3 p, float radius, float& d2) const;
+    // The groups whose boxes come within `reach` of the box [lo, hi], appended to `out`: false
+    // (the search cut short) where they are more than `limit`.
+    bool near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out, size_t limit) const;
 
   private:
     const std::vector<LaneGroup>& m_groups;

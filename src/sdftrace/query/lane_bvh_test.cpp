@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "sdftrace/io/mesh_io.h"
@@ -64,6 +65,46 @@ TEST(LaneBvh, NearestEqualsBruteForce) {
             EXPECT_NE(bvh.closest(p, static_cast<float>(best + tol), none), UINT32_MAX);
         }
     }
+}
+
+// near() finds exactly the groups whose boxes come within reach of a box (brute force over the
+// groups' boxes), and says so when they are more than the limit.
+TEST(LaneBvh, NearFindsTheGroupsWithinReach) {
+    const TriangleMesh m = loadMesh(std::string(SDFT_SOURCE_DIR) + "/data/meshes/suzanne.obj");
+    const TriangleLanes lanes(m);
+    const LaneBvh bvh(lanes);
+    const Bounds3 box = m.bounds();
+    const float size = maxComponent(box.extent());
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(0, 1);
+    int some = 0;
+    for (int k = 0; k < 200; ++k) {
+        const Vec3 lo =
+            box.lo - Vec3(0.2f * size) + box.extent() * 1.4f * Vec3(u(rng), u(rng), u(rng));
+        const Vec3 hi = lo + Vec3(0.05f * size * u(rng));
+        const float reach = 0.1f * size * u(rng);
+        std::vector<uint32_t> brute;
+        for (uint32_t g = 0; g < lanes.groups().size(); ++g) {
+            const LaneGroup& group = lanes.groups()[g];
+            Vec3 glo(INFINITY), ghi(-INFINITY);
+            for (int l = 0; l < kLanes; ++l) {
+                glo = min(glo, Vec3(group.f[kLox][l], group.f[kLoy][l], group.f[kLoz][l]));
+                ghi = max(ghi, Vec3(group.f[kHix][l], group.f[kHiy][l], group.f[kHiz][l]));
+            }
+            const Vec3 gap = max(max(glo - hi, lo - ghi), Vec3(0.0f));
+            if (dot(gap, gap) <= reach * reach) brute.push_back(g);
+        }
+        std::vector<uint32_t> found;
+        ASSERT_TRUE(bvh.near(lo, hi, reach, found, SIZE_MAX));
+        std::sort(found.begin(), found.end());
+        ASSERT_EQ(found, brute) << k;
+        if (brute.size() > 2) {
+            std::vector<uint32_t> cut;
+            EXPECT_FALSE(bvh.near(lo, hi, reach, cut, brute.size() - 1)) << k;
+            ++some;
+        }
+    }
+    EXPECT_GT(some, 20);
 }
 
 }  // namespace

@@ -55,10 +55,11 @@ constexpr size_t kChunk = size_t{1} << 20;
 constexpr size_t kRun = 256;
 // Neighbours in Morton order that share one search for their candidate triangles.
 constexpr size_t kCluster = 16;
-// More candidates than this per point in a cluster (a fine mesh, flat faces seen from afar, points
-// far apart): the next clusters' points search the BVH one by one, each within its own bound,
-// where the shell of candidates is as thin as the bound is tight.
-constexpr size_t kCandidatesPerPoint = 12;
+// More lane groups than this within reach of a cluster (six a point: a fine mesh, flat faces seen
+// from afar, points far apart): the next clusters' points search the BVH one by one, each within
+// its own bound, where the shell of candidates is as thin as the bound is tight. (24 to 192
+// measured: 96-128 fastest on bunny_npm, the teapot, the elephant and the thin part.)
+constexpr size_t kCandidateGroups = 96;
 constexpr int kSoloClusters = 8;
 // Rim loops beyond which an open mesh's hierarchical sums estimate its winding number faster
 // than its films' Taylor models and sums do: between 61 and 106 loops on the meshes measured
@@ -76,6 +77,7 @@ struct MeshQuery::Impl {
     float localExtent = 0;  // the largest |coordinate| of `local`
     std::unique_ptr<MeshBvh> bvh;
     std::unique_ptr<TriangleLanes> lanes;
+    LbvhFrame frame{};                 // of `local`: the Morton order of the points
     std::unique_ptr<LaneBvh> laneBvh;  // over lanes' groups: one-point searches
 
     // Winding: the welded, cleaned mesh, its films and the closed mesh's winding tree.
@@ -93,6 +95,37 @@ struct MeshQuery::Impl {
     mutable bool watertight = false;
 
     Vec3 toLocal(Vec3d p) const { return toFloat(p - origin); }
+
+    // Sort keys and their radix buffer, kept between calls: fresh ones cost a page fault per
+    // 4 KiB, thousands a call (15 % of a million-point query of a small mesh on this project's
+    // VM). A call takes a pair or makes one, and gives it back: as many pairs as calls ever ran
+    // at once, each of at most a chunk.
+    struct Keys {
+        std::unique_ptr<uint64_t[]> order, spare;  // not value-initialized: written before read
+        size_t size = 0;
+    };
+    mutable std::mutex keysMutex;
+    mutable std::vector<Keys> keysPool;
+    Keys takeKeys(size_t n) const {
+        Keys k;
+        {
+            std::lock_guard<std::mutex> lock(keysMutex);
+            if (!keysPool.empty()) {
+                k = std::move(keysPool.back());
+                keysPool.pop_back();
+            }
+        }
+        if (k.size < n) {
+            k.order.reset(new uint64_t[n]);
+            k.spare.reset(new uint64_t[n]);
+            k.size = n;
+        }
+        return k;
+    }
+    void giveBack(Keys k) const {
+        std::lock_guard<std::mutex> lock(keysMutex);
+        keysPool.push_back(std::move(k));
+    }
 
     void buildWinding() const {
         std::call_once(windingOnce, [this] {
@@ -123,10 +156,9 @@ struct MeshQuery::Impl {
     }
 
     struct ClusterScratch {
-        std::vector<uint32_t> ids, winners;
-        std::vector<LaneGroup> groups;
-        int solo = 0;      // clusters still to search point by point
-        int failures = 0;  // clusters in a row with too many candidates
+        std::vector<uint32_t> ids, winners;  // lane groups
+        int solo = 0;                        // clusters still to search point by point
+        int failures = 0;                    // clusters in a row with too many candidates
     };
     void closestCluster(const MeshQuery& query, const Vec3d* p, size_t n, Closest* out,
                         ClusterScratch& scratch) const;
@@ -259,6 +291,7 @@ MeshQuery::MeshQuery(std::vector<Vec3d> vertices, std::vector<std::array<uint32_
     m.faces = std::move(faces);
     m.bvh = std::make_unique<MeshBvh>(m.local);
     m.lanes = std::make_unique<TriangleLanes>(m.local);
+    m.frame = lbvhFrame(m.local);
     m.laneBvh = std::make_unique<LaneBvh>(*m.lanes);
     for (const Vec3& v : m.local.positions)
         m.localExtent = std::max({m.localExtent, std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
@@ -315,12 +348,13 @@ void MeshQuery::Impl::closestCluster(const MeshQuery& query, const Vec3d* p, siz
         lo = min(lo, q[i]);
         hi = max(hi, q[i]);
     }
-    if (s.winners.empty()) s.winners.push_back(query.closest(p[0]).face);
-    lanes->gather(s.winners.data(), s.winners.size(), s.groups);
+    if (s.winners.empty()) s.winners.push_back(lanes->groupOf(query.closest(p[0]).face));
+    const LaneGroup* groups = lanes->groups().data();
     float reach = 0;
     for (size_t i = 0; i < n; ++i) {
         uint32_t id;
-        const float d2 = nearestInGroups(s.groups.data(), s.groups.size(), q[i], INFINITY, id);
+        const float d2 =
+            nearestInGroupList(groups, s.winners.data(), s.winners.size(), q[i], INFINITY, id);
         // Widened past the float test's rounding, which grows with the coordinates.
         const float far =
             std::max({localExtent, std::fabs(q[i].x), std::fabs(q[i].y), std::fabs(q[i].z)});
@@ -332,19 +366,18 @@ void MeshQuery::Impl::closestCluster(const MeshQuery& query, const Vec3d* p, siz
     if (s.solo > 0) {
         --s.solo;
     } else if (std::isfinite(reach)) {
-        clustered = bvh->near(lo, hi, reach, s.ids, kCandidatesPerPoint * n) && !s.ids.empty();
+        clustered = laneBvh->near(lo, hi, reach, s.ids, kCandidateGroups) && !s.ids.empty();
         // Each failure in a row doubles the clusters searched point by point before the next try.
         s.solo = clustered ? 0 : kSoloClusters << std::min(s.failures++, 5);
         if (clustered) s.failures = 0;
     }
-    if (clustered) lanes->gather(s.ids.data(), s.ids.size(), s.groups);
     s.winners.clear();
     for (size_t i = 0; i < n; ++i) {
         uint32_t id = UINT32_MAX;
         if (clustered)
-            nearestInGroups(s.groups.data(), s.groups.size(), q[i], bound[i] * bound[i], id);
+            nearestInGroupList(groups, s.ids.data(), s.ids.size(), q[i], bound[i] * bound[i], id);
         out[i] = id != UINT32_MAX ? refine(p[i], id) : query.closest(p[i], bound[i]);
-        s.winners.push_back(out[i].face);
+        s.winners.push_back(lanes->groupOf(out[i].face));
     }
     std::sort(s.winners.begin(), s.winners.end());
     s.winners.erase(std::unique(s.winners.begin(), s.winners.end()), s.winners.end());
@@ -690,10 +723,14 @@ void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
     auto* winding = static_cast<T*>(out.winding);
     Progress progress(options.progress, n, !options.progress.empty());
     // Morton order by the LBVH's keys (bake/lbvh.h) over the mesh's box: code above index.
-    const LbvhFrame frame = lbvhFrame(m.local);
-    const size_t chunk = std::min(kChunk, n);
-    // Not value-initialized: every key is written before it is read.
-    std::unique_ptr<uint64_t[]> order(new uint64_t[chunk]), spare(new uint64_t[chunk]);
+    const LbvhFrame& frame = m.frame;
+    struct Lease {
+        const Impl& m;
+        Impl::Keys keys;
+        ~Lease() { m.giveBack(std::move(keys)); }
+    } lease{m, m.takeKeys(std::min(kChunk, n))};
+    uint64_t* order = lease.keys.order.get();
+    uint64_t* spare = lease.keys.spare.get();
     for (size_t first = 0; first < n; first += kChunk) {
         const size_t count = std::min(kChunk, n - first);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const auto& r) {
@@ -702,7 +739,7 @@ void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
                 order[i] = lbvhKey(q, q, q, frame.lo, frame.invExtent, static_cast<uint32_t>(i));
             }
         });
-        if (wantClosest) sortByCell(order.get(), spare.get(), count);
+        if (wantClosest) sortByCell(order, spare, count);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, kRun), [&](const auto& r) {
             Impl::SignWalk signs{*this, m, options.sign, carry, carryOpen};
             Impl::ClusterScratch scratch;

@@ -56,21 +56,6 @@ TriangleLanes::TriangleLanes(const TriangleMesh& mesh) {
     });
 }
 
-void TriangleLanes::gather(const uint32_t* ids, size_t n, std::vector<LaneGroup>& out) const {
-    out.resize((n + kLanes - 1) / kLanes);
-    for (size_t g = 0; g < out.size(); ++g) {
-        LaneGroup& group = out[g];
-        for (int l = 0; l < kLanes; ++l) {
-            const size_t k = g * kLanes + l;
-            const uint32_t id = ids[k < n ? k : g * kLanes];
-            group.id[l] = id;
-            const uint32_t place = m_place[id];
-            const LaneGroup& from = m_groups[place / kLanes];
-            for (int f = 0; f < kFields; ++f) group.f[f][l] = from.f[f][place % kLanes];
-        }
-    }
-}
-
 // Every function passing these vectors is inlined: no call crosses the AVX / SSE ABI boundary.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
@@ -92,13 +77,14 @@ __attribute__((always_inline)) inline Floats vmax(Floats a, Floats b) { return a
 // Point-triangle distance without branches (after Ericson, Real-Time Collision Detection
 // §5.1.5): the projection onto the plane where its barycentric weights are inside the face, else
 // the nearest of the three edges, each lane computing all four.
-__attribute__((always_inline)) inline float nearestBody(const LaneGroup* groups, size_t count,
-                                                        Vec3 p, float bound2, uint32_t& id) {
+template <class GroupAt>
+__attribute__((always_inline)) inline float nearestBody(GroupAt groupAt, size_t count, Vec3 p,
+                                                        float bound2, uint32_t& id) {
     const Floats zero = {}, one = zero + 1.0f, px = zero + p.x, py = zero + p.y, pz = zero + p.z;
     Floats best = zero + INFINITY;
     Ints slot = {};
     for (size_t g = 0; g < count; ++g) {
-        const auto& f = groups[g].f;
+        const auto& f = groupAt(g).f;
         const Floats gx = vmax(vmax(load(f[kLox]) - px, px - load(f[kHix])), zero);
         const Floats gy = vmax(vmax(load(f[kLoy]) - py, py - load(f[kHiy])), zero);
         const Floats gz = vmax(vmax(load(f[kLoz]) - pz, pz - load(f[kHiz])), zero);
@@ -143,24 +129,45 @@ __attribute__((always_inline)) inline float nearestBody(const LaneGroup* groups,
     int lane = 0;
     for (int l = 1; l < kLanes; ++l)
         if (best[l] < best[lane]) lane = l;
-    if (best[lane] < INFINITY) id = groups[slot[lane]].id[lane];
+    if (best[lane] < INFINITY) id = groupAt(static_cast<size_t>(slot[lane])).id[lane];
     return best[lane];
 }
 
-SDFT_TARGET_AVX2 float nearestAvx2(const LaneGroup* groups, size_t count, Vec3 p, float bound2,
-                                   uint32_t& id) {
-    return nearestBody(groups, count, p, bound2, id);
+// The groups in an array, or those an index list names in it.
+struct Contiguous {
+    const LaneGroup* groups;
+    const LaneGroup& operator()(size_t g) const { return groups[g]; }
+};
+struct Listed {
+    const LaneGroup* groups;
+    const uint32_t* which;
+    const LaneGroup& operator()(size_t g) const { return groups[which[g]]; }
+};
+
+template <class GroupAt>
+SDFT_TARGET_AVX2 float nearestAvx2(GroupAt at, size_t count, Vec3 p, float bound2, uint32_t& id) {
+    return nearestBody(at, count, p, bound2, id);
 }
-SDFT_TARGET_BASELINE float nearestBaseline(const LaneGroup* groups, size_t count, Vec3 p,
-                                           float bound2, uint32_t& id) {
-    return nearestBody(groups, count, p, bound2, id);
+template <class GroupAt>
+SDFT_TARGET_BASELINE float nearestBaseline(GroupAt at, size_t count, Vec3 p, float bound2,
+                                           uint32_t& id) {
+    return nearestBody(at, count, p, bound2, id);
 }
 
 }  // namespace
 
 float nearestInGroups(const LaneGroup* groups, size_t count, Vec3 p, float bound2, uint32_t& id) {
     // The project's run-time dispatch (exec/simd.h): both levels round alike (no FMA).
-    return (useAvx2() ? nearestAvx2 : nearestBaseline)(groups, count, p, bound2, id);
+    const Contiguous at{groups};
+    return useAvx2() ? nearestAvx2(at, count, p, bound2, id)
+                     : nearestBaseline(at, count, p, bound2, id);
+}
+
+float nearestInGroupList(const LaneGroup* groups, const uint32_t* which, size_t count, Vec3 p,
+                         float bound2, uint32_t& id) {
+    const Listed at{groups, which};
+    return useAvx2() ? nearestAvx2(at, count, p, bound2, id)
+                     : nearestBaseline(at, count, p, bound2, id);
 }
 
 }  // namespace sdft

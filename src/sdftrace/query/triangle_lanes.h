@@ -1,7 +1,8 @@
-// Triangles eight to a lane group for batched point-triangle distances: a cluster of nearby points
-// (neighbours in Morton order) gathers the triangles any of them can be closest to once, from
-// one BVH traversal, and each point then measures them all with a branch-free test that the
-// compiler vectorizes eight wide (AVX2 where the CPU has it, SSE otherwise: exec/simd.h's choice).
+// Triangles eight to a lane group for batched point-triangle distances: each group eight Morton
+// neighbours, found by one BVH traversal (lane_bvh.h) for a point or for a cluster of nearby
+// points (neighbours in Morton order), and each point then measures a group's triangles at once
+// with a branch-free test that the compiler vectorizes eight wide (AVX2 where the CPU has it, SSE
+// otherwise: exec/simd.h's choice).
 // The test is float, as the BVH search it replaces; MeshQuery refines the winner in double.
 #pragma once
 
@@ -39,12 +40,10 @@ class TriangleLanes {
   public:
     explicit TriangleLanes(const TriangleMesh& mesh);
 
-    // The lane groups of the triangles `ids` (n > 0), replacing `out`.
-    void gather(const uint32_t* ids, size_t n, std::vector<LaneGroup>& out) const;
-
     // Every triangle in groups of eight neighbours (in the Morton order of their centroids, a
     // short last group repeating its first): the leaves of LaneBvh (lane_bvh.h).
     const std::vector<LaneGroup>& groups() const { return m_groups; }
+    uint32_t groupOf(uint32_t triangle) const { return m_place[triangle] / kLanes; }
 
   private:
     std::vector<LaneGroup> m_groups;
@@ -55,5 +54,8 @@ class TriangleLanes {
 // whose every box lies farther than sqrt(bound2), and that triangle's id in `id`: +infinity (id
 // untouched) when every group was skipped.
 float nearestInGroups(const LaneGroup* groups, size_t count, Vec3 p, float bound2, uint32_t& id);
+// The same over the `count` groups of `groups` that `which` names.
+float nearestInGroupList(const LaneGroup* groups, const uint32_t* which, size_t count, Vec3 p,
+                         float bound2, uint32_t& id);
 
 }  // namespace sdft

@@ -23,37 +23,56 @@ double exactDistance(const TriangleMesh& m, uint32_t t, Vec3 p) {
 // Random triangles, a quarter of them degenerate (a repeated corner, collinear corners, one
 // point): the lane test's least distance and its triangle equal the double-precision minimum
 // over the same triangles within float rounding of the coordinates, for any number of triangles
-// (a short last group).
+// (a short last group), over all groups and over a list of some of them.
 TEST(TriangleLanes, NearestEqualsTheExactMinimum) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(-1, 1);
-    TriangleMesh m;
+    TriangleMesh all;
     for (int t = 0; t < 203; ++t) {
         const Vec3 a(u(rng), u(rng), u(rng));
         Vec3 b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng));
         if (t % 4 == 1) c = b;                   // a repeated corner
         if (t % 4 == 2) c = a + (b - a) * 0.3f;  // collinear
         if (t % 8 == 3) b = c = a;               // a point
-        const auto base = static_cast<uint32_t>(m.positions.size());
-        m.positions.insert(m.positions.end(), {a, b, c});
-        m.triangles.push_back({base, base + 1, base + 2});
+        const auto base = static_cast<uint32_t>(all.positions.size());
+        all.positions.insert(all.positions.end(), {a, b, c});
+        all.triangles.push_back({base, base + 1, base + 2});
     }
-    const TriangleLanes lanes(m);
-    std::vector<LaneGroup> groups;
     for (size_t count : {size_t{1}, size_t{5}, size_t{8}, size_t{203}}) {
-        std::vector<uint32_t> ids(count);
-        std::iota(ids.begin(), ids.end(), 0u);
-        lanes.gather(ids.data(), count, groups);
+        TriangleMesh m = all;
+        m.triangles.resize(count);
+        const TriangleLanes lanes(m);
+        const std::vector<LaneGroup>& groups = lanes.groups();
         EXPECT_EQ(groups.size(), (count + 7) / 8);
+        // Every triangle in the group groupOf() names, once.
+        std::vector<int> seen(count);
+        for (const LaneGroup& g : groups)
+            for (int l = 0; l < kLanes; ++l) {
+                ASSERT_LT(g.id[l], count);
+                if (&g - groups.data() == lanes.groupOf(g.id[l])) seen[g.id[l]] += 1;
+            }
+        for (size_t t = 0; t < count; ++t) EXPECT_GE(seen[t], 1) << t;
+        // Every other group, by list.
+        std::vector<uint32_t> some;
+        for (uint32_t g = 0; g < groups.size(); g += 2) some.push_back(g);
         for (int k = 0; k < 300; ++k) {
             const Vec3 p(2 * u(rng), 2 * u(rng), 2 * u(rng));
-            double best = INFINITY;
-            for (uint32_t t = 0; t < count; ++t) best = std::min(best, exactDistance(m, t, p));
+            double best = INFINITY, bestSome = INFINITY;
+            for (uint32_t t = 0; t < count; ++t) {
+                best = std::min(best, exactDistance(m, t, p));
+                if (lanes.groupOf(t) % 2 == 0)
+                    bestSome = std::min(bestSome, exactDistance(m, t, p));
+            }
             uint32_t id = UINT32_MAX;
             const float d2 = nearestInGroups(groups.data(), groups.size(), p, INFINITY, id);
             ASSERT_LT(id, count);
             EXPECT_NEAR(std::sqrt(d2), best, 1e-5);
             EXPECT_NEAR(exactDistance(m, id, p), best, 1e-5);  // the winner is a nearest one
+            uint32_t listed = UINT32_MAX;
+            const float s2 =
+                nearestInGroupList(groups.data(), some.data(), some.size(), p, INFINITY, listed);
+            EXPECT_NEAR(std::sqrt(s2), bestSome, 1e-5);
+            EXPECT_EQ(lanes.groupOf(listed) % 2, 0u);
             // A bound short of every box skips them all; one at the answer keeps the answer.
             double nearestBox = INFINITY;
             for (uint32_t t = 0; t < count; ++t) {
