@@ -32,12 +32,6 @@ class MeshBvh {
     // The nearest point itself (distance +infinity when none is within `radius`). A zero-area
     // triangle counts as its longest edge.
     Closest closest(Vec3 p, float radius = INFINITY) const;
-    // Appends to `out` the triangles whose bounding boxes lie within `reach` of the box [lo, hi]:
-    // the candidates for the closest triangle of every point in the box whose distance is at
-    // most `reach` (one traversal for a cluster of points); a triangle the BVH split between
-    // leaves may come twice. False, the search cut short, where there are more than `limit`.
-    bool near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out,
-              size_t limit = SIZE_MAX) const;
     // The first hit of the ray r(t), t > 0: t (+infinity on a miss) and whether it struck the
     // front of the triangle (against its counter-clockwise normal).
     struct Hit {

@@ -129,39 +129,6 @@ MeshBvh::Closest MeshBvh::closest(Vec3 p, float radius) const {
     return data.best;
 }
 
-namespace {
-struct NearQuery {
-    const PackedTriangle* triangles;
-    Vec3 lo, hi;
-    float reach2;
-    std::vector<uint32_t>* out;
-    size_t limit;
-};
-
-bool nearCallback(RTCPointQueryFunctionArguments* args) {
-    auto* q = static_cast<NearQuery*>(args->userPtr);
-    const PackedTriangle& t = q->triangles[args->primID];
-    const Vec3 gap = max(max(t.lo - q->hi, q->lo - t.hi), Vec3(0.0f));
-    if (!(dot(gap, gap) <= q->reach2)) return false;
-    q->out->push_back(args->primID);
-    if (q->out->size() <= q->limit) return false;  // the sphere stays as it is
-    args->query->radius = 0;                       // too many: the search ends
-    return true;
-}
-}  // namespace
-
-bool MeshBvh::near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out, size_t limit) const {
-    const Vec3 centre = (lo + hi) * 0.5f;
-    // The sphere about the centre that holds the box grown by `reach` (and float rounding).
-    RTCPointQuery q = pointQueryAt(centre, (length(hi - lo) * 0.5f + reach) * (1 + 1e-6f));
-    RTCPointQueryContext ctx;
-    rtcInitPointQueryContext(&ctx);
-    const size_t before = out.size();
-    NearQuery data{m_impl->triangles.data(), lo, hi, reach * reach, &out, before + limit};
-    rtcPointQuery(m_impl->scene, &q, &ctx, nearCallback, &data);
-    return out.size() - before <= limit;
-}
-
 MeshBvh::Hit MeshBvh::firstHit(const Ray& ray, float tnear, float tfar) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);

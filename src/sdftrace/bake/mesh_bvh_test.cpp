@@ -12,35 +12,6 @@ namespace sdft {
 namespace {
 
 using testing::boxMesh;
-using testing::icosphere;
-
-// near() returns exactly the triangles whose boxes lie within the reach of the query box
-// (against every triangle's box), and says so; a limit cuts it short and says that.
-TEST(MeshBvh, NearFindsEveryBoxWithinReach) {
-    const TriangleMesh mesh = icosphere(3);
-    const MeshBvh bvh(mesh);
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> u(-1.5f, 1.5f), s(0, 0.3f);
-    for (int k = 0; k < 200; ++k) {
-        const Vec3 lo(u(rng), u(rng), u(rng)), hi = lo + Vec3(s(rng), s(rng), s(rng));
-        const float reach = s(rng) * 2;
-        std::vector<uint32_t> got, want;
-        ASSERT_TRUE(bvh.near(lo, hi, reach, got));
-        for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-            const auto& f = mesh.triangles[t];
-            const Vec3 a = mesh.positions[f[0]], b = mesh.positions[f[1]], c = mesh.positions[f[2]];
-            const Vec3 gap = max(max(min(a, min(b, c)) - hi, lo - max(a, max(b, c))), Vec3(0.0f));
-            if (dot(gap, gap) <= reach * reach) want.push_back(t);
-        }
-        std::sort(got.begin(), got.end());  // a triangle split between leaves comes twice
-        got.erase(std::unique(got.begin(), got.end()), got.end());
-        ASSERT_EQ(got, want);
-        if (want.size() > 3) {
-            std::vector<uint32_t> cut;
-            EXPECT_FALSE(bvh.near(lo, hi, reach, cut, 3));
-        }
-    }
-}
 
 // Along a segment the winding number of a closed mesh changes by the crossings windingChange()
 // counts, wherever it says it is sure; segments ending on a face or along one are not sure.
