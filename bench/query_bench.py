@@ -191,14 +191,18 @@ def deepsdf_run(q, n):
     return seconds, (after - before) / 1024.0, (pts.nbytes + sdf.nbytes) / 2**20
 
 
+def each_mesh(meshes, n, rng):
+    """Per mesh: its name, faces, our MeshQuery, Open3D's scene and n float32 points in its box."""
+    for name, v, f in meshes:
+        pts = rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32)
+        yield name, f, sdftrace.MeshQuery(v, f), open3d_scene(v, f), pts
+
+
 def distances_only(meshes, n, reps, rng):
     """Unsigned and signed distances against Open3D's unsigned compute_distance, nothing else."""
     print("| mesh | triangles | Open3D compute_distance | ours unsigned | ours signed (winding) |")
     print("| --- | --- | --- | --- | --- |")
-    for name, v, f in meshes:
-        q = sdftrace.MeshQuery(v, f)
-        pts = rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32)
-        scene = open3d_scene(v, f)
+    for name, f, q, scene, pts in each_mesh(meshes, n, rng):
         tp = o3d.core.Tensor(pts)
         o = median_seconds(lambda: scene.compute_distance(tp), reps)
         u = median_seconds(lambda: q.distance(pts), reps)
@@ -211,11 +215,8 @@ def rays_only(meshes, n, reps, rng):
     """Ray casts against Open3D's cast_rays (float32 rays, as both take them), nothing else."""
     print("| mesh | triangles | Open3D cast_rays | ours | hits ours / Open3D |")
     print("| --- | --- | --- | --- | --- |")
-    for name, v, f in meshes:
-        q = sdftrace.MeshQuery(v, f)
-        pts = rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32)
+    for name, f, q, scene, pts in each_mesh(meshes, n, rng):
         dirs = rng.normal(size=(n, 3)).astype(np.float32)
-        scene = open3d_scene(v, f)
         rays = o3d.core.Tensor(np.hstack([pts, dirs]))
         o = median_seconds(lambda: scene.cast_rays(rays), reps)
         r = median_seconds(lambda: q.ray_cast(pts, dirs), reps)

@@ -1,6 +1,5 @@
 #include "sdftrace/query/lane_bvh.h"
 
-#include <algorithm>
 #include <cmath>
 
 #include "sdftrace/bake/embree_device.h"
@@ -9,17 +8,16 @@ namespace sdft {
 
 namespace {
 
-// A group's box: the union of its lanes' boxes.
+// A group's box, as the BVH's build asks for it.
 void groupBounds(const RTCBoundsFunctionArguments* args) {
-    const auto& groups = *static_cast<const std::vector<LaneGroup>*>(args->geometryUserPtr);
-    const LaneGroup& g = groups[args->primID];
+    const Bounds3& box = static_cast<const Bounds3*>(args->geometryUserPtr)[args->primID];
     RTCBounds* b = args->bounds_o;
-    b->lower_x = *std::min_element(g.f[kLox], g.f[kLox] + kLanes);
-    b->lower_y = *std::min_element(g.f[kLoy], g.f[kLoy] + kLanes);
-    b->lower_z = *std::min_element(g.f[kLoz], g.f[kLoz] + kLanes);
-    b->upper_x = *std::max_element(g.f[kHix], g.f[kHix] + kLanes);
-    b->upper_y = *std::max_element(g.f[kHiy], g.f[kHiy] + kLanes);
-    b->upper_z = *std::max_element(g.f[kHiz], g.f[kHiz] + kLanes);
+    b->lower_x = box.lo.x;
+    b->lower_y = box.lo.y;
+    b->lower_z = box.lo.z;
+    b->upper_x = box.hi.x;
+    b->upper_y = box.hi.y;
+    b->upper_z = box.hi.z;
 }
 
 struct Query {
@@ -44,7 +42,7 @@ bool groupClosest(RTCPointQueryFunctionArguments* args) {
 }
 
 struct Near {
-    const LaneGroup* groups;
+    const Bounds3* boxes;
     Vec3 lo, hi;
     float reach2;
     std::vector<uint32_t>* out;
@@ -53,13 +51,8 @@ struct Near {
 
 bool groupNear(RTCPointQueryFunctionArguments* args) {
     auto* q = static_cast<Near*>(args->userPtr);
-    const LaneGroup& g = q->groups[args->primID];
-    Vec3 glo(INFINITY), ghi(-INFINITY);
-    for (int l = 0; l < kLanes; ++l) {
-        glo = min(glo, Vec3(g.f[kLox][l], g.f[kLoy][l], g.f[kLoz][l]));
-        ghi = max(ghi, Vec3(g.f[kHix][l], g.f[kHiy][l], g.f[kHiz][l]));
-    }
-    const Vec3 gap = max(max(glo - q->hi, q->lo - ghi), Vec3(0.0f));
+    const Bounds3& box = q->boxes[args->primID];
+    const Vec3 gap = max(max(box.lo - q->hi, q->lo - box.hi), Vec3(0.0f));
     if (!(dot(gap, gap) <= q->reach2)) return false;
     q->out->push_back(args->primID);
     if (q->out->size() <= q->limit) return false;  // the sphere stays as it is
@@ -77,17 +70,26 @@ bool LaneBvh::near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out, si
     RTCPointQueryContext ctx;
     rtcInitPointQueryContext(&ctx);
     const size_t before = out.size();
-    Near q{m_groups.data(), lo, hi, reach * reach, &out, before + limit};
+    Near q{m_boxes.data(), lo, hi, reach * reach, &out, before + limit};
     rtcPointQuery(m_scene, &pq, &ctx, groupNear, &q);
     return out.size() - before <= limit;
 }
 
 LaneBvh::LaneBvh(const TriangleLanes& lanes) : m_groups(lanes.groups()) {
+    // Each group's box, the union of its lanes' boxes: for the build and for near().
+    m_boxes.resize(m_groups.size());
+    for (size_t i = 0; i < m_groups.size(); ++i) {
+        const LaneGroup& g = m_groups[i];
+        for (int l = 0; l < kLanes; ++l) {
+            m_boxes[i].include(Vec3(g.f[kLox][l], g.f[kLoy][l], g.f[kLoz][l]));
+            m_boxes[i].include(Vec3(g.f[kHix][l], g.f[kHiy][l], g.f[kHiz][l]));
+        }
+    }
     m_scene = rtcNewScene(embreeDevice());
     rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
     RTCGeometry geom = rtcNewGeometry(embreeDevice(), RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(geom, static_cast<unsigned>(m_groups.size()));
-    rtcSetGeometryUserData(geom, const_cast<std::vector<LaneGroup>*>(&m_groups));
+    rtcSetGeometryUserData(geom, m_boxes.data());
     rtcSetGeometryBoundsFunction(geom, groupBounds, nullptr);
     rtcCommitGeometry(geom);
     rtcAttachGeometry(m_scene, geom);

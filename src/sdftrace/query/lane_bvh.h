@@ -10,6 +10,7 @@
 
 #include <cstdint>
 
+#include "sdftrace/math/ray.h"
 #include "sdftrace/query/triangle_lanes.h"
 
 namespace sdft {
@@ -31,6 +32,7 @@ class LaneBvh {
 
   private:
     const std::vector<LaneGroup>& m_groups;
+    std::vector<Bounds3> m_boxes;  // per group
     RTCScene m_scene = nullptr;
 };
 

@@ -98,34 +98,43 @@ struct MeshQuery::Impl {
 
     // Sort keys and their radix buffer, kept between calls: fresh ones cost a page fault per
     // 4 KiB, thousands a call (15 % of a million-point query of a small mesh on this project's
-    // VM). A call takes a pair or makes one, and gives it back: as many pairs as calls ever ran
-    // at once, each of at most a chunk.
+    // VM). A call leases a pair (made where none is free) and gives it back at its end: as many
+    // pairs as calls ever ran at once, each of at most a chunk.
     struct Keys {
         std::unique_ptr<uint64_t[]> order, spare;  // not value-initialized: written before read
         size_t size = 0;
     };
     mutable std::mutex keysMutex;
     mutable std::vector<Keys> keysPool;
-    Keys takeKeys(size_t n) const {
-        Keys k;
-        {
-            std::lock_guard<std::mutex> lock(keysMutex);
-            if (!keysPool.empty()) {
-                k = std::move(keysPool.back());
-                keysPool.pop_back();
+    class KeysLease {
+      public:
+        KeysLease(const Impl& m, size_t n) : m_impl(m) {
+            {
+                std::lock_guard<std::mutex> lock(m.keysMutex);
+                if (!m.keysPool.empty()) {
+                    m_keys = std::move(m.keysPool.back());
+                    m.keysPool.pop_back();
+                }
+            }
+            if (m_keys.size < n) {
+                m_keys.order.reset(new uint64_t[n]);
+                m_keys.spare.reset(new uint64_t[n]);
+                m_keys.size = n;
             }
         }
-        if (k.size < n) {
-            k.order.reset(new uint64_t[n]);
-            k.spare.reset(new uint64_t[n]);
-            k.size = n;
+        ~KeysLease() {
+            std::lock_guard<std::mutex> lock(m_impl.keysMutex);
+            m_impl.keysPool.push_back(std::move(m_keys));
         }
-        return k;
-    }
-    void giveBack(Keys k) const {
-        std::lock_guard<std::mutex> lock(keysMutex);
-        keysPool.push_back(std::move(k));
-    }
+        KeysLease(const KeysLease&) = delete;
+        KeysLease& operator=(const KeysLease&) = delete;
+        uint64_t* order() const { return m_keys.order.get(); }
+        uint64_t* spare() const { return m_keys.spare.get(); }
+
+      private:
+        const Impl& m_impl;
+        Keys m_keys;
+    };
 
     void buildWinding() const {
         std::call_once(windingOnce, [this] {
@@ -163,20 +172,31 @@ struct MeshQuery::Impl {
     void closestCluster(const MeshQuery& query, const Vec3d* p, size_t n, Closest* out,
                         ClusterScratch& scratch) const;
 
-    // An open mesh's own winding number at local point q with a bound on its error: the
-    // hierarchical sum where it is clearly off 1/2 (trusted to 0.3 at beta 1.5 and to 0.1 at beta
-    // 3, the margins inside() decides by), else the films' (closing_film.h).
-    double openWindingEstimate(Vec3 q, double& error) const {
-        double w = openWinding->fast(q, 1.5);
+    // The hierarchical tiers of an open mesh's own winding number: `coarse` (beta 1.5, trusted
+    // to 0.3), then `fine` (the tree's beta 3, to 0.1), each taken where it is clearly off 1/2
+    // (the margins inside() decides by). True with the value and its error; false where neither
+    // decides and the films must.
+    template <class Coarse, class Fine>
+    static bool hierarchicalWinding(Coarse coarse, Fine fine, double& w, double& error) {
+        w = coarse();
         if (std::fabs(w - 0.5) > 0.3) {
             error = 0.3;
-            return w;
+            return true;
         }
-        w = openWinding->fast(q);
+        w = fine();
         if (std::fabs(w - 0.5) > 0.1) {
             error = 0.1;
-            return w;
+            return true;
         }
+        return false;
+    }
+    // An open mesh's own winding number at local point q with a bound on its error: the
+    // hierarchical tiers, else the films' (closing_film.h).
+    double openWindingEstimate(Vec3 q, double& error) const {
+        double w;
+        if (hierarchicalWinding([&] { return openWinding->fast(q, 1.5); },
+                                [&] { return openWinding->fast(q); }, w, error))
+            return w;
         const WindingSign::Carried c = WindingSign(*film, *closedWinding).evaluate(q);
         error = c.error;
         return c.winding;
@@ -603,14 +623,10 @@ struct MeshQuery::Impl::SignWalk {
     // itself (coarse, then fine), else the films' sums at q.
     void estimate(Vec3 q, size_t j) {
         if (m.manyFilms) {
-            const double w = coarseAt(j);
-            if (std::fabs(w - 0.5) > 0.3) {
-                carried = {carried.closed, static_cast<float>(w), 0.3f};
-                return;
-            }
-            const double w2 = fineAt(j);
-            if (std::fabs(w2 - 0.5) > 0.1) {
-                carried = {carried.closed, static_cast<float>(w2), 0.1f};
+            double w, error;
+            if (Impl::hierarchicalWinding([&] { return coarseAt(j); }, [&] { return fineAt(j); }, w,
+                                          error)) {
+                carried = {carried.closed, static_cast<float>(w), static_cast<float>(error)};
                 return;
             }
         } else {
@@ -724,13 +740,8 @@ void MeshQuery::queryPoints(const T* xyz, size_t n, const PointOutputs& out,
     Progress progress(options.progress, n, !options.progress.empty());
     // Morton order by the LBVH's keys (bake/lbvh.h) over the mesh's box: code above index.
     const LbvhFrame& frame = m.frame;
-    struct Lease {
-        const Impl& m;
-        Impl::Keys keys;
-        ~Lease() { m.giveBack(std::move(keys)); }
-    } lease{m, m.takeKeys(std::min(kChunk, n))};
-    uint64_t* order = lease.keys.order.get();
-    uint64_t* spare = lease.keys.spare.get();
+    const Impl::KeysLease keys(m, std::min(kChunk, n));
+    uint64_t *order = keys.order(), *spare = keys.spare();
     for (size_t first = 0; first < n; first += kChunk) {
         const size_t count = std::min(kChunk, n - first);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const auto& r) {
