@@ -49,6 +49,7 @@ class Cursor {
     Cursor(const char* data, size_t size, const std::string& path)
         : m_data(data), m_size(size), m_path(path) {}
 
+    const std::string& path() const { return m_path; }
     [[noreturn]] void fail(const std::string& what) const {
         throw InputError(m_path + ": not a readable OpenVDB file: " + what + " (at byte " +
                          std::to_string(m_pos) + ")");
@@ -118,7 +119,17 @@ struct Reader {
     uint32_t compression = 0;
     bool half = false;
     float background = 0;
+    const MappedFile* file = nullptr;                 // what the cursor reads
     std::vector<std::array<int32_t, 3>> leafOrigins;  // in topology order
+    // The file and the nodes built so far, checked against the memory budget as each node is
+    // made (the nodes of a file take from about its size to ~40 times it, where upper nodes'
+    // 8 KiB of masks become 256 KiB of tile values and child indices).
+    double treeBytes = 0;
+    void grow(double bytes) {
+        treeBytes += bytes;
+        checkMemoryBudget(static_cast<double>(c.size()) + treeBytes, c.path(),
+                          "the file and its tree", "resample the level set coarser");
+    }
     // Reused by every node this reader decodes.
     std::vector<char> bloscScratch;
     std::vector<uint64_t> selectionScratch;
@@ -235,6 +246,7 @@ struct Reader {
         n.origin = origin;
         const int log2 = upper ? kUpperLog2 : kLowerLog2, slots = upper ? kUpperSlots : kLowerSlots;
         const int childShift = upper ? kLowerTotal : kLeafLog2;
+        grow(sizeof(Internal) + slots * (sizeof(float) + sizeof(int32_t) + 2.0 / 8));
         readMask(n.childMask, slots, "child mask");
         readMask(n.valueMask, slots, "value mask");
         n.values.resize(slots);
@@ -300,6 +312,9 @@ struct Reader {
             std::memcpy(active, mask, 64);
             readValues(nullptr, kLeafSize, active);
         }
+        // The buffers' pages leave our memory as they are decoded (the file stays cached).
+        if (n) file->release(start[0], c.pos() - start[0]);
+        grow(static_cast<double>(n) * sizeof(Leaf));
         t.leaves.reserve(n);
         adviseHugePages(t.leaves.data(), n * sizeof(Leaf));
         t.leaves.resize(n);
@@ -316,6 +331,7 @@ struct Reader {
                 std::memcpy(leaf.active.data(), own.take(64, "leaf mask"), 64);
                 r.readValues(leaf.values.data(), kLeafSize, leaf.active.data());
             }
+            file->release(start[range.begin()], own.pos() - start[range.begin()]);
         });
     }
 };
@@ -383,16 +399,15 @@ void readTransform(Cursor& c, FloatGrid& g) {
     g.voxelSize = h;
 }
 
-// The file, mapped; its size checked against the memory budget first.
+// The file, mapped; its size checked against the memory budget first (the nodes are checked as
+// they are read).
 std::unique_ptr<MappedFile> mapFile(const std::string& path) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) throw InputError(path + ": cannot open grid file (does it exist?)");
-    // The nodes built from a file take at most ~40 times its bytes (an upper node's 8 KiB of
-    // masks become 256 KiB of tile values and child indices).
-    checkMemoryBudget(41.0 * static_cast<double>(size), path, "the file and its tree",
+    checkMemoryBudget(static_cast<double>(size), path, "the file and its tree",
                       "resample the level set coarser");
-    return std::make_unique<MappedFile>(path);
+    return std::make_unique<MappedFile>(path, MappedFile::Load::Lazy);
 }
 
 }  // namespace
@@ -461,6 +476,7 @@ FloatGrid readVdbFile(const std::string& path) {
         FloatGrid grid;
         grid.name = name;
         Reader r(c);
+        r.file = file.get();
         r.half = half;
         r.compression = c.get<uint32_t>("compression");
         if (r.compression > (kZip | kActiveMask | kBlosc))
