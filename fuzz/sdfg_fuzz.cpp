@@ -1,7 +1,7 @@
 // Fuzz target: the .sdfg reader. The header's checksum is recomputed over the input before
 // reading (mutations would otherwise stop at it): versions 1-2 over the payload, version 3 over its
 // section header and chunk table, so the checks behind it and the zstd chunks are reached; a grid
-// that loads is sampled and its surface blocks walked.
+// that loads is sampled, and what `info` reads of it (readSdfgSummary) agrees with it.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -35,11 +35,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         std::memcpy(bytes.data() + kChecksumAt, &sum, sizeof sum);
     }
     const std::string path = fuzz::writeScratchFile(bytes.data(), bytes.size(), ".sdfg");
+    bool described = false;
+    SdfgSummary summary;
+    try {
+        summary = readSdfgSummary(path);  // what `info` reads: the header and tables
+        described = true;
+    } catch (const InputError&) {
+    }
     try {
         const Grid g = loadSdfg(path);
         const float v = g.view().interpolate(g.shape().bounds().center());
         if (std::isnan(v)) __builtin_trap();
-        (void)g.memoryBytes();
+        // A file that loads is described, and as it loads: the same blocks, no more memory.
+        size_t inside = 0, outside = 0, surface = 0;
+        g.blockCounts(inside, outside, surface);
+        if (!described || summary.blocks.surface != surface || summary.blocks.inside != inside ||
+            summary.memoryBytes > g.memoryBytes())
+            __builtin_trap();
     } catch (const InputError&) {
     }
     return 0;

@@ -78,4 +78,13 @@ struct BlockTable {
     std::vector<int> ownTiles() const;
 };
 
+// The blocks inside the grid by flag.
+struct BlockCounts {
+    size_t inside = 0, outside = 0, surface = 0;
+};
+// Of a table given by its parts (BlockTable's, or a Grid's): constant tiles counted by their blocks
+// inside the grid, own pages by their flags.
+BlockCounts countBlocks(const int blocks[3], const int tiles[3],
+                        const std::vector<int32_t>& tilePage, const std::vector<uint8_t>& flags);
+
 }  // namespace sdft

@@ -203,6 +203,9 @@ class Grid {
     int blockSize() const { return m_blockSize; }
     // Number of blocks flagged inside, outside, surface (sparse only).
     void blockCounts(size_t& inside, size_t& outside, size_t& surface) const;
+    // About what memoryBytes() will be for a sparse grid of `surface` surface blocks on table `t`
+    // (a file's, before its samples are read): every term but the few shared apron blocks.
+    static size_t sparseMemoryEstimate(const BlockTable& t, size_t surface, int blockSize);
     float background() const { return m_background; }
     // Bounds of the cells whose corner samples change sign (where the surface is); empty if none.
     Bounds3 surfaceBounds() const;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -24,6 +25,9 @@ class AtomicOutput {
     // Checked writing: opens the temporary file on the first call; any failed write throws an
     // InputError that names the final path and the reason.
     void write(const void* data, size_t bytes);
+    // Overwrites `bytes` already written at `offset` (a header whose fields are known only once
+    // the rest is written), then goes on writing at the end.
+    void writeAt(uint64_t offset, const void* data, size_t bytes);
     // Flushes and syncs what write() wrote (or checks the file a writer left at tempPath()),
     // then renames it over the final path; throws InputError with the reason on failure.
     void commit();

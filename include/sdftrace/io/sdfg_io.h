@@ -29,6 +29,25 @@ struct SdfgWriteOptions {
 void saveSdfg(const Grid& grid, const std::string& path, const SdfgWriteOptions& options = {});
 Grid loadSdfg(const std::string& path);
 
+// What a .sdfg file holds, from its header and tables alone (its samples are not read, nor their
+// checksums checked): what `sdftrace info` prints without --full.
+struct SdfgSummary {
+    uint32_t version = 0;
+    GridKind kind = GridKind::Dense;
+    GridShape shape;
+    int blockSize = 0;     // sparse
+    float background = 0;  // sparse
+    TexcoordKind texcoords = TexcoordKind::None;
+    uint64_t fileBytes = 0;
+    uint64_t sampleBytes =
+        0;                   // the distances uncompressed (sparse: B^3 own ones per surface block)
+    BlockCounts blocks;      // sparse
+    size_t memoryBytes = 0;  // about what the grid takes once loaded (Grid::memoryBytes)
+};
+// Throws InputError naming the file where its header or tables are wrong (the checks loading makes
+// before it reads the samples).
+SdfgSummary readSdfgSummary(const std::string& path);
+
 // FNV-1a 64 of a byte range (the payload checksum).
 uint64_t fnv1a64(const void* data, size_t bytes, uint64_t seed = 0xcbf29ce484222325ull);
 

@@ -1,7 +1,9 @@
 #include "sdftrace/exec/huge_pages.h"
 
 #include <sys/mman.h>
+#include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstdint>
 
 namespace sdft {
@@ -24,6 +26,16 @@ void adviseHugePages(void* data, size_t bytes) {
     (void)data;
     (void)bytes;
 #endif
+}
+
+void touchPages(void* data, size_t bytes) {
+    constexpr size_t kPage = 4096, kStep = size_t{2} << 20, kSmall = size_t{16} << 20;
+    if (!data || bytes < kSmall) return;
+    char* base = static_cast<char*>(data);
+    tbb::parallel_for(size_t(0), (bytes + kStep - 1) / kStep, [&](size_t s) {
+        const size_t end = std::min(bytes, (s + 1) * kStep);
+        for (size_t at = s * kStep; at < end; at += kPage) base[at] = 0;
+    });
 }
 
 void releasePages(void* data, size_t bytes) {

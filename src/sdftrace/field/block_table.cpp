@@ -34,6 +34,36 @@ size_t BlockTable::surfaceBlocks() const {
         std::count(flags.begin() + kFirstOwnPage * kPageEntries, flags.end(), kSurface));
 }
 
+BlockCounts countBlocks(const int blocks[3], const int tiles[3],
+                        const std::vector<int32_t>& tilePage, const std::vector<uint8_t>& flags) {
+    BlockCounts n;
+    for (size_t tile = 0; tile < tilePage.size(); ++tile) {
+        const int t[3] = {static_cast<int>(tile % tiles[0]),
+                          static_cast<int>(tile / tiles[0] % tiles[1]),
+                          static_cast<int>(tile / (static_cast<size_t>(tiles[0]) * tiles[1]))};
+        const int32_t page = tilePage[tile];
+        if (page < kFirstOwnPage) {
+            size_t inTile = 1;
+            for (int a = 0; a < 3; ++a)
+                inTile *= static_cast<size_t>(std::min(blocks[a], (t[a] + 1) * kTileBlocks) -
+                                              t[a] * kTileBlocks);
+            (page == kInsidePage ? n.inside : n.outside) += inTile;
+            continue;
+        }
+        const uint8_t* f = flags.data() + static_cast<size_t>(page) * kPageEntries;
+        forEachBlockOfTile(blocks, t[0], t[1], t[2], [&](int bi, int bj, int bk) {
+            const uint8_t flag = f[pageLocal(bi, bj, bk)];
+            if (flag == static_cast<uint8_t>(BlockFlag::Inside))
+                ++n.inside;
+            else if (flag == static_cast<uint8_t>(BlockFlag::Outside))
+                ++n.outside;
+            else
+                ++n.surface;
+        });
+    }
+    return n;
+}
+
 BlockTable BlockTable::fromDense(const int blocks[3], const std::vector<uint8_t>& dense,
                                  const std::string& source) {
     BlockTable t = empty(blocks);

@@ -2,8 +2,10 @@
 
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -402,30 +404,20 @@ size_t Grid::memoryBytes() const {
 void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {
     inside = outside = surface = 0;
     if (m_kind != GridKind::Sparse) return;
-    // Constant tiles: their blocks inside the grid; own pages: their flags.
-    for (size_t tile = 0; tile < m_tilePage.size(); ++tile) {
-        const int32_t page = m_tilePage[tile];
-        if (page >= kFirstOwnPage) continue;
-        const int t[3] = {static_cast<int>(tile % m_tiles[0]),
-                          static_cast<int>(tile / m_tiles[0] % m_tiles[1]),
-                          static_cast<int>(tile / (static_cast<size_t>(m_tiles[0]) * m_tiles[1]))};
-        size_t n = 1;
-        for (int a = 0; a < 3; ++a)
-            n *= static_cast<size_t>(std::min(m_blocks[a], (t[a] + 1) * kTileBlocks) -
-                                     t[a] * kTileBlocks);
-        (page == kInsidePage ? inside : outside) += n;
-    }
-    forEachPagedBlock(
-        [&](int, int, int, size_t slot) {
-            const uint8_t f = m_flags[slot];
-            if (f == static_cast<uint8_t>(BlockFlag::Inside))
-                ++inside;
-            else if (f == static_cast<uint8_t>(BlockFlag::Outside))
-                ++outside;
-            else
-                ++surface;
-        },
-        false);
+    const BlockCounts n = countBlocks(m_blocks, m_tiles, m_tilePage, m_flags);
+    inside = n.inside;
+    outside = n.outside;
+    surface = n.surface;
+}
+
+size_t Grid::sparseMemoryEstimate(const BlockTable& t, size_t surface, int B) {
+    const size_t slots = t.flags.size(), tiles = t.tilePage.size();
+    const size_t ownPages = slots / kPageEntries - kFirstOwnPage;
+    const size_t own = static_cast<size_t>(B) * B * B;
+    // The terms of memoryBytes() as the builder sizes them, less the shared apron blocks.
+    return surface * own * sizeof(float) + slots * (1 + sizeof(int32_t) + 1 + 1) +
+           surface * (8 * sizeof(int32_t) + (own + 63) / 64 * sizeof(uint64_t)) +
+           tiles * (sizeof(int32_t) + 1 + 1) + ownPages * 3 * sizeof(int);
 }
 
 namespace {
@@ -640,40 +632,55 @@ void Grid::computeBlockSkip() {
 void Grid::computeLocalLipschitz(const std::vector<float>& blockWorst) {
     std::vector<float> tileWorst(m_tilePage.size(), 0.0f), slotWorst(m_flags.size(), 0.0f);
     const GridView table = view();
-    forEachPagedBlock(
-        [&](int bi, int bj, int bk, size_t slot) {
-            const int32_t data = m_blockData[slot];
-            if (data < 0) return;
-            const float w = blockWorst[static_cast<size_t>(data)];
-            const int b[3] = {bi, bj, bk};
-            int lo[3], hi[3];
-            for (int a = 0; a < 3; ++a) {
-                lo[a] = std::max(0, b[a] - 1);
-                hi[a] = std::min(m_blocks[a] - 1, b[a] + 1);
-            }
-            for (int k = lo[2]; k <= hi[2]; ++k)
-                for (int j = lo[1]; j <= hi[1]; ++j)
-                    for (int i = lo[0]; i <= hi[0]; ++i) {
-                        const size_t tile = table.tileIndex(i, j, k);
-                        tileWorst[tile] = std::max(tileWorst[tile], w);
-                        const int32_t page = m_tilePage[tile];
-                        if (page < kFirstOwnPage) continue;  // shared: the tile's bound
-                        float& m = slotWorst[static_cast<size_t>(page) * kPageEntries +
-                                             pageLocal(i, j, k)];
-                        m = std::max(m, w);
-                    }
-        },
-        false);
+    // Each block's bound covers its 26 neighbours' cells too: slotWorst (and tileWorst) from it,
+    // blocks in parallel (a maximum taken by compare-and-swap: the same in any order).
+    auto raise = [](float& target, float w) {
+        std::atomic_ref<float> ref(target);
+        float seen = ref.load(std::memory_order_relaxed);
+        while (w > seen && !ref.compare_exchange_weak(seen, w, std::memory_order_relaxed)) {
+        }
+    };
+    auto dilate = [&] {
+        forEachPagedBlock(
+            [&](int bi, int bj, int bk, size_t slot) {
+                const int32_t data = m_blockData[slot];
+                if (data < 0) return;
+                const float w = blockWorst[static_cast<size_t>(data)];
+                const int b[3] = {bi, bj, bk};
+                int lo[3], hi[3];
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::max(0, b[a] - 1);
+                    hi[a] = std::min(m_blocks[a] - 1, b[a] + 1);
+                }
+                for (int k = lo[2]; k <= hi[2]; ++k)
+                    for (int j = lo[1]; j <= hi[1]; ++j)
+                        for (int i = lo[0]; i <= hi[0]; ++i) {
+                            const size_t tile = table.tileIndex(i, j, k);
+                            raise(tileWorst[tile], w);
+                            const int32_t page = m_tilePage[tile];
+                            if (page < kFirstOwnPage) continue;  // shared: the tile's bound
+                            raise(slotWorst[static_cast<size_t>(page) * kPageEntries +
+                                            pageLocal(i, j, k)],
+                                  w);
+                        }
+            },
+            true);
+    };
+    dilate();
     // The slope each bound must cover, never below the floor.
     const float floor =
         std::max(1.0f, m_background / (static_cast<float>(m_blockSize) * m_shape.voxelSize));
     auto need = [&](float worst) { return std::max(floor, std::sqrt(worst) / m_shape.voxelSize); };
     // The second bound: of the needs at most half the global bound, the one that minimizes the sum
     // of the bounds over the blocks near surface (each block's bound is what slows its rays).
-    std::vector<float> needs;
+    // Sorted in slotWorst's own buffer (millions of slots at 2048 cells: no second array), which
+    // the dilation then fills again.
+    std::vector<float>& needs = slotWorst;
+    size_t nonzero = 0;
     for (float w : slotWorst)
-        if (w > 0) needs.push_back(need(w));
-    std::sort(needs.begin(), needs.end());
+        if (w > 0) needs[nonzero++] = need(w);
+    needs.resize(nonzero);
+    tbb::parallel_sort(needs.begin(), needs.end());
     m_gentleLipschitz = m_lipschitz;
     double best = static_cast<double>(needs.size()) * m_lipschitz;
     for (size_t i = 0; i < needs.size() && needs[i] <= 0.5f * m_lipschitz; ++i) {
@@ -685,6 +692,8 @@ void Grid::computeLocalLipschitz(const std::vector<float>& blockWorst) {
             m_gentleLipschitz = needs[i];
         }
     }
+    slotWorst.assign(m_flags.size(), 0.0f);
+    dilate();
     const float gentle = m_gentleLipschitz < m_lipschitz ? m_gentleLipschitz : -1.0f;
     // A NaN need (a damaged file) compares false: the global bound.
     auto code = [&](float worst) { return static_cast<uint8_t>(need(worst) <= gentle ? 1 : 0); };

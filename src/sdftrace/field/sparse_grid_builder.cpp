@@ -96,7 +96,7 @@ uint32_t bitsOf(float a) {
     std::memcpy(&u, &a, sizeof u);
     return u;
 }
-constexpr int32_t kConstant = -2, kPrivate = -3;
+constexpr int32_t kPrivate = -3, kFirstConstant = -4;  // constant ids: kFirstConstant - id
 // A block's B^3 own samples (local coordinates 0..B-1) out of its (B+1)^3, row by row.
 template <int B>
 void copyOwn(const float* expanded, float* own) {
@@ -151,10 +151,11 @@ SparseGridBuilder::SparseGridBuilder(const GridShape& shape, int B, float backgr
     std::vector<float>().swap(g.m_blockSamples);
     g.m_blockSamples.reserve(room);
     adviseHugePages(g.m_blockSamples.data(), room * sizeof(float));
+    touchPages(g.m_blockSamples.data(), surface * own * sizeof(float));
     g.m_blockSamples.assign(surface * own, 0.0f);
     assignHuge(g.m_cellMasks, surface * static_cast<size_t>((B * B * B + 63) / 64), uint64_t{0});
-    g.m_blockNeighbors.assign(surface * 8, -1);  // entry 0 set when the block is added
-    m_constantBits.assign(surface * 8, 0);
+    assignHuge(g.m_blockNeighbors, surface * 8,
+               int32_t{-1});  // entry 0 set when the block is added
     m_worst.assign(surface, 0.0f);
     m_view = g.view();
 }
@@ -171,7 +172,7 @@ int32_t SparseGridBuilder::neighbourData(int bi, int bj, int bk, int code) const
 // samples (a surface block: the same values), else a shared constant where the block's
 // vertices there are one value, else a private copy of them.
 void SparseGridBuilder::addBlock(int bi, int bj, int bk, const float* samples,
-                                 uint8_t privateEntries) {
+                                 uint8_t privateEntries, bool ownInPlace) {
     Grid& g = m_grid;
     const int B = g.m_blockSize;
     const GridView& view = m_view;
@@ -184,10 +185,12 @@ void SparseGridBuilder::addBlock(int bi, int bj, int bk, const float* samples,
     uint64_t* mask = g.m_cellMasks.data() + static_cast<size_t>(data) * view.wordsPerMask();
     m_worst[static_cast<size_t>(data)] = blockMasksAndBound(samples, B, ni, nj, nk, mask);
     float* dst = g.m_blockSamples.data() + static_cast<size_t>(data) * own;
-    if (B == 4)
-        copyOwn<4>(samples, dst);
-    else
-        copyOwn<8>(samples, dst);
+    if (!ownInPlace) {
+        if (B == 4)
+            copyOwn<4>(samples, dst);
+        else
+            copyOwn<8>(samples, dst);
+    }
     static const ApronLayout layouts[2] = {ApronLayout(4), ApronLayout(8)};
     const ApronLayout& L = layouts[B == 8];
     int32_t* nb = g.m_blockNeighbors.data() + static_cast<size_t>(data) * 8;
@@ -204,9 +207,7 @@ void SparseGridBuilder::addBlock(int bi, int bj, int bk, const float* samples,
             bool uniform = true;
             for (const auto& v : vs) uniform = uniform && sameBits(samples[v.expanded], first);
             if (uniform) {
-                nb[code] = kConstant;
-                m_constantBits[static_cast<size_t>(data) * 8 + static_cast<size_t>(code)] =
-                    bitsOf(first);
+                nb[code] = kFirstConstant - constantId(bitsOf(first));
                 continue;
             }
         }
@@ -215,6 +216,27 @@ void SparseGridBuilder::addBlock(int bi, int bj, int bk, const float* samples,
         for (const auto& v : vs) p.own[static_cast<size_t>(v.ownerOwn)] = samples[v.expanded];
         m_privates.local().push_back(std::move(p));
     }
+}
+
+int32_t SparseGridBuilder::constantId(uint32_t bits) {
+    auto& cache = m_constantCache.local();
+    for (const auto& [b, id] : cache)
+        if (b == bits) return id;
+    int32_t id;
+    {
+        std::lock_guard<std::mutex> lock(m_constantMutex);
+        const auto [it, added] =
+            m_constantIds.try_emplace(bits, static_cast<int32_t>(m_constantBits.size()));
+        if (added) {
+            if (m_constantBits.size() == size_t{INT32_MAX} - 4)  // its code would not fit
+                throw InputError("sparse grid: more than 2^31 - 5 distinct apron constants");
+            m_constantBits.push_back(bits);
+        }
+        id = it->second;
+    }
+    if (cache.size() == 4) cache.erase(cache.begin());
+    cache.push_back({bits, id});
+    return id;
 }
 
 Grid SparseGridBuilder::finish() {
@@ -228,7 +250,7 @@ Grid SparseGridBuilder::finish() {
         return a.data != b.data ? a.data < b.data : a.code < b.code;
     });
     // The extra sample blocks, numbered in block and entry order.
-    std::vector<std::pair<uint32_t, int32_t>> constants;  // value bits, sample block
+    std::vector<int32_t> constantBlock(m_constantBits.size(), -1);  // per id, once numbered
     g.m_apronFrom.clear();
     g.m_apronCode.clear();
     size_t nextPrivate = 0;
@@ -238,17 +260,15 @@ Grid SparseGridBuilder::finish() {
         for (int code = 1; code < 8; ++code) {
             int32_t& nb = g.m_blockNeighbors[s * 8 + static_cast<size_t>(code)];
             if (nb >= 0) continue;
-            if (nb == kConstant) {
-                const uint32_t bits = m_constantBits[s * 8 + static_cast<size_t>(code)];
-                auto it = std::find_if(constants.begin(), constants.end(),
-                                       [&](const auto& c) { return c.first == bits; });
-                if (it != constants.end()) {
-                    nb = it->second;
+            if (nb <= kFirstConstant) {
+                const size_t id = static_cast<size_t>(kFirstConstant - nb);
+                if (constantBlock[id] >= 0) {
+                    nb = constantBlock[id];
                     continue;
                 }
                 float value;
-                std::memcpy(&value, &bits, sizeof value);
-                constants.push_back({bits, next});
+                std::memcpy(&value, &m_constantBits[id], sizeof value);
+                constantBlock[id] = next;
                 g.m_blockSamples.insert(g.m_blockSamples.end(), own, value);
                 g.m_apronFrom.push_back(-1);
                 g.m_apronCode.push_back(0);
@@ -265,6 +285,7 @@ Grid SparseGridBuilder::finish() {
             nb = next++;
         }
     }
+    m_constantIds = {};
     m_constantBits = std::vector<uint32_t>();
     float worst = 0;
     for (float w : m_worst) worst = std::max(worst, w);

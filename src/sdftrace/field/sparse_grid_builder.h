@@ -9,7 +9,9 @@
 
 #include <array>
 #include <cstdint>
+#include <mutex>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "sdftrace/field/block_table.h"
@@ -25,6 +27,12 @@ class SparseGridBuilder {
                       const std::string& source);
 
     size_t surfaceBlocks() const { return m_grid.m_surfaceBlocks; }
+    // The grid's shape and tables (its sample buffers are not the final ones until finish).
+    const GridView& view() const { return m_view; }
+    // The surface blocks' B^3 own samples (x fastest, blocks in index order), zeros until they
+    // are added: a loader may fill them in place and add each block with `ownInPlace`, so the
+    // grid's samples are never copied.
+    float* ownSamples() { return m_grid.m_blockSamples.data(); }
     // Per slot (GridView::blockSlot) the surface block's index, -1 for none.
     const std::vector<int32_t>& blockData() const { return m_grid.m_blockData; }
     // Tiles whose page is their own, in page order (BlockTable::ownTiles).
@@ -44,8 +52,11 @@ class SparseGridBuilder {
     // Adds surface block (bi, bj, bk) from its (B+1)^3 vertex samples, x fastest; safe to call
     // concurrently for distinct blocks. A vertex that two surface blocks share must have the same
     // value in both, bit for bit, except in the neighbour entries set in `privateEntries` (bit c:
-    // entry c), which keep this block's samples of them in a private sample block.
-    void addBlock(int bi, int bj, int bk, const float* samples, uint8_t privateEntries = 0);
+    // entry c), which keep this block's samples of them in a private sample block. With
+    // `ownInPlace` the block's own samples are already in ownSamples() and are not written (other
+    // threads may be reading them as neighbours).
+    void addBlock(int bi, int bj, int bk, const float* samples, uint8_t privateEntries = 0,
+                  bool ownInPlace = false);
 
     // The grid, once every surface block has been added: the shared constant and private blocks
     // appended and numbered in block order (the same grid for the same input), the Lipschitz
@@ -59,11 +70,18 @@ class SparseGridBuilder {
         std::vector<float> own;  // B^3, the entry's vertices at their owner-local places
     };
     Grid m_grid;
-    GridView m_view;  // of m_grid's tables (its buffers are not moved until finish)
-    std::vector<uint32_t> m_constantBits;  // per surface block and entry: the constant's bits
-    std::vector<float> m_worst;            // per surface block: its cells' largest squared
-                                           // gradient bound (times h^2)
+    GridView m_view;             // of m_grid's tables (its buffers are not moved until finish)
+    std::vector<float> m_worst;  // per surface block: its cells' largest squared gradient bound
+                                 // (times h^2)
     tbb::enumerable_thread_specific<std::vector<Private>> m_privates;
+    // The values that whole entries share (a neighbour entry of a constant takes code
+    // kFirstConstant - id until finish() gives each value its shared block): few, mostly the
+    // background's two signs, each looked up in a small per-thread cache before the shared map.
+    int32_t constantId(uint32_t bits);
+    std::mutex m_constantMutex;
+    std::unordered_map<uint32_t, int32_t> m_constantIds;
+    std::vector<uint32_t> m_constantBits;  // per id
+    tbb::enumerable_thread_specific<std::vector<std::pair<uint32_t, int32_t>>> m_constantCache;
 };
 
 }  // namespace sdft

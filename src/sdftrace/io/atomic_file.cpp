@@ -98,6 +98,13 @@ void AtomicOutput::write(const void* data, size_t bytes) {
     if (bytes && std::fwrite(data, 1, bytes, m_file) != bytes) fail(errno ? errno : EIO);
 }
 
+void AtomicOutput::writeAt(uint64_t offset, const void* data, size_t bytes) {
+    if (!m_file) fail(EBADF);
+    if (::fseeko(m_file, static_cast<off_t>(offset), SEEK_SET) != 0) fail(errno);
+    write(data, bytes);
+    if (::fseeko(m_file, 0, SEEK_END) != 0) fail(errno);
+}
+
 void AtomicOutput::commit() {
     int fd = -1;
     if (m_file) {

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "sdftrace/core/error.h"
 #include "test_files.h"
@@ -25,6 +27,24 @@ TEST(AtomicOutput, AppearsWholeOnCommitAndNotAtAllOtherwise) {
     writeFileAtomically(path, "abcd", 4);
     EXPECT_EQ(std::filesystem::file_size(path), 4u);
     std::filesystem::remove(path);
+}
+
+// A header whose fields are known only at the end is written over its placeholder.
+TEST(AtomicOutput, WriteAtOverwritesAndWritingGoesOnAtTheEnd) {
+    const std::string path = tempPath("at.bin");
+    {
+        AtomicOutput out(path);
+        out.write("0000abc", 7);
+        out.writeAt(1, "XY", 2);
+        out.write("de", 2);
+        out.commit();
+    }
+    std::ifstream in(path, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(bytes, "0XY0abcde");
+    std::filesystem::remove(path);
+    AtomicOutput unopened(tempPath("none.bin"));
+    EXPECT_THROW(unopened.writeAt(0, "x", 1), InputError);  // nothing written yet to overwrite
 }
 
 // What the CLI's SIGINT / SIGTERM handler calls: every live temporary file goes.

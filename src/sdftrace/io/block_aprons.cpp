@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstring>
@@ -35,22 +36,6 @@ struct Layout {
           words((apron + 63) / 64) {
         for (int a = 0; a < 3; ++a) blocks[a] = (s.cells[a] + B - 1) / B;
     }
-    void coords(size_t b, int c[3]) const {
-        c[0] = static_cast<int>(b % blocks[0]);
-        c[1] = static_cast<int>(b / blocks[0] % blocks[1]);
-        c[2] = static_cast<int>(b / (static_cast<size_t>(blocks[0]) * blocks[1]));
-    }
-    // The block owning apron vertex p of block c (p's coordinates == B step to the neighbour);
-    // false when it lies past the grid's last block.
-    bool owner(const int c[3], const std::array<int, 3>& p, size_t& block) const {
-        int o[3];
-        for (int a = 0; a < 3; ++a) {
-            o[a] = c[a] + (p[a] == B);
-            if (o[a] >= blocks[a]) return false;
-        }
-        block = (static_cast<size_t>(o[2]) * blocks[1] + o[1]) * blocks[0] + o[0];
-        return true;
-    }
     // Index of p (mod B) in an owner's B^3 own samples.
     int ownIndex(const std::array<int, 3>& p) const {
         return ((p[2] % B) * B + p[1] % B) * B + p[0] % B;
@@ -59,157 +44,158 @@ struct Layout {
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
-// Per surface block (numbered by `surfaceOf`, per slot), its block coordinates.
-std::vector<std::array<int, 3>> surfaceBlockCoords(const BlockTable& table,
-                                                   const std::vector<int32_t>& surfaceOf,
-                                                   size_t surface) {
-    std::vector<std::array<int, 3>> blockOf(surface);
-    const std::vector<int> own = table.ownTiles();
-    tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
-        const size_t page = (p + kFirstOwnPage) * kPageEntries;
-        forEachBlockOfTile(table.blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
-                           [&](int bi, int bj, int bk) {
-                               const int32_t n = surfaceOf[page + pageLocal(bi, bj, bk)];
-                               if (n >= 0) blockOf[static_cast<size_t>(n)] = {bi, bj, bk};
-                           });
-    });
-    return blockOf;
-}
-
 }  // namespace
 
 int apronSize(int B) { return (B + 1) * (B + 1) * (B + 1) - B * B * B; }
 int apronWords(int B) { return (apronSize(B) + 63) / 64; }
 
-SplitBlocks splitBlocks(const Grid& grid) {
+ApronSamples splitAprons(const Grid& grid) {
     const Layout L(grid.shape(), grid.blockSize());
-    const auto aprons = apronPositions(L.B);
     const GridView view = grid.view();
     const std::vector<float>& samples = grid.blockSamples();  // B^3 own samples per block first
     const size_t surface = grid.surfaceBlockCount();
-    std::vector<size_t> blockOf(surface);  // surface index -> flat block index
+    // Per apron vertex (mask order): its neighbour entry and its index in that entry's samples,
+    // which are the owner's own samples where the entry is shared, else a constant or private
+    // block laid out the same way (decision 10).
+    std::vector<std::pair<int, int>> vertex;
+    for (const auto& p : apronPositions(L.B))
+        vertex.push_back({(p[0] == L.B) | (p[1] == L.B) << 1 | (p[2] == L.B) << 2, L.ownIndex(p)});
+    std::vector<std::array<int, 3>> blockOf(surface);  // per surface block, its coordinates
     grid.forEachPagedBlock([&](int bi, int bj, int bk, size_t slot) {
         const int32_t data = view.blockData[slot];
-        if (data >= 0)
-            blockOf[static_cast<size_t>(data)] =
-                (static_cast<size_t>(bk) * L.blocks[1] + bj) * L.blocks[0] + bi;
+        if (data >= 0) blockOf[static_cast<size_t>(data)] = {bi, bj, bk};
     });
-    // The sample index of flat block o, -1 for none.
-    auto dataOf = [&](size_t o) {
-        int c[3];
-        L.coords(o, c);
-        return view.blockData[view.blockSlot(c[0], c[1], c[2])];
+    // An apron vertex is implicit where its owner is a surface block holding the same value: all
+    // of an entry that reads the owner's samples, else vertex by vertex.
+    auto keptOf = [&](size_t s, auto&& keep) {
+        const int32_t* nb = view.blockNeighbors + s * 8;
+        int32_t own[8];  // per entry, the owner's own samples (a surface block), -1 for none
+        for (int code = 1; code < 8; ++code) {
+            int o[3];
+            own[code] = neighbourBlock(blockOf[s].data(), code, L.blocks, o)
+                            ? view.blockData[view.blockSlot(o[0], o[1], o[2])]
+                            : -1;
+        }
+        for (int a = 0; a < L.apron; ++a) {
+            const auto [code, index] = vertex[static_cast<size_t>(a)];
+            if (own[code] >= 0 && nb[code] == own[code]) continue;
+            const float v = samples[static_cast<size_t>(nb[code]) * L.own + index];
+            if (own[code] < 0 ||
+                !sameBits(v, samples[static_cast<size_t>(own[code]) * L.own + index]))
+                keep(a, v);
+        }
     };
-    // Apron vertex p of surface block s, as its cells read it (through the neighbour entries).
-    auto apronSample = [&](size_t s, const std::array<int, 3>& p) {
-        return samples[view.blockSampleIndex(static_cast<int32_t>(s), p[0], p[1], p[2])];
-    };
-    SplitBlocks out;
-    out.own.resize(surface * L.own);
+    ApronSamples out;
     out.masks.assign(surface * L.words, 0);
     std::vector<uint32_t> kept(surface);
-    // Pass 1: own samples and masks; pass 2 (after the prefix sums) the explicit samples.
-    std::copy(samples.begin(), samples.begin() + static_cast<ptrdiff_t>(surface * L.own),
-              out.own.begin());
+    // Pass 1: the masks; pass 2 (after the prefix sums) the kept samples.
     tbb::parallel_for(size_t(0), surface, [&](size_t s) {
-        int c[3];
-        L.coords(blockOf[s], c);
         uint64_t* mask = out.masks.data() + s * L.words;
-        for (int a = 0; a < L.apron; ++a) {
-            const auto& p = aprons[static_cast<size_t>(a)];
-            const float v = apronSample(s, p);
-            size_t o = 0;
-            int32_t owner = -1;
-            const bool implicit = L.owner(c, p, o) && (owner = dataOf(o)) >= 0 &&
-                                  sameBits(v, samples[static_cast<size_t>(owner) * L.own +
-                                                      static_cast<size_t>(L.ownIndex(p))]);
-            if (!implicit) {
-                mask[a / 64] |= uint64_t{1} << (a % 64);
-                ++kept[s];
-            }
-        }
+        keptOf(s, [&](int a, float) {
+            mask[a / 64] |= uint64_t{1} << (a % 64);
+            ++kept[s];
+        });
     });
     std::vector<size_t> start(surface + 1, 0);
     for (size_t s = 0; s < surface; ++s) start[s + 1] = start[s] + kept[s];
     out.explicitly.resize(start[surface]);
     tbb::parallel_for(size_t(0), surface, [&](size_t s) {
-        const uint64_t* mask = out.masks.data() + s * L.words;
         size_t n = start[s];
-        for (int a = 0; a < L.apron; ++a)
-            if ((mask[a / 64] >> (a % 64)) & 1u) {
-                const auto& p = aprons[static_cast<size_t>(a)];
-                out.explicitly[n++] = apronSample(s, p);
-            }
+        keptOf(s, [&](int, float v) { out.explicitly[n++] = v; });
     });
     return out;
 }
 
-std::vector<float> joinBlocks(const GridShape& shape, int blockSize, const BlockTable& table,
-                              const SplitBlocks& split, const std::string& source) {
-    const Layout L(shape, blockSize);
-    const auto aprons = apronPositions(L.B);
+Grid joinAprons(SparseGridBuilder& builder, std::vector<uint64_t> masks, uint64_t keptCount,
+                KeptApronReader read, uint64_t window, const std::string& source) {
+    const GridView& shapeView = builder.view();
+    const Layout L(shapeView.shape, shapeView.blockSize);
     auto corrupt = [&](const std::string& what) {
         return InputError(source + ": corrupt compressed .sdfg: " + what);
     };
-    for (int a = 0; a < 3; ++a)
-        if (table.blocks[a] != L.blocks[a]) throw corrupt("block table size");
-    // Per slot the surface index (flat block order), and per surface block its coordinates.
-    size_t surface = 0;
-    const std::vector<int32_t> surfaceOf = table.surfaceIndices(surface);
-    if (surfaceOf.empty() && surface > 0) throw corrupt("more than 2^31 - 1 surface blocks");
-    if (split.own.size() != surface * L.own || split.masks.size() != surface * L.words)
+    const size_t surface = builder.surfaceBlocks();
+    if (masks.size() != surface * L.words)
         throw corrupt("the flags name " + std::to_string(surface) +
-                      " surface blocks; the samples and masks do not");
-    const std::vector<std::array<int, 3>> blockOf = surfaceBlockCoords(table, surfaceOf, surface);
-    std::vector<size_t> start(surface + 1, 0);
-    for (size_t s = 0; s < surface; ++s) {
-        size_t kept = 0;
-        for (int w = 0; w < L.words; ++w) kept += std::popcount(split.masks[s * L.words + w]);
-        start[s + 1] = start[s] + kept;
-    }
-    if (start[surface] != split.explicitly.size()) throw corrupt("explicit apron sample count");
+                      " surface blocks; the apron masks do not");
+    auto keptBy = [&](size_t d) {
+        uint64_t kept = 0;
+        for (int w = 0; w < L.words; ++w) kept += std::popcount(masks[d * L.words + w]);
+        return kept;
+    };
     // Per apron vertex, once: where it goes, which neighbour owns it (bit 0: +x, 1: +y, 2: +z)
     // and its index among that neighbour's own samples.
     struct Entry {
         int dst, neighbour, ownIndex;
     };
     std::vector<Entry> entries;
-    for (const auto& p : aprons)
+    for (const auto& p : apronPositions(L.B))
         entries.push_back({(p[2] * L.V + p[1]) * L.V + p[0],
                            (p[0] == L.B) | (p[1] == L.B) << 1 | (p[2] == L.B) << 2, L.ownIndex(p)});
-    std::vector<float> samples(surface * L.per);
-    tbb::parallel_for(size_t(0), surface, [&](size_t s) {
-        float* dst = samples.data() + s * L.per;
-        const float* own = split.own.data() + s * L.own;
-        for (int k = 0; k < L.B; ++k)
-            for (int j = 0; j < L.B; ++j)
-                for (int i = 0; i < L.B; ++i)
-                    dst[(k * L.V + j) * L.V + i] = own[(k * L.B + j) * L.B + i];
-        const int* c = blockOf[s].data();
-        // The 7 neighbours' own samples (null: past the grid or without samples).
-        const float* neighbour[8] = {nullptr};
-        for (int code = 1; code < 8; ++code) {
-            int o[3];
-            if (!neighbourBlock(c, code, L.blocks, o)) continue;
-            const int32_t n = surfaceOf[table.slot(o[0], o[1], o[2])];
-            if (n >= 0) neighbour[code] = split.own.data() + static_cast<size_t>(n) * L.own;
+    const float* ownSamples = builder.ownSamples();
+    // Windows of blocks [d0, d1) whose kept samples fit `window` (a block alone may exceed it),
+    // each block's first kept sample counted from the window's.
+    std::vector<uint32_t> first;
+    window = std::min<uint64_t>(window, uint64_t{1} << 30);  // offsets within it fit 32 bits
+    uint64_t base = 0;
+    for (size_t d0 = 0, d1 = 0; d0 < surface; d0 = d1) {
+        first.assign(1, 0);
+        uint64_t run = 0;
+        for (d1 = d0; d1 < surface; ++d1) {
+            const uint64_t kept = keptBy(d1);
+            if (d1 > d0 && run + kept > window) break;
+            run += kept;
+            first.push_back(static_cast<uint32_t>(run));
         }
-        const uint64_t* mask = split.masks.data() + s * L.words;
-        size_t n = start[s];
-        for (int a = 0; a < L.apron; ++a) {
-            const Entry& e = entries[static_cast<size_t>(a)];
-            if ((mask[a / 64] >> (a % 64)) & 1u) {
-                dst[e.dst] = split.explicitly[n++];
-                continue;
+        if (run > keptCount - base) throw corrupt("explicit apron sample count");
+        const float* kept = read(base, base + run);
+        builder.forEachSurfaceBlock([&](int bi, int bj, int bk, int32_t d) {
+            if (static_cast<size_t>(d) < d0 || static_cast<size_t>(d) >= d1) return;
+            float block[9 * 9 * 9];  // (B+1)^3, B <= 8
+            const float* own = ownSamples + static_cast<size_t>(d) * L.own;
+            for (int k = 0; k < L.B; ++k)
+                for (int j = 0; j < L.B; ++j)
+                    std::memcpy(block + (k * L.V + j) * L.V, own + (k * L.B + j) * L.B,
+                                static_cast<size_t>(L.B) * sizeof(float));
+            // The 7 neighbours' own samples (null: past the grid or without samples).
+            const float* neighbour[8] = {nullptr};
+            for (int code = 1; code < 8; ++code) {
+                const int32_t n = builder.neighbourData(bi, bj, bk, code);
+                if (n >= 0) neighbour[code] = ownSamples + static_cast<size_t>(n) * L.own;
             }
-            const float* from = neighbour[e.neighbour];
-            if (!from) throw corrupt("an apron sample refers to a block without samples");
-            dst[e.dst] = from[e.ownIndex];
-        }
-        for (int a = L.apron; a < L.words * 64; ++a)
-            if ((mask[a / 64] >> (a % 64)) & 1u) throw corrupt("apron mask bits past the apron");
-    });
-    return samples;
+            // Entries whose kept samples differ from their owner's stay private to this block.
+            uint8_t privateEntries = 0;
+            const uint64_t* mask = masks.data() + static_cast<size_t>(d) * L.words;
+            uint32_t n = first[static_cast<size_t>(d) - d0];
+            for (int a = 0; a < L.apron; ++a) {
+                const Entry& e = entries[static_cast<size_t>(a)];
+                const float* from = neighbour[e.neighbour];
+                if ((mask[a / 64] >> (a % 64)) & 1u) {
+                    const float v = kept[n++];
+                    if (from && !sameBits(v, from[e.ownIndex]))
+                        privateEntries |= static_cast<uint8_t>(1u << e.neighbour);
+                    block[e.dst] = v;
+                    continue;
+                }
+                if (!from) throw corrupt("an apron sample refers to a block without samples");
+                block[e.dst] = from[e.ownIndex];
+            }
+            float bad = 0;  // NaN or infinity where any sample is not finite
+            for (int v = 0; v < L.per; ++v) bad += block[v] * 0.0f;
+            if (bad != 0.0f) throw corrupt("non-finite sample");
+            builder.addBlock(bi, bj, bk, block, privateEntries, /*ownInPlace=*/true);
+        });
+        base += run;
+    }
+    if (base != keptCount) throw corrupt("explicit apron sample count");
+    masks = {};  // before the skip and Lipschitz tables are made
+    return builder.finish();
+}
+
+Grid joinAprons(SparseGridBuilder& builder, const ApronSamples& aprons, const std::string& source) {
+    return joinAprons(
+        builder, aprons.masks, aprons.explicitly.size(),
+        [&](uint64_t from, uint64_t) { return aprons.explicitly.data() + from; },
+        aprons.explicitly.size(), source);
 }
 
 }  // namespace sdft

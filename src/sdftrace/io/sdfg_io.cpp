@@ -1,6 +1,10 @@
 #include "sdftrace/io/sdfg_io.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 #include <zstd.h>
 
@@ -10,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <memory>
 
 #include "block_aprons.h"
 #include "sdftrace/core/error.h"
@@ -174,15 +179,68 @@ void unshuffleFloats(const char* in, char* out, uint64_t bytes) {
         for (int b = 0; b < 4; ++b) out[4 * i + b] = in[b * n + i];
 }
 
+// One chunk, its floats byte-shuffled (in `scratch`), compressed by zstd with its checksum.
+std::vector<char> compressChunk(const std::vector<Section>& sections, const Chunk& ch, int level,
+                                std::vector<char>& scratch, const std::string& path) {
+    const Section& sec = sections[static_cast<size_t>(ch.section)];
+    const char* src = sec.data + ch.offset;
+    if (sec.floats) {
+        if (scratch.size() < ch.bytes) scratch.resize(ch.bytes);
+        shuffleFloats(src, scratch.data(), ch.bytes);
+        src = scratch.data();
+    }
+    ZSTD_CCtx* ctx = ZSTD_createCCtx();
+    ZSTD_CCtx_setParameter(ctx, ZSTD_c_compressionLevel, level);
+    ZSTD_CCtx_setParameter(ctx, ZSTD_c_checksumFlag, 1);
+    std::vector<char> out(ZSTD_compressBound(ch.bytes));
+    const size_t n = ZSTD_compress2(ctx, out.data(), out.size(), src, ch.bytes);
+    ZSTD_freeCCtx(ctx);
+    if (ZSTD_isError(n))
+        throw InputError(path + ": compression failed (" + ZSTD_getErrorName(n) + ")");
+    out.resize(n);
+    out.shrink_to_fit();
+    return out;
+}
+
+// Chunks compressed on every core and written in order as they come: the file is written while
+// the rest compresses, and only a few chunks are held at once. Fills in each chunk's compressed
+// size; returns their sum.
+uint64_t writeChunks(AtomicOutput& out, const std::vector<Section>& sections,
+                     const std::vector<Chunk>& chunks, int level, std::vector<uint64_t>& table,
+                     const std::string& path) {
+    using Packed = std::pair<size_t, std::vector<char>>;  // chunk, compressed bytes
+    tbb::enumerable_thread_specific<std::vector<char>> shuffled;
+    size_t next = 0;
+    uint64_t written = 0;
+    tbb::parallel_pipeline(
+        2 * static_cast<size_t>(tbb::this_task_arena::max_concurrency()),
+        tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                       [&](tbb::flow_control& fc) -> size_t {
+                                           if (next == chunks.size()) fc.stop();
+                                           return next++;
+                                       }) &
+            tbb::make_filter<size_t, Packed>(
+                tbb::filter_mode::parallel,
+                [&](size_t c) -> Packed {
+                    return {c, compressChunk(sections, chunks[c], level, shuffled.local(), path)};
+                }) &
+            tbb::make_filter<Packed, void>(tbb::filter_mode::serial_in_order, [&](const Packed& p) {
+                table[p.first] = p.second.size();
+                written += p.second.size();
+                out.write(p.second.data(), p.second.size());
+            }));
+    return written;
+}
+
 void saveCompressed(const Grid& grid, const std::string& path, int level, uint32_t version) {
     std::vector<Section> sections;
-    SplitBlocks split;
+    ApronSamples aprons;
     std::vector<uint8_t> flags, tileKinds;
     TableHeader th{0};
     if (grid.kind() == GridKind::Dense) {
         sections.push_back(section(grid.samples(), true));
     } else {
-        split = splitBlocks(grid);
+        aprons = splitAprons(grid);
         if (version == 3) {
             flags = grid.denseFlags();
             sections = {section(flags, false)};
@@ -196,36 +254,19 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
                         {reinterpret_cast<const char*>(slots.data()) + kFirstOwnPage * kPageEntries,
                          th.ownPages * kPageEntries, false}};
         }
-        sections.insert(sections.end(), {section(split.own, true), section(split.masks, false),
-                                         section(split.explicitly, true)});
+        // The own samples straight from the grid's buffer (its first B^3 per surface block).
+        const uint64_t B = static_cast<uint64_t>(grid.blockSize());
+        sections.insert(sections.end(),
+                        {{reinterpret_cast<const char*>(grid.blockSamples().data()),
+                          grid.surfaceBlockCount() * B * B * B * sizeof(float), true},
+                         section(aprons.masks, false),
+                         section(aprons.explicitly, true)});
     }
     const std::vector<float> texcoords = grid.expandedTexcoords();  // per (B+1)^3 vertex
     if (!texcoords.empty()) sections.push_back(section(texcoords, true));
     std::vector<uint64_t> sectionBytes;
     for (const Section& s : sections) sectionBytes.push_back(s.bytes);
     const std::vector<Chunk> chunks = chunksOf(sectionBytes, kChunkBytes);
-    std::vector<std::vector<char>> packed(chunks.size());
-    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
-        const Chunk& ch = chunks[c];
-        const Section& sec = sections[static_cast<size_t>(ch.section)];
-        const char* src = sec.data + ch.offset;
-        std::vector<char> shuffled;
-        if (sec.floats) {
-            shuffled.resize(ch.bytes);
-            shuffleFloats(src, shuffled.data(), ch.bytes);
-            src = shuffled.data();
-        }
-        ZSTD_CCtx* ctx = ZSTD_createCCtx();
-        ZSTD_CCtx_setParameter(ctx, ZSTD_c_compressionLevel, level);
-        ZSTD_CCtx_setParameter(ctx, ZSTD_c_checksumFlag, 1);
-        std::vector<char>& out = packed[c];
-        out.resize(ZSTD_compressBound(ch.bytes));
-        const size_t n = ZSTD_compress2(ctx, out.data(), out.size(), src, ch.bytes);
-        ZSTD_freeCCtx(ctx);
-        if (ZSTD_isError(n))
-            throw InputError(path + ": compression failed (" + ZSTD_getErrorName(n) + ")");
-        out.resize(n);
-    });
 
     Header h = headerOf(grid, version);
     CompressedHeader ch{};
@@ -235,21 +276,21 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
                          ? grid.storedSamples()
                          : grid.surfaceBlockCount() * (grid.blockSize() + 1) *
                                (grid.blockSize() + 1) * (grid.blockSize() + 1);
-    ch.apronCount = split.explicitly.size();
+    ch.apronCount = aprons.explicitly.size();
     ch.chunkCount = chunks.size();
-    std::vector<uint64_t> table;
-    for (const auto& p : packed) table.push_back(p.size());
     const size_t thBytes = version >= 4 ? sizeof th : 0;
-    h.payloadBytes = sizeof ch + thBytes + table.size() * sizeof(uint64_t);
-    for (uint64_t n : table) h.payloadBytes += n;
-    h.checksum = fnv1a64(table.data(), table.size() * sizeof(uint64_t),
-                         fnv1a64(&th, thBytes, fnv1a64(&ch, sizeof ch)));
+    std::vector<uint64_t> table(chunks.size(), 0);  // compressed sizes, known once written
     AtomicOutput out(path);
     out.write(&h, sizeof h);
     out.write(&ch, sizeof ch);
     out.write(&th, thBytes);
     out.write(table.data(), table.size() * sizeof(uint64_t));
-    for (const auto& p : packed) out.write(p.data(), p.size());
+    h.payloadBytes = sizeof ch + thBytes + table.size() * sizeof(uint64_t) +
+                     writeChunks(out, sections, chunks, level, table, path);
+    h.checksum = fnv1a64(table.data(), table.size() * sizeof(uint64_t),
+                         fnv1a64(&th, thBytes, fnv1a64(&ch, sizeof ch)));
+    out.writeAt(0, &h, sizeof h);
+    out.writeAt(sizeof h + sizeof ch + thBytes, table.data(), table.size() * sizeof(uint64_t));
     out.commit();
 }
 }  // namespace
@@ -361,9 +402,6 @@ PayloadLayout layoutOf(const Header& h, const GridShape& s, const std::string& p
     }
     if (fileBytes - sizeof h > l.bytes)
         throw InputError(path + ": corrupt: trailing bytes after the payload");
-    checkMemoryBudget(2.0 * static_cast<double>(l.bytes), path,
-                      "the grid's samples and the structures built from them",
-                      "convert or bake it at a lower resolution");
     return l;
 }
 
@@ -372,6 +410,18 @@ PayloadLayout layoutOf(const Header& h, const GridShape& s, const std::string& p
 namespace {
 
 using CorruptError = std::function<InputError(const std::string&)>;
+
+// Whether every value is finite, in parallel (x * 0 is NaN exactly where x is not finite).
+bool allFinite(const std::vector<float>& v) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, v.size(), 1 << 16), true,
+        [&](const tbb::blocked_range<size_t>& r, bool ok) {
+            float bad = 0;
+            for (size_t i = r.begin(); i < r.end(); ++i) bad += v[i] * 0.0f;
+            return ok && bad == 0.0f;
+        },
+        [](bool a, bool b) { return a && b; });
+}
 
 // A version-3 or -4 file's section sizes (in file order), from its headers; every count
 // checked against the grid before anything is allocated from it.
@@ -439,22 +489,33 @@ std::vector<uint64_t> chunkStarts(const MappedFile& file, const Header& h,
     return start;
 }
 
-// Every chunk decompressed in parallel to its section `dest[section]` (floats unshuffled), each
-// checked against its size and zstd's checksum.
+// Chunks [first, last) decompressed in parallel to their section's `dest[section]`, at their
+// offset in the section less `shift` (floats unshuffled; sections whose destination is null
+// skipped), each checked against its size and zstd's checksum and then released from memory.
+struct ChunkRange {
+    size_t first, last;
+    uint64_t shift = 0;
+};
 void decompressChunks(const MappedFile& file, const std::vector<Chunk>& chunks,
                       const std::vector<uint64_t>& start, const std::vector<uint64_t>& table,
                       const std::vector<char*>& dest, const std::vector<bool>& floats,
-                      const CorruptError& corrupt) {
-    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
+                      const CorruptError& corrupt, ChunkRange range) {
+    // One shuffle buffer per thread, kept across its chunks (a fresh 4 MiB each time costs a
+    // thousand page faults).
+    tbb::enumerable_thread_specific<std::vector<char>> buffers;
+    tbb::parallel_for(range.first, range.last, [&](size_t c) {
         const Chunk& k = chunks[c];
-        char* out = dest[k.section] + k.offset;
-        std::vector<char> shuffled(floats[k.section] ? k.bytes : 0);
+        if (!dest[k.section]) return;  // a section read in another pass
+        char* out = dest[k.section] + (k.offset - range.shift);
+        std::vector<char>& shuffled = buffers.local();
+        if (floats[k.section] && shuffled.size() < k.bytes) shuffled.resize(k.bytes);
         char* target = floats[k.section] ? shuffled.data() : out;
         const size_t got = ZSTD_decompress(target, k.bytes, file.data() + start[c], table[c]);
         if (ZSTD_isError(got) || got != k.bytes)
             throw corrupt("chunk " + std::to_string(c) + " (" +
                           (ZSTD_isError(got) ? ZSTD_getErrorName(got) : "wrong size") + ")");
         if (floats[k.section]) unshuffleFloats(shuffled.data(), out, k.bytes);
+        file.release(start[c], table[c]);  // read once: the file need not stay in our memory
     });
 }
 
@@ -495,81 +556,146 @@ BlockTable tableOf(const int blocks[3], const std::vector<uint8_t>& tileKinds,
     return t;
 }
 
-// Checks a version-3 or -4 file's tables against the header and the file, then decompresses its
-// chunks in parallel straight into the grid's buffers.
-Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
-                    const std::string& path) {
-    const uint64_t fileBytes = file.size();
-    const CorruptError corrupt = [&](const std::string& what) {
-        return InputError(path + ": corrupt compressed .sdfg: " + what);
-    };
-    if (h.payloadBytes != fileBytes - sizeof h)
-        throw corrupt("the header's payload size does not match the file size");
+// A version-3 or -4 file's section and chunk tables, checked against the header and the file
+// before anything is allocated from their numbers.
+struct Compressed {
     CompressedHeader ch{};
     TableHeader th{0};
-    const size_t thBytes = h.version >= 4 ? sizeof th : 0;
-    if (fileBytes - sizeof h < sizeof ch + thBytes) throw corrupt("truncated section header");
-    std::memcpy(&ch, file.data() + sizeof h, sizeof ch);
-    std::memcpy(&th, file.data() + sizeof h + sizeof ch, thBytes);
-    const std::vector<uint64_t> sectionBytes = compressedSections(h, s, ch, th, path, corrupt);
-    // The chunk count follows from the sections; checked (and the table against the file) before
-    // anything is allocated from these numbers.
-    uint64_t total = 0, expectedChunks = 0;
-    for (uint64_t b : sectionBytes) {
-        total += b;
-        expectedChunks += (b + ch.chunkBytes - 1) / ch.chunkBytes;
-    }
-    if (ch.chunkCount != expectedChunks) throw corrupt("chunk count");
-    if (ch.chunkCount > (fileBytes - sizeof h - sizeof ch - thBytes) / sizeof(uint64_t))
-        throw corrupt("truncated chunk table");
-    checkMemoryBudget(2.0 * static_cast<double>(total), path,
-                      "the grid's samples and the structures built from them",
-                      "convert or bake it at a lower resolution");
-    const std::vector<Chunk> chunks = chunksOf(sectionBytes, ch.chunkBytes);
-    std::vector<uint64_t> table;
-    const std::vector<uint64_t> start = chunkStarts(file, h, ch, th, thBytes, table, corrupt);
+    std::vector<uint64_t> sectionBytes;  // uncompressed, in file order
+    uint64_t total = 0;                  // their sum
+    std::vector<Chunk> chunks;
+    std::vector<uint64_t> start, size;  // per chunk: where it starts in the file, its bytes there
+    CorruptError corrupt;
 
-    // The sections' destinations, in file order.
-    const GridKind kind = static_cast<GridKind>(h.kind);
-    std::vector<uint8_t> flags, tileKinds;
-    std::vector<float> samples, texcoords;
-    SplitBlocks split;
-    std::vector<char*> dest;
-    std::vector<bool> floats;
-    auto into = [&](auto& v, bool isFloat) {
-        v.resize(sectionBytes[dest.size()] / sizeof(v[0]));
-        dest.push_back(reinterpret_cast<char*>(v.data()));
-        floats.push_back(isFloat);
-    };
-    if (kind == GridKind::Dense) {
-        into(samples, true);
-    } else {
-        if (h.version >= 4) into(tileKinds, false);
-        into(flags, false);
-        into(split.own, true);
-        into(split.masks, false);
-        into(split.explicitly, true);
+    Compressed(const MappedFile& file, const Header& h, const GridShape& s, const std::string& path)
+        : corrupt([path](const std::string& what) {
+              return InputError(path + ": corrupt compressed .sdfg: " + what);
+          }) {
+        const uint64_t fileBytes = file.size();
+        if (h.payloadBytes != fileBytes - sizeof h)
+            throw corrupt("the header's payload size does not match the file size");
+        const size_t thBytes = h.version >= 4 ? sizeof th : 0;
+        if (fileBytes - sizeof h < sizeof ch + thBytes) throw corrupt("truncated section header");
+        std::memcpy(&ch, file.data() + sizeof h, sizeof ch);
+        std::memcpy(&th, file.data() + sizeof h + sizeof ch, thBytes);
+        sectionBytes = compressedSections(h, s, ch, th, path, corrupt);
+        // The chunk count follows from the sections.
+        uint64_t expectedChunks = 0;
+        for (uint64_t b : sectionBytes) {
+            total += b;
+            expectedChunks += (b + ch.chunkBytes - 1) / ch.chunkBytes;
+        }
+        if (ch.chunkCount != expectedChunks) throw corrupt("chunk count");
+        if (ch.chunkCount > (fileBytes - sizeof h - sizeof ch - thBytes) / sizeof(uint64_t))
+            throw corrupt("truncated chunk table");
+        chunks = chunksOf(sectionBytes, ch.chunkBytes);
+        start = chunkStarts(file, h, ch, th, thBytes, size, corrupt);
     }
-    if (ch.texKind) into(texcoords, true);
-    decompressChunks(file, chunks, start, table, dest, floats, corrupt);
-    BlockTable blockTable;
-    if (kind == GridKind::Sparse) {
+
+    // Decompresses the sections whose `dest` is set (floats unshuffled where `floats`), in
+    // parallel, and clears `dest`.
+    void decompress(const MappedFile& file, std::vector<char*>& dest,
+                    const std::vector<bool>& floats) const {
+        decompressChunks(file, chunks, start, size, dest, floats, corrupt, {0, chunks.size()});
+        std::fill(dest.begin(), dest.end(), nullptr);
+    }
+
+    // Section `section`'s bytes [from, to), rounded out to whole chunks, decompressed into `out`
+    // (resized); returns where `from` lies in it.
+    size_t decompressPart(const MappedFile& file, size_t section, uint64_t from, uint64_t to,
+                          bool isFloat, std::vector<char>& out) const {
+        size_t first = 0;  // the section's first chunk
+        while (first < chunks.size() && chunks[first].section != static_cast<int>(section)) ++first;
+        const uint64_t c0 = from / ch.chunkBytes, c1 = (to + ch.chunkBytes - 1) / ch.chunkBytes;
+        const uint64_t shift = c0 * ch.chunkBytes;
+        out.resize(std::min(c1 * ch.chunkBytes, sectionBytes[section]) - shift);
+        std::vector<char*> dest(sectionBytes.size(), nullptr);
+        std::vector<bool> floats(sectionBytes.size(), false);
+        dest[section] = out.data();
+        floats[section] = isFloat;
+        decompressChunks(file, chunks, start, size, dest, floats, corrupt,
+                         {first + c0, first + c1, shift});
+        return from - shift;
+    }
+
+    // A sparse grid's block table, from its first section(s) (version 4: tile kinds and own
+    // pages; version 3: flat flags).
+    BlockTable blockTable(const MappedFile& file, const Header& h, const GridShape& s,
+                          const std::string& path) const {
+        std::vector<char*> dest(sectionBytes.size(), nullptr);
+        std::vector<uint8_t> tileKinds(h.version >= 4 ? sectionBytes[0] : 0),
+            flags(sectionBytes[tableSections(h) - 1]);
+        if (h.version >= 4) dest[0] = reinterpret_cast<char*>(tileKinds.data());
+        dest[tableSections(h) - 1] = reinterpret_cast<char*>(flags.data());
+        decompress(file, dest, std::vector<bool>(dest.size(), false));
         const int B = static_cast<int>(h.blockSize);
         const int blocks[3] = {(s.cells[0] + B - 1) / B, (s.cells[1] + B - 1) / B,
                                (s.cells[2] + B - 1) / B};
-        blockTable = h.version >= 4 ? tableOf(blocks, tileKinds, std::move(flags), corrupt)
-                                    : BlockTable::fromDense(blocks, flags, path);
-        samples = joinBlocks(s, B, blockTable, split, path);
-        split = {};
+        return h.version >= 4 ? tableOf(blocks, tileKinds, std::move(flags), corrupt)
+                              : BlockTable::fromDense(blocks, flags, path);
     }
-    for (float v : samples)
-        if (!std::isfinite(v)) throw corrupt("non-finite sample");
-    Grid grid = kind == GridKind::Dense
-                    ? Grid::dense(s, std::move(samples))
-                    : Grid::sparseFromTable(s, static_cast<int>(h.blockSize), h.background,
-                                            std::move(blockTable), std::move(samples), path);
-    if (ch.texKind)
-        grid.setExpandedTexcoords(static_cast<TexcoordKind>(ch.texKind), texcoords, path);
+    static size_t tableSections(const Header& h) { return h.version >= 4 ? 2 : 1; }
+};
+
+// Decompresses a version-3 or -4 file's chunks in parallel straight into the grid's buffers.
+Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
+                    const std::string& path) {
+    const Compressed c(file, h, s, path);
+    const CorruptError& corrupt = c.corrupt;
+    const std::vector<uint64_t>& sectionBytes = c.sectionBytes;
+    // The grid's samples are decompressed where the grid keeps them: beside them only the apron
+    // masks and kept samples, and the tables.
+    checkMemoryBudget(1.25 * static_cast<double>(c.total), path,
+                      "the grid's samples and the structures built from them",
+                      "convert or bake it at a lower resolution");
+    std::vector<char*> dest(sectionBytes.size(), nullptr);
+    std::vector<bool> floats(sectionBytes.size(), false);
+    auto into = [&](size_t section, auto& v, bool isFloat) {
+        v.resize(sectionBytes[section] / sizeof(v[0]));
+        dest[section] = reinterpret_cast<char*>(v.data());
+        floats[section] = isFloat;
+    };
+    auto decompress = [&] { c.decompress(file, dest, floats); };
+    std::vector<float> texcoords;
+    Grid grid;
+    if (static_cast<GridKind>(h.kind) == GridKind::Dense) {
+        std::vector<float> samples;
+        into(0, samples, true);
+        if (c.ch.texKind) into(1, texcoords, true);
+        decompress();
+        if (!allFinite(samples)) throw corrupt("non-finite sample");
+        grid = Grid::dense(s, std::move(samples));
+    } else {
+        // First the block table, which numbers the surface blocks and sizes the grid's buffers.
+        const int B = static_cast<int>(h.blockSize);
+        SparseGridBuilder builder(s, B, h.background, c.blockTable(file, h, s, path), path);
+        const size_t tableSections = Compressed::tableSections(h);
+        const uint64_t ownBytes = builder.surfaceBlocks() * static_cast<uint64_t>(B * B * B) * 4;
+        if (sectionBytes[tableSections] != ownBytes)
+            throw corrupt("the flags name " + std::to_string(builder.surfaceBlocks()) +
+                          " surface blocks; the samples do not");
+        // Then the own samples straight into the grid's buffer, and the apron masks.
+        std::vector<uint64_t> masks;
+        dest[tableSections] = reinterpret_cast<char*>(builder.ownSamples());
+        floats[tableSections] = true;
+        into(tableSections + 1, masks, false);
+        if (c.ch.texKind) into(tableSections + 3, texcoords, true);
+        decompress();
+        // The kept apron samples, a few chunks at a time as the blocks ask for them.
+        const size_t keptSection = tableSections + 2;
+        auto read = [&c, &file, keptSection, window = std::make_shared<std::vector<char>>()](
+                        uint64_t from, uint64_t to) {
+            const size_t at = c.decompressPart(file, keptSection, from * sizeof(float),
+                                               to * sizeof(float), true, *window);
+            return reinterpret_cast<const float*>(window->data() + at);
+        };
+        const uint64_t windowChunks =
+            std::max<uint64_t>(4, tbb::this_task_arena::max_concurrency());
+        grid = joinAprons(builder, std::move(masks), c.ch.apronCount, read,
+                          windowChunks * c.ch.chunkBytes / sizeof(float), path);
+    }
+    if (c.ch.texKind)
+        grid.setExpandedTexcoords(static_cast<TexcoordKind>(c.ch.texKind), texcoords, path);
     return grid;
 }
 
@@ -578,17 +704,21 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
 namespace {
 
 Grid readSdfg(const std::string& path) {
-    const MappedFile file(path);
+    const MappedFile file(path, MappedFile::Load::Lazy);  // each piece released once read
     const uint64_t fileBytes = file.size();
     const Header h = readHeader(file, path);
     const GridShape s = shapeOf(h, path);
     if (h.version >= 3) return loadCompressed(file, h, s, path);
     const PayloadLayout l = layoutOf(h, s, path, fileBytes);
+    checkMemoryBudget(2.0 * static_cast<double>(l.bytes), path,
+                      "the grid's samples and the structures built from them",
+                      "convert or bake it at a lower resolution");
 
     uint64_t pos = sizeof h;
     auto readExact = [&](void* dst, size_t bytes) {
         if (bytes > fileBytes - pos) throw InputError(path + ": truncated payload");
         if (bytes) std::memcpy(dst, file.data() + pos, bytes);
+        file.release(pos, bytes);
         pos += bytes;
     };
     uint64_t sum = 0xcbf29ce484222325ull;
@@ -615,8 +745,7 @@ Grid readSdfg(const std::string& path) {
         sum = fnv1a64(texcoords.data(), texcoords.size() * sizeof(float), sum);
     }
     if (sum != h.checksum) throw InputError(path + ": corrupt: payload checksum mismatch");
-    for (float v : samples)
-        if (!std::isfinite(v)) throw InputError(path + ": corrupt: non-finite sample");
+    if (!allFinite(samples)) throw InputError(path + ": corrupt: non-finite sample");
     if (l.texcoords && texHeader[0] != static_cast<uint32_t>(TexcoordKind::Sphere) &&
         texHeader[0] != static_cast<uint32_t>(TexcoordKind::Cylinder)) {
         throw InputError(path + ": unknown texture-coordinate kind " +
@@ -635,6 +764,54 @@ Grid readSdfg(const std::string& path) {
 
 Grid loadSdfg(const std::string& path) {
     return readWithinBudget(path, [&] { return readSdfg(path); });
+}
+
+SdfgSummary readSdfgSummary(const std::string& path) {
+    const MappedFile file(path, MappedFile::Load::Lazy);  // the header and tables alone are read
+    const Header h = readHeader(file, path);
+    SdfgSummary r;
+    r.version = h.version;
+    r.kind = static_cast<GridKind>(h.kind);
+    r.shape = shapeOf(h, path);
+    r.fileBytes = file.size();
+    BlockTable table;
+    if (h.version >= 3) {
+        const Compressed c(file, h, r.shape, path);
+        r.texcoords = static_cast<TexcoordKind>(c.ch.texKind);
+        if (r.kind == GridKind::Sparse) table = c.blockTable(file, h, r.shape, path);
+    } else {
+        const PayloadLayout l = layoutOf(h, r.shape, path, file.size());
+        if (l.kind == GridKind::Sparse) {
+            const int B = static_cast<int>(h.blockSize);
+            const int blocks[3] = {(r.shape.cells[0] + B - 1) / B, (r.shape.cells[1] + B - 1) / B,
+                                   (r.shape.cells[2] + B - 1) / B};
+            const uint8_t* flags = reinterpret_cast<const uint8_t*>(file.data()) + sizeof h;
+            table = BlockTable::fromDense(blocks, std::vector<uint8_t>(flags, flags + l.numBlocks),
+                                          path);
+        }
+        if (l.texcoords) {  // its kind follows the samples
+            const uint64_t samples = (l.bytes - l.numBlocks - l.texHeaderBytes) / 16;
+            uint32_t kind = 0;
+            std::memcpy(&kind, file.data() + sizeof h + l.numBlocks + 4 * samples, sizeof kind);
+            if (kind != static_cast<uint32_t>(TexcoordKind::Sphere) &&
+                kind != static_cast<uint32_t>(TexcoordKind::Cylinder))
+                throw InputError(path + ": unknown texture-coordinate kind " +
+                                 std::to_string(kind) + " (accepted: 1 sphere, 2 cylinder)");
+            r.texcoords = static_cast<TexcoordKind>(kind);
+        }
+    }
+    if (r.kind == GridKind::Dense) {
+        r.sampleBytes = r.shape.vertexCount() * sizeof(float);
+        r.memoryBytes = r.sampleBytes;
+    } else {
+        r.blockSize = static_cast<int>(h.blockSize);
+        r.background = h.background;
+        r.blocks = countBlocks(table.blocks, table.tiles, table.tilePage, table.flags);
+        const uint64_t B = h.blockSize;
+        r.sampleBytes = r.blocks.surface * B * B * B * sizeof(float);
+        r.memoryBytes = Grid::sparseMemoryEstimate(table, r.blocks.surface, r.blockSize);
+    }
+    return r;
 }
 
 }  // namespace sdft
