@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/memory_budget.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/test_util.h"
 #include "sdftrace/io/grid_file.h"
@@ -61,6 +62,29 @@ TEST(Vdb, RoundTripKeepsTheBandExactlyAndTheSignEverywhere) {
         std::filesystem::remove(vdb);
         std::filesystem::remove(back);
     }
+}
+
+// The reader counts the nodes it makes against the memory budget as it reads them: a budget of
+// 20 times the file loads it (the tree takes a few times the file; a bound of ~40 times, the
+// worst an upper node can cost, refused real level sets), and one under the tree refuses it,
+// naming what needed the memory.
+TEST(Vdb, TheMemoryBudgetCountsTheTreeAsItIsRead) {
+    const std::string vdb = tempPath("budget.vdb");
+    saveGridFile(torusGrid(GridKind::Sparse), vdb);
+    const double file = static_cast<double>(std::filesystem::file_size(vdb));
+    const double before = memoryBudgetIsSet() ? memoryBudgetBytes() : 0;  // 0: the default
+    setMemoryBudgetBytes(20 * file);
+    EXPECT_NO_THROW(loadGridFile(vdb));
+    setMemoryBudgetBytes(1.5 * file);
+    try {
+        loadGridFile(vdb);
+        ADD_FAILURE() << "loaded over the budget";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("the file and its tree"), std::string::npos)
+            << e.what();
+    }
+    setMemoryBudgetBytes(before);
+    std::filesystem::remove(vdb);
 }
 
 // A level set made by OpenVDB's own tools renders here: it matches the analytic sphere.
