@@ -89,7 +89,7 @@ TEST(RenderReference, SpheresOnAFloorMatchAnalyticRayTracing) {
             Vec3 n;
             const Sphere* s = nullptr;
             float t = intersect(ray, n, s);
-            refHit[i] = std::isfinite(t) && t < 100;
+            refHit[i] = std::isfinite(t);  // the floor reaches the horizon
             refDepth[i] = t;
             refNormal[i] = n;
             refObject[i] = s;

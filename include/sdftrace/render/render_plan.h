@@ -15,6 +15,7 @@
 #include "sdftrace/field/node.h"
 #include "sdftrace/field/tape.h"
 #include "sdftrace/math/camera.h"
+#include "sdftrace/render/horizon.h"
 #include "sdftrace/render/lighting.h"
 #include "sdftrace/render/mesh_primary.h"
 #include "sdftrace/render/render_settings.h"
@@ -49,6 +50,9 @@ struct RenderPlan {
     // The field's bounds (nodeBounds of the scene's root; everything when unbounded), from which
     // settings.maxDistance is resolved for the plan's camera (resolveMaxDistance).
     Bounds3 sceneBounds = Bounds3::everything();
+    // The top-level infinite planes, seen to the horizon (horizon.h); with them the automatic
+    // t_max reaches past the rest of the scene, not the planes.
+    HorizonPlanes horizon;
 };
 
 // Primary rays' t_max for `camera`: settings.maxDistance as given, or while it is automatic

@@ -178,6 +178,10 @@ SDFT_HOST_DEVICE inline Vec3 pathRadiance(const PathPixelView& v, const Material
             hit = march(field, ray, d.primary.maxDistance, inside, v.secondary, t, value,
                         c.secondaryEvaluations);
         }
+        if (!hit && !inside && horizonHit(d.primary.horizon, ray, t)) {
+            hit = true;  // a top-level plane past the rest of the scene
+            value = 0;
+        }
         if (!hit) {
             L += beta * (depth == 0 ? d.background : v.environment);
             break;

@@ -44,6 +44,7 @@ PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame
     v.options = plan.settings.trace;
     v.options.pixelRadius = v.camera.pixelRadius();
     v.maxDistance = plan.settings.maxDistance;
+    v.horizon = plan.horizon;
     v.normalSpacingMin = plan.settings.normalSpacingMin;
     v.jitter[0] = frame.pixelJitter[0];
     v.jitter[1] = frame.pixelJitter[1];

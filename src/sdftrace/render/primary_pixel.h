@@ -8,6 +8,7 @@
 #include "sdftrace/core/macros.h"
 #include "sdftrace/field/tape_view.h"
 #include "sdftrace/math/camera.h"
+#include "sdftrace/render/horizon.h"
 #include "sdftrace/render/mesh_primary.h"
 #include "sdftrace/render/normal_stencil.h"
 #include "sdftrace/trace/grid_dda.h"
@@ -31,6 +32,9 @@ struct PrimaryPixelView {
     Camera camera{CameraDesc{}};
     TraceOptions options;  // the plan's primary-ray options, pixelRadius set from the camera
     float maxDistance = kInfinity;
+    // The top-level infinite planes, met analytically past everything else (horizon.h): primary
+    // rays and every secondary ray that leaves the scene see them to the horizon.
+    HorizonPlanes horizon;
     float normalSpacingMin = 1e-4f;  // RenderSettings::normalSpacingMin
     float jitter[2] = {0, 0};
     NormalEstimator normals = NormalEstimator::Tetrahedral;
@@ -83,6 +87,10 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
         return out;
     }
     if (!v.meshesOnly) out.trace = traceTapeRay(v.primaryField, seg, v.options);
+    if (!out.trace.hit && horizonHit(v.horizon, seg.ray, out.trace.t)) {
+        out.trace.hit = true;
+        out.trace.value = 0;
+    }
     if (v.meshes.count > 0) {
         const float tMax = out.trace.hit ? out.trace.t : seg.tMax;
         const MeshPrimaryHit h = meshPrimaryHit(v.meshes, seg.ray, tMax);

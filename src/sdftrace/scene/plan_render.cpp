@@ -78,8 +78,10 @@ RenderPlan planRender(const Scene& scene) {
     plan.deviceGrids = scene.deviceGrids;
     compileField(plan, scene.root);
     plan.sceneBounds = nodeBounds(*scene.root);
+    plan.horizon = horizonPlanes(scene.root);
     scaleLengthDefaults(plan.settings, sceneLengthFactor(plan.sceneBounds, plan.camera));
-    plan.settings.maxDistance = resolveMaxDistance(plan.settings, plan.camera, plan.sceneBounds);
+    plan.settings.maxDistance = resolveMaxDistance(
+        plan.settings, plan.camera, plan.horizon.count ? plan.horizon.rest : plan.sceneBounds);
     if (plan.settings.primaryTriangles && !scene.meshes.empty()) {
         std::vector<PlacedMesh> meshes;
         const NodePtr rest = takeMeshes(scene.root, scene, {}, meshes);

@@ -123,7 +123,8 @@ std::vector<RenderOption> makeTable() {
          .range = kNonNegative,
          .what = "a distance",
          .doc = "t_max of primary rays (the scene bounds clip it further); 0: automatic, at least "
-                "100 and past the scene's bounds from the camera at its distance from the target",
+                "100 and past the scene's bounds from the camera at its distance from the target "
+                "(top-level planes are met to the horizon beyond those of everything else)",
          .get = [](const RenderSettings& s) { return s.maxDistanceAuto ? 0.0 : s.maxDistance; },
          .set =
              [](RenderSettings& s, double v) {
