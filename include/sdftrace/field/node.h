@@ -113,6 +113,8 @@ float lipschitzBound(const Node& n);
 float displaceScale(const Node& n);
 // Axis-aligned box containing the node's surface and interior (may be infinite).
 Bounds3 nodeBounds(const Node& n);
+// A scene's top-level objects: the children of its root union, or the root alone.
+std::vector<NodePtr> topLevelObjects(const NodePtr& root);
 // True when the node's value is at least the distance to nodeBounds() at every point outside those
 // bounds (exact-distance primitives, blobs, rigid or uniformly scaled transforms, unions and
 // repetitions of such). Bounds culling of smooth unions relies on it (decision 0002).

@@ -250,6 +250,12 @@ float displaceScale(const Node& n) {
     return child / (child + added);
 }
 
+std::vector<NodePtr> topLevelObjects(const NodePtr& root) {
+    if (!root) return {};
+    if (root->kind == NodeKind::Union) return root->children;
+    return {root};
+}
+
 Bounds3 nodeBounds(const Node& n) {
     const auto& k = n.params;
     auto child = [&](size_t i) { return nodeBounds(*n.children[i]); };

@@ -6,13 +6,7 @@ namespace sdft {
 
 HorizonPlanes horizonPlanes(const NodePtr& root) {
     HorizonPlanes h;
-    if (!root) return h;
-    std::vector<NodePtr> top;
-    if (root->kind == NodeKind::Union)
-        top = root->children;
-    else
-        top.push_back(root);
-    for (const NodePtr& n : top) {
+    for (const NodePtr& n : topLevelObjects(root)) {
         if (n->kind == NodeKind::Plane && n->params.size() >= 4) {
             if (h.count == HorizonPlanes::kMax) return {};
             const float* k = n->params.data();

@@ -12,12 +12,7 @@ void compileField(RenderPlan& plan, const NodePtr& root) {
     plan.convexObjects.clear();
     if (!s.convexBounds) return;
     // Keinert §3.5: each convex top-level object gets a tape of its own.
-    std::vector<NodePtr> objects;
-    if (root->kind == NodeKind::Union)
-        objects = root->children;
-    else
-        objects.push_back(root);
-    for (const NodePtr& o : objects) {
+    for (const NodePtr& o : topLevelObjects(root)) {
         const Bounds3 b = nodeBounds(*o);
         if (isConvex(*o) && b.finite() && !b.empty())
             plan.convexObjects.push_back({compileTape(o), b});
