@@ -106,28 +106,73 @@ ApronSamples splitAprons(const Grid& grid) {
     return out;
 }
 
+namespace {
+
+InputError corruptAprons(const std::string& source, const std::string& what) {
+    return InputError(source + ": corrupt compressed .sdfg: " + what);
+}
+
+// Per apron vertex (mask order): where it goes in a (B+1)^3 block, which neighbour owns it (bit 0:
+// +x, 1: +y, 2: +z) and its index among that neighbour's own samples.
+struct ApronEntry {
+    int dst, neighbour, ownIndex;
+};
+
+// Surface block d (at bi, bj, bk) expanded to its (B+1)^3 samples in `block`: its own samples, its
+// apron from its neighbours' own samples or, where `mask` says so, from `kept` (its kept samples in
+// mask order). Returns the neighbour entries whose kept samples differ from their owner's (they
+// stay private to the block).
+uint8_t expandBlock(const SparseGridBuilder& builder, const Layout& L, const float* ownSamples,
+                    const std::vector<ApronEntry>& entries, int bi, int bj, int bk, int32_t d,
+                    const uint64_t* mask, const float* kept, float* block,
+                    const std::string& source) {
+    const float* own = ownSamples + static_cast<size_t>(d) * L.own;
+    for (int k = 0; k < L.B; ++k)
+        for (int j = 0; j < L.B; ++j)
+            std::memcpy(block + (k * L.V + j) * L.V, own + (k * L.B + j) * L.B,
+                        static_cast<size_t>(L.B) * sizeof(float));
+    // The 7 neighbours' own samples (null: past the grid or without samples).
+    const float* neighbour[8] = {nullptr};
+    for (int code = 1; code < 8; ++code) {
+        const int32_t n = builder.neighbourData(bi, bj, bk, code);
+        if (n >= 0) neighbour[code] = ownSamples + static_cast<size_t>(n) * L.own;
+    }
+    uint8_t privateEntries = 0;
+    for (int a = 0; a < L.apron; ++a) {
+        const ApronEntry& e = entries[static_cast<size_t>(a)];
+        const float* from = neighbour[e.neighbour];
+        if ((mask[a / 64] >> (a % 64)) & 1u) {
+            const float v = *kept++;
+            if (from && !sameBits(v, from[e.ownIndex]))
+                privateEntries |= static_cast<uint8_t>(1u << e.neighbour);
+            block[e.dst] = v;
+            continue;
+        }
+        if (!from) throw corruptAprons(source, "an apron sample refers to a block without samples");
+        block[e.dst] = from[e.ownIndex];
+    }
+    float bad = 0;  // NaN or infinity where any sample is not finite
+    for (int v = 0; v < L.per; ++v) bad += block[v] * 0.0f;
+    if (bad != 0.0f) throw corruptAprons(source, "non-finite sample");
+    return privateEntries;
+}
+
+}  // namespace
+
 Grid joinAprons(SparseGridBuilder& builder, std::vector<uint64_t> masks, uint64_t keptCount,
                 KeptApronReader read, uint64_t window, const std::string& source) {
     const GridView& shapeView = builder.view();
     const Layout L(shapeView.shape, shapeView.blockSize);
-    auto corrupt = [&](const std::string& what) {
-        return InputError(source + ": corrupt compressed .sdfg: " + what);
-    };
     const size_t surface = builder.surfaceBlocks();
     if (masks.size() != surface * L.words)
-        throw corrupt("the flags name " + std::to_string(surface) +
-                      " surface blocks; the apron masks do not");
+        throw corruptAprons(source, "the flags name " + std::to_string(surface) +
+                                        " surface blocks; the apron masks do not");
     auto keptBy = [&](size_t d) {
         uint64_t kept = 0;
         for (int w = 0; w < L.words; ++w) kept += std::popcount(masks[d * L.words + w]);
         return kept;
     };
-    // Per apron vertex, once: where it goes, which neighbour owns it (bit 0: +x, 1: +y, 2: +z)
-    // and its index among that neighbour's own samples.
-    struct Entry {
-        int dst, neighbour, ownIndex;
-    };
-    std::vector<Entry> entries;
+    std::vector<ApronEntry> entries;
     for (const auto& p : apronPositions(L.B))
         entries.push_back({(p[2] * L.V + p[1]) * L.V + p[0],
                            (p[0] == L.B) | (p[1] == L.B) << 1 | (p[2] == L.B) << 2, L.ownIndex(p)});
@@ -146,48 +191,22 @@ Grid joinAprons(SparseGridBuilder& builder, std::vector<uint64_t> masks, uint64_
             run += kept;
             first.push_back(static_cast<uint32_t>(run));
         }
-        if (run > keptCount - base) throw corrupt("explicit apron sample count");
+        if (run > keptCount - base) throw corruptAprons(source, "explicit apron sample count");
         const float* kept = read(base, base + run);
         builder.forEachSurfaceBlock([&](int bi, int bj, int bk, int32_t d) {
-            if (static_cast<size_t>(d) < d0 || static_cast<size_t>(d) >= d1) return;
+            const size_t at = static_cast<size_t>(d);
+            if (at < d0 || at >= d1) return;
             float block[9 * 9 * 9];  // (B+1)^3, B <= 8
-            const float* own = ownSamples + static_cast<size_t>(d) * L.own;
-            for (int k = 0; k < L.B; ++k)
-                for (int j = 0; j < L.B; ++j)
-                    std::memcpy(block + (k * L.V + j) * L.V, own + (k * L.B + j) * L.B,
-                                static_cast<size_t>(L.B) * sizeof(float));
-            // The 7 neighbours' own samples (null: past the grid or without samples).
-            const float* neighbour[8] = {nullptr};
-            for (int code = 1; code < 8; ++code) {
-                const int32_t n = builder.neighbourData(bi, bj, bk, code);
-                if (n >= 0) neighbour[code] = ownSamples + static_cast<size_t>(n) * L.own;
-            }
-            // Entries whose kept samples differ from their owner's stay private to this block.
-            uint8_t privateEntries = 0;
-            const uint64_t* mask = masks.data() + static_cast<size_t>(d) * L.words;
-            uint32_t n = first[static_cast<size_t>(d) - d0];
-            for (int a = 0; a < L.apron; ++a) {
-                const Entry& e = entries[static_cast<size_t>(a)];
-                const float* from = neighbour[e.neighbour];
-                if ((mask[a / 64] >> (a % 64)) & 1u) {
-                    const float v = kept[n++];
-                    if (from && !sameBits(v, from[e.ownIndex]))
-                        privateEntries |= static_cast<uint8_t>(1u << e.neighbour);
-                    block[e.dst] = v;
-                    continue;
-                }
-                if (!from) throw corrupt("an apron sample refers to a block without samples");
-                block[e.dst] = from[e.ownIndex];
-            }
-            float bad = 0;  // NaN or infinity where any sample is not finite
-            for (int v = 0; v < L.per; ++v) bad += block[v] * 0.0f;
-            if (bad != 0.0f) throw corrupt("non-finite sample");
+            const uint8_t privateEntries =
+                expandBlock(builder, L, ownSamples, entries, bi, bj, bk, d,
+                            masks.data() + at * L.words, kept + first[at - d0], block, source);
             builder.addBlock(bi, bj, bk, block, privateEntries, /*ownInPlace=*/true);
         });
         base += run;
     }
-    if (base != keptCount) throw corrupt("explicit apron sample count");
-    masks = {};  // before the skip and Lipschitz tables are made
+    if (base != keptCount) throw corruptAprons(source, "explicit apron sample count");
+    masks = {};  // and the reader's buffers, before the skip and Lipschitz tables are made
+    read = nullptr;
     return builder.finish();
 }
 
