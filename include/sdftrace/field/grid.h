@@ -233,6 +233,12 @@ class Grid {
     // Writes surface block `data`'s (B+1)^3 samples (x fastest) into out.
     void expandBlock(int32_t data, float* out) const;
     const std::vector<uint64_t>& cellMasks() const { return m_cellMasks; }
+    // Per sample block past the surface blocks: the surface block and neighbour entry it serves,
+    // or -1 (a shared constant block); the entry's code.
+    const std::vector<int32_t>& apronFrom() const { return m_apronFrom; }
+    const std::vector<uint8_t>& apronCode() const { return m_apronCode; }
+    // The second, gentler Lipschitz bound of the blocks coded 1 (GridView::lipschitzLevel[1]).
+    float gentleLipschitz() const { return m_gentleLipschitz; }
     const std::vector<uint8_t>& blockSkip() const { return m_blockSkip; }
     // Texture coordinates beside the distances (GridView::texcoords); empty when none.
     const std::vector<float>& texcoords() const { return m_texcoords; }

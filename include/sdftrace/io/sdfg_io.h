@@ -13,16 +13,20 @@ namespace sdft {
 // Version 1: distances only. Version 2 appends texture coordinates (Liktor 2008, §5.5.2); it is
 // written only for grids that carry them. Version 3 holds the same sections compressed: chunks of
 // byte-shuffled floats compressed by zstd independently (written and read in parallel, each with
-// its own checksum). Version 4 (written by default) stores a sparse grid's flags as its two-level
-// table (block_table.h: one byte per tile of 8^3 blocks, then the flags of the tiles that vary)
-// instead of one byte per block of the bounding box, so that grids 8192 cells across save and load
-// in memory that follows their surface. All four are read.
-constexpr uint32_t kSdfgVersion = 4;
+// its own checksum). Version 4 (written for dense grids) stores a sparse grid's flags as its
+// two-level table (block_table.h: one byte per tile of 8^3 blocks, then the flags of the tiles that
+// vary) instead of one byte per block of the bounding box, so that grids 8192 cells across save and
+// load in memory that follows their surface. Version 5 (written by default for sparse grids) stores
+// a sparse grid as it is in memory: its sample blocks, neighbour entries, cell masks, skip
+// distances and Lipschitz codes, so that loading decompresses them into place and computes
+// nothing; dense and complete grids are written as version 4. All five are read.
+constexpr uint32_t kSdfgVersion = 5;
 
 struct SdfgWriteOptions {
     bool compress = true;  // version 4 (or `version`); false: version 1 or 2, the raw buffers
     int level = 3;         // zstd level (1 fastest .. 19 smallest)
-    uint32_t version = 4;  // compressed: 4, or 3 (flat block flags) for readers of that version
+    uint32_t version = 5;  // compressed: 5, or 4 (apron-free samples, tables recomputed on load)
+                           // or 3 (flat block flags) for readers of those versions
 };
 
 // Atomic (temporary name + rename).

@@ -1,8 +1,10 @@
 #include "sdftrace/field/sparse_grid_builder.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -108,7 +110,7 @@ void copyOwn(const float* expanded, float* own) {
 }  // namespace
 
 SparseGridBuilder::SparseGridBuilder(const GridShape& shape, int B, float background,
-                                     BlockTable table, const std::string& source) {
+                                     BlockTable table, const std::string& source, bool allocate) {
     Grid& g = m_grid;
     g.m_kind = GridKind::Sparse;
     g.m_shape = shape;
@@ -145,6 +147,7 @@ SparseGridBuilder::SparseGridBuilder(const GridShape& shape, int B, float backgr
     g.m_flags = std::move(table.flags);
     g.m_surfaceBlocks = surface;
     const size_t own = static_cast<size_t>(B) * B * B;
+    if (!allocate) return;
     // Room for the constant and private sample blocks finish() appends (a few per thousand
     // surface blocks), so that appending them moves nothing.
     const size_t room = (surface + surface / 64 + 16) * own;
@@ -216,6 +219,61 @@ void SparseGridBuilder::addBlock(int bi, int bj, int bk, const float* samples,
         for (const auto& v : vs) p.own[static_cast<size_t>(v.ownerOwn)] = samples[v.expanded];
         m_privates.local().push_back(std::move(p));
     }
+}
+
+Grid SparseGridBuilder::fromStored(StoredSparse p, const std::string& source) {
+    Grid& g = m_grid;
+    const size_t S = g.m_surfaceBlocks,
+                 own = static_cast<size_t>(g.m_blockSize) * g.m_blockSize * g.m_blockSize;
+    const size_t extra = p.apronFrom.size(), blocks = S + extra;
+    auto corrupt = [&](const std::string& what) {
+        return InputError(source + ": corrupt stored grid: " + what);
+    };
+    if (p.blockSamples.size() != blocks * own || p.blockNeighbors.size() != S * 8 ||
+        p.apronCode.size() != extra ||
+        p.cellMasks.size() != S * ((own + 63) / 64) ||
+        p.blockSkip.size() != g.m_flags.size() || p.blockLipschitz.size() != g.m_flags.size() ||
+        p.tileSkip.size() != g.m_tilePage.size() || p.tileLipschitz.size() != g.m_tilePage.size())
+        throw corrupt("a table's size does not fit the block table");
+    if (blocks > static_cast<size_t>(INT32_MAX)) throw corrupt("more than 2^31 - 1 sample blocks");
+    if (!(p.lipschitz >= 1) || !std::isfinite(p.lipschitz) || !(p.gentleLipschitz > 0) ||
+        !(p.gentleLipschitz <= p.lipschitz))
+        throw corrupt("Lipschitz bounds");
+    // Indices and codes in range (every view lookup then stays in its arrays); finite samples.
+    std::atomic<bool> ok{true};
+    tbb::parallel_for(size_t(0), S, [&](size_t s) {
+        const int32_t* nb = p.blockNeighbors.data() + 8 * s;
+        bool good = nb[0] == static_cast<int32_t>(s);
+        for (int c = 1; c < 8; ++c)
+            good = good && nb[c] >= 0 && static_cast<size_t>(nb[c]) < blocks;
+        if (!good) ok = false;
+    });
+    for (size_t e = 0; e < extra; ++e)
+        if (p.apronFrom[e] < -1 || p.apronFrom[e] >= static_cast<int32_t>(S) || p.apronCode[e] > 7)
+            ok = false;
+    for (const auto* codes : {&p.blockLipschitz, &p.tileLipschitz})
+        if (std::any_of(codes->begin(), codes->end(), [](uint8_t c) { return c > 1; })) ok = false;
+    if (!ok) throw corrupt("a sample block, neighbour entry or Lipschitz code out of range");
+    float bad = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, p.blockSamples.size(), 1 << 16), 0.0f,
+        [&](const tbb::blocked_range<size_t>& r, float sum) {
+            for (size_t i = r.begin(); i < r.end(); ++i) sum += p.blockSamples[i] * 0.0f;
+            return sum;
+        },
+        [](float a, float b) { return a + b; });
+    if (bad != 0.0f) throw corrupt("non-finite sample");
+    g.m_blockSamples = std::move(p.blockSamples);
+    g.m_blockNeighbors = std::move(p.blockNeighbors);
+    g.m_apronFrom = std::move(p.apronFrom);
+    g.m_apronCode = std::move(p.apronCode);
+    g.m_cellMasks = std::move(p.cellMasks);
+    g.m_blockSkip = std::move(p.blockSkip);
+    g.m_blockLipschitz = std::move(p.blockLipschitz);
+    g.m_tileSkip = std::move(p.tileSkip);
+    g.m_tileLipschitz = std::move(p.tileLipschitz);
+    g.m_lipschitz = p.lipschitz;
+    g.m_gentleLipschitz = p.gentleLipschitz;
+    return std::move(g);
 }
 
 int32_t SparseGridBuilder::constantId(uint32_t bits) {

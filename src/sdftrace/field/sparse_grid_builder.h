@@ -19,12 +19,30 @@
 
 namespace sdft {
 
+// A sparse grid's sample blocks and derived tables as a file stores them (.sdfg version 5), so
+// that loading need not recompute them (Grid's members of the same names).
+struct StoredSparse {
+    std::vector<float> blockSamples;                 // (surface + extra) * B^3
+    std::vector<int32_t> blockNeighbors;             // surface * 8
+    std::vector<int32_t> apronFrom;                  // extra
+    std::vector<uint8_t> apronCode;                  // extra
+    std::vector<uint64_t> cellMasks;                 // surface * ceil(B^3 / 64)
+    std::vector<uint8_t> blockSkip, blockLipschitz;  // per slot
+    std::vector<uint8_t> tileSkip, tileLipschitz;    // per tile
+    float lipschitz = 1, gentleLipschitz = 1;
+};
+
 class SparseGridBuilder {
   public:
     // Validates the table (throws InputError naming `source`) and numbers its surface blocks in
-    // flat block order (z, y, x).
+    // flat block order (z, y, x). With `allocate` false the sample buffers are not made (a grid
+    // from stored parts, fromStored).
     SparseGridBuilder(const GridShape& shape, int blockSize, float background, BlockTable table,
-                      const std::string& source);
+                      const std::string& source, bool allocate = true);
+
+    // The grid from its stored blocks and tables, every index and code checked against the table
+    // (throws InputError naming `source`); the builder must have been made with allocate false.
+    Grid fromStored(StoredSparse parts, const std::string& source);
 
     size_t surfaceBlocks() const { return m_grid.m_surfaceBlocks; }
     // The grid's shape and tables (its sample buffers are not the final ones until finish).

@@ -1,5 +1,5 @@
-// Fields for the complete-grid tests (CPU and GPU): grid shapes of any cell counts over [-1, 1]
-// along their longest axis, and a bumpy sphere sampled at their vertices.
+// Fields for the grid tests (CPU and GPU): grid shapes of any cell counts over [-1, 1] along their
+// longest axis, a bumpy sphere sampled at their vertices, and a sparse grid's own block table.
 #pragma once
 
 #include <algorithm>
@@ -9,6 +9,16 @@
 #include "sdftrace/field/grid.h"
 
 namespace sdft::testing {
+
+// A sparse grid's two-level block table, as the builder takes it.
+inline BlockTable tableOf(const Grid& g) {
+    BlockTable t;
+    const GridView v = g.view();
+    for (int a = 0; a < 3; ++a) t.blocks[a] = v.blocks[a], t.tiles[a] = v.tiles[a];
+    t.tilePage = g.tilePage();
+    t.flags = g.flags();
+    return t;
+}
 
 inline GridShape shapeOverUnitCube(int nx, int ny, int nz) {
     GridShape s;

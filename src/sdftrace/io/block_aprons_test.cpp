@@ -9,6 +9,7 @@
 #include "sdftrace/field/node.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/field/tape.h"
+#include "sdftrace/field/test_grid_fields.h"
 
 namespace sdft {
 namespace {
@@ -21,15 +22,7 @@ Grid sphereGrid(int blockSize) {
     return sampleGrid(tape, tape.bounds(), o);
 }
 
-// The grid's own two-level table.
-BlockTable tableOf(const Grid& g) {
-    BlockTable t;
-    const GridView v = g.view();
-    for (int a = 0; a < 3; ++a) t.blocks[a] = v.blocks[a], t.tiles[a] = v.tiles[a];
-    t.tilePage = g.tilePage();
-    t.flags = g.flags();
-    return t;
-}
+using testing::tableOf;
 
 // The grid again from its own samples (as a loader decompresses them into the builder) and the
 // aprons `aprons`.

@@ -128,11 +128,15 @@ struct CompressedHeader {
 static_assert(sizeof(CompressedHeader) == 32);
 
 // Version 4 follows it with the number of own pages of the block table (sparse; 0 when dense),
-// which sizes the section of their flags.
+// which sizes the section of their flags; version 5 (sparse) with the stored grid's surface
+// block count and Lipschitz bounds too.
 struct TableHeader {
     uint64_t ownPages;
+    uint64_t surfaceBlocks;            // version 5
+    float lipschitz, gentleLipschitz;  // version 5
 };
-static_assert(sizeof(TableHeader) == 8);
+static_assert(sizeof(TableHeader) == 24);
+size_t tableHeaderBytes(uint32_t version) { return version >= 5 ? 24 : version == 4 ? 8 : 0; }
 
 // The sections of the uncompressed payload, in file order. Dense: samples. Sparse: the block
 // flags (version 3: one byte per block of the box; version 4: one byte per tile, 0 outside, 1
@@ -232,6 +236,34 @@ uint64_t writeChunks(AtomicOutput& out, const std::vector<Section>& sections,
     return written;
 }
 
+// Version 5's sections of a sparse grid: its block table by tiles (as version 4), then its sample
+// blocks, neighbour entries, apron blocks' owners and codes, cell masks, per-slot skip distances
+// and Lipschitz codes, per-tile skip distances and Lipschitz codes: the grid as it is in memory,
+// written from its own buffers (4-byte words shuffled as floats are).
+void storedSections(const Grid& grid, std::vector<uint8_t>& tileKinds, TableHeader& th,
+                    std::vector<Section>& sections) {
+    tileKinds.resize(grid.tilePage().size());
+    for (size_t t = 0; t < tileKinds.size(); ++t)
+        tileKinds[t] = static_cast<uint8_t>(std::min(grid.tilePage()[t], kFirstOwnPage));
+    const std::vector<uint8_t>& slots = grid.flags();
+    th.ownPages = slots.size() / kPageEntries - kFirstOwnPage;
+    th.surfaceBlocks = grid.surfaceBlockCount();
+    th.lipschitz = grid.lipschitz();
+    th.gentleLipschitz = grid.gentleLipschitz();
+    sections = {section(tileKinds, false),
+                {reinterpret_cast<const char*>(slots.data()) + kFirstOwnPage * kPageEntries,
+                 th.ownPages * kPageEntries, false},
+                section(grid.blockSamples(), true),
+                section(grid.blockNeighbors(), true),
+                section(grid.apronFrom(), true),
+                section(grid.apronCode(), false),
+                section(grid.cellMasks(), true),
+                section(grid.blockSkip(), false),
+                section(grid.blockLipschitz(), false),
+                section(grid.tileSkip(), false),
+                section(grid.tileLipschitz(), false)};
+}
+
 void saveCompressed(const Grid& grid, const std::string& path, int level, uint32_t version) {
     std::vector<Section> sections;
     ApronSamples aprons;
@@ -239,6 +271,8 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
     TableHeader th{0};
     if (grid.kind() == GridKind::Dense) {
         sections.push_back(section(grid.samples(), true));
+    } else if (version >= 5) {
+        storedSections(grid, tileKinds, th, sections);
     } else {
         aprons = splitAprons(grid);
         if (version == 3) {
@@ -262,8 +296,13 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
                          section(aprons.masks, false),
                          section(aprons.explicitly, true)});
     }
-    const std::vector<float> texcoords = grid.expandedTexcoords();  // per (B+1)^3 vertex
-    if (!texcoords.empty()) sections.push_back(section(texcoords, true));
+    // Per (B+1)^3 vertex up to version 4; per stored sample in version 5.
+    const std::vector<float> texcoords =
+        version >= 5 ? std::vector<float>() : grid.expandedTexcoords();
+    if (version >= 5 && !grid.texcoords().empty())
+        sections.push_back(section(grid.texcoords(), true));
+    else if (!texcoords.empty())
+        sections.push_back(section(texcoords, true));
     std::vector<uint64_t> sectionBytes;
     for (const Section& s : sections) sectionBytes.push_back(s.bytes);
     const std::vector<Chunk> chunks = chunksOf(sectionBytes, kChunkBytes);
@@ -272,13 +311,14 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
     CompressedHeader ch{};
     ch.texKind = grid.texcoords().empty() ? 0 : static_cast<uint32_t>(grid.texcoordKind());
     ch.chunkBytes = kChunkBytes;
-    ch.sampleCount = grid.kind() == GridKind::Dense
-                         ? grid.storedSamples()
-                         : grid.surfaceBlockCount() * (grid.blockSize() + 1) *
-                               (grid.blockSize() + 1) * (grid.blockSize() + 1);
-    ch.apronCount = aprons.explicitly.size();
+    const uint64_t B = static_cast<uint64_t>(grid.blockSize());
+    ch.sampleCount = grid.kind() == GridKind::Dense ? grid.storedSamples()
+                     : version >= 5                 ? grid.blockSamples().size()
+                                    : grid.surfaceBlockCount() * (B + 1) * (B + 1) * (B + 1);
+    // Version 5: the sample blocks past the surface ones; before, the kept apron samples.
+    ch.apronCount = version >= 5 ? grid.apronFrom().size() : aprons.explicitly.size();
     ch.chunkCount = chunks.size();
-    const size_t thBytes = version >= 4 ? sizeof th : 0;
+    const size_t thBytes = tableHeaderBytes(version);
     std::vector<uint64_t> table(chunks.size(), 0);  // compressed sizes, known once written
     AtomicOutput out(path);
     out.write(&h, sizeof h);
@@ -296,7 +336,7 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
 }  // namespace
 
 void saveSdfg(const Grid& grid, const std::string& path, const SdfgWriteOptions& options) {
-    SDFT_CHECK(options.version == 3 || options.version == 4);
+    SDFT_CHECK(options.version >= 3 && options.version <= 5);
     // Versions 1-3 store one flag per block of the bounding box (the grid keeps them paged, see
     // block_table.h): checked before that array is made.
     const bool flatFlags = !options.compress || options.version == 3;
@@ -306,8 +346,14 @@ void saveSdfg(const Grid& grid, const std::string& path, const SdfgWriteOptions&
                           "the flat block flags of .sdfg versions 1-3",
                           "save it compressed (version 4 stores the block table by tiles)");
     }
+    // Version 5 stores a sparse grid as it is in memory; dense and complete grids (nothing to
+    // store beyond their samples, or a layout of their own) stay version 4.
+    const uint32_t version =
+        options.version == 5 && (grid.kind() == GridKind::Dense || grid.isComplete())
+            ? 4
+            : options.version;
     if (options.compress)
-        saveCompressed(grid, path, options.level, options.version);
+        saveCompressed(grid, path, options.level, version);
     else
         saveRaw(grid, path);
 }
@@ -425,6 +471,34 @@ bool allFinite(const std::vector<float>& v) {
 
 // A version-3 or -4 file's section sizes (in file order), from its headers; every count
 // checked against the grid before anything is allocated from it.
+// The sizes of a version-5 sparse file's sections (storedSections), from its headers.
+std::vector<uint64_t> storedSectionBytes(const Header& h, const GridShape& s,
+                                         const CompressedHeader& ch, const TableHeader& th,
+                                         const std::string& path, const CorruptError& corrupt) {
+    const uint64_t numBlocks = sparseBlockCount(h, s, path);
+    const uint64_t B = h.blockSize, own = B * B * B, words = (own + 63) / 64;
+    uint64_t tiles = 1;
+    for (int a = 0; a < 3; ++a) tiles *= ((s.cells[a] + B - 1) / B + kTileBlocks - 1) / kTileBlocks;
+    if (th.ownPages > tiles) throw corrupt("own page count");
+    const uint64_t surface = th.surfaceBlocks, extra = ch.apronCount;
+    if (surface > th.ownPages * kPageEntries || surface > numBlocks)
+        throw corrupt("surface block count does not fit the block table");
+    if (extra > 7 * surface || ch.sampleCount != (surface + extra) * own)
+        throw corrupt("sample count does not fit the block layout");
+    const uint64_t slots = (th.ownPages + kFirstOwnPage) * kPageEntries;
+    return {tiles,
+            th.ownPages * kPageEntries,
+            ch.sampleCount * sizeof(float),
+            surface * 8 * sizeof(int32_t),
+            extra * sizeof(int32_t),
+            extra,
+            surface * words * sizeof(uint64_t),
+            slots,
+            slots,
+            tiles,
+            tiles};
+}
+
 std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
                                          const CompressedHeader& ch, const TableHeader& th,
                                          const std::string& path, const CorruptError& corrupt) {
@@ -438,6 +512,8 @@ std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
         if (ch.apronCount != 0) throw corrupt("apron sample count");
         if (th.ownPages != 0) throw corrupt("own page count");
         sections = {ch.sampleCount * sizeof(float)};
+    } else if (h.version >= 5) {
+        sections = storedSectionBytes(h, s, ch, th, path, corrupt);
     } else {
         const uint64_t numBlocks = sparseBlockCount(h, s, path);
         const int B = static_cast<int>(h.blockSize);
@@ -574,7 +650,7 @@ struct Compressed {
         const uint64_t fileBytes = file.size();
         if (h.payloadBytes != fileBytes - sizeof h)
             throw corrupt("the header's payload size does not match the file size");
-        const size_t thBytes = h.version >= 4 ? sizeof th : 0;
+        const size_t thBytes = tableHeaderBytes(h.version);
         if (fileBytes - sizeof h < sizeof ch + thBytes) throw corrupt("truncated section header");
         std::memcpy(&ch, file.data() + sizeof h, sizeof ch);
         std::memcpy(&th, file.data() + sizeof h + sizeof ch, thBytes);
@@ -637,6 +713,44 @@ struct Compressed {
     static size_t tableSections(const Header& h) { return h.version >= 4 ? 2 : 1; }
 };
 
+// A version-5 sparse file: its sections decompressed in parallel into the grid's own buffers,
+// each index and code checked (SparseGridBuilder::fromStored); nothing recomputed.
+Grid loadStored(const MappedFile& file, const Header& h, const GridShape& s, const Compressed& c,
+                const std::string& path) {
+    SparseGridBuilder builder(s, static_cast<int>(h.blockSize), h.background,
+                              c.blockTable(file, h, s, path), path, /*allocate=*/false);
+    if (builder.surfaceBlocks() != c.th.surfaceBlocks)
+        throw c.corrupt("the flags name " + std::to_string(builder.surfaceBlocks()) +
+                        " surface blocks; the header " + std::to_string(c.th.surfaceBlocks));
+    StoredSparse p;
+    std::vector<float> texcoords;
+    std::vector<char*> dest(c.sectionBytes.size(), nullptr);
+    std::vector<bool> floats(c.sectionBytes.size(), false);
+    size_t next = 2;  // after the block table's two sections
+    auto into = [&](auto& v, bool shuffled) {
+        v.resize(c.sectionBytes[next] / sizeof(v[0]));
+        dest[next] = reinterpret_cast<char*>(v.data());
+        floats[next++] = shuffled;
+    };
+    into(p.blockSamples, true);
+    into(p.blockNeighbors, true);
+    into(p.apronFrom, true);
+    into(p.apronCode, false);
+    into(p.cellMasks, true);
+    into(p.blockSkip, false);
+    into(p.blockLipschitz, false);
+    into(p.tileSkip, false);
+    into(p.tileLipschitz, false);
+    if (c.ch.texKind) into(texcoords, true);
+    c.decompress(file, dest, floats);
+    p.lipschitz = c.th.lipschitz;
+    p.gentleLipschitz = c.th.gentleLipschitz;
+    Grid grid = builder.fromStored(std::move(p), path);
+    if (c.ch.texKind)
+        grid.setTexcoords(static_cast<TexcoordKind>(c.ch.texKind), std::move(texcoords), path);
+    return grid;
+}
+
 // Decompresses a version-3 or -4 file's chunks in parallel straight into the grid's buffers.
 Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
                     const std::string& path) {
@@ -666,6 +780,7 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
         if (!allFinite(samples)) throw corrupt("non-finite sample");
         grid = Grid::dense(s, std::move(samples));
     } else {
+        if (h.version >= 5) return loadStored(file, h, s, c, path);
         // First the block table, which numbers the surface blocks and sizes the grid's buffers.
         const int B = static_cast<int>(h.blockSize);
         SparseGridBuilder builder(s, B, h.background, c.blockTable(file, h, s, path), path);
@@ -775,10 +890,12 @@ SdfgSummary readSdfgSummary(const std::string& path) {
     r.shape = shapeOf(h, path);
     r.fileBytes = file.size();
     BlockTable table;
+    uint64_t extraBlocks = 0;
     if (h.version >= 3) {
         const Compressed c(file, h, r.shape, path);
         r.texcoords = static_cast<TexcoordKind>(c.ch.texKind);
         if (r.kind == GridKind::Sparse) table = c.blockTable(file, h, r.shape, path);
+        if (h.version >= 5) extraBlocks = c.ch.apronCount;  // the apron blocks, stored
     } else {
         const PayloadLayout l = layoutOf(h, r.shape, path, file.size());
         if (l.kind == GridKind::Sparse) {
@@ -809,7 +926,8 @@ SdfgSummary readSdfgSummary(const std::string& path) {
         r.blocks = countBlocks(table.blocks, table.tiles, table.tilePage, table.flags);
         const uint64_t B = h.blockSize;
         r.sampleBytes = r.blocks.surface * B * B * B * sizeof(float);
-        r.memoryBytes = Grid::sparseMemoryEstimate(table, r.blocks.surface, r.blockSize);
+        r.memoryBytes = Grid::sparseMemoryEstimate(table, r.blocks.surface, r.blockSize) +
+                        extraBlocks * (B * B * B * sizeof(float) + sizeof(int32_t) + 1);
     }
     return r;
 }

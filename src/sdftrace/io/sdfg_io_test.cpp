@@ -38,14 +38,15 @@ void writeAll(const std::string& path, const std::string& bytes) {
 // Versions 4 (the default: the block table by tiles), 3 (flat block flags, compressed) and 1
 // (raw) give back the same grid.
 TEST(Sdfg, RoundTripIsExactForBothLayoutsInEveryVersion) {
-    for (uint32_t written : {4u, 3u, 1u})
+    for (uint32_t written : {5u, 4u, 3u, 1u})
         for (GridKind kind : {GridKind::Dense, GridKind::Sparse}) {
             Grid g = makeGrid(kind);
             std::string path = tempPath("rt.sdfg");
-            saveSdfg(g, path, {.compress = written != 1, .version = written == 3 ? 3u : 4u});
+            saveSdfg(g, path, {.compress = written != 1, .version = written == 1 ? 4u : written});
             uint32_t version = 0;
             std::memcpy(&version, readAll(path).data() + 4, 4);
-            EXPECT_EQ(version, written);
+            // Version 5 stores sparse grids; dense ones stay version 4.
+            EXPECT_EQ(version, written == 5 && kind == GridKind::Dense ? 4u : written);
             Grid back = loadSdfg(path);
             EXPECT_EQ(back.kind(), kind);
             EXPECT_EQ(back.samples(), g.samples());
@@ -54,6 +55,15 @@ TEST(Sdfg, RoundTripIsExactForBothLayoutsInEveryVersion) {
             EXPECT_EQ(back.cellMasks(), g.cellMasks());
             EXPECT_EQ(back.lipschitz(), g.lipschitz());
             EXPECT_EQ(back.shape().voxelSize, g.shape().voxelSize);
+            // The derived tables, stored (version 5) or recomputed, are the grid's.
+            EXPECT_EQ(back.blockSamples(), g.blockSamples());
+            EXPECT_EQ(back.blockNeighbors(), g.blockNeighbors());
+            EXPECT_EQ(back.blockSkip(), g.blockSkip());
+            EXPECT_EQ(back.tileSkip(), g.tileSkip());
+            EXPECT_EQ(back.blockLipschitz(), g.blockLipschitz());
+            EXPECT_EQ(back.tileLipschitz(), g.tileLipschitz());
+            EXPECT_EQ(back.gentleLipschitz(), g.gentleLipschitz());
+            EXPECT_EQ(back.memoryBytes(), g.memoryBytes());
             std::filesystem::remove(path);
         }
 }
@@ -156,12 +166,12 @@ TEST(Sdfg, RejectsBadFilesBeforeAllocating) {
 // Versions 3 and 4: every table and chunk is checked against the header, the file and its
 // checksums.
 TEST(Sdfg, RejectsBadCompressedFiles) {
-    for (uint32_t version : {3u, 4u}) {
+    for (uint32_t version : {3u, 4u, 5u}) {
         std::string path = tempPath("good3.sdfg");
         saveSdfg(makeGrid(GridKind::Sparse), path, {.version = version});
         std::string good = readAll(path);
         std::filesystem::remove(path);
-        const size_t table = 64 + 32 + (version == 4 ? 8 : 0);  // the chunk table's offset
+        const size_t table = 64 + 32 + (version == 5 ? 24 : version == 4 ? 8 : 0);  // chunk table
         ASSERT_GT(good.size(), table + 8);
 
         expectRejected(good.substr(0, 40), "truncated");
@@ -169,9 +179,11 @@ TEST(Sdfg, RejectsBadCompressedFiles) {
         expectRejected(good + "xx", "payload size");
         std::string chunk = good;
         chunk[good.size() - 6] ^= 0x55;
-        // The explicit aprons: after the flags (version 4: tile kinds and own pages), the own
-        // samples and the masks.
-        expectRejected(chunk, version == 4 ? "chunk 4 (" : "chunk 3 (");
+        // The last chunk is named (versions 3 and 4: the explicit aprons; 5: the tiles' Lipschitz
+        // codes).
+        uint64_t chunks = 0;
+        std::memcpy(&chunks, good.data() + 64 + 24, 8);
+        expectRejected(chunk, "chunk " + std::to_string(chunks - 1) + " (");
         std::string badTable = good;
         badTable[table] ^= 0x01;
         expectRejected(badTable, "table checksum");
@@ -188,7 +200,13 @@ TEST(Sdfg, RejectsBadCompressedFiles) {
         uint64_t many = uint64_t{1} << 40;
         std::memcpy(&count[64 + 24], &many, 8);
         expectRejected(count, "chunk count");
-        if (version == 4) {
+        if (version == 5) {  // a surface block count the flags do not give
+            std::string surface = good;
+            uint64_t one = 1;
+            std::memcpy(&surface[64 + 32 + 8], &one, 8);
+            expectRejected(surface, "");
+        }
+        if (version >= 4) {
             std::string pages = good;
             std::memcpy(&pages[64 + 32], &many, 8);
             expectRejected(pages, "own page count");
@@ -200,7 +218,7 @@ TEST(Sdfg, RejectsBadCompressedFiles) {
 // and no sample is read (a damaged sample chunk goes unnoticed until the grid is loaded; a damaged
 // table does not).
 TEST(Sdfg, SummaryReadsTheHeaderAndTablesAlone) {
-    for (uint32_t written : {4u, 3u, 1u})
+    for (uint32_t written : {5u, 4u, 3u, 1u})
         for (GridKind kind : {GridKind::Dense, GridKind::Sparse})
             for (int B : {4, 8}) {
                 if (kind == GridKind::Dense && B == 8) continue;
@@ -210,15 +228,18 @@ TEST(Sdfg, SummaryReadsTheHeaderAndTablesAlone) {
                 o.kind = kind;
                 o.blockSize = B;
                 Grid g = sampleGrid(tape, nodeBounds(*node::torus(0.7f, 0.2f)), o);
-                if (written == 4)
+                if (written >= 4)
                     g.setTexcoords(TexcoordKind::Sphere,
                                    std::vector<float>(3 * g.storedSamples(), 0.5f), "t");
                 const std::string path = tempPath("summary.sdfg");
-                saveSdfg(g, path, {.compress = written != 1, .version = written == 3 ? 3u : 4u});
+                saveSdfg(g, path,
+                         {.compress = written != 1, .version = written == 1 ? 4u : written});
                 const SdfgSummary r = readSdfgSummary(path);
                 const Grid back = loadSdfg(path);
                 const std::string what = std::to_string(written) + " " + std::to_string(B);
-                EXPECT_EQ(r.version, written == 1 ? 1u : written) << what;
+                // Version 5 stores sparse grids; dense ones stay version 4.
+                const uint32_t stored = written == 5 && kind == GridKind::Dense ? 4u : written;
+                EXPECT_EQ(r.version, stored) << what;
                 EXPECT_EQ(r.kind, kind) << what;
                 EXPECT_EQ(r.texcoords, back.texcoordKind()) << what;
                 EXPECT_EQ(r.fileBytes, std::filesystem::file_size(path)) << what;
@@ -227,6 +248,7 @@ TEST(Sdfg, SummaryReadsTheHeaderAndTablesAlone) {
                 // Every term but the few shared apron blocks the loader adds.
                 EXPECT_LE(r.memoryBytes, back.memoryBytes()) << what;
                 EXPECT_GE(r.memoryBytes, 0.97 * back.memoryBytes()) << what;
+                if (stored == 5) EXPECT_EQ(r.memoryBytes, back.memoryBytes()) << what;  // stored
                 if (kind == GridKind::Sparse) {
                     size_t in = 0, out = 0, surf = 0;
                     back.blockCounts(in, out, surf);
@@ -239,7 +261,7 @@ TEST(Sdfg, SummaryReadsTheHeaderAndTablesAlone) {
                 } else {
                     EXPECT_EQ(r.sampleBytes, g.samples().size() * sizeof(float));
                 }
-                if (written == 4 && kind == GridKind::Sparse) {
+                if (written >= 4 && kind == GridKind::Sparse) {
                     // The last chunk (texture coordinates) damaged: described, not loaded.
                     std::string bytes = readAll(path);
                     bytes[bytes.size() - 6] ^= 0x55;
@@ -249,9 +271,10 @@ TEST(Sdfg, SummaryReadsTheHeaderAndTablesAlone) {
                     // The first (the tile kinds) damaged: neither.
                     bytes = readAll(path);
                     uint64_t chunks = 0, first = 0;
+                    const size_t table = 64 + 32 + (written == 5 ? 24 : 8);
                     std::memcpy(&chunks, bytes.data() + 64 + 24, 8);
-                    std::memcpy(&first, bytes.data() + 64 + 40, 8);
-                    bytes[64 + 40 + 8 * chunks + first / 2] ^= 0x55;
+                    std::memcpy(&first, bytes.data() + table, 8);
+                    bytes[table + 8 * chunks + first / 2] ^= 0x55;
                     writeAll(path, bytes);
                     EXPECT_THROW(readSdfgSummary(path), InputError);
                 }
