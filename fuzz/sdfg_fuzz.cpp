@@ -1,7 +1,7 @@
 // Fuzz target: the .sdfg reader. The header's checksum is recomputed over the input before
-// reading (mutations would otherwise stop at it): versions 1-2 over the payload, version 3 over its
-// section header and chunk table, so the checks behind it and the zstd chunks are reached; a grid
-// that loads is sampled, and what `info` reads of it (readSdfgSummary) agrees with it.
+// reading (mutations would otherwise stop at it): versions 1-2 over the payload, versions 3-5 over
+// their section headers and chunk table, so the checks behind it and the zstd chunks are reached; a
+// grid that loads is sampled, and what `info` reads of it (readSdfgSummary) agrees with it.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -17,12 +17,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fuzz::limitMemoryForFuzzing();
     constexpr size_t kHeader = 64, kChecksumAt = 56;
     std::vector<uint8_t> bytes(data, data + size);
-    constexpr size_t kSections = 32, kChunkCountAt = kHeader + 24;
+    constexpr size_t kChunkCountAt = kHeader + 24;
     if (size >= kHeader) {
         uint32_t version = 0;
         std::memcpy(&version, bytes.data() + 4, sizeof version);
+        // The section header: 32 bytes, and the table header of version 4 (8) or 5 (24).
+        const size_t kSections = 32 + (version == 5 ? 24 : version == 4 ? 8 : 0);
         uint64_t sum = 0;
-        if (version == 3 && size >= kHeader + kSections) {
+        if (version >= 3 && version <= 5 && size >= kHeader + kSections) {
             uint64_t chunks = 0;
             std::memcpy(&chunks, bytes.data() + kChunkCountAt, sizeof chunks);
             const size_t available = (size - kHeader - kSections) / sizeof(uint64_t);
