@@ -134,6 +134,69 @@ struct Timing {
     double memoryMiB = 0;
 };
 
+// One mesh: its bake at `res` cells (the write phase from the bake's phase line), the .vdb
+// converted from it, then `reps` rounds of the loads, each in a process of its own; prints its
+// table row.
+void benchMesh(const std::string& mesh, int res, int reps, const std::string& dir, bool keep) {
+    const std::string self = std::filesystem::canonical("/proc/self/exe").string();
+    const std::string cli = SDFT_CLI_PATH;
+    const std::string name = std::filesystem::path(mesh).stem().string();
+    const std::string sdfg = dir + "/" + name + "-" + std::to_string(res) + ".sdfg",
+                      vdb = dir + "/" + name + "-" + std::to_string(res) + ".vdb";
+    const Run bake = run({cli, "bake", mesh, "--res", std::to_string(res), "-o", sdfg});
+    if (bake.status != 0) {
+        std::fprintf(stderr, "%s: bake failed: %s\n", mesh.c_str(), bake.err.c_str());
+        return;
+    }
+    const double write = numberAfter(bake.err, "write "), total = numberAfter(bake.err, "total ");
+    const Run convert = run({cli, "convert", sdfg, vdb});
+    const bool haveVdb = convert.status == 0;
+    Timing load, read, import, base;
+    std::vector<double> info;
+    for (int r = 0; r < reps; ++r) {
+        auto once = [&](const std::string& mode, const std::string& file, Timing& t) {
+            const Run c = run({self, "--child", mode, file});
+            if (c.status != 0) {
+                std::fprintf(stderr, "%s %s: %s", mode.c_str(), file.c_str(), c.err.c_str());
+                return;
+            }
+            double s = 0;
+            std::sscanf(c.out.c_str(), "%lf %lf", &s, &t.memoryMiB);
+            t.seconds.push_back(s);
+            t.peak.push_back(c.peakMiB);
+        };
+        once("baseline", sdfg, base);
+        once("sdfg", sdfg, load);
+        if (haveVdb) {
+            once("openvdb", vdb, read);
+            once("import", vdb, import);
+        }
+        info.push_back(run({cli, "info", sdfg}).wall);
+    }
+    const double grid = load.memoryMiB;
+    auto peakOf = [&](const Timing& t) { return median(t.peak); };
+    auto overGrid = [&](const Timing& t) {
+        return grid > 0 ? (peakOf(t) - peakOf(base)) / grid : 0.0;
+    };
+    char row[1024];
+    std::snprintf(
+        row, sizeof row,
+        "| %s | %d | %.0f MiB | %.0f / %.0f MB | %.2f / %.1f s (%.0f %%) | %.2f s (%.0f MiB, "
+        "%.2fx) | %.2f s (%.0f MiB) | %.2fx | %.2f s (%.0f MiB, %.2fx) | %.0f ms |\n",
+        name.c_str(), res, grid, std::filesystem::file_size(sdfg) / 1e6,
+        haveVdb ? std::filesystem::file_size(vdb) / 1e6 : 0.0, write, total,
+        total > 0 ? 100 * write / total : 0.0, median(load.seconds), peakOf(load), overGrid(load),
+        median(read.seconds), peakOf(read),
+        median(load.seconds) > 0 ? median(read.seconds) / median(load.seconds) : 0.0,
+        median(import.seconds), peakOf(import), overGrid(import), 1000 * median(info));
+    std::fputs(row, stdout);
+    std::fflush(stdout);
+    if (!keep) {
+        std::filesystem::remove(sdfg);
+        std::filesystem::remove(vdb);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -161,70 +224,11 @@ int main(int argc, char** argv) {
                      "[--keep] mesh ...\n");
         return 2;
     }
-    const std::string self = std::filesystem::canonical("/proc/self/exe").string();
-    const std::string cli = SDFT_CLI_PATH;
     std::printf(
         "| mesh | cells | grid | .sdfg / .vdb | bake: write / total | sdftrace load (peak, "
         "x grid over the process) | OpenVDB read (peak) | read / load | sdftrace import "
         "(peak, x grid) | info |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | "
         "--- |\n");
-    for (const std::string& mesh : meshes) {
-        const std::string name = std::filesystem::path(mesh).stem().string();
-        const std::string sdfg = dir + "/" + name + "-" + std::to_string(res) + ".sdfg",
-                          vdb = dir + "/" + name + "-" + std::to_string(res) + ".vdb";
-        const Run bake = run({cli, "bake", mesh, "--res", std::to_string(res), "-o", sdfg});
-        if (bake.status != 0) {
-            std::fprintf(stderr, "%s: bake failed: %s\n", mesh.c_str(), bake.err.c_str());
-            continue;
-        }
-        const double write = numberAfter(bake.err, "write "),
-                     total = numberAfter(bake.err, "total ");
-        const Run convert = run({cli, "convert", sdfg, vdb});
-        const bool haveVdb = convert.status == 0;
-        Timing load, read, import, base;
-        std::vector<double> info;
-        for (int r = 0; r < reps; ++r) {
-            auto once = [&](const std::string& mode, const std::string& file, Timing& t) {
-                const Run c = run({self, "--child", mode, file});
-                if (c.status != 0) {
-                    std::fprintf(stderr, "%s %s: %s", mode.c_str(), file.c_str(), c.err.c_str());
-                    return;
-                }
-                double s = 0;
-                std::sscanf(c.out.c_str(), "%lf %lf", &s, &t.memoryMiB);
-                t.seconds.push_back(s);
-                t.peak.push_back(c.peakMiB);
-            };
-            once("baseline", sdfg, base);
-            once("sdfg", sdfg, load);
-            if (haveVdb) {
-                once("openvdb", vdb, read);
-                once("import", vdb, import);
-            }
-            info.push_back(run({cli, "info", sdfg}).wall);
-        }
-        const double grid = load.memoryMiB;
-        auto peakOf = [&](const Timing& t) { return median(t.peak); };
-        auto overGrid = [&](const Timing& t) {
-            return grid > 0 ? (peakOf(t) - peakOf(base)) / grid : 0.0;
-        };
-        char row[1024];
-        std::snprintf(
-            row, sizeof row,
-            "| %s | %d | %.0f MiB | %.0f / %.0f MB | %.2f / %.1f s (%.0f %%) | %.2f s (%.0f MiB, "
-            "%.2fx) | %.2f s (%.0f MiB) | %.2fx | %.2f s (%.0f MiB, %.2fx) | %.0f ms |\n",
-            name.c_str(), res, grid, std::filesystem::file_size(sdfg) / 1e6,
-            haveVdb ? std::filesystem::file_size(vdb) / 1e6 : 0.0, write, total,
-            total > 0 ? 100 * write / total : 0.0, median(load.seconds), peakOf(load),
-            overGrid(load), median(read.seconds), peakOf(read),
-            median(load.seconds) > 0 ? median(read.seconds) / median(load.seconds) : 0.0,
-            median(import.seconds), peakOf(import), overGrid(import), 1000 * median(info));
-        std::fputs(row, stdout);
-        std::fflush(stdout);
-        if (!keep) {
-            std::filesystem::remove(sdfg);
-            std::filesystem::remove(vdb);
-        }
-    }
+    for (const std::string& mesh : meshes) benchMesh(mesh, res, reps, dir, keep);
     return 0;
 }

@@ -8,6 +8,7 @@
 #include "sdftrace/core/macros.h"
 #include "sdftrace/field/node.h"
 #include "sdftrace/math/ray.h"
+#include "sdftrace/trace/sphere_tracer.h"
 
 namespace sdft {
 
@@ -42,6 +43,15 @@ SDFT_HOST_DEVICE inline bool horizonHit(const HorizonPlanes& h, const Ray& ray, 
     if (!(best < kInfinity) || best < leave) return false;
     t = best;
     return true;
+}
+
+// A march's miss `r` along `ray` made a hit on the plane it meets past the rest (horizonHit),
+// where there is one: what every caller does with a ray that may leave the scene.
+SDFT_HOST_DEVICE inline void meetHorizon(const HorizonPlanes& h, const Ray& ray, TraceResult& r) {
+    if (!r.hit && horizonHit(h, ray, r.t)) {
+        r.hit = true;
+        r.value = 0;
+    }
 }
 
 }  // namespace sdft

@@ -1,7 +1,6 @@
 #include "sdftrace/field/sparse_grid_builder.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -11,6 +10,7 @@
 #include "block_apron_layout.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
+#include "sdftrace/exec/all_finite.h"
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/field/block_masks.h"
 
@@ -230,8 +230,7 @@ Grid SparseGridBuilder::fromStored(StoredSparse p, const std::string& source) {
         return InputError(source + ": corrupt stored grid: " + what);
     };
     if (p.blockSamples.size() != blocks * own || p.blockNeighbors.size() != S * 8 ||
-        p.apronCode.size() != extra ||
-        p.cellMasks.size() != S * ((own + 63) / 64) ||
+        p.apronCode.size() != extra || p.cellMasks.size() != S * ((own + 63) / 64) ||
         p.blockSkip.size() != g.m_flags.size() || p.blockLipschitz.size() != g.m_flags.size() ||
         p.tileSkip.size() != g.m_tilePage.size() || p.tileLipschitz.size() != g.m_tilePage.size())
         throw corrupt("a table's size does not fit the block table");
@@ -239,7 +238,7 @@ Grid SparseGridBuilder::fromStored(StoredSparse p, const std::string& source) {
     if (!(p.lipschitz >= 1) || !std::isfinite(p.lipschitz) || !(p.gentleLipschitz > 0) ||
         !(p.gentleLipschitz <= p.lipschitz))
         throw corrupt("Lipschitz bounds");
-    // Indices and codes in range (every view lookup then stays in its arrays); finite samples.
+    // Indices and codes in range (every view lookup then stays in its arrays), finite samples.
     std::atomic<bool> ok{true};
     tbb::parallel_for(size_t(0), S, [&](size_t s) {
         const int32_t* nb = p.blockNeighbors.data() + 8 * s;
@@ -254,14 +253,8 @@ Grid SparseGridBuilder::fromStored(StoredSparse p, const std::string& source) {
     for (const auto* codes : {&p.blockLipschitz, &p.tileLipschitz})
         if (std::any_of(codes->begin(), codes->end(), [](uint8_t c) { return c > 1; })) ok = false;
     if (!ok) throw corrupt("a sample block, neighbour entry or Lipschitz code out of range");
-    float bad = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, p.blockSamples.size(), 1 << 16), 0.0f,
-        [&](const tbb::blocked_range<size_t>& r, float sum) {
-            for (size_t i = r.begin(); i < r.end(); ++i) sum += p.blockSamples[i] * 0.0f;
-            return sum;
-        },
-        [](float a, float b) { return a + b; });
-    if (bad != 0.0f) throw corrupt("non-finite sample");
+    if (!allFinite(p.blockSamples.data(), p.blockSamples.size()))
+        throw corrupt("non-finite sample");
     g.m_blockSamples = std::move(p.blockSamples);
     g.m_blockNeighbors = std::move(p.blockNeighbors);
     g.m_apronFrom = std::move(p.apronFrom);

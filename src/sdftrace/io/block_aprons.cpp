@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/exec/all_finite.h"
 #include "sdftrace/field/block_apron_layout.h"
 
 namespace sdft {
@@ -151,9 +152,8 @@ uint8_t expandBlock(const SparseGridBuilder& builder, const Layout& L, const flo
         if (!from) throw corruptAprons(source, "an apron sample refers to a block without samples");
         block[e.dst] = from[e.ownIndex];
     }
-    float bad = 0;  // NaN or infinity where any sample is not finite
-    for (int v = 0; v < L.per; ++v) bad += block[v] * 0.0f;
-    if (bad != 0.0f) throw corruptAprons(source, "non-finite sample");
+    if (!allFinite(block, static_cast<size_t>(L.per)))
+        throw corruptAprons(source, "non-finite sample");
     return privateEntries;
 }
 

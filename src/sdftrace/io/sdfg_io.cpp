@@ -3,7 +3,6 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
 #include <zstd.h>
@@ -19,6 +18,7 @@
 #include "block_aprons.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
+#include "sdftrace/exec/all_finite.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/mapped_file.h"
 
@@ -113,17 +113,21 @@ void saveRaw(const Grid& grid, const std::string& path) {
     out.commit();
 }
 
-// ---- versions 3 and 4: compressed sections ----
+// ---- versions 3 to 5: compressed sections ----
 
 constexpr uint32_t kChunkBytes = 1u << 22;  // uncompressed bytes per chunk (4 MiB)
 
-// After the 64-byte header of a version-3 or -4 file.
+// After the 64-byte header of a version-3 to -5 file.
 struct CompressedHeader {
-    uint32_t texKind;      // 0: no texture coordinates; else TexcoordKind
-    uint32_t chunkBytes;   // uncompressed bytes per chunk (the last of a section may be shorter)
-    uint64_t sampleCount;  // stored samples (dense: every vertex; sparse: surface blocks')
-    uint64_t apronCount;   // sparse: apron samples kept explicitly (block_aprons.h)
-    uint64_t chunkCount;   // then chunkCount u64 compressed sizes, then the chunks
+    uint32_t texKind;     // 0: no texture coordinates; else TexcoordKind
+    uint32_t chunkBytes;  // uncompressed bytes per chunk (the last of a section may be shorter)
+    // Stored samples: dense, every vertex; sparse, (B+1)^3 per surface block (versions 3 and 4)
+    // or B^3 per sample block (version 5).
+    uint64_t sampleCount;
+    // Sparse: the apron samples kept explicitly (versions 3 and 4, block_aprons.h) or the sample
+    // blocks past the surface ones (version 5).
+    uint64_t apronCount;
+    uint64_t chunkCount;  // then chunkCount u64 compressed sizes, then the chunks
 };
 static_assert(sizeof(CompressedHeader) == 32);
 
@@ -139,12 +143,13 @@ static_assert(sizeof(TableHeader) == 24);
 size_t tableHeaderBytes(uint32_t version) { return version >= 5 ? 24 : version == 4 ? 8 : 0; }
 
 // The sections of the uncompressed payload, in file order. Dense: samples. Sparse: the block
-// flags (version 3: one byte per block of the box; version 4: one byte per tile, 0 outside, 1
-// inside, 2 own page, then the own pages' 512 flags each in tile order), the surface blocks' own
-// samples, their apron masks, the explicit apron samples (block_aprons.h). Then texture
-// coordinates, if any, per stored sample. Floats are byte-shuffled
-// before compression (the four bytes of each float in four planes: sign and exponent bytes
-// repeat, and compress far better).
+// flags (version 3: one byte per block of the box; versions 4 and 5: one byte per tile, 0
+// outside, 1 inside, 2 own page, then the own pages' 512 flags each in tile order); then, up to
+// version 4, the surface blocks' own samples, their apron masks, the explicit apron samples
+// (block_aprons.h), and in version 5 the grid's own buffers (storedSections). Then texture
+// coordinates, if any. Floats (and version 5's other 4-byte words) are byte-shuffled before
+// compression (the four bytes of each word in four planes: sign and exponent bytes repeat, and
+// compress far better).
 struct Section {
     const char* data;
     uint64_t bytes;
@@ -236,32 +241,36 @@ uint64_t writeChunks(AtomicOutput& out, const std::vector<Section>& sections,
     return written;
 }
 
+// Versions 4 and 5: a sparse grid's block table by tiles, its kinds (filled into `tileKinds`)
+// and its own pages' flags (from the grid's), and their count in `th`.
+void tableSections(const Grid& grid, std::vector<uint8_t>& tileKinds, TableHeader& th,
+                   std::vector<Section>& sections) {
+    tileKinds.resize(grid.tilePage().size());
+    for (size_t t = 0; t < tileKinds.size(); ++t)
+        tileKinds[t] = static_cast<uint8_t>(std::min(grid.tilePage()[t], kFirstOwnPage));
+    const std::vector<uint8_t>& slots = grid.flags();
+    th.ownPages = slots.size() / kPageEntries - kFirstOwnPage;
+    sections = {section(tileKinds, false),
+                {reinterpret_cast<const char*>(slots.data()) + kFirstOwnPage * kPageEntries,
+                 th.ownPages * kPageEntries, false}};
+}
+
 // Version 5's sections of a sparse grid: its block table by tiles (as version 4), then its sample
 // blocks, neighbour entries, apron blocks' owners and codes, cell masks, per-slot skip distances
 // and Lipschitz codes, per-tile skip distances and Lipschitz codes: the grid as it is in memory,
 // written from its own buffers (4-byte words shuffled as floats are).
 void storedSections(const Grid& grid, std::vector<uint8_t>& tileKinds, TableHeader& th,
                     std::vector<Section>& sections) {
-    tileKinds.resize(grid.tilePage().size());
-    for (size_t t = 0; t < tileKinds.size(); ++t)
-        tileKinds[t] = static_cast<uint8_t>(std::min(grid.tilePage()[t], kFirstOwnPage));
-    const std::vector<uint8_t>& slots = grid.flags();
-    th.ownPages = slots.size() / kPageEntries - kFirstOwnPage;
+    tableSections(grid, tileKinds, th, sections);
     th.surfaceBlocks = grid.surfaceBlockCount();
     th.lipschitz = grid.lipschitz();
     th.gentleLipschitz = grid.gentleLipschitz();
-    sections = {section(tileKinds, false),
-                {reinterpret_cast<const char*>(slots.data()) + kFirstOwnPage * kPageEntries,
-                 th.ownPages * kPageEntries, false},
-                section(grid.blockSamples(), true),
-                section(grid.blockNeighbors(), true),
-                section(grid.apronFrom(), true),
-                section(grid.apronCode(), false),
-                section(grid.cellMasks(), true),
-                section(grid.blockSkip(), false),
-                section(grid.blockLipschitz(), false),
-                section(grid.tileSkip(), false),
-                section(grid.tileLipschitz(), false)};
+    sections.insert(sections.end(),
+                    {section(grid.blockSamples(), true), section(grid.blockNeighbors(), true),
+                     section(grid.apronFrom(), true), section(grid.apronCode(), false),
+                     section(grid.cellMasks(), true), section(grid.blockSkip(), false),
+                     section(grid.blockLipschitz(), false), section(grid.tileSkip(), false),
+                     section(grid.tileLipschitz(), false)});
 }
 
 void saveCompressed(const Grid& grid, const std::string& path, int level, uint32_t version) {
@@ -279,14 +288,7 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
             flags = grid.denseFlags();
             sections = {section(flags, false)};
         } else {
-            tileKinds.resize(grid.tilePage().size());
-            for (size_t t = 0; t < tileKinds.size(); ++t)
-                tileKinds[t] = static_cast<uint8_t>(std::min(grid.tilePage()[t], kFirstOwnPage));
-            const std::vector<uint8_t>& slots = grid.flags();
-            th.ownPages = slots.size() / kPageEntries - kFirstOwnPage;
-            sections = {section(tileKinds, false),
-                        {reinterpret_cast<const char*>(slots.data()) + kFirstOwnPage * kPageEntries,
-                         th.ownPages * kPageEntries, false}};
+            tableSections(grid, tileKinds, th, sections);
         }
         // The own samples straight from the grid's buffer (its first B^3 per surface block).
         const uint64_t B = static_cast<uint64_t>(grid.blockSize());
@@ -296,13 +298,13 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
                          section(aprons.masks, false),
                          section(aprons.explicitly, true)});
     }
-    // Per (B+1)^3 vertex up to version 4; per stored sample in version 5.
-    const std::vector<float> texcoords =
-        version >= 5 ? std::vector<float>() : grid.expandedTexcoords();
-    if (version >= 5 && !grid.texcoords().empty())
-        sections.push_back(section(grid.texcoords(), true));
-    else if (!texcoords.empty())
-        sections.push_back(section(texcoords, true));
+    // Texture coordinates: per stored sample in version 5, as the grid keeps them; before, per
+    // (B+1)^3 vertex.
+    std::vector<float> expandedTexcoords;
+    if (!grid.texcoords().empty()) {
+        if (version < 5) expandedTexcoords = grid.expandedTexcoords();
+        sections.push_back(section(version < 5 ? expandedTexcoords : grid.texcoords(), true));
+    }
     std::vector<uint64_t> sectionBytes;
     for (const Section& s : sections) sectionBytes.push_back(s.bytes);
     const std::vector<Chunk> chunks = chunksOf(sectionBytes, kChunkBytes);
@@ -406,6 +408,18 @@ GridShape shapeOf(const Header& h, const std::string& path) {
     return s;
 }
 
+// Blocks of B cells per axis, and tiles of 8^3 of them, over a grid of shape s.
+void blocksOf(const GridShape& s, int B, int blocks[3]) {
+    for (int a = 0; a < 3; ++a) blocks[a] = (s.cells[a] + B - 1) / B;
+}
+uint64_t tileCount(const GridShape& s, int B) {
+    int blocks[3];
+    blocksOf(s, B, blocks);
+    uint64_t tiles = 1;
+    for (int a = 0; a < 3; ++a) tiles *= (blocks[a] + kTileBlocks - 1) / kTileBlocks;
+    return tiles;
+}
+
 // A sparse header's block size and background, checked; the number of blocks they give.
 uint64_t sparseBlockCount(const Header& h, const GridShape& s, const std::string& path) {
     if (h.blockSize != 4 && h.blockSize != 8)
@@ -413,9 +427,9 @@ uint64_t sparseBlockCount(const Header& h, const GridShape& s, const std::string
                          " (accepted: 4, 8)");
     if (!(h.background > 0) || !std::isfinite(h.background))
         throw InputError(path + ": background must be positive and finite");
-    uint64_t n = 1;
-    for (int a = 0; a < 3; ++a) n *= (s.cells[a] + h.blockSize - 1) / h.blockSize;
-    return n;
+    int blocks[3];
+    blocksOf(s, static_cast<int>(h.blockSize), blocks);
+    return static_cast<uint64_t>(blocks[0]) * blocks[1] * blocks[2];
 }
 
 // The payload expected from the header alone, checked against the file before allocating.
@@ -457,28 +471,13 @@ namespace {
 
 using CorruptError = std::function<InputError(const std::string&)>;
 
-// Whether every value is finite, in parallel (x * 0 is NaN exactly where x is not finite).
-bool allFinite(const std::vector<float>& v) {
-    return tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, v.size(), 1 << 16), true,
-        [&](const tbb::blocked_range<size_t>& r, bool ok) {
-            float bad = 0;
-            for (size_t i = r.begin(); i < r.end(); ++i) bad += v[i] * 0.0f;
-            return ok && bad == 0.0f;
-        },
-        [](bool a, bool b) { return a && b; });
-}
-
-// A version-3 or -4 file's section sizes (in file order), from its headers; every count
-// checked against the grid before anything is allocated from it.
 // The sizes of a version-5 sparse file's sections (storedSections), from its headers.
 std::vector<uint64_t> storedSectionBytes(const Header& h, const GridShape& s,
                                          const CompressedHeader& ch, const TableHeader& th,
                                          const std::string& path, const CorruptError& corrupt) {
     const uint64_t numBlocks = sparseBlockCount(h, s, path);
     const uint64_t B = h.blockSize, own = B * B * B, words = (own + 63) / 64;
-    uint64_t tiles = 1;
-    for (int a = 0; a < 3; ++a) tiles *= ((s.cells[a] + B - 1) / B + kTileBlocks - 1) / kTileBlocks;
+    const uint64_t tiles = tileCount(s, static_cast<int>(B));
     if (th.ownPages > tiles) throw corrupt("own page count");
     const uint64_t surface = th.surfaceBlocks, extra = ch.apronCount;
     if (surface > th.ownPages * kPageEntries || surface > numBlocks)
@@ -499,6 +498,8 @@ std::vector<uint64_t> storedSectionBytes(const Header& h, const GridShape& s,
             tiles};
 }
 
+// A version-3 to -5 file's section sizes (in file order), from its headers; every count checked
+// against the grid before anything is allocated from it.
 std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
                                          const CompressedHeader& ch, const TableHeader& th,
                                          const std::string& path, const CorruptError& corrupt) {
@@ -523,9 +524,7 @@ std::vector<uint64_t> compressedSections(const Header& h, const GridShape& s,
         const uint64_t surface = ch.sampleCount / perBlock;
         if (ch.apronCount > surface * apronSize(B)) throw corrupt("apron sample count");
         if (h.version >= 4) {
-            uint64_t tiles = 1;
-            for (int a = 0; a < 3; ++a)
-                tiles *= ((s.cells[a] + B - 1) / B + kTileBlocks - 1) / kTileBlocks;
+            const uint64_t tiles = tileCount(s, B);
             if (th.ownPages > tiles) throw corrupt("own page count");
             if (surface > th.ownPages * kPageEntries)
                 throw corrupt("sample count does not fit the block table");
@@ -595,8 +594,8 @@ void decompressChunks(const MappedFile& file, const std::vector<Chunk>& chunks,
     });
 }
 
-// A version-4 file's block table: per tile 0 (outside), 1 (inside) or 2 (its own page, the pages
-// in tile order), and the own pages' flags.
+// A version-4 or -5 file's block table: per tile 0 (outside), 1 (inside) or 2 (its own page, the
+// pages in tile order), and the own pages' flags.
 BlockTable tableOf(const int blocks[3], const std::vector<uint8_t>& tileKinds,
                    std::vector<uint8_t> ownFlags, const CorruptError& corrupt) {
     BlockTable t = BlockTable::empty(blocks);
@@ -632,7 +631,7 @@ BlockTable tableOf(const int blocks[3], const std::vector<uint8_t>& tileKinds,
     return t;
 }
 
-// A version-3 or -4 file's section and chunk tables, checked against the header and the file
+// A version-3 to -5 file's section and chunk tables, checked against the header and the file
 // before anything is allocated from their numbers.
 struct Compressed {
     CompressedHeader ch{};
@@ -668,12 +667,33 @@ struct Compressed {
         start = chunkStarts(file, h, ch, th, thBytes, size, corrupt);
     }
 
-    // Decompresses the sections whose `dest` is set (floats unshuffled where `floats`), in
-    // parallel, and clears `dest`.
-    void decompress(const MappedFile& file, std::vector<char*>& dest,
-                    const std::vector<bool>& floats) const {
-        decompressChunks(file, chunks, start, size, dest, floats, corrupt, {0, chunks.size()});
-        std::fill(dest.begin(), dest.end(), nullptr);
+    // Where sections decompress (null: not in this pass), and which are byte-shuffled.
+    struct Targets {
+        std::vector<char*> dest;
+        std::vector<bool> shuffled;
+        const std::vector<uint64_t>& bytes;
+        explicit Targets(const Compressed& c)
+            : dest(c.sectionBytes.size(), nullptr),
+              shuffled(c.sectionBytes.size(), false),
+              bytes(c.sectionBytes) {}
+        void at(size_t section, char* out, bool isShuffled) {
+            dest[section] = out;
+            shuffled[section] = isShuffled;
+        }
+        // `v` sized to the section, which decompresses into it.
+        template <class T>
+        void into(size_t section, std::vector<T>& v, bool isShuffled) {
+            v.resize(bytes[section] / sizeof(T));
+            at(section, reinterpret_cast<char*>(v.data()), isShuffled);
+        }
+    };
+
+    // Decompresses the sections `t` names (unshuffling those it says), in parallel, and clears
+    // them from `t`.
+    void decompress(const MappedFile& file, Targets& t) const {
+        decompressChunks(file, chunks, start, size, t.dest, t.shuffled, corrupt,
+                         {0, chunks.size()});
+        std::fill(t.dest.begin(), t.dest.end(), nullptr);
     }
 
     // Section `section`'s bytes [from, to), rounded out to whole chunks, decompressed into `out`
@@ -685,28 +705,24 @@ struct Compressed {
         const uint64_t c0 = from / ch.chunkBytes, c1 = (to + ch.chunkBytes - 1) / ch.chunkBytes;
         const uint64_t shift = c0 * ch.chunkBytes;
         out.resize(std::min(c1 * ch.chunkBytes, sectionBytes[section]) - shift);
-        std::vector<char*> dest(sectionBytes.size(), nullptr);
-        std::vector<bool> floats(sectionBytes.size(), false);
-        dest[section] = out.data();
-        floats[section] = isFloat;
-        decompressChunks(file, chunks, start, size, dest, floats, corrupt,
+        Targets t(*this);
+        t.at(section, out.data(), isFloat);
+        decompressChunks(file, chunks, start, size, t.dest, t.shuffled, corrupt,
                          {first + c0, first + c1, shift});
         return from - shift;
     }
 
-    // A sparse grid's block table, from its first section(s) (version 4: tile kinds and own
-    // pages; version 3: flat flags).
+    // A sparse grid's block table, from its first section(s) (versions 4 and 5: tile kinds and
+    // own pages; version 3: flat flags).
     BlockTable blockTable(const MappedFile& file, const Header& h, const GridShape& s,
                           const std::string& path) const {
-        std::vector<char*> dest(sectionBytes.size(), nullptr);
-        std::vector<uint8_t> tileKinds(h.version >= 4 ? sectionBytes[0] : 0),
-            flags(sectionBytes[tableSections(h) - 1]);
-        if (h.version >= 4) dest[0] = reinterpret_cast<char*>(tileKinds.data());
-        dest[tableSections(h) - 1] = reinterpret_cast<char*>(flags.data());
-        decompress(file, dest, std::vector<bool>(dest.size(), false));
-        const int B = static_cast<int>(h.blockSize);
-        const int blocks[3] = {(s.cells[0] + B - 1) / B, (s.cells[1] + B - 1) / B,
-                               (s.cells[2] + B - 1) / B};
+        Targets t(*this);
+        std::vector<uint8_t> tileKinds, flags;
+        if (h.version >= 4) t.into(0, tileKinds, false);
+        t.into(tableSections(h) - 1, flags, false);
+        decompress(file, t);
+        int blocks[3];
+        blocksOf(s, static_cast<int>(h.blockSize), blocks);
         return h.version >= 4 ? tableOf(blocks, tileKinds, std::move(flags), corrupt)
                               : BlockTable::fromDense(blocks, flags, path);
     }
@@ -724,14 +740,9 @@ Grid loadStored(const MappedFile& file, const Header& h, const GridShape& s, con
                         " surface blocks; the header " + std::to_string(c.th.surfaceBlocks));
     StoredSparse p;
     std::vector<float> texcoords;
-    std::vector<char*> dest(c.sectionBytes.size(), nullptr);
-    std::vector<bool> floats(c.sectionBytes.size(), false);
-    size_t next = 2;  // after the block table's two sections
-    auto into = [&](auto& v, bool shuffled) {
-        v.resize(c.sectionBytes[next] / sizeof(v[0]));
-        dest[next] = reinterpret_cast<char*>(v.data());
-        floats[next++] = shuffled;
-    };
+    Compressed::Targets t(c);
+    size_t next = 2;  // after the block table's two sections, in storedSections' order
+    auto into = [&](auto& v, bool shuffled) { t.into(next++, v, shuffled); };
     into(p.blockSamples, true);
     into(p.blockNeighbors, true);
     into(p.apronFrom, true);
@@ -742,7 +753,7 @@ Grid loadStored(const MappedFile& file, const Header& h, const GridShape& s, con
     into(p.tileSkip, false);
     into(p.tileLipschitz, false);
     if (c.ch.texKind) into(texcoords, true);
-    c.decompress(file, dest, floats);
+    c.decompress(file, t);
     p.lipschitz = c.th.lipschitz;
     p.gentleLipschitz = c.th.gentleLipschitz;
     Grid grid = builder.fromStored(std::move(p), path);
@@ -751,7 +762,7 @@ Grid loadStored(const MappedFile& file, const Header& h, const GridShape& s, con
     return grid;
 }
 
-// Decompresses a version-3 or -4 file's chunks in parallel straight into the grid's buffers.
+// Decompresses a version-3 to -5 file's chunks in parallel straight into the grid's buffers.
 Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
                     const std::string& path) {
     const Compressed c(file, h, s, path);
@@ -762,25 +773,19 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
     checkMemoryBudget(1.25 * static_cast<double>(c.total), path,
                       "the grid's samples and the structures built from them",
                       "convert or bake it at a lower resolution");
-    std::vector<char*> dest(sectionBytes.size(), nullptr);
-    std::vector<bool> floats(sectionBytes.size(), false);
-    auto into = [&](size_t section, auto& v, bool isFloat) {
-        v.resize(sectionBytes[section] / sizeof(v[0]));
-        dest[section] = reinterpret_cast<char*>(v.data());
-        floats[section] = isFloat;
-    };
-    auto decompress = [&] { c.decompress(file, dest, floats); };
+    if (static_cast<GridKind>(h.kind) == GridKind::Sparse && h.version >= 5)
+        return loadStored(file, h, s, c, path);
+    Compressed::Targets t(c);
     std::vector<float> texcoords;
     Grid grid;
     if (static_cast<GridKind>(h.kind) == GridKind::Dense) {
         std::vector<float> samples;
-        into(0, samples, true);
-        if (c.ch.texKind) into(1, texcoords, true);
-        decompress();
-        if (!allFinite(samples)) throw corrupt("non-finite sample");
+        t.into(0, samples, true);
+        if (c.ch.texKind) t.into(1, texcoords, true);
+        c.decompress(file, t);
+        if (!allFinite(samples.data(), samples.size())) throw corrupt("non-finite sample");
         grid = Grid::dense(s, std::move(samples));
     } else {
-        if (h.version >= 5) return loadStored(file, h, s, c, path);
         // First the block table, which numbers the surface blocks and sizes the grid's buffers.
         const int B = static_cast<int>(h.blockSize);
         SparseGridBuilder builder(s, B, h.background, c.blockTable(file, h, s, path), path);
@@ -791,11 +796,10 @@ Grid loadCompressed(const MappedFile& file, const Header& h, const GridShape& s,
                           " surface blocks; the samples do not");
         // Then the own samples straight into the grid's buffer, and the apron masks.
         std::vector<uint64_t> masks;
-        dest[tableSections] = reinterpret_cast<char*>(builder.ownSamples());
-        floats[tableSections] = true;
-        into(tableSections + 1, masks, false);
-        if (c.ch.texKind) into(tableSections + 3, texcoords, true);
-        decompress();
+        t.at(tableSections, reinterpret_cast<char*>(builder.ownSamples()), true);
+        t.into(tableSections + 1, masks, false);
+        if (c.ch.texKind) t.into(tableSections + 3, texcoords, true);
+        c.decompress(file, t);
         // The kept apron samples, a few chunks at a time as the blocks ask for them.
         const size_t keptSection = tableSections + 2;
         auto read = [&c, &file, keptSection, window = std::make_shared<std::vector<char>>()](
@@ -860,7 +864,8 @@ Grid readSdfg(const std::string& path) {
         sum = fnv1a64(texcoords.data(), texcoords.size() * sizeof(float), sum);
     }
     if (sum != h.checksum) throw InputError(path + ": corrupt: payload checksum mismatch");
-    if (!allFinite(samples)) throw InputError(path + ": corrupt: non-finite sample");
+    if (!allFinite(samples.data(), samples.size()))
+        throw InputError(path + ": corrupt: non-finite sample");
     if (l.texcoords && texHeader[0] != static_cast<uint32_t>(TexcoordKind::Sphere) &&
         texHeader[0] != static_cast<uint32_t>(TexcoordKind::Cylinder)) {
         throw InputError(path + ": unknown texture-coordinate kind " +
@@ -899,9 +904,8 @@ SdfgSummary readSdfgSummary(const std::string& path) {
     } else {
         const PayloadLayout l = layoutOf(h, r.shape, path, file.size());
         if (l.kind == GridKind::Sparse) {
-            const int B = static_cast<int>(h.blockSize);
-            const int blocks[3] = {(r.shape.cells[0] + B - 1) / B, (r.shape.cells[1] + B - 1) / B,
-                                   (r.shape.cells[2] + B - 1) / B};
+            int blocks[3];
+            blocksOf(r.shape, static_cast<int>(h.blockSize), blocks);
             const uint8_t* flags = reinterpret_cast<const uint8_t*>(file.data()) + sizeof h;
             table = BlockTable::fromDense(blocks, std::vector<uint8_t>(flags, flags + l.numBlocks),
                                           path);

@@ -87,10 +87,7 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
         return out;
     }
     if (!v.meshesOnly) out.trace = traceTapeRay(v.primaryField, seg, v.options);
-    if (!out.trace.hit && horizonHit(v.horizon, seg.ray, out.trace.t)) {
-        out.trace.hit = true;
-        out.trace.value = 0;
-    }
+    meetHorizon(v.horizon, seg.ray, out.trace);
     if (v.meshes.count > 0) {
         const float tMax = out.trace.hit ? out.trace.t : seg.tMax;
         const MeshPrimaryHit h = meshPrimaryHit(v.meshes, seg.ray, tMax);

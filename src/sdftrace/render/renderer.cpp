@@ -220,13 +220,8 @@ void TileRenderer::tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1) 
     } else {
         tracePacket(m_plan.primaryField ? *m_plan.primaryField : m_tape, s.segments, m_primary,
                     s.results, s.packet);
-        for (int i = 0; i < count; ++i) {  // the top-level planes past the rest (horizon.h)
-            TraceResult& r = s.results[i];
-            if (!r.hit && horizonHit(m_plan.horizon, s.segments[i].ray, r.t)) {
-                r.hit = true;
-                r.value = 0;
-            }
-        }
+        for (int i = 0; i < count; ++i)  // the top-level planes past the rest (horizon.h)
+            meetHorizon(m_plan.horizon, s.segments[i].ray, s.results[i]);
     }
     if (m_plan.meshPrimary) tracePrimaryTriangles(s);
     s.hitPixel.clear();

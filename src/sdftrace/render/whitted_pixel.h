@@ -276,10 +276,7 @@ SDFT_HOST_DEVICE inline Vec3 shadeWhitted(const DirectPixelView& v, const Whitte
             TraceResult hit = traceTapeRay(
                 v.primary.field, {{r.origin, r.dir}, 0.0f, v.primary.maxDistance}, w.secondary);
             c.evaluations += static_cast<uint32_t>(hit.evaluations);
-            if (!hit.hit && horizonHit(v.primary.horizon, {r.origin, r.dir}, hit.t)) {
-                hit.hit = true;  // a reflection of the floor's far part
-                hit.value = 0;
-            }
+            meetHorizon(v.primary.horizon, {r.origin, r.dir}, hit);  // the floor's far part
             if (!hit.hit) {
                 radiance += r.weight * v.background;
                 continue;
