@@ -13,6 +13,7 @@
 #include "sdftrace/bake/bake_options.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/field/sample_grid.h"
+#include "sdftrace/scene/prepare_scene.h"
 
 namespace sdft::py {
 
@@ -177,7 +178,7 @@ void bindField(pyb::module_& m) {
                 std::shared_ptr<const Grid> grid;
                 {
                     pyb::gil_scoped_release release;
-                    grid = std::make_shared<const Grid>(sampleGrid(*f.tape, region, o));
+                    grid = sceneGrid(sampleGrid(*f.tape, region, o));
                 }
                 return PyGrid{grid};
             },

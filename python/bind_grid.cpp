@@ -17,6 +17,7 @@
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_io.h"
+#include "sdftrace/scene/prepare_scene.h"
 
 namespace sdft::py {
 
@@ -151,7 +152,7 @@ PyGrid bake(const pyb::handle& mesh, const pyb::handle& faces, int resolution,
     MeshReport report;
     const TriangleMesh m = meshArgument(mesh, faces, report);
     pyb::gil_scoped_release release;
-    return PyGrid{std::make_shared<const Grid>(bakeMeshOn(choice.gpu, m, o).grid)};
+    return PyGrid{sceneGrid(bakeMeshOn(choice.gpu, m, o).grid)};
 }
 
 PyGrid gridFromNumpy(const pyb::handle& values, std::array<float, 3> origin, float voxelSize,
@@ -184,9 +185,8 @@ PyGrid gridFromNumpy(const pyb::handle& values, std::array<float, 3> origin, flo
                 samples[(k * ny + j) * nx + i] = v;
             }
     pyb::gil_scoped_release release;
-    return PyGrid{std::make_shared<const Grid>(sparse
-                                                   ? Grid::sparseFromDense(s, samples, block, band)
-                                                   : Grid::dense(s, std::move(samples)))};
+    return PyGrid{sceneGrid(sparse ? Grid::sparseFromDense(s, samples, block, band)
+                                   : Grid::dense(s, std::move(samples)))};
 }
 
 pyb::object gridSample(const PyGrid& g, const pyb::handle& points, bool gradients,
@@ -300,7 +300,7 @@ void bindGrid(pyb::module_& m) {
             [](const pyb::handle& path) {
                 const std::string p = pathArgument(path);
                 pyb::gil_scoped_release release;
-                return PyGrid{std::make_shared<const Grid>(loadGridFile(p))};
+                return PyGrid{sceneGrid(loadGridFile(p))};
             },
             pyb::arg("path"),
             "Reads a grid file: `path` names a .sdfg, .vdb (OpenVDB float level set), .sdf "
@@ -344,7 +344,8 @@ void bindGrid(pyb::module_& m) {
                              "grid field"};
             },
             "The grid as a Field (its tape: one grid primitive), reading the samples divided by "
-            "info['lipschitz'] so that the field is 1-Lipschitz for the tracer")
+            "info['lipschitz'] so that the field is 1-Lipschitz for the tracer (a sparse grid, "
+            "beyond its band: a bound of the distance to its surface, as in scenes)")
         .def("to_mesh", &gridToMesh, pyb::arg("adaptivity") = 0.0f, pyb::arg("isovalue") = 0.0f,
              "The surface (or the offset surface `isovalue`), simplified where flat by "
              "`adaptivity` in [0, 1] (0: none), as (vertices N x 3 float32, faces "

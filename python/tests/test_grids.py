@@ -140,12 +140,16 @@ def test_a_baked_grid_is_a_field_and_renders():
     v, f = cube_mesh()
     grid = sdftrace.bake(v, f, resolution=32)
     # in the band the field reads the samples divided by the reconstruction's Lipschitz bound
-    # (a 1-Lipschitz field for the tracer); elsewhere both are bounds (the field's: at least the
-    # distance to the grid's box outside it)
+    # (a 1-Lipschitz field for the tracer), or the gap lattice's bound of the distance where that
+    # is larger (a few points by the cube's corners, where L is largest); elsewhere both are
+    # bounds (the field's: at least the distance to the grid's box outside it)
     p = band_points(grid, 2000, band_voxels=1.0)
     L = grid.info["lipschitz"]
     assert L >= 1.0
-    np.testing.assert_allclose(grid.field.evaluate(p) * L, grid.sample(p), atol=1e-5)
+    field, sample = grid.field.evaluate(p), grid.sample(p)
+    assert (np.sign(field) == np.sign(sample)).all()
+    assert (np.abs(field) * L >= np.abs(sample) - 1e-5).all()
+    assert np.isclose(field * L, sample, atol=1e-5).mean() > 0.99
     img = sdftrace.render(grid, 48, 32, aovs=["color", "depth"])
     assert img["color"].shape == (32, 48, 3) and np.isfinite(img["color"]).all()
     assert np.isfinite(img["depth"]).mean() > 0.05

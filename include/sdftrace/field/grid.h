@@ -89,6 +89,15 @@ struct GridView {
     const uint8_t* tileLipschitz = nullptr;
     float lipschitzLevel[2] = {1, 1};
     float background = 1;  // |value| assumed in non-surface blocks (a lower bound of the distance)
+    // Optional (sparse narrow bands; Grid::computeGapLattice): at the vertices of a lattice of
+    // step gapStep cells from the origin (gapCounts[a] per axis, x fastest), a lower bound of the
+    // distance to the reconstruction's zero set in units of gapUnit (rounded down, 255: at least
+    // that), which gridDistanceBound reads where the band's samples are clamped or absent.
+    // Null: none.
+    const uint8_t* gapLattice = nullptr;
+    int gapCounts[3] = {0, 0, 0};
+    int gapStep = 1;
+    float gapUnit = 0;
     // Optional texture coordinates (Liktor 2008, §5.5.2): 3 floats per stored sample, beside the
     // distance (dense: per vertex; sparse: per surface-block sample), mapped to (u, v) by
     // `texcoordKind` (TexcoordKind).
@@ -240,6 +249,20 @@ class Grid {
     // The second, gentler Lipschitz bound of the blocks coded 1 (GridView::lipschitzLevel[1]).
     float gentleLipschitz() const { return m_gentleLipschitz; }
     const std::vector<uint8_t>& blockSkip() const { return m_blockSkip; }
+    // The gap lattice (GridView::gapLattice; gap_lattice.cpp): for a sparse narrow band, at the
+    // vertices of a lattice of step s cells, a lower bound of the distance to the nearest cell
+    // whose corners change sign, from an exact Euclidean distance transform of those cells at
+    // step s, one byte each (eighths of a step, up to 31 7/8 steps). Beyond the band it stands in
+    // for the clamp, so that what the grid reads there depends on the surface, not on the band's
+    // width. s is the smallest step that keeps the lattice within maxVertices (0: a quarter of
+    // the grid's own memory, at least 33^3 and at most 129^3 vertices). A no-op for dense and
+    // complete grids (their samples are not clamped to a band) and for grids without a sign
+    // change.
+    void computeGapLattice(size_t maxVertices = 0);
+    const std::vector<uint8_t>& gapLattice() const { return m_gapLattice; }
+    int gapStep() const { return m_gapStep; }
+    // World units per count of the lattice's bytes.
+    float gapUnit() const { return m_gapUnit; }
     // Texture coordinates beside the distances (GridView::texcoords); empty when none.
     const std::vector<float>& texcoords() const { return m_texcoords; }
     TexcoordKind texcoordKind() const { return m_texcoordKind; }
@@ -316,6 +339,10 @@ class Grid {
     std::vector<uint64_t> m_cellMasks;
     std::vector<uint8_t> m_blockSkip;
     std::vector<float> m_texcoords;
+    std::vector<uint8_t> m_gapLattice;
+    int m_gapCounts[3] = {0, 0, 0};
+    int m_gapStep = 1;
+    float m_gapUnit = 0;
     TexcoordKind m_texcoordKind = TexcoordKind::None;
     bool m_complete = false;  // completeFromDense's layout
     float m_completeBand = 0;

@@ -88,6 +88,8 @@ using MeshBaker = std::function<MeshBakeResult(const TriangleMesh&, const MeshBa
 struct PrepareOptions {
     bool progress = false;  // one line per asset on stderr, and the bakes' percentages
     MeshBaker bakeMesh;     // every mesh asset's bake, RTSDF's per-frame regeneration included
+    // Narrow bands get their gap lattice (sceneGrid); off only to measure what it changes.
+    bool gapLattice = true;
 };
 
 struct PrepareStats {
@@ -111,5 +113,10 @@ void shareMeshAccels(Scene& scene, AssetCache& cache);
 PrepareStats prepareScene(Scene& scene, AssetCache& cache, const PrepareOptions& options = {});
 // With a cache of its own.
 PrepareStats prepareScene(Scene& scene, const PrepareOptions& options = {});
+
+// A grid as a scene holds it: a sparse narrow band gets its gap lattice
+// (Grid::computeGapLattice), so that beyond the band it reads a bound of the surface's distance
+// rather than the band's clamp.
+std::shared_ptr<const Grid> sceneGrid(Grid grid, bool gapLattice = true);
 
 }  // namespace sdft

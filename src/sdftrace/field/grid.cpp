@@ -295,6 +295,12 @@ GridView Grid::view() const {
     v.cellMasks = m_cellMasks.data();
     v.blockSkip = m_blockSkip.empty() ? nullptr : m_blockSkip.data();
     v.background = m_background;
+    if (!m_gapLattice.empty()) {
+        v.gapLattice = m_gapLattice.data();
+        for (int a = 0; a < 3; ++a) v.gapCounts[a] = m_gapCounts[a];
+        v.gapStep = m_gapStep;
+        v.gapUnit = m_gapUnit;
+    }
     if (!m_texcoords.empty()) {
         v.texcoords = m_texcoords.data();
         v.texcoordKind = static_cast<int>(m_texcoordKind);
@@ -398,7 +404,7 @@ size_t Grid::memoryBytes() const {
            m_blockNeighbors.size() * sizeof(int32_t) + m_apronFrom.size() * sizeof(int32_t) +
            m_apronCode.size() + m_cellMasks.size() * sizeof(uint64_t) + m_blockSkip.size() +
            m_tilePage.size() * sizeof(int32_t) + m_tileSkip.size() + m_tileLipschitz.size() +
-           m_blockLipschitz.size() + m_ownTiles.size() * sizeof(int);
+           m_blockLipschitz.size() + m_ownTiles.size() * sizeof(int) + m_gapLattice.size();
 }
 
 void Grid::blockCounts(size_t& inside, size_t& outside, size_t& surface) const {

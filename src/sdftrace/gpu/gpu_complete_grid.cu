@@ -151,6 +151,7 @@ GpuCompleteGrid::GpuCompleteGrid(const Grid& g) : m_impl(std::make_unique<Impl>(
     v.samples = nullptr;
     v.texcoords = nullptr;
     v.texcoordKind = 0;
+    v.gapLattice = nullptr;  // complete grids are not clamped to a band
 }
 
 GpuCompleteGrid::~GpuCompleteGrid() = default;

@@ -54,6 +54,7 @@ void forEachGridArray(GridView& v, const Grid& g, F&& f) {
     f(v.texcoords, g.texcoords());
     f(v.tileLipschitz, g.tileLipschitz());
     f(v.blockLipschitz, g.blockLipschitz());
+    f(v.gapLattice, g.gapLattice());
 }
 
 }  // namespace

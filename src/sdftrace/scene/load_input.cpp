@@ -20,13 +20,13 @@ LoadedInput loadSceneInput(const std::string& input, bool progress, const MeshBa
         TriangleMesh mesh = loadMesh(input, &report);
         MeshBakeOptions options;
         options.progress = progress;
-        auto grid = std::make_shared<const Grid>(bakeMesh(mesh, options).grid);
+        auto grid = sceneGrid(bakeMesh(mesh, options).grid);
         return {sceneForObject(node::grid(grid), grid->surfaceBounds()),
                 input + ": " + report.summary() + "; baked exactly at " +
                     std::to_string(options.sampling.resolution) + " cells"};
     }
     if (isGridFile(input)) {
-        auto grid = std::make_shared<const Grid>(loadGridFile(input));
+        auto grid = sceneGrid(loadGridFile(input));
         const Bounds3 frame = grid->surfaceBounds();
         if (frame.empty())
             throw InputError(input + ": the grid contains no surface (no sign change)");

@@ -128,7 +128,7 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
     try {
         switch (q.kind) {
             case AssetRequest::Kind::GridFile:
-                return std::make_shared<const Grid>(loadGridFile(q.path));
+                return sceneGrid(loadGridFile(q.path), options.gapLattice);
             case AssetRequest::Kind::Mesh: {
                 MeshBakeOptions bake = q.bake;
                 bake.progress = progress;
@@ -170,11 +170,12 @@ std::shared_ptr<const Grid> loadAsset(const AssetRequest& q, const NodePtr& subt
                     h.grid = grid;
                     return grid;
                 }
-                return std::make_shared<const Grid>(
-                    (options.bakeMesh ? options.bakeMesh(mesh, bake) : bakeMesh(mesh, bake)).grid);
+                return sceneGrid(
+                    (options.bakeMesh ? options.bakeMesh(mesh, bake) : bakeMesh(mesh, bake)).grid,
+                    options.gapLattice);
             }
             case AssetRequest::Kind::Subtree:
-                return std::make_shared<const Grid>(sampleSubtree(q, subtree));
+                return sceneGrid(sampleSubtree(q, subtree), options.gapLattice);
         }
     } catch (const InputError& e) {
         const std::string m = e.what();
@@ -196,6 +197,11 @@ void checkRepeats(const Scene& scene, const std::vector<std::shared_ptr<const Gr
 }
 
 }  // namespace
+
+std::shared_ptr<const Grid> sceneGrid(Grid grid, bool gapLattice) {
+    if (gapLattice) grid.computeGapLattice();
+    return std::make_shared<const Grid>(std::move(grid));
+}
 
 std::shared_ptr<const MeshAccel> AssetCache::meshAccel(
     const std::shared_ptr<const TriangleMesh>& mesh) {
