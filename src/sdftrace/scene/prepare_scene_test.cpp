@@ -99,6 +99,41 @@ TEST(PrepareScene, MeshAssetsBakeThroughTheGivenBaker) {
     EXPECT_EQ(planRender(scene).tape.eval({0, 0, 0}), -1.0f);
 }
 
+// Every narrow band a scene holds (a baked mesh, a grid file, a sampled subtree) gets its gap
+// lattice, so that beyond the band it reads a bound of the surface's distance (decision 19); a
+// dense one needs none.
+TEST(PrepareScene, NarrowBandsInASceneGetTheirGapLattice) {
+    GridDir d;
+    const std::string text =
+        R"({"objects": [
+        {"mesh": ")" +
+        kMeshes +
+        R"(teapot.obj", "resolution": 24},
+        {"mesh": ")" +
+        kMeshes +
+        R"(suzanne.obj", "resolution": 24, "dense": true, "translate": [3, 0, 0]},
+        {"grid": "ball.sdfg", "translate": [-3, 0, 0]},
+        {"type": "bake", "resolution": 24, "translate": [0, 3, 0],
+         "child": {"type": "sphere", "radius": 0.5}}]})";
+    for (bool lattice : {true, false}) {
+        Scene scene = describeSceneText(text, "t.json", d.dir.string());
+        prepareScene(scene, PrepareOptions{.gapLattice = lattice});
+        const Tape tape = planRender(scene).tape;
+        int sparse = 0, dense = 0;
+        for (const auto& g : tape.grids()) {
+            if (g->kind() == GridKind::Dense) {
+                ++dense;
+                EXPECT_EQ(g->view().gapLattice, nullptr);
+                continue;
+            }
+            ++sparse;
+            EXPECT_EQ(g->view().gapLattice != nullptr, lattice);
+        }
+        EXPECT_EQ(dense, 1);
+        EXPECT_EQ(sparse, 3);
+    }
+}
+
 TEST(PrepareScene, AMissingFileIsAnErrorOfPreparationWithItsJsonPath) {
     Scene scene = describeSceneText(R"({"objects": [{"type": "sphere", "radius": 1},
         {"type": "grid", "file": "nowhere.sdfg"}]})",
