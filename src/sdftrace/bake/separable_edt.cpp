@@ -7,45 +7,13 @@
 
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/exec/thread_arena.h"
+#include "sdftrace/field/lower_envelope.h"
 
 namespace sdft {
 
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// One line: f[q] (squared distance so far, kInf for none) -> out[q] = min_r (q - r)^2 + f[r], and
-// from[q] = the minimizing r. v, z: scratch of n and n + 1.
-void envelope(int n, const double* f, double* out, int* from, int* v, double* z) {
-    int k = -1;
-    for (int q = 0; q < n; ++q) {
-        if (f[q] == kInf) continue;
-        if (k < 0) {
-            k = 0, v[0] = q, z[0] = -kInf, z[1] = kInf;
-            continue;
-        }
-        double s;
-        while (true) {  // z[0] = -inf ends it
-            int r = v[k];
-            s = ((f[q] + double(q) * q) - (f[r] + double(r) * r)) / (2.0 * (q - r));
-            if (s > z[k]) break;
-            --k;
-        }
-        ++k;
-        v[k] = q, z[k] = s, z[k + 1] = kInf;
-    }
-    if (k < 0) {
-        for (int q = 0; q < n; ++q) out[q] = kInf, from[q] = -1;
-        return;
-    }
-    k = 0;
-    for (int q = 0; q < n; ++q) {
-        while (z[k + 1] < q) ++k;
-        double d = double(q) - v[k];
-        out[q] = d * d + f[v[k]];
-        from[q] = v[k];
-    }
-}
 
 }  // namespace
 
@@ -79,7 +47,7 @@ std::vector<Vec3> separableEdt(const GridShape& s, const std::vector<Vec3>& seed
                         f[q] = dist[base + q * stride[axis]];
                         feat[q] = feature[base + q * stride[axis]];
                     }
-                    envelope(len, f.data(), out.data(), from.data(), v.data(), z.data());
+                    lowerEnvelope(len, f.data(), out.data(), from.data(), v.data(), z.data());
                     for (int q = 0; q < len; ++q) {
                         dist[base + q * stride[axis]] = out[q];
                         feature[base + q * stride[axis]] = from[q] < 0 ? -1 : feat[from[q]];

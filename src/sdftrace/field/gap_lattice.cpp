@@ -23,44 +23,13 @@
 #include <vector>
 
 #include "sdftrace/field/grid.h"
+#include "sdftrace/field/lower_envelope.h"
 
 namespace sdft {
 
 namespace {
 
 constexpr float kFar = std::numeric_limits<float>::infinity();
-
-// Squared distances along one line of n values in place: out[q] = min_p (q - p)^2 + f[p]
-// (Felzenszwalb and Huttenlocher 2012, §2.1), infinite values skipped; v and z are scratch of n
-// and n + 1 entries.
-void distanceLine(float* f, int n, std::vector<int>& v, std::vector<float>& z,
-                  std::vector<float>& out) {
-    int k = -1;
-    for (int q = 0; q < n; ++q) {
-        if (f[q] == kFar) continue;
-        const float fq = f[q] + static_cast<float>(q) * static_cast<float>(q);
-        float s = -kFar;
-        while (k >= 0) {
-            const int p = v[static_cast<size_t>(k)];
-            s = (fq - (f[p] + static_cast<float>(p) * static_cast<float>(p))) /
-                static_cast<float>(2 * (q - p));
-            if (s > z[static_cast<size_t>(k)]) break;
-            --k;
-        }
-        ++k;
-        v[static_cast<size_t>(k)] = q;
-        z[static_cast<size_t>(k)] = k == 0 ? -kFar : s;
-    }
-    if (k < 0) return;  // nothing finite on this line
-    z[static_cast<size_t>(k) + 1] = kFar;
-    int j = 0;
-    for (int q = 0; q < n; ++q) {
-        while (z[static_cast<size_t>(j) + 1] < static_cast<float>(q)) ++j;
-        const int p = v[static_cast<size_t>(j)];
-        out[static_cast<size_t>(q)] = static_cast<float>((q - p) * (q - p)) + f[p];
-    }
-    std::copy(out.begin(), out.begin() + n, f);
-}
 
 // One pass of the transform along `axis` of the n[0] x n[1] x n[2] array d (x fastest), lines in
 // parallel.
@@ -84,8 +53,8 @@ void distancePass(std::vector<float>& d, const int n[3], int axis) {
                     (static_cast<size_t>(c[2]) * n[1] + static_cast<size_t>(c[1])) * n[0] +
                     static_cast<size_t>(c[0]);
                 for (int i = 0; i < len; ++i) line[static_cast<size_t>(i)] = d[base + i * stride];
-                distanceLine(line.data(), len, v, z, out);
-                for (int i = 0; i < len; ++i) d[base + i * stride] = line[static_cast<size_t>(i)];
+                lowerEnvelope(len, line.data(), out.data(), nullptr, v.data(), z.data());
+                for (int i = 0; i < len; ++i) d[base + i * stride] = out[static_cast<size_t>(i)];
             }
         });
 }
