@@ -155,22 +155,81 @@ void latticeCost(const std::string& path, int reps) {
         1e3 * times[times.size() / 2], reps);
 }
 
+struct Options {
+    int resolution = 128, truthRays = 256, width = 320, height = 200, reps = 3;
+    std::string images;  // where each row's pictures go; empty: none
+};
+
+// One mesh and camera: every row's shadows against the truth, a table line each.
+void benchView(const Options& o, const std::string& path, const Placement& place,
+               const MeshBvh& bvh, const View& view, const std::vector<Row>& rows) {
+    const int width = o.width, height = o.height, reps = o.reps, truthRays = o.truthRays;
+    const std::string& images = o.images;
+    const std::string name = path.substr(path.find_last_of('/') + 1);
+    double evaluations = 0;  // shadow evaluations per pixel of the last render
+    auto shadowOf = [&](const Row& r, double* ms) {
+        const std::string mesh =
+            R"({"mesh": ")" + path + R"(", )" + r.mesh + ", " + place.keys + "}";
+        Scene s = describeSceneText(sceneText(view, width, height, mesh, r.render), name);
+        PrepareOptions prepare;
+        prepare.gapLattice = r.gapLattice;
+        prepareScene(s, prepare);
+        const RenderPlan plan = planRender(s);
+        std::vector<double> times;
+        Film film(plan.camera.width, plan.camera.height);
+        for (int k = 0; k < (ms ? reps : 1); ++k) {
+            film = Film(plan.camera.width, plan.camera.height);
+            const auto t0 = Clock::now();
+            const RenderStats st = render(plan, film);
+            evaluations =
+                static_cast<double>(st.shadowEvaluations) / static_cast<double>(film.pixels());
+            times.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+        }
+        std::sort(times.begin(), times.end());
+        if (ms) *ms = 1e3 * times[times.size() / 2];
+        if (!ms) film.shadow = triangleTruth(film, plan.camera, bvh, truthRays);
+        return film;
+    };
+    // Every row shades the same points: the first row's, with the truth's shadows.
+    const Film reference = shadowOf(rows.front(), nullptr);
+    std::vector<Film> films;
+    std::vector<double> times, perPixel;
+    for (const Row& r : rows) {
+        double ms = 0;
+        films.push_back(shadowOf(r, &ms));
+        times.push_back(ms);
+        perPixel.push_back(evaluations);
+        if (!images.empty()) {
+            const Film& f = films.back();
+            const std::string stem =
+                images + "/" + name + "-" + view.name + "-" + std::to_string(&r - rows.data());
+            writePng(stem + ".png", f.width, f.height, 3, toneMapSrgb(f.color));
+            writeAov(f, Aov::Shadow, stem + "-shadow.png");
+        }
+    }
+    for (size_t r = 0; r < rows.size(); ++r) {
+        std::printf("| %s | %s | %s | %.4f | %.4f | %.1f | %.1f ms |\n", name.c_str(), view.name,
+                    rows[r].name.c_str(), rmse(films[r].shadow, reference, films, true),
+                    rmse(films[r].shadow, reference, films, false), perPixel[r], times[r]);
+        std::fflush(stdout);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    int resolution = 128, truthRays = 256, width = 320, height = 200, reps = 3;
+    Options o;
     std::vector<std::string> meshes;
-    std::string images;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        int* target = a == "--resolution" ? &resolution
-                      : a == "--truth"    ? &truthRays
-                      : a == "--width"    ? &width
-                      : a == "--height"   ? &height
-                      : a == "--reps"     ? &reps
+        int* target = a == "--resolution" ? &o.resolution
+                      : a == "--truth"    ? &o.truthRays
+                      : a == "--width"    ? &o.width
+                      : a == "--height"   ? &o.height
+                      : a == "--reps"     ? &o.reps
                                           : nullptr;
         if (a == "--images" && i + 1 < argc) {
-            images = argv[++i];
+            o.images = argv[++i];
         } else if (target && i + 1 < argc) {
             *target = std::max(1, std::atoi(argv[++i]));
         } else if (a.rfind("--", 0) == 0) {
@@ -185,7 +244,7 @@ int main(int argc, char** argv) {
         return 2;
     }
     const std::string soft = R"("shadow_method": "soft")";
-    const std::string res = "\"resolution\": " + std::to_string(resolution);
+    const std::string res = "\"resolution\": " + std::to_string(o.resolution);
     const std::vector<Row> rows = {
         {"band 3 (default), soft, without the gap lattice", res, soft, false},
         {"band 3 (default), soft", res, soft},
@@ -201,63 +260,15 @@ int main(int argc, char** argv) {
         "rays per point on the triangles)\n\n| mesh | camera | row | RMSE, floor | RMSE, mesh | "
         "shadow evaluations per pixel | render (median of %d) |\n"
         "| --- | --- | --- | --- | --- | --- | --- |\n",
-        resolution, width, height, truthRays, reps);
+        o.resolution, o.width, o.height, o.truthRays, o.reps);
     for (const std::string& path : meshes) {
         if (isGridFile(path)) {
-            latticeCost(path, reps);
+            latticeCost(path, o.reps);
             continue;
         }
         const Placement place = placement(path);
         const MeshBvh bvh(place.mesh);
-        const std::string name = path.substr(path.find_last_of('/') + 1);
-        for (const View& view : views) {
-            double evaluations = 0;  // shadow evaluations per pixel of the last render
-            auto shadowOf = [&](const Row& r, double* ms) {
-                const std::string mesh =
-                    R"({"mesh": ")" + path + R"(", )" + r.mesh + ", " + place.keys + "}";
-                Scene s = describeSceneText(sceneText(view, width, height, mesh, r.render), name);
-                prepareScene(s, PrepareOptions{.gapLattice = r.gapLattice});
-                const RenderPlan plan = planRender(s);
-                std::vector<double> times;
-                Film film(plan.camera.width, plan.camera.height);
-                for (int k = 0; k < (ms ? reps : 1); ++k) {
-                    film = Film(plan.camera.width, plan.camera.height);
-                    const auto t0 = Clock::now();
-                    const RenderStats st = render(plan, film);
-                    evaluations = static_cast<double>(st.shadowEvaluations) /
-                                  static_cast<double>(film.pixels());
-                    times.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
-                }
-                std::sort(times.begin(), times.end());
-                if (ms) *ms = 1e3 * times[times.size() / 2];
-                if (!ms) film.shadow = triangleTruth(film, plan.camera, bvh, truthRays);
-                return film;
-            };
-            // Every row shades the same points: the first row's, with the truth's shadows.
-            const Film reference = shadowOf(rows.front(), nullptr);
-            std::vector<Film> films;
-            std::vector<double> times, perPixel;
-            for (const Row& r : rows) {
-                double ms = 0;
-                films.push_back(shadowOf(r, &ms));
-                times.push_back(ms);
-                perPixel.push_back(evaluations);
-                if (!images.empty()) {
-                    const Film& f = films.back();
-                    const std::string stem = images + "/" + name + "-" + view.name + "-" +
-                                             std::to_string(&r - rows.data());
-                    writePng(stem + ".png", f.width, f.height, 3, toneMapSrgb(f.color));
-                    writeAov(f, Aov::Shadow, stem + "-shadow.png");
-                }
-            }
-            for (size_t r = 0; r < rows.size(); ++r) {
-                std::printf("| %s | %s | %s | %.4f | %.4f | %.1f | %.1f ms |\n", name.c_str(),
-                            view.name, rows[r].name.c_str(),
-                            rmse(films[r].shadow, reference, films, true),
-                            rmse(films[r].shadow, reference, films, false), perPixel[r], times[r]);
-                std::fflush(stdout);
-            }
-        }
+        for (const View& view : views) benchView(o, path, place, bvh, view, rows);
     }
     return 0;
 }

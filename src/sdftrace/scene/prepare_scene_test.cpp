@@ -117,7 +117,9 @@ TEST(PrepareScene, NarrowBandsInASceneGetTheirGapLattice) {
          "child": {"type": "sphere", "radius": 0.5}}]})";
     for (bool lattice : {true, false}) {
         Scene scene = describeSceneText(text, "t.json", d.dir.string());
-        prepareScene(scene, PrepareOptions{.gapLattice = lattice});
+        PrepareOptions prepare;
+        prepare.gapLattice = lattice;
+        prepareScene(scene, prepare);
         const Tape tape = planRender(scene).tape;
         int sparse = 0, dense = 0;
         for (const auto& g : tape.grids()) {
