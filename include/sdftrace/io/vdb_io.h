@@ -4,6 +4,7 @@
 // the VDB transform must be a uniform linear scale plus translation.
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 #include "sdftrace/field/grid.h"
@@ -13,6 +14,9 @@ namespace sdft {
 struct VdbImportOptions {
     int blockSize = 4;
     float minBandVoxels = 2;  // the sparse band is the level set's half width, at least this
+    // Leaves each worker keeps decoded while it gathers blocks (2 KiB each; at least one tile of
+    // blocks' worth). 0: 1024, or two tiles' worth if more.
+    size_t cachedLeaves = 0;
 };
 
 // Loads the first float grid (a level set preferably) of a .vdb file as a sparse block grid

@@ -1,6 +1,8 @@
 #include "sdftrace/io/vdb_io.h"
 
 #include <emmintrin.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -9,13 +11,17 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <utility>
 
 #include "sdftrace/core/error.h"
+#include "sdftrace/core/macros.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/field/openvdb_plugin.h"
 #include "sdftrace/field/sparse_grid_builder.h"
 #include "sdftrace/io/atomic_file.h"
+#include "sdftrace/io/mapped_file.h"
 #include "vdb_reader.h"
 
 namespace sdft {
@@ -48,44 +54,91 @@ void forEachTile(const vdb::Tree& t, F&& f) {
     internal(t.lower, 4, 3);
 }
 
-// The active voxels' index bounds (leaves' value masks, active tiles); false if none.
-bool activeBounds(const vdb::Tree& t, std::array<int32_t, 3>& lo, std::array<int32_t, 3>& hi) {
+// Index bounds of active voxels, grown voxel box by voxel box.
+struct ActiveBounds {
+    std::array<int32_t, 3> lo{}, hi{};
     bool any = false;
-    auto include = [&](int32_t x, int32_t y, int32_t z, int32_t extent) {
-        const int32_t p[3] = {x, y, z};
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = any ? std::min(lo[a], p[a]) : p[a];
-            hi[a] = any ? std::max(hi[a], p[a] + extent - 1) : p[a] + extent - 1;
+    void include(const int32_t a[3], const int32_t b[3]) {
+        for (int i = 0; i < 3; ++i) {
+            lo[i] = any ? std::min(lo[i], a[i]) : a[i];
+            hi[i] = any ? std::max(hi[i], b[i]) : b[i];
         }
         any = true;
-    };
-    // A leaf's mask word w holds x = w; its bit b holds y = b >> 3, z = b & 7.
-    for (const vdb::Leaf& leaf : t.leaves) {
-        uint64_t any = 0;
+    }
+    void include(const ActiveBounds& o) {
+        if (o.any) include(o.lo.data(), o.hi.data());
+    }
+    // A leaf's active voxels (mask word w holds x = w; its bit b holds y = b >> 3, z = b & 7).
+    void includeLeaf(const std::array<int32_t, 3>& origin, const uint64_t active[8]) {
+        uint64_t bits = 0;
         int x0 = 8, x1 = -1;
         for (int w = 0; w < 8; ++w) {
-            if (!leaf.active[w]) continue;
-            any |= leaf.active[w];
+            if (!active[w]) continue;
+            bits |= active[w];
             x0 = std::min(x0, w);
             x1 = w;
         }
-        if (!any) continue;
+        if (!bits) return;
         uint8_t rows = 0, cols = 0;  // y and z present
-        for (uint64_t bits = any; bits; bits &= bits - 1) {
+        for (; bits; bits &= bits - 1) {
             const int b = std::countr_zero(bits);
             rows |= static_cast<uint8_t>(1u << (b >> 3));
             cols |= static_cast<uint8_t>(1u << (b & 7));
         }
-        const int y0 = std::countr_zero(rows), y1 = 7 - std::countl_zero(rows);
-        const int z0 = std::countr_zero(cols), z1 = 7 - std::countl_zero(cols);
-        include(leaf.origin[0] + x0, leaf.origin[1] + y0, leaf.origin[2] + z0, 1);
-        include(leaf.origin[0] + x1, leaf.origin[1] + y1, leaf.origin[2] + z1, 1);
+        const int32_t a[3] = {origin[0] + x0, origin[1] + std::countr_zero(rows),
+                              origin[2] + std::countr_zero(cols)};
+        const int32_t b[3] = {origin[0] + x1, origin[1] + 7 - std::countl_zero(rows),
+                              origin[2] + 7 - std::countl_zero(cols)};
+        include(a, b);
     }
-    forEachTile(t, [&](float, bool active, int32_t x, int32_t y, int32_t z, int extent) {
-        if (active) include(x, y, z, extent);
-    });
-    return any;
-}
+    // The active tiles of the tree.
+    void includeTiles(const vdb::Tree& t) {
+        forEachTile(t, [&](float, bool active, int32_t x, int32_t y, int32_t z, int extent) {
+            const int32_t a[3] = {x, y, z}, b[3] = {x + extent - 1, y + extent - 1, z + extent - 1};
+            if (active) include(a, b);
+        });
+    }
+};
+
+// Per worker: leaves decoded for the tiles it gathers, kept from tile to tile (its tiles come in
+// the file's order, so the next one reads many of the same leaves) and dropped all at once when
+// a tile might not fit, never while a tile reads them.
+class LeafCache {
+  public:
+    LeafCache(const vdb::FloatGrid& g, size_t capacity)
+        : m_decoder(std::make_unique<vdb::LeafDecoder>(g)),
+          m_capacity(capacity),
+          m_values(new float[capacity * vdb::kLeafVoxels]),  // touched as leaves are decoded
+          m_keys(std::bit_ceil(2 * capacity), -1),
+          m_slots(m_keys.size()) {}
+
+    // Room for `leaves` more, made by dropping every leaf if need be.
+    void makeRoom(size_t leaves) {
+        if (m_used + leaves <= m_capacity) return;
+        std::fill(m_keys.begin(), m_keys.end(), -1);
+        m_used = 0;
+    }
+    // Leaf i's 512 values, decoded if they are not here.
+    const float* values(int32_t leaf) {
+        const size_t mask = m_keys.size() - 1;
+        size_t h = (static_cast<uint32_t>(leaf) * 0x9e3779b1u) & mask;
+        for (; m_keys[h] >= 0; h = (h + 1) & mask)
+            if (m_keys[h] == leaf) return m_values.get() + m_slots[h] * vdb::kLeafVoxels;
+        SDFT_CHECK(m_used < m_capacity);
+        float* out = m_values.get() + m_used * vdb::kLeafVoxels;
+        m_decoder->decode(static_cast<size_t>(leaf), out);
+        m_keys[h] = leaf;
+        m_slots[h] = m_used++;
+        return out;
+    }
+
+  private:
+    std::unique_ptr<vdb::LeafDecoder> m_decoder;
+    size_t m_capacity, m_used = 0;
+    std::unique_ptr<float[]> m_values;
+    std::vector<int32_t> m_keys;  // open addressing, linear probing
+    std::vector<size_t> m_slots;
+};
 
 // The tree straight into a sparse block grid: blocks that touch a leaf (or whose corners are near
 // or of both signs) get their samples from the tree; every other block lies in one tile region
@@ -93,15 +146,25 @@ bool activeBounds(const vdb::Tree& t, std::array<int32_t, 3>& lo, std::array<int
 // sparsifying it (Grid::sparseFromDense), without the dense array.
 class TreeToGrid {
   public:
-    TreeToGrid(const vdb::FloatGrid& g, const std::string& path, const VdbImportOptions& o)
-        : m_t(g.tree), m_path(path), m_B(o.blockSize), m_V(o.blockSize + 1) {
-        if (!activeBounds(m_t, m_lo, m_hi))
-            throw InputError(path + ": grid '" + g.name + "' has no active voxels");
-        makeShape(g);
-        const float h = m_shape.voxelSize;
+    // Reads `g`'s leaves from its file and drops its tree once the samples are gathered.
+    TreeToGrid(vdb::FloatGrid& g, const std::string& path, const VdbImportOptions& o)
+        : m_g(g),
+          m_t(g.tree),
+          m_path(path),
+          m_B(o.blockSize),
+          m_V(o.blockSize + 1),
+          m_cachedLeaves(o.cachedLeaves) {
+        m_gridName = g.name;
+        const float h = static_cast<float>(g.voxelSize);
         m_bandVoxels = std::max(o.minBandVoxels, std::fabs(m_t.background) / h * 0.999f);
         m_band = m_bandVoxels * h;
         m_tileFloor = std::min(m_band, std::fabs(m_t.background) / h * 0.999f * h);
+        ActiveBounds bounds = scanLeaves();
+        bounds.includeTiles(m_t);
+        if (!bounds.any) throw InputError(path + ": grid '" + g.name + "' has no active voxels");
+        m_lo = bounds.lo;
+        m_hi = bounds.hi;
+        makeShape(g);
         checkTiles();
         for (int a = 0; a < 3; ++a) {
             m_blocks[a] = (m_shape.cells[a] + m_B - 1) / m_B;
@@ -118,8 +181,8 @@ class TreeToGrid {
     }
 
     Grid build() {
-        computeLeafBits();
         BlockTable table = buildTable();
+        std::vector<LeafBits>().swap(m_leafBits);  // the leaves' bits are read no more
         const size_t surface = table.surfaceBlocks();
         checkMemoryBudget(static_cast<double>(table.flags.size()) * 6 +
                               static_cast<double>(surface) * kBytesPerSurfaceBlock(m_B),
@@ -130,6 +193,10 @@ class TreeToGrid {
         SparseGridBuilder builder(m_shape, m_B, (m_bandVoxels - 1) * m_shape.voxelSize,
                                   std::move(table), m_path);
         sampleSurfaceBlocks(builder);
+        // The tree is read no more: its nodes leave before finish() makes the skip tables.
+        m_g.tree = vdb::Tree();
+        std::vector<int32_t>().swap(m_unitLower);
+        std::vector<float>().swap(m_unitValue);
         return builder.finish();
     }
 
@@ -165,7 +232,6 @@ class TreeToGrid {
                 throw InputError(m_path + ": the grid lies beyond +-1e9");
         }
         m_shape.voxelSize = static_cast<float>(g.voxelSize);
-        m_gridName = g.name;
     }
 
     // The active region in units of a lower internal node (128^3 voxels): per unit its lower node
@@ -196,7 +262,7 @@ class TreeToGrid {
             const int32_t z =
                 (m_u0[2] + static_cast<int32_t>(u / (static_cast<size_t>(m_un[0]) * m_un[1])))
                 << kUnitLog2;
-            m_unitValue[u] = m_t.value(x, y, z);
+            m_unitValue[u] = m_t.locate(x, y, z).value;  // no leaf: the unit has no lower node
         });
     }
 
@@ -227,7 +293,13 @@ class TreeToGrid {
     // once per tile: classify and gatherBlock read up to 8 regions per block.
     struct TileRegions {
         static constexpr int kMax = 11;  // a tile's vertices span at most 64 + 1 voxels
-        int32_t first[3] = {0, 0, 0};    // region coordinate (voxel >> 3) of entry 0
+        // The most regions a tile of blocks of B lists (tileRegions: its span's regions and one
+        // more per axis).
+        static constexpr int regionsPerTile(int B) {
+            const int n = (kTileBlocks * B + 7) / 8 + 2;
+            return n * n * n;
+        }
+        int32_t first[3] = {0, 0, 0};  // region coordinate (voxel >> 3) of entry 0
         int n[3] = {0, 0, 0};
         int32_t leaf[kMax * kMax * kMax];
         float value[kMax * kMax * kMax];
@@ -358,36 +430,61 @@ class TreeToGrid {
         uint64_t negative[8], near[8];
     };
 
-    // Also refuses non-finite values (|v| <= FLT_MAX fails for them).
-    void computeLeafBits() {
-        m_leafBits.resize(m_t.leaves.size());
+    // Pass 0, over the leaves in the file's order: each decoded once, its bits kept and its pages
+    // released; the leaves' active bounds. Also refuses non-finite values (|v| <= FLT_MAX fails
+    // for them).
+    ActiveBounds scanLeaves() {
+        const size_t n = m_t.leaves.size();
+        m_leafBits.resize(n);
         std::atomic<bool> finite{true};
-        tbb::parallel_for(
-            tbb::blocked_range<size_t>(0, m_t.leaves.size(), 256), [&](const auto& range) {
-                const __m128 sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps(),
-                             band = _mm_set1_ps(m_band),
-                             largest = _mm_set1_ps(std::numeric_limits<float>::max());
-                int allFinite = 0xf;
-                for (size_t l = range.begin(); l != range.end(); ++l) {
-                    const float* v = m_t.leaves[l].values.data();
-                    LeafBits& bits = m_leafBits[l];
-                    for (int x = 0; x < 8; ++x) {
-                        uint64_t negative = 0, near = 0;
-                        for (int q = 0; q < 16; ++q) {
-                            const __m128 f = _mm_loadu_ps(v + x * 64 + q * 4);
-                            const __m128 magnitude = _mm_andnot_ps(sign, f);
-                            negative |= uint64_t(_mm_movemask_ps(_mm_cmplt_ps(f, zero))) << (4 * q);
-                            near |= uint64_t(_mm_movemask_ps(_mm_cmplt_ps(magnitude, band)))
-                                    << (4 * q);
-                            allFinite &= _mm_movemask_ps(_mm_cmple_ps(magnitude, largest));
-                        }
-                        bits.negative[x] = negative;
-                        bits.near[x] = near;
-                    }
-                }
-                if (allFinite != 0xf) finite = false;
-            });
+        tbb::enumerable_thread_specific<ActiveBounds> bounds;
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const auto& range) {
+            vdb::LeafDecoder decoder(m_g);
+            alignas(16) float values[vdb::kLeafVoxels];
+            uint64_t active[8];
+            ActiveBounds& b = bounds.local();
+            bool allFinite = true;
+            for (size_t l = range.begin(); l != range.end(); ++l) {
+                decoder.decode(l, values, active);
+                b.includeLeaf(m_t.leaves[l].origin, active);
+                allFinite &= leafBits(values, m_leafBits[l]);
+            }
+            if (!allFinite) finite = false;
+            releaseLeaves(range.begin(), range.end());
+        });
         if (!finite) throw InputError(m_path + ": non-finite values in grid '" + m_gridName + "'");
+        ActiveBounds all;
+        for (const ActiveBounds& b : bounds) all.include(b);
+        return all;
+    }
+
+    // The file's pages of leaves [first, last) (those their buffers hold whole) leave the
+    // process's memory; the file stays in the page cache.
+    void releaseLeaves(size_t first, size_t last) const {
+        if (first >= last) return;
+        const uint64_t begin = m_t.leaves[first].buffer;
+        const uint64_t end = last < m_t.leaves.size() ? m_t.leaves[last].buffer : m_g.file->size();
+        m_g.file->release(begin, end - begin);
+    }
+
+    // One leaf's sign and band bits (SSE2, four voxels a step); false if a value is not finite.
+    bool leafBits(const float* v, LeafBits& bits) const {
+        const __m128 sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps(), band = _mm_set1_ps(m_band),
+                     largest = _mm_set1_ps(std::numeric_limits<float>::max());
+        int allFinite = 0xf;
+        for (int x = 0; x < 8; ++x) {
+            uint64_t negative = 0, near = 0;
+            for (int q = 0; q < 16; ++q) {
+                const __m128 f = _mm_load_ps(v + x * 64 + q * 4);
+                const __m128 magnitude = _mm_andnot_ps(sign, f);
+                negative |= uint64_t(_mm_movemask_ps(_mm_cmplt_ps(f, zero))) << (4 * q);
+                near |= uint64_t(_mm_movemask_ps(_mm_cmplt_ps(magnitude, band))) << (4 * q);
+                allFinite &= _mm_movemask_ps(_mm_cmple_ps(magnitude, largest));
+            }
+            bits.negative[x] = negative;
+            bits.near[x] = near;
+        }
+        return allFinite == 0xf;
     }
 
     // Block b's flag from its (B+1)^3 samples' bits, without gathering them: surface if one is
@@ -457,8 +554,8 @@ class TreeToGrid {
     // Block b's (B+1)^3 samples into `out`, x fastest. Its V vertices per axis span at most two
     // 8-voxel regions: per axis, each vertex's region (0 or 1 from the first) and its offset inside
     // the leaf; per region of the 2x2x2, the leaf's values or a tile value repeated.
-    void gatherBlock(const int b[3], float* out, GatherScratch& scratch,
-                     const TileRegions& tr) const {
+    void gatherBlock(const int b[3], float* out, GatherScratch& scratch, const TileRegions& tr,
+                     LeafCache& leaves) const {
         const int V = m_V;
         int region[3][9], offset[3][9];  // V <= 9
         int first[3];
@@ -482,8 +579,7 @@ class TreeToGrid {
             }
             float v = 0;
             const int32_t leaf = tr.at(x >> 3, y >> 3, z >> 3, v);
-            source[c] =
-                leaf >= 0 ? m_t.leaves[static_cast<size_t>(leaf)].values.data() : scratch.region(v);
+            source[c] = leaf >= 0 ? leaves.values(leaf) : scratch.region(v);
         }
         // x splits between the two regions at most once per row, at the same place in every row.
         int split = 0;
@@ -502,38 +598,78 @@ class TreeToGrid {
     }
 
     // Pass 2: the surface blocks' samples, clamped to the band, into the grid's builder (every
-    // vertex's value comes from the tree, so blocks that share one agree); own pages in parallel.
+    // vertex's value comes from the tree, so blocks that share one agree); own pages in parallel,
+    // in the order of the first leaf each reads, so that the leaves are decoded in the file's
+    // order, kept in each worker's cache while its next tiles read them, and their pages
+    // released behind the tiles (the leaves are never all decoded at once).
     void sampleSurfaceBlocks(SparseGridBuilder& builder) const {
         const std::vector<int>& own = builder.ownTiles();
-        const std::vector<int32_t>& index = builder.blockData();
-        const int V = m_V;
-        const size_t perBlock = static_cast<size_t>(V) * V * V;
-        const float band = m_band;
-        tbb::parallel_for(size_t(0), own.size() / 3, [&](size_t p) {
-            GatherScratch scratch;
+        const size_t pages = own.size() / 3;
+        std::vector<std::pair<int32_t, uint32_t>> order(pages);  // (first leaf, page)
+        tbb::parallel_for(size_t(0), pages, [&](size_t p) {
             TileRegions tr;
             tileRegions(&own[3 * p], tr);
-            const size_t base = (p + kFirstOwnPage) * kPageEntries;
-            float block[9 * 9 * 9];  // (B+1)^3, B <= 8
-            forEachBlockOfTile(m_blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
-                               [&](int bi, int bj, int bk) {
-                                   const int32_t at = index[base + pageLocal(bi, bj, bk)];
-                                   if (at < 0) return;
-                                   const int b[3] = {bi, bj, bk};
-                                   gatherBlock(b, block, scratch, tr);
-#pragma omp simd
-                                   for (size_t n = 0; n < perBlock; ++n) {
-                                       const float v = block[n];
-                                       block[n] = v < -band ? -band : (v > band ? band : v);
-                                   }
-                                   builder.addBlock(bi, bj, bk, block);
-                               });
+            int32_t first = std::numeric_limits<int32_t>::max();
+            for (int i = 0; i < tr.n[0] * tr.n[1] * tr.n[2]; ++i)
+                if (tr.leaf[i] >= 0) first = std::min(first, tr.leaf[i]);
+            order[p] = {first, static_cast<uint32_t>(p)};
         });
+        std::sort(order.begin(), order.end());
+        const size_t maxRegions = static_cast<size_t>(TileRegions::regionsPerTile(m_B));
+        const size_t capacity = m_cachedLeaves ? std::max(m_cachedLeaves, maxRegions)
+                                               : std::max<size_t>(1024, 2 * maxRegions);
+        tbb::enumerable_thread_specific<LeafCache> caches([&] { return LeafCache(m_g, capacity); });
+        const size_t batch = std::max<size_t>(32, pages / 128);
+        size_t released = 0;  // leaves whose pages are released
+        for (size_t b0 = 0; b0 < pages; b0 += batch) {
+            const size_t b1 = std::min(pages, b0 + batch);
+            tbb::parallel_for(b0, b1, [&](size_t o) {
+                LeafCache& cache = caches.local();
+                cache.makeRoom(maxRegions);
+                sampleTile(builder, order[o].second, cache);
+            });
+            // No later tile reads a leaf before its own first one.
+            const size_t next = b1 < pages ? std::min<size_t>(static_cast<size_t>(order[b1].first),
+                                                              m_t.leaves.size())
+                                           : m_t.leaves.size();
+            if (next > released) {
+                releaseLeaves(released, next);
+                released = next;
+            }
+        }
     }
 
+    // The surface blocks of own page p, gathered and added to the builder.
+    void sampleTile(SparseGridBuilder& builder, size_t p, LeafCache& cache) const {
+        const std::vector<int>& own = builder.ownTiles();
+        const std::vector<int32_t>& index = builder.blockData();
+        const size_t perBlock = static_cast<size_t>(m_V) * m_V * m_V;
+        const float band = m_band;
+        GatherScratch scratch;
+        TileRegions tr;
+        tileRegions(&own[3 * p], tr);
+        const size_t base = (p + kFirstOwnPage) * kPageEntries;
+        float block[9 * 9 * 9];  // (B+1)^3, B <= 8
+        forEachBlockOfTile(m_blocks, own[3 * p], own[3 * p + 1], own[3 * p + 2],
+                           [&](int bi, int bj, int bk) {
+                               const int32_t at = index[base + pageLocal(bi, bj, bk)];
+                               if (at < 0) return;
+                               const int b[3] = {bi, bj, bk};
+                               gatherBlock(b, block, scratch, tr, cache);
+#pragma omp simd
+                               for (size_t n = 0; n < perBlock; ++n) {
+                                   const float v = block[n];
+                                   block[n] = v < -band ? -band : (v > band ? band : v);
+                               }
+                               builder.addBlock(bi, bj, bk, block);
+                           });
+    }
+
+    vdb::FloatGrid& m_g;
     const vdb::Tree& m_t;
     const std::string& m_path;
     const int m_B, m_V;
+    const size_t m_cachedLeaves;
     std::array<int32_t, 3> m_lo{}, m_hi{};
     GridShape m_shape;
     float m_bandVoxels = 0, m_band = 0;
@@ -552,7 +688,7 @@ class TreeToGrid {
 
 Grid loadVdb(const std::string& path, const VdbImportOptions& options) {
     return readWithinBudget(path, [&] {
-        const vdb::FloatGrid g = vdb::readVdbFile(path);
+        vdb::FloatGrid g = vdb::readVdbFile(path);
         return TreeToGrid(g, path, options).build();
     });
 }

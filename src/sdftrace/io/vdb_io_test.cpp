@@ -389,18 +389,29 @@ TEST(Vdb, NativeReaderMatchesOpenVdbOnEveryEncoding) {
                         continue;
                     }
                     const vdb::FloatGrid mine = vdb::readVdbFile(path);
+                    // Every leaf decoded once, looked up where the tree locates a voxel.
+                    std::vector<float> leaves(mine.tree.leaves.size() * vdb::kLeafVoxels);
+                    vdb::LeafDecoder decoder(mine);
+                    for (size_t l = 0; l < mine.tree.leaves.size(); ++l)
+                        decoder.decode(l, leaves.data() + l * vdb::kLeafVoxels);
+                    auto value = [&](int32_t x, int32_t y, int32_t z) {
+                        const vdb::Location at = mine.tree.locate(x, y, z);
+                        return at.leaf < 0
+                                   ? at.value
+                                   : leaves[static_cast<size_t>(at.leaf) * vdb::kLeafVoxels +
+                                            static_cast<size_t>(at.voxel)];
+                    };
                     EXPECT_EQ(mine.name, grid->getName()) << what;
                     EXPECT_EQ(mine.tree.background, ref->background()) << what;
                     auto acc = ref->getConstAccessor();
                     for (int i = 0; i < 20000; ++i) {
                         const Vec3 p = rng.inCube(300.0f);
                         const openvdb::Coord c(int(p.x), int(p.y), int(p.z));
-                        ASSERT_EQ(mine.tree.value(c.x(), c.y(), c.z()), acc.getValue(c))
+                        ASSERT_EQ(value(c.x(), c.y(), c.z()), acc.getValue(c))
                             << what << " at " << c;
                     }
                     for (auto it = ref->tree().cbeginValueOn(); it; ++it)
-                        ASSERT_EQ(mine.tree.value(it.getCoord().x(), it.getCoord().y(),
-                                                  it.getCoord().z()),
+                        ASSERT_EQ(value(it.getCoord().x(), it.getCoord().y(), it.getCoord().z()),
                                   *it)
                             << what;
                     if (grid == sphere)
@@ -417,6 +428,25 @@ TEST(Vdb, NativeReaderMatchesOpenVdbOnEveryEncoding) {
     openvdb::io::Stream(out).write({sphere});
     out.close();
     EXPECT_NO_THROW(loadVdb(path));
+    std::filesystem::remove(path);
+}
+
+// The importer decodes the leaves as it gathers the blocks, each worker keeping a few: a level set
+// of thousands of leaves imports to the same grid whether a worker keeps one tile's leaves (every
+// tile evicts) or the default.
+TEST(Vdb, StreamsItsLeavesIntoTheSameGrid) {
+    openvdb::initialize();
+    auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        1.0f, openvdb::Vec3f(0.1f, 0.2f, -0.3f), 0.0125f, 3.0f);
+    const std::string path = tempPath("streamed.vdb");
+    openvdb::io::File(path).write({sphere});
+    EXPECT_GT(sphere->tree().leafCount(), 2000u);  // 216 (B = 4) or 1000 (8) fit a worker
+    for (int B : {4, 8}) {
+        const Grid reference = importThroughOpenVdb(*sphere, VdbImportOptions{.blockSize = B});
+        for (size_t cached : {size_t{1}, size_t{0}})
+            expectSameGrid(loadVdb(path, {.blockSize = B, .cachedLeaves = cached}), reference,
+                           "B=" + std::to_string(B) + " cached " + std::to_string(cached));
+    }
     std::filesystem::remove(path);
 }
 

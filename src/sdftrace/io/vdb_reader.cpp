@@ -4,8 +4,6 @@
 #include "vdb_reader.h"
 
 #include <blosc.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <zlib.h>
 
 #include <bit>
@@ -17,7 +15,6 @@
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
-#include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/io/mapped_file.h"
 
 namespace sdft::vdb {
@@ -299,40 +296,27 @@ struct Reader {
         }
     }
 
-    // LeafNode::readBuffers for every leaf, in the order of the topology: one pass finds where
-    // each leaf's buffer starts (its headers read, its values stepped over), then the leaves are
-    // decoded in parallel, each from its own cursor.
+    // LeafNode::readBuffers for every leaf, in the order of the topology: where each leaf's
+    // buffer starts (its headers read, its values stepped over; LeafDecoder reads them). The
+    // pages read leave our memory every few MiB (the file stays cached).
     void readBuffers(Tree& t) {
         const size_t n = leafOrigins.size();
-        std::vector<size_t> start(n);
-        for (size_t i = 0; i < n; ++i) {
-            start[i] = c.pos();
-            const char* mask = c.take(64, "leaf mask");
-            uint64_t active[8];
-            std::memcpy(active, mask, 64);
-            readValues(nullptr, kLeafSize, active);
-        }
-        // The buffers' pages leave our memory as they are decoded (the file stays cached).
-        if (n) file->release(start[0], c.pos() - start[0]);
         grow(static_cast<double>(n) * sizeof(Leaf));
-        t.leaves.reserve(n);
-        adviseHugePages(t.leaves.data(), n * sizeof(Leaf));
         t.leaves.resize(n);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const auto& range) {
-            Cursor own = c;
-            Reader r(own);
-            r.compression = compression;
-            r.half = half;
-            r.background = background;
-            for (size_t i = range.begin(); i != range.end(); ++i) {
-                Leaf& leaf = t.leaves[i];
-                leaf.origin = leafOrigins[i];
-                own.seek(static_cast<int64_t>(start[i]), "a leaf buffer");
-                std::memcpy(leaf.active.data(), own.take(64, "leaf mask"), 64);
-                r.readValues(leaf.values.data(), kLeafSize, leaf.active.data());
+        constexpr size_t kReleaseBytes = size_t{16} << 20;
+        size_t released = c.pos();
+        for (size_t i = 0; i < n; ++i) {
+            t.leaves[i] = Leaf{leafOrigins[i], c.pos()};
+            uint64_t active[8];
+            std::memcpy(active, c.take(64, "leaf mask"), 64);
+            readValues(nullptr, kLeafSize, active);
+            if (c.pos() - released >= kReleaseBytes) {
+                file->release(released, c.pos() - released);
+                released = c.pos();
             }
-            file->release(start[range.begin()], own.pos() - start[range.begin()]);
-        });
+        }
+        file->release(released, c.pos() - released);
+        leafOrigins = {};
     }
 };
 
@@ -401,18 +385,18 @@ void readTransform(Cursor& c, FloatGrid& g) {
 
 // The file, mapped; its size checked against the memory budget first (the nodes are checked as
 // they are read).
-std::unique_ptr<MappedFile> mapFile(const std::string& path) {
+std::shared_ptr<const MappedFile> mapFile(const std::string& path) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) throw InputError(path + ": cannot open grid file (does it exist?)");
     checkMemoryBudget(static_cast<double>(size), path, "the file and its tree",
                       "resample the level set coarser");
-    return std::make_unique<MappedFile>(path, MappedFile::Load::Lazy);
+    return std::make_shared<const MappedFile>(path, MappedFile::Load::Lazy);
 }
 
 }  // namespace
 
-float Tree::value(int32_t x, int32_t y, int32_t z) const {
+Location Tree::locate(int32_t x, int32_t y, int32_t z) const {
     const int32_t mask = ~((1 << kUpperTotal) - 1);
     const std::array<int32_t, 3> key = {x & mask, y & mask, z & mask};
     for (int32_t u : rootChildren) {
@@ -420,20 +404,52 @@ float Tree::value(int32_t x, int32_t y, int32_t z) const {
         if (up.origin != key) continue;
         const int su = (((x >> kLowerTotal) & 31) << 10) | (((y >> kLowerTotal) & 31) << 5) |
                        ((z >> kLowerTotal) & 31);
-        if (up.children[su] < 0) return up.values[su];
+        if (up.children[su] < 0) return {-1, 0, up.values[su]};
         const Internal& lo = lower[up.children[su]];
         const int sl = (((x >> kLeafLog2) & 15) << 8) | (((y >> kLeafLog2) & 15) << 4) |
                        ((z >> kLeafLog2) & 15);
-        if (lo.children[sl] < 0) return lo.values[sl];
-        return leaves[lo.children[sl]].values[((x & 7) << 6) | ((y & 7) << 3) | (z & 7)];
+        if (lo.children[sl] < 0) return {-1, 0, lo.values[sl]};
+        return {lo.children[sl], ((x & 7) << 6) | ((y & 7) << 3) | (z & 7), 0};
     }
     for (const RootTile& t : tiles)
-        if (t.origin == key) return t.value;
-    return background;
+        if (t.origin == key) return {-1, 0, t.value};
+    return {-1, 0, background};
+}
+
+float FloatGrid::value(int32_t x, int32_t y, int32_t z) const {
+    const Location at = tree.locate(x, y, z);
+    if (at.leaf < 0) return at.value;
+    std::array<float, kLeafSize> values;
+    LeafDecoder(*this).decode(static_cast<size_t>(at.leaf), values.data());
+    return values[static_cast<size_t>(at.voxel)];
+}
+
+struct LeafDecoder::Impl {
+    explicit Impl(const FloatGrid& g)
+        : grid(g), cursor(g.file->data(), g.file->size(), g.path), reader(cursor) {
+        reader.compression = g.compression;
+        reader.half = g.half;
+        reader.background = g.tree.background;
+    }
+    const FloatGrid& grid;
+    Cursor cursor;
+    Reader reader;
+};
+
+LeafDecoder::LeafDecoder(const FloatGrid& grid) : m_impl(std::make_unique<Impl>(grid)) {}
+LeafDecoder::~LeafDecoder() = default;
+
+void LeafDecoder::decode(size_t i, float* values, uint64_t* active) {
+    Cursor& c = m_impl->cursor;
+    c.seek(static_cast<int64_t>(m_impl->grid.tree.leaves[i].buffer), "a leaf buffer");
+    uint64_t mask[8];
+    std::memcpy(mask, c.take(64, "leaf mask"), 64);
+    m_impl->reader.readValues(values, kLeafSize, mask);
+    if (active) std::memcpy(active, mask, 64);
 }
 
 FloatGrid readVdbFile(const std::string& path) {
-    const std::unique_ptr<MappedFile> file = mapFile(path);
+    const std::shared_ptr<const MappedFile> file = mapFile(path);
     Cursor c(file->data(), file->size(), path);
     if (file->size() < 8 || c.get<int64_t>("magic") != kMagic)
         throw InputError(path + ": not an OpenVDB file (no VDB magic number)");
@@ -475,6 +491,8 @@ FloatGrid readVdbFile(const std::string& path) {
         }
         FloatGrid grid;
         grid.name = name;
+        grid.path = path;
+        grid.file = file;
         Reader r(c);
         r.file = file.get();
         r.half = half;
@@ -485,6 +503,8 @@ FloatGrid readVdbFile(const std::string& path) {
         skipMetadata(c, &gridClass);
         grid.levelSet = gridClass == "level set";
         readTransform(c, grid);
+        grid.compression = r.compression;
+        grid.half = half;
         r.readTopology(grid.tree);
         r.readBuffers(grid.tree);
         if (!have || (grid.levelSet && !found.levelSet)) {
