@@ -3,7 +3,11 @@
 // leave no file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 
 #include "cli_runner.h"
 #include "sdftrace/io/video_writer.h"
@@ -86,6 +90,33 @@ TEST(Animation, ARangeCanBeWrittenAsAVideo) {
     EXPECT_NE(r.status, 0);
     EXPECT_NE(r.err.find("--output"), std::string::npos) << r.err;
     EXPECT_EQ(dir.count(), 2);
+}
+
+// FFmpeg's encoder is a plugin (docs/decisions/0020-video-as-a-plugin.md): the executable loads
+// no FFmpeg library at start; without the plugin a video fails with one line naming it and leaves
+// no file, and frame images still render.
+TEST(Animation, VideoIsAPluginLoadedOnlyWhenWritten) {
+    if (!VideoWriter::available()) GTEST_SKIP() << "this build has no FFmpeg";
+    const std::string libs = librariesLoadedAtStart();
+    EXPECT_NE(libs.find("libtbb"), std::string::npos) << libs;
+    for (const char* lib : {"libavformat", "libavcodec", "libswscale"})
+        EXPECT_EQ(libs.find(lib), std::string::npos) << lib << " in\n" << libs;
+
+    TempDir dir;
+    const std::string scene = dir.write("ball.json", kMovingBall);
+    setenv("SDFT_PLUGIN_DIR", dir.file("no-plugins-here").c_str(), 1);
+    const RunResult video =
+        runCli("render " + scene + " -q --time 0:1 --fps 4 -o " + dir.file("ball.mp4"), dir);
+    const RunResult frames = runCli(
+        "render " + scene + " -q --time 0:1 --fps 2 --frame-pattern " + dir.file("f%02d.png"), dir);
+    unsetenv("SDFT_PLUGIN_DIR");
+    EXPECT_NE(video.status, 0);
+    EXPECT_NE(video.err.find("libsdftrace_video.so not found"), std::string::npos) << video.err;
+    EXPECT_EQ(std::count(video.err.begin(), video.err.end(), '\n'), 1) << video.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("ball.mp4")));
+    EXPECT_EQ(frames.status, 0) << frames.err;
+    EXPECT_TRUE(std::filesystem::exists(dir.file("f00.png")));
+    EXPECT_TRUE(std::filesystem::exists(dir.file("f01.png")));
 }
 
 // bake and mesh take an instant too: a keyframed scene at t gives the same file as the static

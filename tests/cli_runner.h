@@ -96,4 +96,15 @@ inline RunResult runCli(const std::string& args, const TempDir& dir,
     return r;
 }
 
+// The shared libraries the CLI loads at start, as the dynamic loader lists them.
+inline std::string librariesLoadedAtStart() {
+    std::string libs;
+    FILE* p = popen(("LD_TRACE_LOADED_OBJECTS=1 " + std::string(SDFT_CLI_PATH)).c_str(), "r");
+    if (!p) return libs;
+    char buf[4096];
+    for (size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) libs.append(buf, n);
+    pclose(p);
+    return libs;
+}
+
 }  // namespace sdft::e2e

@@ -86,15 +86,7 @@ TEST(ExtractMeshCli, OpenVdbIsAPluginLoadedOnlyWhenNeeded) {
     const std::string scene =
         dir.write("s.json", R"({"objects": [{"type": "sphere", "radius": 1}]})");
     ASSERT_EQ(runCli("bake " + scene + " --res 24 -o " + dir.file("s.vdb"), dir).status, 0);
-    // The dynamic loader's own listing of what the executable loads at start.
-    std::string libs;
-    {
-        FILE* p = popen(("LD_TRACE_LOADED_OBJECTS=1 " + std::string(SDFT_CLI_PATH)).c_str(), "r");
-        ASSERT_NE(p, nullptr);
-        char buf[4096];
-        for (size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) libs.append(buf, n);
-        pclose(p);
-    }
+    const std::string libs = librariesLoadedAtStart();
     EXPECT_NE(libs.find("libtbb"), std::string::npos) << libs;
     EXPECT_EQ(libs.find("libopenvdb"), std::string::npos) << libs;
 

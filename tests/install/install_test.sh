@@ -16,6 +16,10 @@ for f in bin/sdftrace include/sdftrace/scene/parse_scene.h lib/cmake/sdftrace/sd
          share/doc/sdftrace/README.md; do
     [ -e "$prefix/$f" ] || { echo "install_test: $f was not installed"; exit 1; }
 done
+if [ -e "$build/apps/sdftrace/libsdftrace_video.so" ] && \
+   [ ! -e "$prefix/lib/sdftrace/libsdftrace_video.so" ]; then
+    echo "install_test: lib/sdftrace/libsdftrace_video.so was not installed"; exit 1
+fi
 # Internals stay out of the installed headers.
 for f in gpu/gpu_render.h render/direct_pixel.h trace/grid_dda.h; do
     [ ! -e "$prefix/include/sdftrace/$f" ] || { echo "install_test: internal $f installed"; exit 1; }
@@ -31,6 +35,10 @@ env -i HOME="$work" PATH="$prefix/bin:/usr/bin:/bin" bash -c '
     sdftrace bake '"$prefix"'/share/sdftrace/examples/csg.json --bounds -4,0,-1,4,2,3 --res 32 -o csg.sdfg
     sdftrace convert csg.sdfg csg.vdb   # the OpenVDB plugin, found from the installed tree
     [ -s csg.vdb ]
+    if [ -e '"$prefix"'/lib/sdftrace/libsdftrace_video.so ]; then   # the video plugin, likewise
+        sdftrace render --width 64 --height 36 --time 0:0.1 --fps 20 -o demo.mp4
+        [ -s demo.mp4 ]
+    fi
 '
 echo "install_test: CLI ok"
 

@@ -61,4 +61,23 @@ std::string findPlugin(const std::string& file, std::string& tried) {
     return {};
 }
 
+const void* loadPluginTable(const std::string& file, const char* symbol, std::string& failure) {
+    std::string tried;
+    const std::string path = findPlugin(file, tried);
+    if (path.empty()) {
+        failure = file + " not found (looked for " + tried +
+                  "; `make build` builds it, SDFT_PLUGIN_DIR names its directory)";
+        return nullptr;
+    }
+    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+        failure = "cannot load " + path + " (" + dlerror() + ")";
+        return nullptr;
+    }
+    auto entry = reinterpret_cast<const void* (*)()>(dlsym(handle, symbol));
+    const void* table = entry ? entry() : nullptr;
+    if (!table) failure = path + " has no " + symbol + " (rebuild sdftrace)";
+    return table;
+}
+
 }  // namespace sdft

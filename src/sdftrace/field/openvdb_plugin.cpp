@@ -1,7 +1,5 @@
 #include "openvdb_plugin.h"
 
-#include <dlfcn.h>
-
 #include <string>
 
 #include "sdftrace/core/error.h"
@@ -20,20 +18,15 @@ struct Loaded {
 
 Loaded load() {
     // core/plugin_dirs.h says where it is looked for.
-    std::string tried;
-    const std::string path = findPlugin(kPluginFile, tried);
-    if (!path.empty()) {
-        void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-        if (!handle) return {nullptr, "cannot load " + path + " (" + dlerror() + ")"};
-        auto entry =
-            reinterpret_cast<const OpenVdbPlugin* (*)()>(dlsym(handle, "sdftrace_openvdb_plugin"));
-        const OpenVdbPlugin* table = entry ? entry() : nullptr;
-        if (!table || table->version != OpenVdbPlugin::kVersion)
-            return {nullptr, path + " is not this build's OpenVDB plugin (rebuild sdftrace)"};
-        return {table, {}};
-    }
-    return {nullptr, kPluginFile + std::string(" not found (looked for ") + tried +
-                         "; `make build` builds it, SDFT_PLUGIN_DIR names its directory)"};
+    std::string failure;
+    const auto* table = static_cast<const OpenVdbPlugin*>(
+        loadPluginTable(kPluginFile, "sdftrace_openvdb_plugin", failure));
+    if (!table) return {nullptr, failure};
+    if (table->version != OpenVdbPlugin::kVersion)
+        return {nullptr, std::string(kPluginFile) +
+                             " is not this build's OpenVDB plugin (rebuild "
+                             "sdftrace)"};
+    return {table, {}};
 }
 
 }  // namespace
