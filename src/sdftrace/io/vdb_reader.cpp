@@ -416,14 +416,6 @@ Location Tree::locate(int32_t x, int32_t y, int32_t z) const {
     return {-1, 0, background};
 }
 
-float FloatGrid::value(int32_t x, int32_t y, int32_t z) const {
-    const Location at = tree.locate(x, y, z);
-    if (at.leaf < 0) return at.value;
-    std::array<float, kLeafSize> values;
-    LeafDecoder(*this).decode(static_cast<size_t>(at.leaf), values.data());
-    return values[static_cast<size_t>(at.voxel)];
-}
-
 struct LeafDecoder::Impl {
     explicit Impl(const FloatGrid& g)
         : grid(g), cursor(g.file->data(), g.file->size(), g.path), reader(cursor) {

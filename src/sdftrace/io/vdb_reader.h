@@ -70,9 +70,6 @@ struct FloatGrid {
     std::shared_ptr<const MappedFile> file;
     uint32_t compression = 0;
     bool half = false;
-    // The value at index coordinate (x, y, z), as OpenVDB's accessor would return it (a leaf is
-    // decoded for it: for tests and single lookups).
-    float value(int32_t x, int32_t y, int32_t z) const;
 };
 
 // Decodes leaves' buffers from the grid's file, any leaf in any order; one per thread (it keeps
