@@ -22,6 +22,33 @@ struct CompileOptions {
     // Skip union operands whose bounding box is no nearer than the running minimum (decision 0002).
     // The value stays a distance bound with the same zero set; off, the tape equals the tree.
     bool boundsCulling = true;
+    // Hierarchical pruning (field/tape_prune.h): per cell of a lattice over the scene, a tape
+    // without the operands that cannot change the field in the cell. The same values; a switch to
+    // measure it against the whole tape.
+    bool pruning = true;
+};
+
+// Where a fold's operands start (the compiler's record, which pruning reads): for an instruction
+// that combines an accumulator with an operand (Union ... SmoothDifference), the first
+// instruction of the operand's own (after its CullIfFar guard, if any) and of the fold's first
+// operand.
+struct FoldOperands {
+    uint32_t operand = 0, fold = 0;
+};
+
+// The pruned tapes and their cells (TapeCells is their view).
+struct PrunedTapes {
+    std::vector<Instr> instrs;
+    std::vector<uint32_t> spans;     // first instruction and count, per tape
+    std::vector<uint32_t> cellTape;  // per cell
+    int res[3] = {0, 0, 0};
+    Bounds3 box;
+    // A tape for the points outside the box (a top-level union of planes and bounded objects:
+    // the planes, and the distance to the objects' box, which the box's margin keeps from 0),
+    // or -1: those points take the whole tape.
+    int32_t outsideTape = -1;
+    int levels = 0;      // of the octree the cells were built by
+    double buildMs = 0;  // how long the build took
 };
 
 // Scratch registers for evalBatch; one per thread, reused across calls.
@@ -29,6 +56,9 @@ struct BatchScratch {
     std::vector<float> points;    // numPointRegs * 3 * kBatchWidth
     std::vector<float> scalars;   // numScalarRegs * kBatchWidth
     std::vector<uint8_t> culled;  // numCulls * kBatchWidth: lanes that skipped an operand
+    // A chunk's lanes grouped by the pruned tape of their cell.
+    std::vector<uint32_t> laneTape, order;
+    std::vector<float> gx, gy, gz, gout;
 };
 
 class Tape {
@@ -63,12 +93,19 @@ class Tape {
     int numPointRegs() const { return m_numPointRegs; }
     int numScalarRegs() const { return m_numScalarRegs; }
     int numCulls() const { return m_numCulls; }
+    // The per-cell pruned tapes (null when pruning is off or finds nothing to prune).
+    const PrunedTapes* pruned() const { return m_pruned.get(); }
+    std::span<const FoldOperands> foldOperands() const { return m_folds; }
 
   private:
     friend Tape compileTape(const NodePtr& root, const CompileOptions& options);
+    friend void addOutsideTape(Tape& tape, const Node& root, PrunedTapes& pruned);
     int findUniformMaterial() const;
-    void evalChunk(const float* x, const float* y, const float* z, float* out, int n,
-                   BatchScratch& scratch) const;
+    void evalChunk(const Instr* instrs, uint32_t count, const float* x, const float* y,
+                   const float* z, float* out, int n, BatchScratch& scratch) const;
+    // A chunk whose lanes may lie in cells of different pruned tapes: evaluated tape by tape.
+    void evalChunkByCell(const float* x, const float* y, const float* z, float* out, int n,
+                         BatchScratch& scratch) const;
     // evalBatch's loop over chunks, and its builds for AVX2 and for the x86-64 baseline
     // (exec/simd.h).
     void evalChunks(const float* x, const float* y, const float* z, float* out, int n,
@@ -79,6 +116,8 @@ class Tape {
                             BatchScratch& scratch) const;
 
     std::vector<Instr> m_instrs;
+    std::vector<FoldOperands> m_folds;  // per instruction
+    std::shared_ptr<const PrunedTapes> m_pruned;
     std::vector<float> m_consts;
     std::vector<std::shared_ptr<const Grid>> m_grids;  // keeps the views' buffers alive
     std::vector<GridView> m_gridViews;

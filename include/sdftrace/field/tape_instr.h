@@ -25,6 +25,7 @@ enum class Op : uint8_t {
     Morph,
     // scalar unary
     Complement,     // out = -a
+    Copy,           // out = a (a pruned fold's first kept operand, field/tape_prune.h)
     ScaleValue,     // out = a * k[0]
     RepeatBound,    // out = min(a, neighbour bound of point b)
     FloorByBounds,  // out = max(a, signed distance of point b to the box k[0..5])

@@ -20,6 +20,33 @@
 
 namespace sdft {
 
+// Hierarchical pruning (field/tape_prune.h): a lattice of cells over `box`, each naming one of
+// the pruned tapes, all back to back in `instrs` (spans[2 t], spans[2 t + 1]: first instruction
+// and count of tape t). A point in a cell is evaluated by that cell's tape, which gives the full
+// tape's value there; a point outside the box by the full tape. Plain data, like the rest.
+struct TapeCells {
+    const Instr* instrs = nullptr;  // null: no pruning
+    const uint32_t* spans = nullptr;
+    const uint32_t* cellTape = nullptr;  // per cell, x fastest
+    int32_t outside = -1;                // the tape of points outside the box; -1: the whole tape
+    int res[3] = {0, 0, 0};
+    Vec3 lo;             // the box's low corner
+    Vec3 invCell{0.0f};  // cells per unit length, per axis
+
+    // The cell holding p, or -1 outside the box.
+    SDFT_HOST_DEVICE int cellOf(Vec3 p) const {
+        const float fx = (p.x - lo.x) * invCell.x, fy = (p.y - lo.y) * invCell.y,
+                    fz = (p.z - lo.z) * invCell.z;
+        if (!(fx >= 0 && fy >= 0 && fz >= 0 && fx <= res[0] && fy <= res[1] && fz <= res[2]))
+            return -1;
+        const int i = minInt(static_cast<int>(fx), res[0] - 1),
+                  j = minInt(static_cast<int>(fy), res[1] - 1),
+                  k = minInt(static_cast<int>(fz), res[2] - 1);
+        return (k * res[1] + j) * res[0] + i;
+    }
+    static SDFT_HOST_DEVICE int minInt(int a, int b) { return b < a ? b : a; }
+};
+
 struct TapeView {
     const Instr* instrs = nullptr;
     const float* consts = nullptr;
@@ -30,6 +57,19 @@ struct TapeView {
     uint16_t numPointRegs = 1;
     float lipschitz = 1;
     Bounds3 bounds;
+    TapeCells cells;
+
+    // The instructions that evaluate the field at p: its cell's pruned tape, or all of them.
+    SDFT_HOST_DEVICE void tapeAt(Vec3 p, const Instr*& first, uint32_t& n) const {
+        first = instrs;
+        n = count;
+        if (!cells.instrs) return;
+        const int c = cells.cellOf(p);
+        if (c < 0 && cells.outside < 0) return;
+        const uint32_t t = c < 0 ? static_cast<uint32_t>(cells.outside) : cells.cellTape[c];
+        first = cells.instrs + cells.spans[2 * t];
+        n = cells.spans[2 * t + 1];
+    }
 };
 static_assert(std::is_trivially_copyable_v<TapeView>);
 
@@ -125,8 +165,11 @@ SDFT_HOST_DEVICE inline float evalTapeAt(const TapeView& t, Vec3 p, MaterialBlen
     Vec3 pts[kTapeMaxPointRegs];
     MaterialBlend mats[kMaterial ? kMaterialRegs : 1];
     pts[0] = p;
-    for (uint32_t pc = 0; pc < t.count; ++pc) {
-        const Instr& in = t.instrs[pc];
+    const Instr* instrs;
+    uint32_t count;
+    t.tapeAt(p, instrs, count);
+    for (uint32_t pc = 0; pc < count; ++pc) {
+        const Instr& in = instrs[pc];
         const float* k = t.consts + in.k;
         const Op op = in.op;
         if (op == Op::CullIfFar) {
@@ -153,6 +196,9 @@ SDFT_HOST_DEVICE inline float evalTapeAt(const TapeView& t, Vec3 p, MaterialBlen
                 mats[in.out] = MaterialBlend::mix(mats[in.a], mats[in.b], 1 - h);
         } else if (op == Op::Complement) {
             s[in.out] = -s[in.a];
+        } else if (op == Op::Copy) {
+            s[in.out] = s[in.a];
+            if constexpr (kMaterial) mats[in.out] = mats[in.a];
         } else if (op == Op::ScaleValue) {
             s[in.out] = s[in.a] * k[0];
         } else if (op == Op::RepeatBound) {

@@ -64,6 +64,7 @@ struct RenderSettings {
     uint64_t given = 0;
     float shadowOffsetMin = 1e-3f;  // eps_min of the shadow-ray origin offset
     bool boundsCulling = true;  // skip far union operands (docs/decisions/0002-bounds-culling.md)
+    bool pruning = true;        // per-cell pruned tapes (docs/decisions/0021-lipschitz-pruning.md)
     int threads = 0;            // 0 = all hardware threads
     // Single-grid scenes (Jamriška 2010).
     GridTracerKind gridTracer = GridTracerKind::Dda;

@@ -5,6 +5,7 @@
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
 #include "sdftrace/field/tape.h"
+#include "sdftrace/field/tape_prune.h"
 
 namespace sdft {
 
@@ -15,9 +16,10 @@ constexpr int kMaxPointRegs = Tape::kMaxPointRegs;
 
 class Compiler {
   public:
-    Compiler(std::vector<Instr>& instrs, std::vector<float>& consts,
-             std::vector<std::shared_ptr<const Grid>>& grids, const CompileOptions& options)
-        : m_instrs(instrs), m_consts(consts), m_grids(grids), m_options(options) {}
+    Compiler(std::vector<Instr>& instrs, std::vector<FoldOperands>& folds,
+             std::vector<float>& consts, std::vector<std::shared_ptr<const Grid>>& grids,
+             const CompileOptions& options)
+        : m_instrs(instrs), m_folds(folds), m_consts(consts), m_grids(grids), m_options(options) {}
 
     uint16_t emit(const Node& n, uint16_t point, int material);
     int pointRegs() const { return m_nextPoint; }
@@ -54,7 +56,9 @@ class Compiler {
         in.material = material;
         in.materialPoint = m_materialPoint;
         m_instrs.push_back(in);
+        m_folds.emplace_back();
     }
+    uint32_t here() const { return static_cast<uint32_t>(m_instrs.size()); }
     uint16_t emitUnion(const Node& n, uint16_t point, int material);
     uint16_t emitPrimitive(const Node& n, uint16_t point, int material);
     uint16_t emitFold(Op op, const Node& n, const std::vector<float>& k, uint16_t point,
@@ -63,8 +67,10 @@ class Compiler {
     uint16_t emitRepeat(const Node& n, uint16_t point, int material);
     uint16_t emitSmoothUnion(const Node& n, uint16_t point, int material);
     // Emits `operand` combined into `acc` by `op`, behind a CullIfFar when culling applies.
+    // `fold`: the first instruction of the fold's first operand (FoldOperands).
     void emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t point, int material,
-                     float margin, bool cullable, const std::vector<float>& opConsts);
+                     float margin, bool cullable, const std::vector<float>& opConsts,
+                     uint32_t fold);
     uint16_t emitPointOp(Op op, uint16_t point, const std::vector<float>& k) {
         uint16_t q = allocPoint();
         push(op, q, point, 0, addConsts(k));
@@ -72,6 +78,7 @@ class Compiler {
     }
 
     std::vector<Instr>& m_instrs;
+    std::vector<FoldOperands>& m_folds;
     std::vector<float>& m_consts;
     std::vector<std::shared_ptr<const Grid>>& m_grids;
     const CompileOptions& m_options;
@@ -162,11 +169,14 @@ uint16_t Compiler::emitPrimitive(const Node& n, uint16_t point, int material) {
 // The children combined left to right by a binary op with constants k.
 uint16_t Compiler::emitFold(Op op, const Node& n, const std::vector<float>& k, uint16_t point,
                             int material) {
+    const uint32_t fold = here();
     const uint16_t acc = emit(*n.children[0], point, material);
     const uint32_t offset = addConsts(k);
     for (size_t i = 1; i < n.children.size(); ++i) {
+        const uint32_t operand = here();
         const uint16_t rhs = emit(*n.children[i], point, material);
         push(op, acc, acc, rhs, offset);
+        m_folds.back() = {operand, fold};
         m_freeScalar.push_back(rhs);
     }
     return acc;
@@ -221,9 +231,10 @@ uint16_t Compiler::emitUnion(const Node& n, uint16_t point, int material) {
     for (const NodePtr& c : n.children) order.push_back(c.get());
     std::stable_partition(order.begin(), order.end(),
                           [](const Node* c) { return !nodeBounds(*c).finite(); });
+    const uint32_t fold = here();
     uint16_t acc = emit(*order[0], point, material);
     for (size_t i = 1; i < order.size(); ++i)
-        emitGuarded(Op::Union, acc, *order[i], point, material, 0, true, {});
+        emitGuarded(Op::Union, acc, *order[i], point, material, 0, true, {}, fold);
     return acc;
 }
 
@@ -231,17 +242,19 @@ uint16_t Compiler::emitUnion(const Node& n, uint16_t point, int material) {
 // so an operand whose value dominates the distance to its box can be skipped when that box is at
 // least acc + k away: the result is exactly acc.
 uint16_t Compiler::emitSmoothUnion(const Node& n, uint16_t point, int material) {
+    const uint32_t fold = here();
     uint16_t acc = emit(*n.children[0], point, material);
     float k = n.params[0];
     for (size_t i = 1; i < n.children.size(); ++i) {
         emitGuarded(Op::SmoothUnion, acc, *n.children[i], point, material, k,
-                    dominatesBounds(*n.children[i]), n.params);
+                    dominatesBounds(*n.children[i]), n.params, fold);
     }
     return acc;
 }
 
 void Compiler::emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t point, int material,
-                           float margin, bool cullable, const std::vector<float>& opConsts) {
+                           float margin, bool cullable, const std::vector<float>& opConsts,
+                           uint32_t fold) {
     Bounds3 box = nodeBounds(operand);
     bool cull = m_options.boundsCulling && cullable && box.finite() && !box.empty();
     size_t guard = m_instrs.size();
@@ -252,19 +265,71 @@ void Compiler::emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t po
              addConsts({box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z, margin}));
         m_instrs.back().cull = slot;
     }
+    const uint32_t begin = here();
     uint16_t rhs = emit(operand, point, material);
     push(op, acc, acc, rhs, addConsts(opConsts));
     m_instrs.back().cull = slot;
+    m_folds.back() = {begin, fold};
     m_freeScalar.push_back(rhs);
     if (cull) m_instrs[guard].jump = static_cast<uint32_t>(m_instrs.size());
 }
 
 }  // namespace
 
+namespace {
+// The operands as a bounding volume hierarchy of nested unions (median splits along the longest
+// axis of their boxes' centres): compiled with bounds culling, each group is skipped by its box.
+NodePtr unionHierarchy(std::vector<NodePtr> ops) {
+    if (ops.size() <= 4) return ops.size() == 1 ? ops[0] : node::unite(ops);
+    Bounds3 centres;
+    for (const NodePtr& o : ops) {
+        const Bounds3 b = nodeBounds(*o);
+        centres.include((b.lo + b.hi) * 0.5f);
+    }
+    const Vec3 e = centres.extent();
+    const int axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
+    const auto mid = ops.begin() + static_cast<std::ptrdiff_t>(ops.size() / 2);
+    std::nth_element(ops.begin(), mid, ops.end(), [axis](const NodePtr& a, const NodePtr& b) {
+        const Bounds3 ba = nodeBounds(*a), bb = nodeBounds(*b);
+        return ba.lo[axis] + ba.hi[axis] < bb.lo[axis] + bb.hi[axis];
+    });
+    return node::unite({unionHierarchy({ops.begin(), mid}), unionHierarchy({mid, ops.end()})});
+}
+}  // namespace
+
+// The tape of points outside the pruned cells' box (PrunedTapes::outsideTape) for a top-level
+// union with bounds culling: its unbounded operands (planes) first, then the others as a
+// hierarchy of unions each guarded by its box. Culling skips a group whose box is no nearer than
+// the running minimum, so the value is the whole tape's minimum (exactly so for operands whose
+// value dominates the distance to their box), at a cost that grows with log N, not N. Its
+// constants go after the tape's.
+void addOutsideTape(Tape& tape, const Node& root, PrunedTapes& pruned) {
+    if (root.kind != NodeKind::Union || !tape.m_grids.empty()) return;
+    std::vector<NodePtr> planes, bounded;
+    for (const NodePtr& c : root.children)
+        (nodeBounds(*c).finite() ? bounded : planes).push_back(c);
+    if (bounded.size() < 8) return;
+    planes.push_back(unionHierarchy(std::move(bounded)));
+    const Tape outside = compileTape(planes.size() == 1 ? planes[0] : node::unite(planes),
+                                     {.boundsCulling = true, .pruning = false});
+    if (outside.m_numCulls > tape.m_numCulls) tape.m_numCulls = outside.m_numCulls;
+    const auto base = static_cast<uint32_t>(tape.m_consts.size());
+    tape.m_consts.insert(tape.m_consts.end(), outside.m_consts.begin(), outside.m_consts.end());
+    pruned.outsideTape = static_cast<int32_t>(pruned.spans.size() / 2);
+    pruned.spans.push_back(static_cast<uint32_t>(pruned.instrs.size()));
+    pruned.spans.push_back(static_cast<uint32_t>(outside.m_instrs.size()));
+    for (Instr in : outside.m_instrs) {  // jumps count from the tape's first instruction
+        in.k += base;
+        pruned.instrs.push_back(in);
+    }
+    tape.m_numScalarRegs = std::max(tape.m_numScalarRegs, outside.m_numScalarRegs);
+    tape.m_numPointRegs = std::max(tape.m_numPointRegs, outside.m_numPointRegs);
+}
+
 Tape compileTape(const NodePtr& root, const CompileOptions& options) {
     SDFT_CHECK(root != nullptr);
     Tape tape;
-    Compiler compiler(tape.m_instrs, tape.m_consts, tape.m_grids, options);
+    Compiler compiler(tape.m_instrs, tape.m_folds, tape.m_consts, tape.m_grids, options);
     tape.m_result = compiler.emit(*root, 0, root->material >= 0 ? root->material : 0);
     tape.m_numPointRegs = compiler.pointRegs();
     tape.m_numScalarRegs = compiler.scalarRegs();
@@ -273,6 +338,11 @@ Tape compileTape(const NodePtr& root, const CompileOptions& options) {
     tape.m_lipschitz = lipschitzBound(*root);
     tape.m_bounds = nodeBounds(*root);
     tape.m_uniformMaterial = tape.findUniformMaterial();
+    if (options.pruning) {
+        std::shared_ptr<PrunedTapes> pruned = buildPrunedTapes(tape, *root);
+        if (pruned && options.boundsCulling) addOutsideTape(tape, *root, *pruned);
+        tape.m_pruned = std::move(pruned);
+    }
     return tape;
 }
 

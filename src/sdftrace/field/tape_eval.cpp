@@ -24,6 +24,19 @@ TapeView Tape::view() const {
     v.numPointRegs = static_cast<uint16_t>(m_numPointRegs);
     v.lipschitz = m_lipschitz;
     v.bounds = m_bounds;
+    if (m_pruned) {
+        const PrunedTapes& p = *m_pruned;
+        v.cells.instrs = p.instrs.data();
+        v.cells.spans = p.spans.data();
+        v.cells.cellTape = p.cellTape.data();
+        const Vec3 extent = p.box.extent();
+        for (int a = 0; a < 3; ++a) {
+            v.cells.res[a] = p.res[a];
+            v.cells.invCell[a] = static_cast<float>(p.res[a]) / extent[a];
+        }
+        v.cells.lo = p.box.lo;
+        v.cells.outside = p.outsideTape;
+    }
     return v;
 }
 
@@ -56,6 +69,12 @@ void Tape::evalBatch(const float* x, const float* y, const float* z, float* out,
     if (scratch.scalars.size() < needS) scratch.scalars.resize(needS);
     size_t needC = static_cast<size_t>(m_numCulls) * kBatchWidth;
     if (scratch.culled.size() < needC) scratch.culled.resize(needC);
+    if (m_pruned && scratch.gout.size() < kBatchWidth) {
+        for (auto* v : {&scratch.gx, &scratch.gy, &scratch.gz, &scratch.gout})
+            v->resize(kBatchWidth);
+        scratch.laneTape.resize(kBatchWidth);
+        scratch.order.resize(kBatchWidth);
+    }
     if (useAvx2())
         evalChunksAvx2(x, y, z, out, n, scratch);
     else
@@ -64,9 +83,62 @@ void Tape::evalBatch(const float* x, const float* y, const float* z, float* out,
 
 void Tape::evalChunks(const float* x, const float* y, const float* z, float* out, int n,
                       BatchScratch& scratch) const {
-    for (int start = 0; start < n; start += kBatchWidth)
-        evalChunk(x + start, y + start, z + start, out + start, std::min(kBatchWidth, n - start),
-                  scratch);
+    for (int start = 0; start < n; start += kBatchWidth) {
+        const int m = std::min(kBatchWidth, n - start);
+        if (m_pruned)
+            evalChunkByCell(x + start, y + start, z + start, out + start, m, scratch);
+        else
+            evalChunk(m_instrs.data(), static_cast<uint32_t>(m_instrs.size()), x + start, y + start,
+                      z + start, out + start, m, scratch);
+    }
+}
+
+// The lanes grouped by their cell's tape (primary rays of a tile mostly share one), each group
+// evaluated by its tape; lanes outside the cells' box by the whole tape.
+void Tape::evalChunkByCell(const float* x, const float* y, const float* z, float* out, int n,
+                           BatchScratch& scratch) const {
+    const PrunedTapes& p = *m_pruned;
+    const TapeCells cells = view().cells;
+    constexpr uint32_t kWhole = ~0u;
+    uint32_t* laneTape = scratch.laneTape.data();
+    bool same = true;
+    for (int l = 0; l < n; ++l) {
+        const int c = cells.cellOf(Vec3(x[l], y[l], z[l]));
+        laneTape[l] = c >= 0 ? p.cellTape[static_cast<size_t>(c)]
+                             : (p.outsideTape >= 0 ? static_cast<uint32_t>(p.outsideTape) : kWhole);
+        same &= laneTape[l] == laneTape[0];
+    }
+    auto span = [&](uint32_t t, const Instr*& first, uint32_t& count) {
+        first = t == kWhole ? m_instrs.data() : p.instrs.data() + p.spans[2 * t];
+        count = t == kWhole ? static_cast<uint32_t>(m_instrs.size()) : p.spans[2 * t + 1];
+    };
+    const Instr* first;
+    uint32_t count;
+    if (same) {
+        span(laneTape[0], first, count);
+        evalChunk(first, count, x, y, z, out, n, scratch);
+        return;
+    }
+    // Group by group: gather the lanes of the first tape not yet done, evaluate, scatter.
+    uint32_t* order = scratch.order.data();
+    float *gx = scratch.gx.data(), *gy = scratch.gy.data(), *gz = scratch.gz.data(),
+          *go = scratch.gout.data();
+    constexpr uint32_t kDone = kWhole - 1;
+    for (int from = 0; from < n; ++from) {
+        const uint32_t t = laneTape[from];
+        if (t == kDone) continue;
+        int m = 0;
+        for (int l = from; l < n; ++l) {
+            if (laneTape[l] != t) continue;
+            order[m] = static_cast<uint32_t>(l);
+            gx[m] = x[l], gy[m] = y[l], gz[m] = z[l];
+            laneTape[l] = kDone;
+            ++m;
+        }
+        span(t, first, count);
+        evalChunk(first, count, gx, gy, gz, go, m, scratch);
+        for (int g = 0; g < m; ++g) out[order[g]] = go[g];
+    }
 }
 
 SDFT_TARGET_AVX2 void Tape::evalChunksAvx2(const float* x, const float* y, const float* z,
@@ -82,8 +154,8 @@ SDFT_TARGET_BASELINE void Tape::evalChunksBaseline(const float* x, const float* 
 // One switch over every opcode, deliberately: split into a function per kind of instruction
 // (always inlined) it ran 2.8% more instructions on examples/many_blend.json (callgrind, issue
 // 13), and this loop is most of a render's time.
-void Tape::evalChunk(const float* x, const float* y, const float* z, float* out, int n,
-                     BatchScratch& scratch) const {
+void Tape::evalChunk(const Instr* instrs, uint32_t count, const float* x, const float* y,
+                     const float* z, float* out, int n, BatchScratch& scratch) const {
     constexpr int W = kBatchWidth;
     float* points = scratch.points.data();
     float* scalars = scratch.scalars.data();
@@ -104,9 +176,8 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
         break;                                                                 \
     }
 
-    const size_t count = m_instrs.size();
-    for (size_t pc = 0; pc < count; ++pc) {
-        const Instr& in = m_instrs[pc];
+    for (uint32_t pc = 0; pc < count; ++pc) {
+        const Instr& in = instrs[pc];
         const float* k = consts + in.k;
         switch (in.op) {
             case Op::CullIfFar: {
@@ -172,6 +243,9 @@ void Tape::evalChunk(const float* x, const float* y, const float* z, float* out,
                 for (int l = 0; l < n; ++l) o[l] = -a[l];
                 break;
             }
+            case Op::Copy:
+                std::copy(sr(in.a), sr(in.a) + n, sr(in.out));
+                break;
             case Op::ScaleValue: {
                 float *o = sr(in.out), *a = sr(in.a);
                 for (int l = 0; l < n; ++l) o[l] = a[l] * k[0];

@@ -77,6 +77,14 @@ GpuTape::GpuTape(const Tape& tape, const std::vector<GpuGridBinding>& bound)
     const std::span<const float> consts = tape.constants();
     const size_t instrAt = pack.add(instrs.data(), instrs.size_bytes());
     const size_t constAt = pack.add(consts.data(), consts.size_bytes());
+    // The pruned tapes and their cells (field/tape_prune.h), read through the same view.
+    const PrunedTapes* pruned = tape.pruned();
+    size_t prunedAt = 0, spansAt = 0, cellsAt = 0;
+    if (pruned) {
+        prunedAt = pack.add(pruned->instrs.data(), pruned->instrs.size() * sizeof(Instr));
+        spansAt = pack.add(pruned->spans.data(), pruned->spans.size() * sizeof(uint32_t));
+        cellsAt = pack.add(pruned->cellTape.data(), pruned->cellTape.size() * sizeof(uint32_t));
+    }
     // Each grid's arrays (their offsets in forEachGridArray's order), then their views; a bound
     // grid's view as given, nothing uploaded.
     std::vector<GridView> views;
@@ -115,6 +123,11 @@ GpuTape::GpuTape(const Tape& tape, const std::vector<GpuGridBinding>& bound)
     v = tape.view();
     v.instrs = reinterpret_cast<const Instr*>(base + instrAt);
     v.consts = reinterpret_cast<const float*>(base + constAt);
+    if (pruned) {
+        v.cells.instrs = reinterpret_cast<const Instr*>(base + prunedAt);
+        v.cells.spans = reinterpret_cast<const uint32_t*>(base + spansAt);
+        v.cells.cellTape = reinterpret_cast<const uint32_t*>(base + cellsAt);
+    }
     v.grids = views.empty() ? nullptr : reinterpret_cast<const GridView*>(base + viewsAt);
 }
 

@@ -6,7 +6,7 @@ namespace sdft {
 
 void compileField(RenderPlan& plan, const NodePtr& root) {
     const RenderSettings& s = plan.settings;
-    plan.tape = compileTape(root, {.boundsCulling = s.boundsCulling});
+    plan.tape = compileTape(root, {.boundsCulling = s.boundsCulling, .pruning = s.pruning});
     plan.ddaGrid =
         root->kind == NodeKind::Grid && s.gridTracer == GridTracerKind::Dda ? root->grid : nullptr;
     plan.convexObjects.clear();

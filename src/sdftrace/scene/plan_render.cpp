@@ -88,8 +88,8 @@ RenderPlan planRender(const Scene& scene) {
         if (!meshes.empty()) {
             plan.meshPrimary = std::make_shared<const PlacedMeshes>(std::move(meshes));
             if (rest)
-                plan.primaryField =
-                    compileTape(rest, {.boundsCulling = plan.settings.boundsCulling});
+                plan.primaryField = compileTape(rest, {.boundsCulling = plan.settings.boundsCulling,
+                                                       .pruning = plan.settings.pruning});
             plan.ddaGrid = nullptr;  // a mesh's primary rays are Embree's; shadows sphere trace
         }
     }

@@ -138,6 +138,13 @@ std::vector<RenderOption> makeTable() {
          .doc = "skip union operands whose box is no nearer than the running minimum (decision "
                 "0002; changes no hit)",
          SDFT_MEMBER(boundsCulling)},
+        {.key = "pruning",
+         .flags = "--pruning",
+         .group = "Tracer",
+         .type = T::Bool,
+         .doc = "per cell of an octree over the scene, a tape without the operands that cannot "
+                "change the field there (Lipschitz pruning, decision 0021; changes no hit)",
+         SDFT_MEMBER(pruning)},
         // Shading and shadows (Liktor §4.1; RTSDF §2.4-2.5 and §3).
         {.key = "normals",
          .flags = "--normals",

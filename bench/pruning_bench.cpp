@@ -1,0 +1,243 @@
+// Scenes of many primitives with hierarchical Lipschitz pruning on and off (field/tape_prune.h,
+// decision 21), all in one run: four generated scene kinds at N = 64 ... 65,536 primitives,
+// 640x360, no shadows. Per row: JSON parse time, the pruned cells' build time, evaluations per
+// pixel (primary rays, normals), render time, time per evaluation (render wall time / every
+// evaluation), and the pixels whose depth differs from the unpruned render's by more than 1e-4 t.
+//
+//   build/release/bench/sdftrace_pruning_bench [--reps 3] [--threads 2] [--max 65536]
+//       [--max-off 16384] [--kinds clusters,city,molecule,sculpt]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "sdftrace/render/film.h"
+#include "sdftrace/render/renderer.h"
+#include "sdftrace/scene/parse_scene.h"
+#include "sdftrace/scene/plan_render.h"
+
+namespace sdft {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+std::string v3(float x, float y, float z) {
+    char b[96];
+    std::snprintf(b, sizeof b, "[%.4f, %.4f, %.4f]", x, y, z);
+    return b;
+}
+
+// The primitives spread over a square of side `side` (about 1.2 units per cluster of 8).
+float sideFor(int n) { return 1.2f * std::sqrt(std::max(1.0f, n / 8.0f)); }
+
+// Clusters of eight spheres and boxes blended by smooth_union, the clusters in one union.
+std::string clusters(int n, std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(-1, 1);
+    const int per = 8, count = std::max(1, n / per),
+              grid = static_cast<int>(std::ceil(std::sqrt(count)));
+    std::ostringstream s;
+    for (int c = 0; c < count; ++c) {
+        const float cx = (c % grid - 0.5f * (grid - 1)) * 1.2f,
+                    cz = (c / grid - 0.5f * (grid - 1)) * 1.2f;
+        s << (c ? ",\n" : "") << R"({"type": "smooth_union", "k": 0.15, "children": [)";
+        for (int i = 0; i < per; ++i) {
+            const float x = cx + 0.3f * u(rng), y = 0.35f + 0.25f * u(rng), z = cz + 0.3f * u(rng);
+            s << (i ? ", " : "");
+            if (i % 2)
+                s << R"({"type": "sphere", "radius": 0.16, "translate": )" << v3(x, y, z) << "}";
+            else
+                s << R"({"type": "box", "size": [0.24, 0.24, 0.24], "translate": )" << v3(x, y, z)
+                  << "}";
+        }
+        s << "]}";
+    }
+    return s.str();
+}
+
+// Buildings (boxes) with three windows each cut out by a difference.
+std::string city(int n, std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(0, 1);
+    const int count = std::max(1, n / 4), grid = static_cast<int>(std::ceil(std::sqrt(count)));
+    std::ostringstream s;
+    for (int b = 0; b < count; ++b) {
+        const float x = (b % grid - 0.5f * (grid - 1)) * 0.6f,
+                    z = (b / grid - 0.5f * (grid - 1)) * 0.6f;
+        const float h = 0.3f + 0.9f * u(rng);
+        s << (b ? ",\n" : "") << R"({"type": "difference", "children": [)"
+          << R"({"type": "box", "size": [0.4, )" << h << R"(, 0.4], "translate": )"
+          << v3(x, 0.5f * h, z) << "}";
+        for (int w = 0; w < 3; ++w)
+            s << R"(, {"type": "box", "size": [0.12, 0.1, 0.5], "translate": )"
+              << v3(x - 0.12f + 0.12f * w, h * (0.25f + 0.5f * u(rng)), z) << "}";
+        s << "]}";
+    }
+    return s.str();
+}
+
+// Atoms along a random walk folded into a slab, in one union.
+std::string molecule(int n, std::mt19937& rng) {
+    std::normal_distribution<float> g(0, 1);
+    const float side = sideFor(n);
+    std::ostringstream s;
+    float x = 0, y = 0.5f, z = 0;
+    for (int i = 0; i < n; ++i) {
+        Vec3 d(g(rng), g(rng), g(rng));
+        d = normalize(d) * 0.14f;
+        x = std::clamp(x + d.x, -0.5f * side, 0.5f * side);
+        y = std::clamp(y + d.y, 0.2f, 1.0f);
+        z = std::clamp(z + d.z, -0.5f * side, 0.5f * side);
+        s << (i ? ",\n" : "") << R"({"type": "sphere", "radius": )" << (i % 3 ? 0.09 : 0.12)
+          << R"(, "translate": )" << v3(x, y, z) << "}";
+    }
+    return s.str();
+}
+
+// Strokes of 16 capsules blended along their path, the strokes in one union.
+std::string sculpt(int n, std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(-1, 1);
+    const float side = sideFor(n);
+    const int per = 16, count = std::max(1, n / per);
+    std::ostringstream s;
+    for (int c = 0; c < count; ++c) {
+        Vec3 p(0.5f * side * u(rng), 0.3f + 0.2f * u(rng), 0.5f * side * u(rng));
+        Vec3 dir = normalize(Vec3(u(rng), 0.3f * u(rng), u(rng)));
+        s << (c ? ",\n" : "") << R"({"type": "smooth_union", "k": 0.06, "children": [)";
+        for (int i = 0; i < per; ++i) {
+            dir = normalize(dir + Vec3(0.4f * u(rng), 0.2f * u(rng), 0.4f * u(rng)));
+            const Vec3 q = p + dir * 0.08f;
+            s << (i ? ", " : "") << R"({"type": "capsule", "a": )" << v3(p.x, p.y, p.z)
+              << R"(, "b": )" << v3(q.x, q.y, q.z) << R"(, "radius": 0.035})";
+            p = q;
+        }
+        s << "]}";
+    }
+    return s.str();
+}
+
+std::string sceneText(const std::string& objects, int n) {
+    const float side = sideFor(n);
+    std::ostringstream s;
+    s << R"({"camera": {"eye": )" << v3(0.0f, 0.45f * side + 1.5f, 0.75f * side + 1.5f)
+      << R"(, "target": [0, 0.3, 0], "fov": 45, "width": 640, "height": 360},)"
+      << R"("render": {"shadows": false},)"
+      << R"("lights": [{"type": "directional", "direction": [0.4, -1, -0.5], "intensity": 1}],)"
+      << R"("objects": [{"type": "plane", "normal": [0, 1, 0], "distance": 0},)"
+      << "\n"
+      << objects << "]}";
+    return s.str();
+}
+
+struct Options {
+    int reps = 3, threads = 2, max = 65536, maxOff = 16384;
+    std::vector<std::string> kinds{"clusters", "city", "molecule", "sculpt"};
+};
+
+struct Run {
+    double planMs = 0, renderMs = 0, evalsPerPixel = 0;
+    std::vector<float> depth;
+};
+
+Run renderScene(const Scene& parsed, bool pruning, const Options& o) {
+    Scene s = parsed;
+    s.settings.pruning = pruning;
+    s.settings.threads = o.threads;
+    Run r;
+    const auto t0 = Clock::now();
+    const RenderPlan plan = planRender(s);
+    r.planMs = ms(t0, Clock::now());
+    std::vector<double> times;
+    for (int k = 0; k < o.reps; ++k) {
+        Film film(plan.camera.width, plan.camera.height, Film::bit(Aov::Depth));
+        const auto a = Clock::now();
+        const RenderStats st = render(plan, film);
+        times.push_back(ms(a, Clock::now()));
+        r.evalsPerPixel = static_cast<double>(st.primaryEvaluations + st.normalEvaluations +
+                                              st.shadowEvaluations + st.aoEvaluations) /
+                          static_cast<double>(film.pixels());
+        r.depth = film.depth;
+    }
+    std::sort(times.begin(), times.end());
+    r.renderMs = times[times.size() / 2];
+    return r;
+}
+
+long depthMismatches(const std::vector<float>& a, const std::vector<float>& b) {
+    long bad = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        const bool ha = std::isfinite(a[i]), hb = std::isfinite(b[i]);
+        if (ha != hb || (ha && std::fabs(a[i] - b[i]) > 1e-4f * std::max(a[i], b[i]))) ++bad;
+    }
+    return bad;
+}
+
+void row(const std::string& kind, int n, const Options& o) {
+    std::mt19937 rng(1234u + static_cast<unsigned>(n));
+    const std::string objects = kind == "clusters"   ? clusters(n, rng)
+                                : kind == "city"     ? city(n, rng)
+                                : kind == "molecule" ? molecule(n, rng)
+                                                     : sculpt(n, rng);
+    const std::string text = sceneText(objects, n);
+    auto t0 = Clock::now();
+    const Scene scene = parseSceneText(text, kind + ".json");
+    const double parseMs = ms(t0, Clock::now());
+    const Run on = renderScene(scene, true, o);
+    const double nsOn = 1e6 * on.renderMs / (on.evalsPerPixel * 640 * 360);
+    if (n > o.maxOff) {
+        std::printf(
+            "| %s | %d | %.0f ms | %.1f ms | %.1f | %.1f ms | %.0f ns | — | — | — | — | — |\n",
+            kind.c_str(), n, parseMs, on.planMs, on.evalsPerPixel, on.renderMs, nsOn);
+    } else {
+        const Run off = renderScene(scene, false, o);
+        const double nsOff = 1e6 * off.renderMs / (off.evalsPerPixel * 640 * 360);
+        std::printf(
+            "| %s | %d | %.0f ms | %.1f ms | %.1f | %.1f ms | %.0f ns | %.1f | %.1f ms | "
+            "%.0f ns | %.2fx | %ld |\n",
+            kind.c_str(), n, parseMs, on.planMs - off.planMs, on.evalsPerPixel, on.renderMs, nsOn,
+            off.evalsPerPixel, off.renderMs, nsOff, off.renderMs / on.renderMs,
+            depthMismatches(on.depth, off.depth));
+    }
+    std::fflush(stdout);
+}
+
+}  // namespace
+}  // namespace sdft
+
+int main(int argc, char** argv) {
+    sdft::Options o;
+    for (int i = 1; i + 1 < argc; i += 2) {
+        const std::string a = argv[i], v = argv[i + 1];
+        if (a == "--reps")
+            o.reps = std::stoi(v);
+        else if (a == "--threads")
+            o.threads = std::stoi(v);
+        else if (a == "--max")
+            o.max = std::stoi(v);
+        else if (a == "--max-off")
+            o.maxOff = std::stoi(v);
+        else if (a == "--kinds") {
+            o.kinds.clear();
+            std::stringstream s(v);
+            for (std::string k; std::getline(s, k, ',');) o.kinds.push_back(k);
+        } else {
+            std::fprintf(stderr, "unknown option %s\n", a.c_str());
+            return 2;
+        }
+    }
+    std::printf("## Pruning: %d threads, 640x360, no shadows, medians of %d\n\n", o.threads,
+                o.reps);
+    std::printf(
+        "| scene | N | parse | pruning build | evals / pixel | frame | per eval | evals / pixel "
+        "(off) | frame (off) | per eval (off) | frame speed-up | depth mismatches |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (const std::string& kind : o.kinds)
+        for (int n = 64; n <= o.max; n *= 4) sdft::row(kind, n, o);
+    return 0;
+}

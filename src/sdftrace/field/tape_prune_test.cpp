@@ -1,0 +1,165 @@
+// Hierarchical pruning (tape_prune.h): the cells' tapes give the whole tape's values, scalar and
+// batch, on random scenes of many operands of every operator; traced hits stay where the whole
+// tape puts them; tapes too small to gain are left alone.
+#include "sdftrace/field/tape_prune.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "sdftrace/field/node.h"
+#include "sdftrace/field/tape.h"
+#include "sdftrace/field/test_util.h"
+#include "sdftrace/math/camera.h"
+#include "sdftrace/trace/field_tracer.h"
+
+namespace sdft {
+namespace {
+
+using testing::Rng;
+
+NodePtr randomLeaf(Rng& rng, float spread) {
+    const float s = rng.uniform(0.05f, 0.3f);
+    NodePtr p;
+    switch (static_cast<int>(rng.uniform(0, 6))) {
+        case 0:
+            p = node::sphere(s);
+            break;
+        case 1:
+            p = node::box({s, rng.uniform(0.05f, 0.3f), s});
+            break;
+        case 2:
+            p = node::torus(s, 0.3f * s);
+            break;
+        case 3:
+            p = node::capsule(rng.inCube(0.2f), rng.inCube(0.2f), 0.4f * s);
+            break;
+        case 4:
+            p = node::scale(node::sphere(s), {rng.uniform(0.5f, 2), 1, rng.uniform(0.5f, 2)});
+            break;
+        default:
+            p = node::rotate(node::cylinder(s, 2 * s),
+                             rotationAxisAngle(rng.direction(), rng.uniform(0, 360)));
+    }
+    return node::translate(p, rng.inBox({-spread, 0, -spread}, {spread, 1, spread}));
+}
+
+// A group of a few leaves under one operator (every hard and smooth CSG operator).
+NodePtr randomGroup(Rng& rng, float spread) {
+    const Vec3 at = rng.inBox({-spread, 0, -spread}, {spread, 0.5f, spread});
+    auto leaf = [&] { return node::translate(randomLeaf(rng, 0.3f), at); };
+    const float k = rng.uniform(0.02f, 0.2f);
+    switch (static_cast<int>(rng.uniform(0, 6))) {
+        case 0:
+            return node::unite({leaf(), leaf(), leaf()});
+        case 1:
+            return node::smoothUnion(node::smoothUnion(leaf(), leaf(), k), leaf(), k);
+        case 2:
+            return node::intersect({leaf(), node::translate(node::sphere(0.4f), at)});
+        case 3:
+            return node::subtract(leaf(), node::unite({leaf(), leaf()}));
+        case 4:
+            return node::smoothIntersection(leaf(), node::translate(node::sphere(0.35f), at), k);
+        default:
+            return node::smoothDifference(leaf(), leaf(), k);
+    }
+}
+
+NodePtr randomScene(Rng& rng, int groups, bool plane) {
+    std::vector<NodePtr> c;
+    if (plane) c.push_back(node::plane({0, 1, 0}, 0.1f));
+    const float spread = 0.6f * std::sqrt(static_cast<float>(groups));
+    for (int i = 0; i < groups; ++i) c.push_back(randomGroup(rng, spread));
+    return node::unite(c);
+}
+
+TEST(Pruning, CellTapesGiveTheWholeTapesValuesOnRandomScenes) {
+    Rng rng(44);
+    for (int scene = 0; scene < 12; ++scene) {
+        const NodePtr root = randomScene(rng, 60 + 30 * scene, scene % 2 == 0);
+        const Tape whole = compileTape(root, {.boundsCulling = false, .pruning = false});
+        const Tape pruned = compileTape(root, {.boundsCulling = false, .pruning = true});
+        ASSERT_NE(pruned.pruned(), nullptr) << "scene " << scene;
+        const PrunedTapes& p = *pruned.pruned();
+        EXPECT_LT(p.instrs.size() / (p.spans.size() / 2), whole.size()) << "scene " << scene;
+        const Bounds3 box = p.box;
+        for (int i = 0; i < 3000; ++i) {
+            // Mostly near the surfaces (where pruning is tight), some anywhere in the box.
+            Vec3 q = rng.inBox(box.lo, box.hi);
+            if (i % 3) q = q + rng.direction() * (0.01f - whole.eval(q)) * 0.5f;
+            const float a = whole.eval(q), b = pruned.eval(q);
+            // Exact, but for the one rounding of a smooth blend at weight 1.
+            ASSERT_NEAR(a, b, 1e-5f * (std::fabs(a) + 1)) << "scene " << scene << " point " << i;
+        }
+    }
+}
+
+TEST(Pruning, BatchMatchesScalarAcrossCells) {
+    Rng rng(7);
+    const NodePtr root = randomScene(rng, 200, true);
+    const Tape tape = compileTape(root);
+    ASSERT_NE(tape.pruned(), nullptr);
+    ASSERT_GE(tape.pruned()->outsideTape, 0);
+    const Bounds3 box = tape.pruned()->box;
+    std::vector<float> x, y, z;
+    for (int i = 0; i < 1000; ++i) {
+        // Runs of nearby points (one cell or a few) and scattered ones, some outside the box.
+        const Vec3 q = i % 64 < 40 ? rng.inBox(box.lo, box.hi) + rng.inCube(0.05f) * float(i % 8)
+                                   : rng.inBox(box.lo - Vec3(2), box.hi + Vec3(2));
+        x.push_back(q.x);
+        y.push_back(q.y);
+        z.push_back(q.z);
+    }
+    std::vector<float> out(x.size());
+    BatchScratch scratch;
+    tape.evalBatch(x.data(), y.data(), z.data(), out.data(), static_cast<int>(x.size()), scratch);
+    for (size_t i = 0; i < x.size(); ++i)
+        ASSERT_EQ(out[i], tape.eval({x[i], y[i], z[i]})) << "point " << i;
+}
+
+// Sphere-traced hits with pruning (cells and the outside tape) where the whole tape has them,
+// within 1e-4 t, from a camera above and one grazing the plane.
+TEST(Pruning, HitsMatchTheWholeTape) {
+    Rng rng(11);
+    const NodePtr root = randomScene(rng, 300, true);
+    const Tape whole = compileTape(root, {.pruning = false});
+    const Tape pruned = compileTape(root);
+    ASSERT_NE(pruned.pruned(), nullptr);
+    for (const Vec3 eye : {Vec3(0, 8, 12), Vec3(-14, 0.4f, 3)}) {
+        CameraDesc cd;
+        cd.eye = eye;
+        cd.target = {0, 0.3f, 0};
+        cd.width = 96;
+        cd.height = 64;
+        const Camera cam(cd);
+        std::vector<RaySegment> rays;
+        for (int y = 0; y < cd.height; ++y)
+            for (int x = 0; x < cd.width; ++x) rays.push_back({cam.pixelRay(x, y), 0, 200});
+        TraceOptions o;
+        o.pixelRadius = cam.pixelRadius();
+        std::vector<TraceResult> a(rays.size()), b(rays.size());
+        PacketScratch s;
+        tracePacket(whole, rays, o, a, s);
+        tracePacket(pruned, rays, o, b, s);
+        int hits = 0;
+        for (size_t i = 0; i < rays.size(); ++i) {
+            ASSERT_EQ(a[i].hit, b[i].hit) << "ray " << i;
+            if (!a[i].hit) continue;
+            ++hits;
+            ASSERT_NEAR(a[i].t, b[i].t, 1e-4f * a[i].t) << "ray " << i;
+        }
+        EXPECT_GT(hits, static_cast<int>(rays.size()) / 4);
+    }
+}
+
+TEST(Pruning, SmallOrUnprunableTapesKeepTheWholeTape) {
+    EXPECT_EQ(compileTape(node::sphere(1)).pruned(), nullptr);
+    EXPECT_EQ(compileTape(testing::everyKindTree()).pruned(), nullptr);
+    // Many operands, all overlapping: no cell can drop any.
+    std::vector<NodePtr> same;
+    for (int i = 0; i < 30; ++i) same.push_back(node::sphere(1.0f + 0.001f * i));
+    EXPECT_EQ(compileTape(node::unite(same)).pruned(), nullptr);
+}
+
+}  // namespace
+}  // namespace sdft
