@@ -47,8 +47,6 @@ struct PrunedTapes {
     // the planes, and the distance to the objects' box, which the box's margin keeps from 0),
     // or -1: those points take the whole tape.
     int32_t outsideTape = -1;
-    int levels = 0;      // of the octree the cells were built by
-    double buildMs = 0;  // how long the build took
 };
 
 // Scratch registers for evalBatch; one per thread, reused across calls.
@@ -118,6 +116,7 @@ class Tape {
     std::vector<Instr> m_instrs;
     std::vector<FoldOperands> m_folds;  // per instruction
     std::shared_ptr<const PrunedTapes> m_pruned;
+    TapeCells m_cells;  // the view of m_pruned's arrays (empty without)
     std::vector<float> m_consts;
     std::vector<std::shared_ptr<const Grid>> m_grids;  // keeps the views' buffers alive
     std::vector<GridView> m_gridViews;

@@ -20,11 +20,14 @@
 
 namespace sdft {
 
-// Hierarchical pruning (field/tape_prune.h): a lattice of cells over `box`, each naming one of
+// Hierarchical pruning (field/tape_prune.h): a lattice of cells over a box, each naming one of
 // the pruned tapes, all back to back in `instrs` (spans[2 t], spans[2 t + 1]: first instruction
-// and count of tape t). A point in a cell is evaluated by that cell's tape, which gives the full
-// tape's value there; a point outside the box by the full tape. Plain data, like the rest.
+// and count of tape t). A point in a cell is evaluated by that cell's tape, which gives the whole
+// tape's value there; a point outside the box by the outside tape, or the whole tape without one.
+// Plain data, like the rest.
 struct TapeCells {
+    static constexpr uint32_t kWhole = ~0u;  // tapeOf: the whole tape
+
     const Instr* instrs = nullptr;  // null: no pruning
     const uint32_t* spans = nullptr;
     const uint32_t* cellTape = nullptr;  // per cell, x fastest
@@ -33,18 +36,17 @@ struct TapeCells {
     Vec3 lo;             // the box's low corner
     Vec3 invCell{0.0f};  // cells per unit length, per axis
 
-    // The cell holding p, or -1 outside the box.
-    SDFT_HOST_DEVICE int cellOf(Vec3 p) const {
+    // The tape that evaluates p: an index into `spans`, or kWhole.
+    SDFT_HOST_DEVICE uint32_t tapeOf(Vec3 p) const {
         const float fx = (p.x - lo.x) * invCell.x, fy = (p.y - lo.y) * invCell.y,
                     fz = (p.z - lo.z) * invCell.z;
         if (!(fx >= 0 && fy >= 0 && fz >= 0 && fx <= res[0] && fy <= res[1] && fz <= res[2]))
-            return -1;
-        const int i = minInt(static_cast<int>(fx), res[0] - 1),
-                  j = minInt(static_cast<int>(fy), res[1] - 1),
-                  k = minInt(static_cast<int>(fz), res[2] - 1);
-        return (k * res[1] + j) * res[0] + i;
+            return outside < 0 ? kWhole : static_cast<uint32_t>(outside);
+        // fx == res[0] (the box's far face) belongs to the last cell.
+        const int i = static_cast<int>(fx), j = static_cast<int>(fy), k = static_cast<int>(fz);
+        return cellTape[((k - (k == res[2])) * res[1] + (j - (j == res[1]))) * res[0] +
+                        (i - (i == res[0]))];
     }
-    static SDFT_HOST_DEVICE int minInt(int a, int b) { return b < a ? b : a; }
 };
 
 struct TapeView {
@@ -59,16 +61,19 @@ struct TapeView {
     Bounds3 bounds;
     TapeCells cells;
 
+    // The instructions of tape t (TapeCells::tapeOf; kWhole: all of them).
+    SDFT_HOST_DEVICE void tapeSpan(uint32_t t, const Instr*& first, uint32_t& n) const {
+        if (t == TapeCells::kWhole) {
+            first = instrs;
+            n = count;
+        } else {
+            first = cells.instrs + cells.spans[2 * t];
+            n = cells.spans[2 * t + 1];
+        }
+    }
     // The instructions that evaluate the field at p: its cell's pruned tape, or all of them.
     SDFT_HOST_DEVICE void tapeAt(Vec3 p, const Instr*& first, uint32_t& n) const {
-        first = instrs;
-        n = count;
-        if (!cells.instrs) return;
-        const int c = cells.cellOf(p);
-        if (c < 0 && cells.outside < 0) return;
-        const uint32_t t = c < 0 ? static_cast<uint32_t>(cells.outside) : cells.cellTape[c];
-        first = cells.instrs + cells.spans[2 * t];
-        n = cells.spans[2 * t + 1];
+        tapeSpan(cells.instrs ? cells.tapeOf(p) : TapeCells::kWhole, first, n);
     }
 };
 static_assert(std::is_trivially_copyable_v<TapeView>);

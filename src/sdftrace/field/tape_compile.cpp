@@ -278,22 +278,44 @@ void Compiler::emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t po
 
 namespace {
 // The operands as a bounding volume hierarchy of nested unions (median splits along the longest
-// axis of their boxes' centres): compiled with bounds culling, each group is skipped by its box.
-NodePtr unionHierarchy(std::vector<NodePtr> ops) {
-    if (ops.size() <= 4) return ops.size() == 1 ? ops[0] : node::unite(ops);
-    Bounds3 centres;
-    for (const NodePtr& o : ops) {
-        const Bounds3 b = nodeBounds(*o);
-        centres.include((b.lo + b.hi) * 0.5f);
+// axis of their boxes' centres, each centre computed once): compiled with bounds culling, each
+// group is skipped by its box.
+struct Placed {
+    NodePtr node;
+    Vec3 centre;
+};
+NodePtr unionHierarchy(std::vector<Placed>::iterator first, std::vector<Placed>::iterator last) {
+    const size_t n = static_cast<size_t>(last - first);
+    if (n <= 4) {
+        std::vector<NodePtr> ops;
+        for (auto it = first; it != last; ++it) ops.push_back(it->node);
+        return n == 1 ? ops[0] : node::unite(ops);
     }
+    Bounds3 centres;
+    for (auto it = first; it != last; ++it) centres.include(it->centre);
     const Vec3 e = centres.extent();
     const int axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
-    const auto mid = ops.begin() + static_cast<std::ptrdiff_t>(ops.size() / 2);
-    std::nth_element(ops.begin(), mid, ops.end(), [axis](const NodePtr& a, const NodePtr& b) {
-        const Bounds3 ba = nodeBounds(*a), bb = nodeBounds(*b);
-        return ba.lo[axis] + ba.hi[axis] < bb.lo[axis] + bb.hi[axis];
+    const auto mid = first + static_cast<std::ptrdiff_t>(n / 2);
+    std::nth_element(first, mid, last, [axis](const Placed& a, const Placed& b) {
+        return a.centre[axis] < b.centre[axis];
     });
-    return node::unite({unionHierarchy({ops.begin(), mid}), unionHierarchy({mid, ops.end()})});
+    return node::unite({unionHierarchy(first, mid), unionHierarchy(mid, last)});
+}
+
+// The pruned tapes' arrays as the view reads them.
+TapeCells cellsView(const PrunedTapes& p) {
+    TapeCells c;
+    c.instrs = p.instrs.data();
+    c.spans = p.spans.data();
+    c.cellTape = p.cellTape.data();
+    c.outside = p.outsideTape;
+    c.lo = p.box.lo;
+    const Vec3 extent = p.box.extent();
+    for (int a = 0; a < 3; ++a) {
+        c.res[a] = p.res[a];
+        c.invCell[a] = static_cast<float>(p.res[a]) / extent[a];
+    }
+    return c;
 }
 }  // namespace
 
@@ -305,11 +327,17 @@ NodePtr unionHierarchy(std::vector<NodePtr> ops) {
 // constants go after the tape's.
 void addOutsideTape(Tape& tape, const Node& root, PrunedTapes& pruned) {
     if (root.kind != NodeKind::Union || !tape.m_grids.empty()) return;
-    std::vector<NodePtr> planes, bounded;
-    for (const NodePtr& c : root.children)
-        (nodeBounds(*c).finite() ? bounded : planes).push_back(c);
+    std::vector<NodePtr> planes;
+    std::vector<Placed> bounded;
+    for (const NodePtr& c : root.children) {
+        const Bounds3 b = nodeBounds(*c);
+        if (b.finite())
+            bounded.push_back({c, (b.lo + b.hi) * 0.5f});
+        else
+            planes.push_back(c);
+    }
     if (bounded.size() < 8) return;
-    planes.push_back(unionHierarchy(std::move(bounded)));
+    planes.push_back(unionHierarchy(bounded.begin(), bounded.end()));
     const Tape outside = compileTape(planes.size() == 1 ? planes[0] : node::unite(planes),
                                      {.boundsCulling = true, .pruning = false});
     if (outside.m_numCulls > tape.m_numCulls) tape.m_numCulls = outside.m_numCulls;
@@ -341,6 +369,7 @@ Tape compileTape(const NodePtr& root, const CompileOptions& options) {
     if (options.pruning) {
         std::shared_ptr<PrunedTapes> pruned = buildPrunedTapes(tape, *root);
         if (pruned && options.boundsCulling) addOutsideTape(tape, *root, *pruned);
+        if (pruned) tape.m_cells = cellsView(*pruned);
         tape.m_pruned = std::move(pruned);
     }
     return tape;

@@ -24,19 +24,7 @@ TapeView Tape::view() const {
     v.numPointRegs = static_cast<uint16_t>(m_numPointRegs);
     v.lipschitz = m_lipschitz;
     v.bounds = m_bounds;
-    if (m_pruned) {
-        const PrunedTapes& p = *m_pruned;
-        v.cells.instrs = p.instrs.data();
-        v.cells.spans = p.spans.data();
-        v.cells.cellTape = p.cellTape.data();
-        const Vec3 extent = p.box.extent();
-        for (int a = 0; a < 3; ++a) {
-            v.cells.res[a] = p.res[a];
-            v.cells.invCell[a] = static_cast<float>(p.res[a]) / extent[a];
-        }
-        v.cells.lo = p.box.lo;
-        v.cells.outside = p.outsideTape;
-    }
+    v.cells = m_cells;
     return v;
 }
 
@@ -94,28 +82,20 @@ void Tape::evalChunks(const float* x, const float* y, const float* z, float* out
 }
 
 // The lanes grouped by their cell's tape (primary rays of a tile mostly share one), each group
-// evaluated by its tape; lanes outside the cells' box by the whole tape.
+// evaluated by its tape; lanes outside the cells' box by the outside tape (or the whole one).
 void Tape::evalChunkByCell(const float* x, const float* y, const float* z, float* out, int n,
                            BatchScratch& scratch) const {
-    const PrunedTapes& p = *m_pruned;
-    const TapeCells cells = view().cells;
-    constexpr uint32_t kWhole = ~0u;
+    const TapeView v = view();
     uint32_t* laneTape = scratch.laneTape.data();
     bool same = true;
     for (int l = 0; l < n; ++l) {
-        const int c = cells.cellOf(Vec3(x[l], y[l], z[l]));
-        laneTape[l] = c >= 0 ? p.cellTape[static_cast<size_t>(c)]
-                             : (p.outsideTape >= 0 ? static_cast<uint32_t>(p.outsideTape) : kWhole);
+        laneTape[l] = m_cells.tapeOf(Vec3(x[l], y[l], z[l]));
         same &= laneTape[l] == laneTape[0];
     }
-    auto span = [&](uint32_t t, const Instr*& first, uint32_t& count) {
-        first = t == kWhole ? m_instrs.data() : p.instrs.data() + p.spans[2 * t];
-        count = t == kWhole ? static_cast<uint32_t>(m_instrs.size()) : p.spans[2 * t + 1];
-    };
     const Instr* first;
     uint32_t count;
     if (same) {
-        span(laneTape[0], first, count);
+        v.tapeSpan(laneTape[0], first, count);
         evalChunk(first, count, x, y, z, out, n, scratch);
         return;
     }
@@ -123,7 +103,7 @@ void Tape::evalChunkByCell(const float* x, const float* y, const float* z, float
     uint32_t* order = scratch.order.data();
     float *gx = scratch.gx.data(), *gy = scratch.gy.data(), *gz = scratch.gz.data(),
           *go = scratch.gout.data();
-    constexpr uint32_t kDone = kWhole - 1;
+    constexpr uint32_t kDone = TapeCells::kWhole - 1;
     for (int from = 0; from < n; ++from) {
         const uint32_t t = laneTape[from];
         if (t == kDone) continue;
@@ -135,7 +115,7 @@ void Tape::evalChunkByCell(const float* x, const float* y, const float* z, float
             laneTape[l] = kDone;
             ++m;
         }
-        span(t, first, count);
+        v.tapeSpan(t, first, count);
         evalChunk(first, count, gx, gy, gz, go, m, scratch);
         for (int g = 0; g < m; ++g) out[order[g]] = go[g];
     }

@@ -1,5 +1,5 @@
-// Hierarchical Lipschitz pruning (tape_prune.h; Barbier et al. 2025, §4): interval bounds of
-// every instruction over a cell from the value at its centre and the Lipschitz bound of the
+// Hierarchical Lipschitz pruning (tape_prune.h; Barbier et al., Eurographics 2025): interval bounds
+// of every instruction over a cell from the value at its centre and the Lipschitz bound of the
 // primitives (every primitive is 1-Lipschitz; a point transform scales that by its stretch),
 // propagated through the CSG operators; folds drop the operands those bounds rule out.
 #include "sdftrace/field/tape_prune.h"
@@ -7,7 +7,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <unordered_map>
@@ -322,7 +321,7 @@ class Builder {
         bool split[3];
         for (int a = 0; a < 3; ++a) split[a] = range[a] > 1 && extent[a] >= 0.5f * longest;
         if (!(split[0] || split[1] || split[2]) || tape->instrs.size() <= kSmallTape) {
-            const uint32_t id = tapeId(tape, level);
+            const uint32_t id = tapeId(tape);
             const int* res = m_out->res;
             for (int z = first[2]; z < first[2] + range[2]; ++z)
                 for (int y = first[1]; y < first[1] + range[1]; ++y)
@@ -360,9 +359,8 @@ class Builder {
             for (int c = 0; c < 8; ++c) child(c);
         }
     }
-    uint32_t tapeId(const std::shared_ptr<const FlatTape>& t, int level) {
+    uint32_t tapeId(const std::shared_ptr<const FlatTape>& t) {
         std::lock_guard<std::mutex> lock(m_mutex);
-        m_out->levels = std::max(m_out->levels, level);
         auto [it, added] = m_ids.try_emplace(t.get(), static_cast<uint32_t>(m_tapes.size()));
         if (added) m_tapes.push_back(t);
         return it->second;
@@ -397,7 +395,6 @@ FlatTape pruneTape(const FlatTape& tape, const float* consts, const Bounds3& cel
 }
 
 std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root) {
-    const auto start = std::chrono::steady_clock::now();
     size_t primitives = 0, folds = 0;
     for (const Instr& in : tape.instructions()) {
         primitives += in.op <= Op::Grid;
@@ -414,10 +411,7 @@ std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root
     // Cells whose tapes are not much shorter than the whole are not worth their lookups.
     if (builder.meanLeafInstrs() > kWorthwhileShare * static_cast<double>(tape.size()))
         return nullptr;
-    std::shared_ptr<PrunedTapes> out = builder.finish();
-    out->buildMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    return out;
+    return builder.finish();
 }
 
 }  // namespace sdft

@@ -81,9 +81,9 @@ GpuTape::GpuTape(const Tape& tape, const std::vector<GpuGridBinding>& bound)
     const PrunedTapes* pruned = tape.pruned();
     size_t prunedAt = 0, spansAt = 0, cellsAt = 0;
     if (pruned) {
-        prunedAt = pack.add(pruned->instrs.data(), pruned->instrs.size() * sizeof(Instr));
-        spansAt = pack.add(pruned->spans.data(), pruned->spans.size() * sizeof(uint32_t));
-        cellsAt = pack.add(pruned->cellTape.data(), pruned->cellTape.size() * sizeof(uint32_t));
+        prunedAt = pack.add(pruned->instrs);
+        spansAt = pack.add(pruned->spans);
+        cellsAt = pack.add(pruned->cellTape);
     }
     // Each grid's arrays (their offsets in forEachGridArray's order), then their views; a bound
     // grid's view as given, nothing uploaded.
