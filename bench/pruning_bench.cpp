@@ -4,12 +4,17 @@
 // pixel (primary rays, normals), render time, time per evaluation (render wall time / every
 // evaluation), and the pixels whose depth differs from the unpruned render's by more than 1e-4 t.
 //
+// Each scene from three cameras (above, close among the objects, grazing the ground); at the end,
+// the JSON parse alone of scenes of --parse primitives.
+//
 //   build/release/bench/sdftrace_pruning_bench [--reps 3] [--threads 2] [--max 65536]
-//       [--max-off 16384] [--kinds clusters,city,molecule,sculpt]
+//       [--max-off 16384] [--kinds clusters,city,molecule,sculpt] [--views above,close,grazing]
+//       [--parse 100000]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <sstream>
 #include <string>
@@ -122,11 +127,25 @@ std::string sculpt(int n, std::mt19937& rng) {
     return s.str();
 }
 
-std::string sceneText(const std::string& objects, int n) {
+// The camera: from above at 30-40 degrees over the whole scene, close among the objects, or
+// grazing the ground plane from its edge.
+std::string cameraJson(const std::string& view, int n) {
     const float side = sideFor(n);
+    Vec3 eye(0.0f, 0.45f * side + 1.5f, 0.75f * side + 1.5f), target(0, 0.3f, 0);
+    if (view == "close") {
+        eye = Vec3(0.1f * side + 0.5f, 1.6f, 0.1f * side + 1.5f);
+        target = Vec3(0.1f * side - 0.5f, 0.2f, 0.1f * side - 1.0f);
+    } else if (view == "grazing") {
+        eye = Vec3(-0.1f * side, 0.25f, 0.55f * side + 1.0f);
+        target = Vec3(0.1f * side, 0.3f, -0.5f * side);
+    }
+    return R"({"eye": )" + v3(eye.x, eye.y, eye.z) + R"(, "target": )" +
+           v3(target.x, target.y, target.z) + R"(, "fov": 45, "width": 640, "height": 360})";
+}
+
+std::string sceneText(const std::string& objects, int n, const std::string& view) {
     std::ostringstream s;
-    s << R"({"camera": {"eye": )" << v3(0.0f, 0.45f * side + 1.5f, 0.75f * side + 1.5f)
-      << R"(, "target": [0, 0.3, 0], "fov": 45, "width": 640, "height": 360},)"
+    s << R"({"camera": )" << cameraJson(view, n) << ",\n"
       << R"("render": {"shadows": false},)"
       << R"("lights": [{"type": "directional", "direction": [0.4, -1, -0.5], "intensity": 1}],)"
       << R"("objects": [{"type": "plane", "normal": [0, 1, 0], "distance": 0},)"
@@ -136,8 +155,9 @@ std::string sceneText(const std::string& objects, int n) {
 }
 
 struct Options {
-    int reps = 3, threads = 2, max = 65536, maxOff = 16384;
+    int reps = 3, threads = 2, max = 65536, maxOff = 16384, parseN = 100000;
     std::vector<std::string> kinds{"clusters", "city", "molecule", "sculpt"};
+    std::vector<std::string> views{"above", "close", "grazing"};
 };
 
 struct Run {
@@ -178,13 +198,16 @@ long depthMismatches(const std::vector<float>& a, const std::vector<float>& b) {
     return bad;
 }
 
-void row(const std::string& kind, int n, const Options& o) {
+std::string objectsOf(const std::string& kind, int n) {
     std::mt19937 rng(1234u + static_cast<unsigned>(n));
-    const std::string objects = kind == "clusters"   ? clusters(n, rng)
-                                : kind == "city"     ? city(n, rng)
-                                : kind == "molecule" ? molecule(n, rng)
-                                                     : sculpt(n, rng);
-    const std::string text = sceneText(objects, n);
+    return kind == "clusters"   ? clusters(n, rng)
+           : kind == "city"     ? city(n, rng)
+           : kind == "molecule" ? molecule(n, rng)
+                                : sculpt(n, rng);
+}
+
+void row(const std::string& kind, int n, const std::string& view, const Options& o) {
+    const std::string text = sceneText(objectsOf(kind, n), n, view);
     auto t0 = Clock::now();
     const Scene scene = parseSceneText(text, kind + ".json");
     const double parseMs = ms(t0, Clock::now());
@@ -192,18 +215,33 @@ void row(const std::string& kind, int n, const Options& o) {
     const double nsOn = 1e6 * on.renderMs / (on.evalsPerPixel * 640 * 360);
     if (n > o.maxOff) {
         std::printf(
-            "| %s | %d | %.0f ms | %.1f ms | %.1f | %.1f ms | %.0f ns | — | — | — | — | — |\n",
-            kind.c_str(), n, parseMs, on.planMs, on.evalsPerPixel, on.renderMs, nsOn);
+            "| %s | %s | %d | %.0f ms | %.1f ms | %.1f | %.1f ms | %.0f ns | — | — | — | — | — |\n",
+            kind.c_str(), view.c_str(), n, parseMs, on.planMs, on.evalsPerPixel, on.renderMs, nsOn);
     } else {
         const Run off = renderScene(scene, false, o);
         const double nsOff = 1e6 * off.renderMs / (off.evalsPerPixel * 640 * 360);
         std::printf(
-            "| %s | %d | %.0f ms | %.1f ms | %.1f | %.1f ms | %.0f ns | %.1f | %.1f ms | "
+            "| %s | %s | %d | %.0f ms | %.1f ms | %.1f | %.1f ms | %.0f ns | %.1f | %.1f ms | "
             "%.0f ns | %.2fx | %ld |\n",
-            kind.c_str(), n, parseMs, on.planMs - off.planMs, on.evalsPerPixel, on.renderMs, nsOn,
-            off.evalsPerPixel, off.renderMs, nsOff, off.renderMs / on.renderMs,
+            kind.c_str(), view.c_str(), n, parseMs, on.planMs - off.planMs, on.evalsPerPixel,
+            on.renderMs, nsOn, off.evalsPerPixel, off.renderMs, nsOff, off.renderMs / on.renderMs,
             depthMismatches(on.depth, off.depth));
     }
+    std::fflush(stdout);
+}
+
+void parseRow(const std::string& kind, int n, const Options& o) {
+    const std::string text = sceneText(objectsOf(kind, n), n, "above");
+    std::vector<double> times;
+    for (int k = 0; k < std::max(1, o.reps); ++k) {
+        const auto t0 = Clock::now();
+        const Scene scene = parseSceneText(text, kind + ".json");
+        times.push_back(ms(t0, Clock::now()));
+        if (!scene.root) std::abort();
+    }
+    std::sort(times.begin(), times.end());
+    std::printf("| %s | %d | %.1f MB | %.0f ms |\n", kind.c_str(), n, text.size() / 1e6,
+                times[times.size() / 2]);
     std::fflush(stdout);
 }
 
@@ -222,10 +260,13 @@ int main(int argc, char** argv) {
             o.max = std::stoi(v);
         else if (a == "--max-off")
             o.maxOff = std::stoi(v);
-        else if (a == "--kinds") {
-            o.kinds.clear();
+        else if (a == "--parse")
+            o.parseN = std::stoi(v);
+        else if (a == "--kinds" || a == "--views") {
+            std::vector<std::string>& list = a == "--kinds" ? o.kinds : o.views;
+            list.clear();
             std::stringstream s(v);
-            for (std::string k; std::getline(s, k, ',');) o.kinds.push_back(k);
+            for (std::string k; std::getline(s, k, ',');) list.push_back(k);
         } else {
             std::fprintf(stderr, "unknown option %s\n", a.c_str());
             return 2;
@@ -234,10 +275,17 @@ int main(int argc, char** argv) {
     std::printf("## Pruning: %d threads, 640x360, no shadows, medians of %d\n\n", o.threads,
                 o.reps);
     std::printf(
-        "| scene | N | parse | pruning build | evals / pixel | frame | per eval | evals / pixel "
+        "| scene | camera | N | parse | pruning build | evals / pixel | frame | per eval | evals / "
+        "pixel "
         "(off) | frame (off) | per eval (off) | frame speed-up | depth mismatches |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const std::string& kind : o.kinds)
-        for (int n = 64; n <= o.max; n *= 4) sdft::row(kind, n, o);
+        for (const std::string& view : o.views)
+            for (int n = 64; n <= o.max; n *= 4) sdft::row(kind, n, view, o);
+    // Scene files of many primitives: the JSON parse alone (text to tree), median of --reps.
+    if (o.parseN > 0) {
+        std::printf("\n| scene | N | JSON size | parse |\n|---|---|---|---|\n");
+        for (const std::string& kind : o.kinds) sdft::parseRow(kind, o.parseN, o);
+    }
     return 0;
 }

@@ -1,6 +1,6 @@
 // Keinert et al. 2014 §3.1-3.2 measured: classic sphere tracing vs over-relaxation vs
-// over-relaxation
-// + screen-space selection, on several scenes, primary rays only, all in one run.
+// over-relaxation + screen-space selection, and the same with Bálint & Valasek's adaptive factor
+// instead of the fixed one (decision 22), on several scenes, primary rays only, all in one run.
 //
 // Counters per benchmark: evals/ray (field evaluations per primary ray, hardware-independent),
 // items_per_second (rays/s), hit_diff_% (share of pixels whose hit/miss differs from classic),
@@ -53,12 +53,27 @@ const Prepared& prepared(const std::string& name) {
     return cache.emplace(name, std::move(p)).first->second;
 }
 
-enum Method { kClassic, kRelaxed, kRelaxedScreenSpace, kEnhanced, kEnhancedNoCulling };
+enum Method {
+    kClassic,
+    kRelaxed,
+    kRelaxedScreenSpace,
+    kEnhanced,
+    kEnhancedNoCulling,
+    kAdaptive,
+    kAdaptiveScreenSpace,
+    kAdaptiveEnhanced
+};
 
 TraceOptions options(Method m, const Prepared& p) {
     TraceOptions o = TraceOptions::classic();
     o.pixelRadius = Camera(p.scene.camera).pixelRadius();
     o.rootIters = 0;  // the papers' methods; the root refinement is measured in exact_hits_test
+    if (m >= kAdaptive) {  // Bálint & Valasek's adaptive factor instead of Keinert's fixed one
+        o.adaptiveRelaxation = true;
+        o.screenSpace = m >= kAdaptiveScreenSpace;
+        if (m == kAdaptiveEnhanced) o.discontinuityIters = 3;
+        return o;
+    }
     if (m >= kRelaxed) o.omega = 1.2f;
     if (m >= kRelaxedScreenSpace) o.screenSpace = true;
     if (m >= kEnhanced) o.discontinuityIters = 3;
@@ -119,7 +134,10 @@ void registerAll() {
                                {"relaxed", kRelaxed},
                                {"relaxed+screen", kRelaxedScreenSpace},
                                {"enhanced", kEnhanced},
-                               {"enhanced-no-culling", kEnhancedNoCulling}}) {
+                               {"enhanced-no-culling", kEnhancedNoCulling},
+                               {"adaptive", kAdaptive},
+                               {"adaptive+screen", kAdaptiveScreenSpace},
+                               {"adaptive-enhanced", kAdaptiveEnhanced}}) {
             benchmark::RegisterBenchmark((std::string("Methods/") + scene + "/" + name).c_str(),
                                          Methods, std::string(scene), m)
                 ->Unit(benchmark::kMillisecond)

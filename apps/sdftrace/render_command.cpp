@@ -556,7 +556,8 @@ void addRenderCommand(CLI::App& app, Action& action) {
         "legend)");
     addCameraFlags(cmd, *args);
     cmd->add_flag("--classic", args->classic,
-                  "Plain sphere tracing (Hart): omega 1, no screen-space selection, no "
+                  "Plain sphere tracing (Hart): no over-relaxation (fixed or adaptive), no "
+                  "screen-space selection, no "
                   "discontinuity reduction; the option flags still apply after it");
     addOptionFlags(cmd, *args);
     addFrameFlags(cmd, *args);

@@ -10,7 +10,13 @@ struct TraceOptions {
     int maxSteps = 256;  // field evaluations spent marching (Hart's MAX_ITERATIONS)
     float tau = 1e-3f;   // hit threshold on f/L when not using the screen-space criterion
     // Keinert et al. 2014, §3.1: step omega * f/L, with the safe fallback of Listing 2. 1 = off.
+    // Used when adaptiveRelaxation is off.
     float omega = 1.2f;
+    // Bálint & Valasek 2018 ("Accelerating Sphere Tracing"), the adaptive over-relaxation
+    // Keinert §5 leaves to future work: each step's factor from the slope of the last two
+    // unbounding radii, as long as the next sphere would still overlap this one were the surface
+    // a plane; Keinert's overlap test and fallback keep it safe. Replaces the fixed omega.
+    bool adaptiveRelaxation = false;
     // Keinert et al. 2014, §3.2: pick the point with the smallest screen-space unbounding radius
     // and stop once it is under half a pixel. Needs pixelRadius (radius of a pixel at t = 1).
     bool screenSpace = true;
@@ -33,10 +39,13 @@ struct TraceOptions {
     int rootIters = 2;
 
     // The options of a ray without a pixel footprint of its own (shadow, reflection, refraction,
-    // shadow-map and path rays): the primary rays' march and relaxation, a plain threshold, no
-    // screen-space selection, no refinement, no fixed step count.
+    // shadow-map and path rays): the primary rays' march and fixed relaxation, a plain threshold,
+    // no screen-space selection, no refinement, no fixed step count. These rays start on a surface
+    // (refracted ones inside it), where the adaptive factor's first slopes mislead it (it falls
+    // back about as often as it saves), so they keep the fixed omega.
     SDFT_HOST_DEVICE TraceOptions secondary() const {
         TraceOptions o = *this;
+        o.adaptiveRelaxation = false;
         o.screenSpace = false;
         o.forceHit = false;
         o.discontinuityIters = 0;
@@ -56,6 +65,7 @@ struct TraceOptions {
     SDFT_HOST_DEVICE static TraceOptions classic() {
         TraceOptions o;
         o.omega = 1;
+        o.adaptiveRelaxation = false;
         o.screenSpace = false;
         o.discontinuityIters = 0;
         return o;

@@ -46,8 +46,17 @@ std::vector<RenderOption> makeTable() {
          .type = T::Float,
          .range = {1, 2, false, true},
          .what = "an over-relaxation factor",
-         .doc = "over-relaxation with the safe fallback (Keinert et al. 2014, §3.1; 1 = off)",
+         .doc =
+             "fixed over-relaxation with the safe fallback (Keinert et al. 2014, §3.1; 1 = off), "
+             "when `adaptive_relaxation` is off",
          SDFT_MEMBER(trace.omega)},
+        {.key = "adaptive_relaxation",
+         .flags = "--adaptive-relaxation",
+         .group = "Tracer",
+         .type = T::Bool,
+         .doc = "primary rays: each step's over-relaxation from the slope of the last two "
+                "distances, up to 2, with the same safe fallback (Bálint & Valasek 2018)",
+         SDFT_MEMBER(trace.adaptiveRelaxation)},
         {.key = "screen_space",
          .flags = "--screen-space",
          .group = "Tracer",
