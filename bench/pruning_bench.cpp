@@ -29,6 +29,7 @@ namespace sdft {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+constexpr int kWidth = 640, kHeight = 360;
 
 double ms(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
@@ -140,7 +141,8 @@ std::string cameraJson(const std::string& view, int n) {
         target = Vec3(0.1f * side, 0.3f, -0.5f * side);
     }
     return R"({"eye": )" + v3(eye.x, eye.y, eye.z) + R"(, "target": )" +
-           v3(target.x, target.y, target.z) + R"(, "fov": 45, "width": 640, "height": 360})";
+           v3(target.x, target.y, target.z) + R"(, "fov": 45, "width": )" + std::to_string(kWidth) +
+           R"(, "height": )" + std::to_string(kHeight) + "}";
 }
 
 std::string sceneText(const std::string& objects, int n, const std::string& view) {
@@ -163,6 +165,8 @@ struct Options {
 struct Run {
     double planMs = 0, renderMs = 0, evalsPerPixel = 0;
     std::vector<float> depth;
+    // The render's wall time over every evaluation it made.
+    double nsPerEval() const { return 1e6 * renderMs / (evalsPerPixel * kWidth * kHeight); }
 };
 
 Run renderScene(const Scene& parsed, bool pruning, const Options& o) {
@@ -212,14 +216,14 @@ void row(const std::string& kind, int n, const std::string& view, const Options&
     const Scene scene = parseSceneText(text, kind + ".json");
     const double parseMs = ms(t0, Clock::now());
     const Run on = renderScene(scene, true, o);
-    const double nsOn = 1e6 * on.renderMs / (on.evalsPerPixel * 640 * 360);
+    const double nsOn = on.nsPerEval();
     if (n > o.maxOff) {
         std::printf(
             "| %s | %s | %d | %.0f ms | %.1f ms | %.1f | %.1f ms | %.0f ns | — | — | — | — | — |\n",
             kind.c_str(), view.c_str(), n, parseMs, on.planMs, on.evalsPerPixel, on.renderMs, nsOn);
     } else {
         const Run off = renderScene(scene, false, o);
-        const double nsOff = 1e6 * off.renderMs / (off.evalsPerPixel * 640 * 360);
+        const double nsOff = off.nsPerEval();
         std::printf(
             "| %s | %s | %d | %.0f ms | %.1f ms | %.1f | %.1f ms | %.0f ns | %.1f | %.1f ms | "
             "%.0f ns | %.2fx | %ld |\n",
@@ -272,12 +276,11 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
-    std::printf("## Pruning: %d threads, 640x360, no shadows, medians of %d\n\n", o.threads,
-                o.reps);
+    std::printf("## Pruning: %d threads, %dx%d, no shadows, medians of %d\n\n", o.threads,
+                sdft::kWidth, sdft::kHeight, o.reps);
     std::printf(
-        "| scene | camera | N | parse | pruning build | evals / pixel | frame | per eval | evals / "
-        "pixel "
-        "(off) | frame (off) | per eval (off) | frame speed-up | depth mismatches |\n"
+        "| scene | camera | N | parse | pruning build | evals / pixel | frame | per eval | "
+        "evals / pixel (off) | frame (off) | per eval (off) | frame speed-up | depth mismatches |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const std::string& kind : o.kinds)
         for (const std::string& view : o.views)

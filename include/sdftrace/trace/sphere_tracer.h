@@ -33,8 +33,6 @@ struct SphereTraceState {
     float t = 0;  // where the next evaluation happens
     float candidateT = 0, candidateError = kInfinity, candidateValue = 0;
     float previousRadius = 0, stepLength = 0, omega = 1, sign = 0;
-    float advance = 0;         // the march's next move along the ray
-    bool relaxedStep = false;  // adaptive relaxation: the last step was longer than plain
     float tA = 0, fA = 0, tB = 0, fB = 0;  // hybrid and root refinement: the bracket
     // The march's latest samples on each side of the surface (values sign * f): the root
     // refinement's bracket or secant starts from them.
@@ -250,10 +248,16 @@ SDFT_HOST_DEVICE inline void endMarch(SphereTraceState& s, float invL, const Tra
     beginRoot(s, s.candidateT, s.candidateValue, invL, o);
 }
 
-// Keinert et al. 2014, Listing 2: the fixed factor omega with its fallback. Returns whether this
-// sample is abandoned (its sphere does not overlap the previous one).
-SDFT_HOST_DEVICE inline bool fixedRelaxation(SphereTraceState& s, float signedRadius,
-                                             float radius) {
+// An over-relaxation's choice at a march sample: the move to the next sample, and whether this
+// sample is abandoned (its unbounding sphere does not overlap the previous one).
+struct RelaxedStep {
+    float move;
+    bool abandoned;
+};
+
+// Keinert et al. 2014, §3.1 and Listing 2: the fixed factor omega with its fallback.
+SDFT_HOST_DEVICE inline RelaxedStep fixedRelaxation(SphereTraceState& s, float signedRadius,
+                                                    float radius) {
     const bool sorFail = s.omega > 1 && (radius + s.previousRadius) < s.stepLength;
     if (sorFail) {
         // The unbounding spheres do not overlap: step back to where plain sphere tracing would
@@ -264,9 +268,8 @@ SDFT_HOST_DEVICE inline bool fixedRelaxation(SphereTraceState& s, float signedRa
     } else {
         s.stepLength = signedRadius * s.omega;
     }
-    s.advance = s.stepLength;
     s.previousRadius = radius;
-    return sorFail;
+    return {s.stepLength, sorFail};
 }
 
 // Bálint & Valasek 2018: with the unbounding radius falling at slope s per unit of t (the last two
@@ -274,19 +277,20 @@ SDFT_HOST_DEVICE inline bool fixedRelaxation(SphereTraceState& s, float signedRa
 // this one while d <= 2 r / (1 + s): twice the plain step along a grazing plane, the plain step
 // (onto the plane) head on. A step that proves too long (the spheres do not overlap: the surface
 // curved towards the ray) falls back to the plain step from the previous sample, so no surface is
-// ever stepped over; the next step starts a fresh slope.
-SDFT_HOST_DEVICE inline bool adaptiveRelaxation(SphereTraceState& s, float signedRadius,
-                                                float radius) {
+// ever stepped over; the next step starts a fresh slope. stepLength is the distance from the
+// reference sample (previousRadius's) to the next one; only a step longer than plain can fail
+// the overlap test, since radius >= 0.
+SDFT_HOST_DEVICE inline RelaxedStep adaptiveRelaxation(SphereTraceState& s, float signedRadius,
+                                                       float radius) {
     // A margin under the planar bound (surfaces that curve towards the ray fall back less often)
-    // and a cap on the factor (rays leaving a surface). Chosen on the examples' primary rays:
+    // and a cap on the factor (rays leaving a surface). Chosen on the tracer benchmark's scenes:
     // 0.9 and 2 need fewer evaluations than 0.8-1.0 and 1.6-8 (docs/performance.md).
     constexpr float kGain = 0.9f, kMaxOmega = 2.0f;
-    if (s.relaxedStep && radius + s.previousRadius < s.stepLength) {
-        s.advance = s.previousRadius - s.stepLength;
+    if (radius + s.previousRadius < s.stepLength) {
+        const float back = s.previousRadius - s.stepLength;
         s.stepLength = s.previousRadius;  // from the previous sample, which stays the reference
-        s.relaxedStep = false;
         s.result.fallbacks++;
-        return true;
+        return {back, true};
     }
     float omega = 1;  // the first step has no slope yet
     if (s.stepLength > 0 && signedRadius > 0) {
@@ -294,21 +298,21 @@ SDFT_HOST_DEVICE inline bool adaptiveRelaxation(SphereTraceState& s, float signe
         omega = slope <= 0 ? kMaxOmega : minf(1 + kGain * (2 / (1 + slope) - 1), kMaxOmega);
     }
     s.stepLength = signedRadius * omega;
-    s.advance = s.stepLength;
-    s.relaxedStep = omega > 1;
     s.previousRadius = radius;
-    return false;
+    return {s.stepLength, false};
 }
 
-// Keinert et al. 2014, Listing 2: over-relaxed step with the safe fallback and screen-space
-// intersection-point selection.
+// Keinert et al. 2014, Listing 2: one march step, over-relaxed (the fixed factor of §3.1, or
+// Bálint & Valasek's adaptive one) with the safe fallback, and screen-space intersection-point
+// selection (§3.2).
 SDFT_HOST_DEVICE inline void marchStep(SphereTraceState& s, float f, float invL,
                                        const TraceOptions& o) {
     if (s.sign == 0) s.sign = f < 0 ? -1.0f : 1.0f;  // a ray starting inside traces out
     float signedRadius = s.sign * f * invL;
     float radius = std::fabs(signedRadius);
-    const bool sorFail = o.adaptiveRelaxation ? adaptiveRelaxation(s, signedRadius, radius)
-                                              : fixedRelaxation(s, signedRadius, radius);
+    const RelaxedStep step = o.adaptiveRelaxation ? adaptiveRelaxation(s, signedRadius, radius)
+                                                  : fixedRelaxation(s, signedRadius, radius);
+    const bool sorFail = step.abandoned;
     float error = hitError(s, radius, o);
     if (!sorFail && error < s.candidateError && s.t <= s.tMax) {
         s.candidateT = s.t;
@@ -337,7 +341,7 @@ SDFT_HOST_DEVICE inline void marchStep(SphereTraceState& s, float f, float invL,
         }
         return;
     }
-    s.t += s.advance;
+    s.t += step.move;
 }
 
 // Liktor 2008, §5.3: fixed steps until the sign changes, then regula falsi on the bracket.
