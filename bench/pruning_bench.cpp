@@ -5,11 +5,14 @@
 // evaluation), and the pixels whose depth differs from the unpruned render's by more than 1e-4 t.
 //
 // Each scene from three cameras (above, close among the objects, grazing the ground); at the end,
-// the JSON parse alone of scenes of --parse primitives.
+// the JSON parse alone of scenes of --parse primitives. With --build-only 1, the pruned cells'
+// build alone, per scene kind and N.
 //
 //   build/release/bench/sdftrace_pruning_bench [--reps 3] [--threads 2] [--max 65536]
 //       [--max-off 16384] [--kinds clusters,city,molecule,sculpt] [--views above,close,grazing]
-//       [--parse 100000]
+//       [--parse 100000] [--build-only 1]
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "sdftrace/field/tape.h"
 #include "sdftrace/render/film.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/parse_scene.h"
@@ -158,6 +162,7 @@ std::string sceneText(const std::string& objects, int n, const std::string& view
 
 struct Options {
     int reps = 3, threads = 2, max = 65536, maxOff = 16384, parseN = 100000;
+    bool buildOnly = false;
     std::vector<std::string> kinds{"clusters", "city", "molecule", "sculpt"};
     std::vector<std::string> views{"above", "close", "grazing"};
 };
@@ -249,6 +254,37 @@ void parseRow(const std::string& kind, int n, const Options& o) {
     std::fflush(stdout);
 }
 
+// The pruned cells' build alone (--build-only 1): compileTape with pruning on less off, median
+// of --reps; the leaf cells, their distinct tapes, and the instructions a leaf cell's tape holds
+// on average against the whole tape's.
+void buildRow(const std::string& kind, int n, const Options& o) {
+    const Scene scene = parseSceneText(sceneText(objectsOf(kind, n), n, "above"), kind + ".json");
+    std::vector<double> on, off;
+    Tape tape;
+    for (int k = 0; k < std::max(1, o.reps); ++k) {
+        const auto t0 = Clock::now();
+        const Tape whole = compileTape(scene.root, {.boundsCulling = true, .pruning = false});
+        const auto t1 = Clock::now();
+        tape = compileTape(scene.root, {.boundsCulling = true, .pruning = true});
+        off.push_back(ms(t0, t1));
+        on.push_back(ms(t1, Clock::now()));
+    }
+    std::sort(on.begin(), on.end());
+    std::sort(off.begin(), off.end());
+    const PrunedTapes* p = tape.pruned();
+    double meanLeaf = 0;
+    if (p) {
+        for (uint32_t t : p->cellTape) meanLeaf += p->spans[2 * t + 1];
+        meanLeaf /= static_cast<double>(p->cellTape.size());
+    }
+    std::printf("| %s | %d | %zu | %.1f ms | %.1f ms | %zu | %zu | %.1f MB | %.0f |\n",
+                kind.c_str(), n, tape.size(), off[off.size() / 2],
+                on[on.size() / 2] - off[off.size() / 2], p ? p->cellTape.size() : 0,
+                p ? p->spans.size() / 2 : 0,
+                p ? static_cast<double>(p->instrs.size() * sizeof(Instr)) / 1e6 : 0.0, meanLeaf);
+    std::fflush(stdout);
+}
+
 }  // namespace
 }  // namespace sdft
 
@@ -264,6 +300,8 @@ int main(int argc, char** argv) {
             o.max = std::stoi(v);
         else if (a == "--max-off")
             o.maxOff = std::stoi(v);
+        else if (a == "--build-only")
+            o.buildOnly = v != "0";
         else if (a == "--parse")
             o.parseN = std::stoi(v);
         else if (a == "--kinds" || a == "--views") {
@@ -275,6 +313,15 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "unknown option %s\n", a.c_str());
             return 2;
         }
+    }
+    if (o.buildOnly) {
+        const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, o.threads);
+        std::printf(
+            "| scene | N | tape | compile | pruning build | leaf cells | tapes | their size | "
+            "instructions per leaf |\n|---|---|---|---|---|---|---|---|---|\n");
+        for (const std::string& kind : o.kinds)
+            for (int n = 64; n <= o.max; n *= 4) sdft::buildRow(kind, n, o);
+        return 0;
     }
     std::printf("## Pruning: %d threads, %dx%d, no shadows, medians of %d\n\n", o.threads,
                 sdft::kWidth, sdft::kHeight, o.reps);

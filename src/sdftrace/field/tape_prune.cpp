@@ -4,12 +4,13 @@
 // propagated through the CSG operators; folds drop the operands those bounds rule out.
 #include "sdftrace/field/tape_prune.h"
 
+#include <sys/mman.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <mutex>
-#include <unordered_map>
 
 #include "sdftrace/field/tape_view.h"
 
@@ -64,24 +65,71 @@ float stretch(Op op, const float* k) {
     }
 }
 
+// The pruner's working memory, one per thread, reused from cell to cell (a build visits tens of
+// thousands of cells; allocating per cell cost more than the pruning).
+struct PruneScratch {
+    struct Chain {
+        Op op;
+        int32_t first, front;  // the fold's first operand, its first member
+        float best;            // the best bound an operand guarantees
+        bool valid, replaceFirst;
+    };
+    std::vector<Interval> out;
+    std::vector<int32_t> accDef, rhsDef, chainOf;
+    std::vector<uint8_t> drop, copy;
+    std::vector<uint32_t> next;
+    std::vector<Chain> chains;
+};
+
 class Pruner {
   public:
-    Pruner(const FlatTape& t, const float* consts, const Bounds3& cell)
-        : m_t(t), m_k(consts), m_n(t.instrs.size()) {
+    Pruner(const FlatTape& t, const float* consts, const Bounds3& cell, PruneScratch& s)
+        : m_t(t), m_k(consts), m_n(t.instrs.size()), m_s(s) {
         m_centre = (cell.lo + cell.hi) * 0.5f;
         m_radius = 0.5f * length(cell.hi - cell.lo);
-        m_out.resize(m_n);
-        m_accDef.assign(m_n, -1);
-        m_rhsDef.assign(m_n, -1);
-        m_drop.assign(m_n, 0);
-        m_copy.assign(m_n, 0);
+        m_s.out.resize(m_n);
+        m_s.accDef.assign(m_n, -1);
+        m_s.rhsDef.assign(m_n, -1);
+        m_s.chainOf.assign(m_n, -1);
+        m_s.drop.assign(m_n, 0);
+        m_s.copy.assign(m_n, 0);
     }
-    FlatTape run(bool& changed) {
+    // The tape's values over the cell (its last result's interval), once run.
+    Interval value() const { return m_value; }
+    // Whether anything is dropped; emit() then writes the pruned tape.
+    bool run() {
         bounds();
         decideHard();
         decideSmooth();
-        changed = std::find(m_drop.begin(), m_drop.end(), 1) != m_drop.end();
-        return changed ? emit() : FlatTape{};
+        return std::find(m_s.drop.begin(), m_s.drop.end(), 1) != m_s.drop.end();
+    }
+
+    // The kept instructions, renumbered: jumps, fold records, copies.
+    void emit(FlatTape& out) const {
+        const std::vector<uint8_t>& drop = m_s.drop;
+        std::vector<uint32_t>& next = m_s.next;  // new index of the first kept instruction >= i
+        next.resize(m_n + 1);
+        next[m_n] = static_cast<uint32_t>(m_n - std::count(drop.begin(), drop.end(), 1));
+        for (size_t i = m_n; i-- > 0;) next[i] = next[i + 1] - (drop[i] ? 0 : 1);
+        out.instrs.clear();
+        out.folds.clear();
+        for (size_t i = 0; i < m_n; ++i) {
+            if (drop[i]) continue;
+            Instr in = m_t.instrs[i];
+            FoldOperands f{};
+            if (m_s.copy[i]) {
+                in.op = Op::Copy;
+                in.a = in.b;
+                in.b = 0;
+                in.cull = -1;
+            } else if (in.op == Op::CullIfFar) {
+                in.jump = next[in.jump - 1] + 1;  // past its (kept) operator
+            } else if (isCombine(in.op)) {
+                f = {next[m_t.folds[i].operand], next[m_t.folds[i].fold]};
+            }
+            out.instrs.push_back(in);
+            out.folds.push_back(f);
+        }
     }
 
   private:
@@ -111,8 +159,8 @@ class Pruner {
             } else if (op == Op::Grid) {
                 r = {};
             } else if (op <= Op::Morph) {
-                m_accDef[i] = writer[in.a];
-                m_rhsDef[i] = writer[in.b];
+                m_s.accDef[i] = writer[in.a];
+                m_s.rhsDef[i] = writer[in.b];
                 r = combine(op, sr[in.a], sr[in.b], k);
             } else if (op == Op::Complement) {
                 r = {-sr[in.a].hi, -sr[in.a].lo};
@@ -136,66 +184,69 @@ class Pruner {
             }
             if (!(r.lo == r.lo)) r.lo = -kInfinity;
             if (!(r.hi == r.hi)) r.hi = kInfinity;
-            m_out[i] = r;
+            m_s.out[i] = r;
             if (writesScalar(op)) {
                 sr[in.out] = r;
                 writer[in.out] = static_cast<int32_t>(i);
+                m_value = r;
             }
         }
+    }
+
+    // An operand's interval as its hard fold sees it (a difference negates all but the first).
+    Interval operand(Op op, int32_t m) const {
+        const Interval b = m_s.out[m_s.rhsDef[m]];
+        return op == Op::Difference ? Interval{-b.hi, -b.lo} : b;
+    }
+    static bool ruledOut(const PruneScratch::Chain& c, Interval v) {
+        return c.op == Op::Union ? v.lo > c.best : v.hi < c.best;
     }
 
     // Hard folds, as chains of one operator through the accumulator (min, max and max(a, -b)
     // are associative, so nested folds of the same operator form one chain): an operand whose
     // values over the cell all lie beyond the best bound another operand guarantees never
-    // decides the result.
+    // decides the result. The first operand, when ruled out, gives its place to the first
+    // member left (a copy of its operand); a difference's first operand is never negated, so it
+    // stays.
     void decideHard() {
-        std::vector<int32_t> chainOf(m_n, -1);
-        struct Chain {
-            Op op;
-            int32_t first;
-            std::vector<int32_t> members;
-        };
-        std::vector<Chain> chains;
-        for (size_t i = 0; i < m_n; ++i) {
+        std::vector<PruneScratch::Chain>& chains = m_s.chains;
+        chains.clear();
+        for (size_t i = 0; i < m_n; ++i) {  // the chains and their best bounds
             const Op op = m_t.instrs[i].op;
             if (!isHardCombine(op)) continue;
-            const int32_t j = m_accDef[i];
-            if (j >= 0 && m_t.instrs[j].op == op && chainOf[j] >= 0) {
-                chainOf[i] = chainOf[j];
+            const int32_t j = m_s.accDef[i];
+            if (j >= 0 && m_t.instrs[j].op == op && m_s.chainOf[j] >= 0) {
+                m_s.chainOf[i] = m_s.chainOf[j];
             } else {
-                chainOf[i] = static_cast<int32_t>(chains.size());
-                chains.push_back({op, j, {}});
+                m_s.chainOf[i] = static_cast<int32_t>(chains.size());
+                const Interval a = j >= 0 ? m_s.out[j] : Interval{};
+                chains.push_back(
+                    {op, j, static_cast<int32_t>(i), op == Op::Union ? a.hi : a.lo, j >= 0, false});
             }
-            chains[chainOf[i]].members.push_back(static_cast<int32_t>(i));
+            PruneScratch::Chain& c = chains[m_s.chainOf[i]];
+            if (m_s.rhsDef[i] < 0) {
+                c.valid = false;
+                continue;
+            }
+            const Interval v = operand(op, static_cast<int32_t>(i));
+            c.best = op == Op::Union ? std::min(c.best, v.hi) : std::max(c.best, v.lo);
         }
-        for (const Chain& c : chains) decideChain(c.op, c.first, c.members);
-    }
-
-    void decideChain(Op op, int32_t first, const std::vector<int32_t>& members) {
-        if (first < 0) return;
-        // The operands' intervals as the fold sees them (a difference negates all but the first).
-        for (int32_t m : members)
-            if (m_rhsDef[m] < 0) return;
-        auto operand = [&](int32_t m) {
-            const Interval b = m_out[m_rhsDef[m]];
-            return op == Op::Difference ? Interval{-b.hi, -b.lo} : b;
-        };
-        const bool isMin = op == Op::Union;
-        float best = isMin ? m_out[first].hi : m_out[first].lo;
-        for (int32_t m : members)
-            best = isMin ? std::min(best, operand(m).hi) : std::max(best, operand(m).lo);
-        auto ruledOut = [&](Interval v) { return isMin ? v.lo > best : v.hi < best; };
-        for (int32_t m : members)
-            if (ruledOut(operand(m))) dropOperand(m);
-        // The first operand: the first member left takes its place (a copy of its operand); a
-        // difference's first operand is never negated, so it stays.
-        if (op == Op::Difference || !ruledOut(m_out[first])) return;
-        for (int32_t m : members) {
-            if (m_drop[m]) continue;
-            dropRange(m_t.folds[members.front()].fold, first);
-            if (m_t.instrs[m].cull >= 0) m_drop[m_t.folds[m].operand - 1] = 1;
-            m_copy[m] = 1;
-            return;
+        for (PruneScratch::Chain& c : chains)
+            c.replaceFirst = c.valid && c.op != Op::Difference && ruledOut(c, m_s.out[c.first]);
+        for (size_t i = 0; i < m_n; ++i) {  // drop the ruled-out operands
+            const int32_t ci = m_s.chainOf[i];
+            if (ci < 0 || !chains[ci].valid) continue;
+            if (ruledOut(chains[ci], operand(chains[ci].op, static_cast<int32_t>(i))))
+                dropOperand(static_cast<int32_t>(i));
+        }
+        for (size_t i = 0; i < m_n; ++i) {  // the first member left replaces a dropped first
+            const int32_t ci = m_s.chainOf[i];
+            if (ci < 0 || !chains[ci].replaceFirst || m_s.drop[i]) continue;
+            PruneScratch::Chain& c = chains[ci];
+            dropRange(m_t.folds[c.front].fold, static_cast<uint32_t>(c.first));
+            if (m_t.instrs[i].cull >= 0) m_s.drop[m_t.folds[i].operand - 1] = 1;
+            m_s.copy[i] = 1;
+            c.replaceFirst = false;
         }
     }
 
@@ -206,9 +257,9 @@ class Pruner {
             const Instr& in = m_t.instrs[i];
             if (!isCombine(in.op) || isHardCombine(in.op)) continue;
             const float k = m_k[in.k];
-            if (!(k > 0) || m_accDef[i] < 0 || m_rhsDef[i] < 0) continue;
+            if (!(k > 0) || m_s.accDef[i] < 0 || m_s.rhsDef[i] < 0) continue;
             const float margin = k * (1 + 1e-5f);
-            const Interval a = m_out[m_accDef[i]], b = m_out[m_rhsDef[i]];
+            const Interval a = m_s.out[m_s.accDef[i]], b = m_s.out[m_s.rhsDef[i]];
             const bool inactive = in.op == Op::SmoothUnion          ? b.lo - a.hi >= margin
                                   : in.op == Op::SmoothIntersection ? a.lo - b.hi >= margin
                                                                     : a.lo + b.lo >= margin;
@@ -222,48 +273,31 @@ class Pruner {
         dropRange(from, static_cast<uint32_t>(m));
     }
     void dropRange(uint32_t from, uint32_t to) {
-        std::fill(m_drop.begin() + from, m_drop.begin() + to + 1, 1);
-    }
-
-    // The kept instructions, renumbered: jumps, fold records, copies.
-    FlatTape emit() {
-        std::vector<uint32_t> next(m_n + 1);  // new index of the first kept instruction >= i
-        uint32_t kept = 0;
-        for (size_t i = 0; i < m_n; ++i) kept += !m_drop[i];
-        next[m_n] = kept;
-        for (size_t i = m_n; i-- > 0;) next[i] = next[i + 1] - (m_drop[i] ? 0 : 1);
-        FlatTape out;
-        out.instrs.reserve(kept);
-        out.folds.reserve(kept);
-        for (size_t i = 0; i < m_n; ++i) {
-            if (m_drop[i]) continue;
-            Instr in = m_t.instrs[i];
-            FoldOperands f{};
-            if (m_copy[i]) {
-                in.op = Op::Copy;
-                in.a = in.b;
-                in.b = 0;
-                in.cull = -1;
-            } else if (in.op == Op::CullIfFar) {
-                in.jump = next[in.jump - 1] + 1;  // past its (kept) operator
-            } else if (isCombine(in.op)) {
-                f = {next[m_t.folds[i].operand], next[m_t.folds[i].fold]};
-            }
-            out.instrs.push_back(in);
-            out.folds.push_back(f);
-        }
-        return out;
+        std::fill(m_s.drop.begin() + from, m_s.drop.begin() + to + 1, 1);
     }
 
     const FlatTape& m_t;
     const float* m_k;
     size_t m_n;
+    PruneScratch& m_s;
     Vec3 m_centre;
     float m_radius = 0;
-    std::vector<Interval> m_out;
-    std::vector<int32_t> m_accDef, m_rhsDef;
-    std::vector<uint8_t> m_drop, m_copy;
+    Interval m_value;
 };
+
+// Room for `n` elements, backed by huge pages where the system gives them on request: a build
+// writes tens of megabytes of fresh leaf tapes, and faulting them in 4 KiB pages cost more than
+// computing them (about 10 us a page on a virtual machine).
+template <typename T>
+void reserveLarge(std::vector<T>& v, size_t n) {
+    v.reserve(n);
+#ifdef MADV_HUGEPAGE
+    constexpr uintptr_t kHuge = uintptr_t{1} << 21;
+    const auto begin = (reinterpret_cast<uintptr_t>(v.data()) + kHuge - 1) & ~(kHuge - 1);
+    const auto end = reinterpret_cast<uintptr_t>(v.data() + v.capacity()) & ~(kHuge - 1);
+    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#endif
+}
 
 // A leaf tape stops at this many instructions: its cells share it.
 constexpr size_t kSmallTape = 12;
@@ -271,6 +305,10 @@ constexpr size_t kSmallTape = 12;
 // share of the instructions.
 constexpr size_t kWorthPruning = 48;
 constexpr double kWorthwhileShare = 0.5;
+// The octree's top levels run their children in parallel; below, each subtree is one thread's.
+constexpr int kParallelLevels = 2;
+constexpr int kMaxLevels = 32;
+constexpr size_t kLeafGuess = 384, kMaxReserve = size_t{1} << 26;
 
 class Builder {
   public:
@@ -285,43 +323,62 @@ class Builder {
             while (r * edge < extent[a] && r < 64) r *= 2;
             m_out->res[a] = range[a] = r;
         }
-        m_out->cellTape.assign(static_cast<size_t>(range[0]) * range[1] * range[2], 0);
-        auto root = std::make_shared<FlatTape>();
-        root->instrs.assign(tape.instructions().begin(), tape.instructions().end());
-        root->folds.assign(tape.foldOperands().begin(), tape.foldOperands().end());
+        const size_t cells = static_cast<size_t>(range[0]) * range[1] * range[2];
+        m_out->cellTape.assign(cells, 0);
+        // Room for the leaf tapes, as many as the cells of up to kLeafGuess instructions, and for
+        // the outside tape (addOutsideTape: the operands and a guard and union per group);
+        // reserved, not touched.
+        const size_t whole = tape.size();
+        reserveLarge(m_out->instrs,
+                     std::min(cells * std::min(whole, kLeafGuess), kMaxReserve) + 2 * whole + 64);
+        FlatTape root;
+        root.instrs.assign(tape.instructions().begin(), tape.instructions().end());
+        root.folds.assign(tape.foldOperands().begin(), tape.foldOperands().end());
+        int32_t memo = -1;
         const int first[3] = {0, 0, 0};
-        node(root, box, 0, first, range);
+        node(root, memo, box, 0, first, range);
     }
-    std::shared_ptr<PrunedTapes> finish() {
-        for (const auto& t : m_tapes) {
-            m_out->spans.push_back(static_cast<uint32_t>(m_out->instrs.size()));
-            m_out->spans.push_back(static_cast<uint32_t>(t->instrs.size()));
-            m_out->instrs.insert(m_out->instrs.end(), t->instrs.begin(), t->instrs.end());
-        }
-        return m_out;
-    }
+    std::shared_ptr<PrunedTapes> finish() { return m_out; }
     // The mean instructions per leaf cell, against the whole tape's.
     double meanLeafInstrs() const {
         double sum = 0;
-        for (uint32_t t : m_out->cellTape) sum += static_cast<double>(m_tapes[t]->instrs.size());
+        for (uint32_t t : m_out->cellTape) sum += m_out->spans[2 * t + 1];
         return sum / static_cast<double>(m_out->cellTape.size());
     }
 
   private:
-    // The octree node over leaf cells first[a] + [0, range[a]), pruned from `parent`; it splits
-    // the axes at least half as long as its longest, so that its cells stay about cubic.
-    void node(const std::shared_ptr<const FlatTape>& parent, const Bounds3& box, int level,
+    // One thread's: its pruner's scratch and the tape of each level of the subtree it descends.
+    struct Local {
+        PruneScratch scratch;
+        std::vector<FlatTape> levels = std::vector<FlatTape>(kMaxLevels);
+    };
+
+    // The octree node over leaf cells first[a] + [0, range[a]), pruned from `parent` (whose leaf
+    // id, once it has one, is `parentMemo`); it splits the axes at least half as long as its
+    // longest, so that its cells stay about cubic.
+    void node(const FlatTape& parent, int32_t& parentMemo, const Bounds3& box, int level,
               const int first[3], const int range[3]) {
-        bool changed = false;
-        FlatTape pruned = pruneTape(*parent, m_consts, box, changed);
-        const std::shared_ptr<const FlatTape> tape =
-            changed ? std::make_shared<const FlatTape>(std::move(pruned)) : parent;
+        SDFT_CHECK(level < kMaxLevels);
+        Local& local = m_locals.local();
+        FlatTape own;  // the top levels' tapes; a subtree's live in its thread's levels
+        FlatTape& mine = level < kParallelLevels ? own : local.levels[level];
+        Pruner pruner(parent, m_consts, box, local.scratch);
+        const bool changed = pruner.run();
+        if (changed) pruner.emit(mine);
+        const FlatTape& tape = changed ? mine : parent;
+        int32_t ownMemo = -1;
+        int32_t& memo = changed ? ownMemo : parentMemo;
         const Vec3 extent = box.extent();
         const float longest = maxComponent(extent);
         bool split[3];
         for (int a = 0; a < 3; ++a) split[a] = range[a] > 1 && extent[a] >= 0.5f * longest;
-        if (!(split[0] || split[1] || split[2]) || tape->instrs.size() <= kSmallTape) {
-            const uint32_t id = tapeId(tape);
+        // A cell farther than its diagonal from the surface (outside or inside) is not split:
+        // rays cross it in a step or two, so a shorter tape would hardly be used.
+        const float diagonal = length(extent);
+        const Interval v = pruner.value();
+        const bool far = v.lo > diagonal || v.hi < -diagonal;
+        if (!(split[0] || split[1] || split[2]) || far || tape.instrs.size() <= kSmallTape) {
+            const uint32_t id = leafId(tape, memo);
             const int* res = m_out->res;
             for (int z = first[2]; z < first[2] + range[2]; ++z)
                 for (int y = first[1]; y < first[1] + range[1]; ++y)
@@ -351,30 +408,35 @@ class Builder {
                     b.hi[a] = mid;
                 }
             }
-            node(tape, b, level + 1, f, r);
+            node(tape, memo, b, level + 1, f, r);
         };
-        if (level < 2) {
+        if (level < kParallelLevels) {
             tbb::parallel_for(0, 8, child);
         } else {
             for (int c = 0; c < 8; ++c) child(c);
         }
     }
-    uint32_t tapeId(const std::shared_ptr<const FlatTape>& t) {
+
+    // The id of a leaf's tape: `memo`, or a new one for the tape, appended to the leaf tapes.
+    uint32_t leafId(const FlatTape& t, int32_t& memo) {
         std::lock_guard<std::mutex> lock(m_mutex);
-        auto [it, added] = m_ids.try_emplace(t.get(), static_cast<uint32_t>(m_tapes.size()));
-        if (added) m_tapes.push_back(t);
-        return it->second;
+        if (memo >= 0) return static_cast<uint32_t>(memo);
+        std::vector<Instr>& all = m_out->instrs;
+        memo = static_cast<int32_t>(m_out->spans.size() / 2);
+        m_out->spans.push_back(static_cast<uint32_t>(all.size()));
+        m_out->spans.push_back(static_cast<uint32_t>(t.instrs.size()));
+        all.insert(all.end(), t.instrs.begin(), t.instrs.end());
+        return static_cast<uint32_t>(memo);
     }
 
     const float* m_consts;
     std::shared_ptr<PrunedTapes> m_out;
+    tbb::enumerable_thread_specific<Local> m_locals;
     std::mutex m_mutex;
-    std::vector<std::shared_ptr<const FlatTape>> m_tapes;
-    std::unordered_map<const FlatTape*, uint32_t> m_ids;
 };
 
-// The box the cells cover: the scene's bounds, or (a top-level union with planes) those of its
-// bounded operands; grown by a margin, which the outside tape's bound steps over (tape_prune.h).
+// The box the cells cover before its margin: the scene's bounds, or (a top-level union with
+// planes) those of its bounded operands.
 Bounds3 cellBox(const Node& root) {
     Bounds3 box = nodeBounds(root);
     if ((!box.finite() || box.empty()) && root.kind == NodeKind::Union) {
@@ -385,13 +447,18 @@ Bounds3 cellBox(const Node& root) {
         }
     }
     if (box.empty() || !box.finite()) return Bounds3{};
-    return box.expanded(kOutsideMargin * length(box.extent()) + 1e-6f);
+    return box;
 }
 
 }  // namespace
 
 FlatTape pruneTape(const FlatTape& tape, const float* consts, const Bounds3& cell, bool& changed) {
-    return Pruner(tape, consts, cell).run(changed);
+    PruneScratch scratch;
+    Pruner pruner(tape, consts, cell, scratch);
+    FlatTape out;
+    changed = pruner.run();
+    if (changed) pruner.emit(out);
+    return out;
 }
 
 std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root) {
@@ -402,11 +469,14 @@ std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root
     }
     // Small tapes gain nothing from cells (their lookups cost more than they save).
     if (folds == 0 || tape.size() < kWorthPruning) return nullptr;
-    const Bounds3 box = cellBox(root);
+    Bounds3 box = cellBox(root);
     if (box.empty()) return nullptr;
     // About one leaf cell per primitive along the longest axis, 2 to 64 cells.
     const double perAxis = std::cbrt(static_cast<double>(primitives));
     const int levels = std::clamp(static_cast<int>(std::lround(std::log2(perAxis))) + 1, 1, 6);
+    // The margin (tape_prune.h): at most one leaf cell, so that a flat scene's cells stay on it.
+    const float edge = maxComponent(box.extent()) / static_cast<float>(1 << levels);
+    box = box.expanded(std::min(kOutsideMargin * length(box.extent()), edge) + 1e-6f);
     Builder builder(tape, box, maxComponent(box.extent()) / static_cast<float>(1 << levels));
     // Cells whose tapes are not much shorter than the whole are not worth their lookups.
     if (builder.meanLeafInstrs() > kWorthwhileShare * static_cast<double>(tape.size()))

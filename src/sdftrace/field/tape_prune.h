@@ -28,7 +28,9 @@ struct FlatTape {
 // `changed` tells whether anything was removed.
 FlatTape pruneTape(const FlatTape& tape, const float* consts, const Bounds3& cell, bool& changed);
 
-// The cells' box is the scene's (or its bounded operands') grown by this share of its diagonal.
+// The cells' box is the scene's (or its bounded operands') grown by this share of its diagonal,
+// or by one leaf cell where that is less; points outside it take the outside tape
+// (PrunedTapes::outsideTape), which gives the same values.
 inline constexpr float kOutsideMargin = 0.02f;
 
 // The octree's leaf cells and their tapes for a compiled tape, or null when pruning would not

@@ -10,8 +10,13 @@ void compileField(RenderPlan& plan, const NodePtr& root) {
     plan.ddaGrid =
         root->kind == NodeKind::Grid && s.gridTracer == GridTracerKind::Dda ? root->grid : nullptr;
     plan.convexObjects.clear();
-    if (!s.convexBounds) return;
-    // Keinert §3.5: each convex top-level object gets a tape of its own.
+    // Keinert §3.5: each convex top-level object gets a tape of its own. Only rays inside a
+    // dielectric look for their exit by them, so a scene without one (of thousands of objects,
+    // say) compiles none.
+    const bool refracts =
+        std::any_of(plan.materials.begin(), plan.materials.end(),
+                    [](const Material& m) { return m.kind == Material::Kind::Dielectric; });
+    if (!s.convexBounds || !refracts) return;
     for (const NodePtr& o : topLevelObjects(root)) {
         const Bounds3 b = nodeBounds(*o);
         if (isConvex(*o) && b.finite() && !b.empty())

@@ -424,7 +424,7 @@ std::string objectTypeNames() {
 }  // namespace
 
 bool boundedField(const NodePtr& n) {
-    const Bounds3 b = compileTape(n, {.boundsCulling = false}).bounds();
+    const Bounds3 b = compileTape(n, {.boundsCulling = false, .pruning = false}).bounds();
     return b.finite() && !b.empty();
 }
 
