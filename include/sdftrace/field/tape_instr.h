@@ -36,10 +36,12 @@ enum class Op : uint8_t {
     ScalePoint,
     RepeatPoint,
     // control: skip the next (smooth) union operand when its bounds (constants k[0..5]) are at
-    // least
-    // the running minimum in scalar b plus the margin k[6] away from point a; jump to `jump`.
-    // See decision 0002.
+    // least the running minimum in scalar b plus the margin k[6] away from point a; jump to
+    // `jump`. See decision 0002.
     CullIfFar,
+    // control: evaluate the whole tape's instructions k .. jump - 1 here, then go on (a pruned
+    // tape's stretch kept as the whole tape has it, field/tape_prune.h; never in a whole tape).
+    Run,
 };
 
 struct Instr {

@@ -49,6 +49,37 @@ struct TapeCells {
     }
 };
 
+// The instructions of a tape in the order they run: a pruned tape's Op::Run evaluates a stretch
+// of the whole tape, then the tape goes on after it. A jump (CullIfFar) counts within the
+// stretch it is in.
+struct TapeWalk {
+    const Instr* tape = nullptr;  // and its count: what runs
+    uint32_t count = 0;
+    SDFT_HOST_DEVICE void begin(const Instr* whole) {
+        m_whole = whole;
+        m_code = tape;
+        m_end = count;
+    }
+    // The instruction at pc, or null past the end; pc moves into and out of Runs.
+    SDFT_HOST_DEVICE const Instr* at(uint32_t& pc) {
+        for (;;) {
+            if (pc >= m_end) {
+                if (m_code == tape) return nullptr;
+                m_code = tape, m_end = count, pc = m_resume + 1;
+                continue;
+            }
+            const Instr& in = m_code[pc];
+            if (in.op != Op::Run) return &in;
+            m_resume = pc, m_code = m_whole, m_end = in.jump, pc = in.k;
+        }
+    }
+
+  private:
+    const Instr* m_whole = nullptr;
+    const Instr* m_code = nullptr;
+    uint32_t m_end = 0, m_resume = 0;
+};
+
 struct TapeView {
     const Instr* instrs = nullptr;
     const float* consts = nullptr;
@@ -170,11 +201,11 @@ SDFT_HOST_DEVICE inline float evalTapeAt(const TapeView& t, Vec3 p, MaterialBlen
     Vec3 pts[kTapeMaxPointRegs];
     MaterialBlend mats[kMaterial ? kMaterialRegs : 1];
     pts[0] = p;
-    const Instr* instrs;
-    uint32_t count;
-    t.tapeAt(p, instrs, count);
-    for (uint32_t pc = 0; pc < count; ++pc) {
-        const Instr& in = instrs[pc];
+    TapeWalk walk;
+    t.tapeAt(p, walk.tape, walk.count);
+    walk.begin(t.instrs);
+    for (uint32_t pc = 0; const Instr* next = walk.at(pc); ++pc) {
+        const Instr& in = *next;
         const float* k = t.consts + in.k;
         const Op op = in.op;
         if (op == Op::CullIfFar) {

@@ -156,10 +156,16 @@ void Tape::evalChunk(const Instr* instrs, uint32_t count, const float* x, const 
         break;                                                                 \
     }
 
-    for (uint32_t pc = 0; pc < count; ++pc) {
-        const Instr& in = instrs[pc];
+    TapeWalk walk;
+    walk.tape = instrs;
+    walk.count = count;
+    walk.begin(m_instrs.data());
+    for (uint32_t pc = 0; const Instr* next = walk.at(pc); ++pc) {
+        const Instr& in = *next;
         const float* k = consts + in.k;
         switch (in.op) {
+            case Op::Run:  // TapeWalk follows it
+                break;
             case Op::CullIfFar: {
                 // Per lane as in the scalar path (compared squared, branch-free so it vectorizes);
                 // the operand is skipped when every lane skips it.

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <numeric>
 
 #include "sdftrace/field/tape_view.h"
 
@@ -79,6 +80,7 @@ struct PruneScratch {
     std::vector<uint8_t> drop, copy;
     std::vector<uint32_t> next;
     std::vector<Chain> chains;
+    std::vector<int32_t> hard;  // the hard folds' members, in order
 };
 
 class Pruner {
@@ -87,12 +89,15 @@ class Pruner {
         : m_t(t), m_k(consts), m_n(t.instrs.size()), m_s(s) {
         m_centre = (cell.lo + cell.hi) * 0.5f;
         m_radius = 0.5f * length(cell.hi - cell.lo);
+        // accDef, rhsDef and chainOf are read only where bounds() wrote them (folds).
         m_s.out.resize(m_n);
-        m_s.accDef.assign(m_n, -1);
-        m_s.rhsDef.assign(m_n, -1);
-        m_s.chainOf.assign(m_n, -1);
+        m_s.accDef.resize(m_n);
+        m_s.rhsDef.resize(m_n);
+        m_s.chainOf.resize(m_n);
         m_s.drop.assign(m_n, 0);
         m_s.copy.assign(m_n, 0);
+        m_s.chains.clear();
+        m_s.hard.clear();
     }
     // The tape's values over the cell (its last result's interval), once run.
     Interval value() const { return m_value; }
@@ -100,8 +105,7 @@ class Pruner {
     bool run() {
         bounds();
         decideHard();
-        decideSmooth();
-        return std::find(m_s.drop.begin(), m_s.drop.end(), 1) != m_s.drop.end();
+        return m_changed;
     }
 
     // The kept instructions, renumbered: jumps, fold records, copies.
@@ -109,12 +113,14 @@ class Pruner {
         const std::vector<uint8_t>& drop = m_s.drop;
         std::vector<uint32_t>& next = m_s.next;  // new index of the first kept instruction >= i
         next.resize(m_n + 1);
-        next[m_n] = static_cast<uint32_t>(m_n - std::count(drop.begin(), drop.end(), 1));
-        for (size_t i = m_n; i-- > 0;) next[i] = next[i + 1] - (drop[i] ? 0 : 1);
         out.instrs.clear();
         out.folds.clear();
+        out.origin.clear();
+        uint32_t kept = 0;
         for (size_t i = 0; i < m_n; ++i) {
+            next[i] = kept;
             if (drop[i]) continue;
+            ++kept;
             Instr in = m_t.instrs[i];
             FoldOperands f{};
             if (m_s.copy[i]) {
@@ -122,18 +128,21 @@ class Pruner {
                 in.a = in.b;
                 in.b = 0;
                 in.cull = -1;
-            } else if (in.op == Op::CullIfFar) {
-                in.jump = next[in.jump - 1] + 1;  // past its (kept) operator
-            } else if (isCombine(in.op)) {
+            } else if (isCombine(in.op)) {  // fold records point back: renumbered already
                 f = {next[m_t.folds[i].operand], next[m_t.folds[i].fold]};
             }
             out.instrs.push_back(in);
             out.folds.push_back(f);
+            out.origin.push_back(m_s.copy[i] ? FlatTape::kMade : m_t.origin[i]);
         }
+        next[m_n] = kept;
+        for (Instr& in : out.instrs)  // guards jump forward, past their (kept) operator
+            if (in.op == Op::CullIfFar) in.jump = next[in.jump - 1] + 1;
     }
 
   private:
-    // Forward pass: every scalar instruction's interval over the cell.
+    // Forward pass: every scalar instruction's interval over the cell; smooth folds decided and
+    // hard ones gathered into chains on the way.
     void bounds() {
         Vec3 pc[kTapeMaxPointRegs];
         float ps[kTapeMaxPointRegs];
@@ -162,6 +171,10 @@ class Pruner {
                 m_s.accDef[i] = writer[in.a];
                 m_s.rhsDef[i] = writer[in.b];
                 r = combine(op, sr[in.a], sr[in.b], k);
+                if (isHardCombine(op))
+                    joinChain(static_cast<int32_t>(i));
+                else if (op != Op::Morph)
+                    decideSmooth(static_cast<int32_t>(i));
             } else if (op == Op::Complement) {
                 r = {-sr[in.a].hi, -sr[in.a].lo};
             } else if (op == Op::Copy) {
@@ -203,46 +216,44 @@ class Pruner {
     }
 
     // Hard folds, as chains of one operator through the accumulator (min, max and max(a, -b)
-    // are associative, so nested folds of the same operator form one chain): an operand whose
-    // values over the cell all lie beyond the best bound another operand guarantees never
-    // decides the result. The first operand, when ruled out, gives its place to the first
-    // member left (a copy of its operand); a difference's first operand is never negated, so it
-    // stays.
+    // are associative, so nested folds of the same operator form one chain): member i joins the
+    // chain of its accumulator's or starts one, and tightens the chain's best bound.
+    void joinChain(int32_t i) {
+        std::vector<PruneScratch::Chain>& chains = m_s.chains;
+        const Op op = m_t.instrs[i].op;
+        const int32_t j = m_s.accDef[i];
+        if (j >= 0 && m_t.instrs[j].op == op && m_s.chainOf[j] >= 0) {
+            m_s.chainOf[i] = m_s.chainOf[j];
+        } else {
+            m_s.chainOf[i] = static_cast<int32_t>(chains.size());
+            const Interval a = j >= 0 ? m_s.out[j] : Interval{};
+            chains.push_back({op, j, i, op == Op::Union ? a.hi : a.lo, j >= 0, false});
+        }
+        m_s.hard.push_back(i);
+        PruneScratch::Chain& c = chains[m_s.chainOf[i]];
+        if (m_s.rhsDef[i] < 0) {
+            c.valid = false;
+            return;
+        }
+        const Interval v = operand(op, i);
+        c.best = op == Op::Union ? std::min(c.best, v.hi) : std::max(c.best, v.lo);
+    }
+
+    // An operand whose values over the cell all lie beyond the best bound another operand of its
+    // chain guarantees never decides the result. The first operand, when ruled out, gives its
+    // place to the first member left (a copy of its operand); a difference's first operand is
+    // never negated, so it stays.
     void decideHard() {
         std::vector<PruneScratch::Chain>& chains = m_s.chains;
-        chains.clear();
-        for (size_t i = 0; i < m_n; ++i) {  // the chains and their best bounds
-            const Op op = m_t.instrs[i].op;
-            if (!isHardCombine(op)) continue;
-            const int32_t j = m_s.accDef[i];
-            if (j >= 0 && m_t.instrs[j].op == op && m_s.chainOf[j] >= 0) {
-                m_s.chainOf[i] = m_s.chainOf[j];
-            } else {
-                m_s.chainOf[i] = static_cast<int32_t>(chains.size());
-                const Interval a = j >= 0 ? m_s.out[j] : Interval{};
-                chains.push_back(
-                    {op, j, static_cast<int32_t>(i), op == Op::Union ? a.hi : a.lo, j >= 0, false});
-            }
-            PruneScratch::Chain& c = chains[m_s.chainOf[i]];
-            if (m_s.rhsDef[i] < 0) {
-                c.valid = false;
-                continue;
-            }
-            const Interval v = operand(op, static_cast<int32_t>(i));
-            c.best = op == Op::Union ? std::min(c.best, v.hi) : std::max(c.best, v.lo);
-        }
         for (PruneScratch::Chain& c : chains)
             c.replaceFirst = c.valid && c.op != Op::Difference && ruledOut(c, m_s.out[c.first]);
-        for (size_t i = 0; i < m_n; ++i) {  // drop the ruled-out operands
-            const int32_t ci = m_s.chainOf[i];
-            if (ci < 0 || !chains[ci].valid) continue;
-            if (ruledOut(chains[ci], operand(chains[ci].op, static_cast<int32_t>(i))))
-                dropOperand(static_cast<int32_t>(i));
+        for (const int32_t i : m_s.hard) {  // drop the ruled-out operands
+            const PruneScratch::Chain& c = chains[m_s.chainOf[i]];
+            if (c.valid && ruledOut(c, operand(c.op, i))) dropOperand(i);
         }
-        for (size_t i = 0; i < m_n; ++i) {  // the first member left replaces a dropped first
-            const int32_t ci = m_s.chainOf[i];
-            if (ci < 0 || !chains[ci].replaceFirst || m_s.drop[i]) continue;
-            PruneScratch::Chain& c = chains[ci];
+        for (const int32_t i : m_s.hard) {  // the first member left replaces a dropped first
+            PruneScratch::Chain& c = chains[m_s.chainOf[i]];
+            if (!c.replaceFirst || m_s.drop[i]) continue;
             dropRange(m_t.folds[c.front].fold, static_cast<uint32_t>(c.first));
             if (m_t.instrs[i].cull >= 0) m_s.drop[m_t.folds[i].operand - 1] = 1;
             m_s.copy[i] = 1;
@@ -250,21 +261,18 @@ class Pruner {
         }
     }
 
-    // Smooth folds, operand by operand: zero blend weight over the whole cell (|a - b| >= k,
-    // the right sign) leaves the accumulator as it was.
-    void decideSmooth() {
-        for (size_t i = 0; i < m_n; ++i) {
-            const Instr& in = m_t.instrs[i];
-            if (!isCombine(in.op) || isHardCombine(in.op)) continue;
-            const float k = m_k[in.k];
-            if (!(k > 0) || m_s.accDef[i] < 0 || m_s.rhsDef[i] < 0) continue;
-            const float margin = k * (1 + 1e-5f);
-            const Interval a = m_s.out[m_s.accDef[i]], b = m_s.out[m_s.rhsDef[i]];
-            const bool inactive = in.op == Op::SmoothUnion          ? b.lo - a.hi >= margin
-                                  : in.op == Op::SmoothIntersection ? a.lo - b.hi >= margin
-                                                                    : a.lo + b.lo >= margin;
-            if (inactive) dropOperand(static_cast<int32_t>(i));
-        }
+    // A smooth fold's operand i: zero blend weight over the whole cell (|a - b| >= k, the right
+    // sign) leaves the accumulator as it was.
+    void decideSmooth(int32_t i) {
+        const Instr& in = m_t.instrs[i];
+        const float k = m_k[in.k];
+        if (!(k > 0) || m_s.accDef[i] < 0 || m_s.rhsDef[i] < 0) return;
+        const float margin = k * (1 + 1e-5f);
+        const Interval a = m_s.out[m_s.accDef[i]], b = m_s.out[m_s.rhsDef[i]];
+        const bool inactive = in.op == Op::SmoothUnion          ? b.lo - a.hi >= margin
+                              : in.op == Op::SmoothIntersection ? a.lo - b.hi >= margin
+                                                                : a.lo + b.lo >= margin;
+        if (inactive) dropOperand(i);
     }
 
     // A fold member and its operand, with the operand's guard.
@@ -274,6 +282,7 @@ class Pruner {
     }
     void dropRange(uint32_t from, uint32_t to) {
         std::fill(m_s.drop.begin() + from, m_s.drop.begin() + to + 1, 1);
+        m_changed = true;
     }
 
     const FlatTape& m_t;
@@ -283,7 +292,73 @@ class Pruner {
     Vec3 m_centre;
     float m_radius = 0;
     Interval m_value;
+    bool m_changed = false;
 };
+
+// compactTape's working memory, one per thread.
+struct CompactScratch {
+    struct Entry {
+        uint32_t first, count;  // instructions of the pruned tape: a Run when count > 1
+    };
+    std::vector<uint8_t> copied, starts;
+    std::vector<uint32_t> entryOf;
+    std::vector<Entry> entries;
+};
+
+// A pruned tape as the cells keep it: each stretch of instructions that the whole tape has as
+// they are (consecutive there, every jump inside) becomes one Op::Run of the whole tape's
+// instructions, and the rest is copied, its jumps renumbered. `whole` is the whole tape's.
+void compactTape(const FlatTape& t, const Instr* whole, std::vector<Instr>& out,
+                 CompactScratch& scratch) {
+    const size_t n = t.instrs.size();
+    auto verbatim = [&](size_t j) { return t.origin[j] != FlatTape::kMade; };
+    auto follows = [&](size_t j) {  // j continues j - 1's stretch of the whole tape
+        return j > 0 && verbatim(j) && verbatim(j - 1) && t.origin[j] == t.origin[j - 1] + 1;
+    };
+    // A guard may sit in a Run when its operand is the whole tape's, unbroken; the others are
+    // copied, and the instruction each jumps to must start an entry.
+    std::vector<uint8_t>&copied = scratch.copied, &starts = scratch.starts;
+    copied.assign(n, 0);
+    starts.assign(n + 1, 0);
+    for (size_t j = 0; j < n; ++j) {
+        if (!verbatim(j)) {
+            copied[j] = 1;
+            continue;
+        }
+        const Instr& in = t.instrs[j];
+        if (in.op != Op::CullIfFar) continue;
+        bool whole_ = in.jump - j == whole[t.origin[j]].jump - t.origin[j];
+        for (size_t i = j + 1; whole_ && i < in.jump; ++i) whole_ = follows(i);
+        if (!whole_) copied[j] = 1, starts[in.jump] = 1;
+    }
+    // The entries: a Run per stretch of two or more, the rest one by one.
+    std::vector<uint32_t>& entryOf = scratch.entryOf;
+    entryOf.assign(n + 1, 0);
+    std::vector<CompactScratch::Entry>& entries = scratch.entries;
+    entries.clear();
+    for (size_t j = 0; j < n;) {
+        size_t e = j + 1;
+        if (!copied[j])
+            while (e < n && !copied[e] && !starts[e] && follows(e)) ++e;
+        entryOf[j] = static_cast<uint32_t>(entries.size());
+        entries.push_back({static_cast<uint32_t>(j), static_cast<uint32_t>(e - j)});
+        j = e;
+    }
+    entryOf[n] = static_cast<uint32_t>(entries.size());
+    out.clear();
+    for (const CompactScratch::Entry& e : entries) {
+        Instr in = t.instrs[e.first];
+        if (e.count > 1) {
+            in = Instr{};
+            in.op = Op::Run;
+            in.k = t.origin[e.first];
+            in.jump = t.origin[e.first] + e.count;
+        } else if (in.op == Op::CullIfFar) {
+            in.jump = entryOf[in.jump];
+        }
+        out.push_back(in);
+    }
+}
 
 // Room for `n` elements, backed by huge pages where the system gives them on request: a build
 // writes tens of megabytes of fresh leaf tapes, and faulting them in 4 KiB pages cost more than
@@ -334,6 +409,9 @@ class Builder {
         FlatTape root;
         root.instrs.assign(tape.instructions().begin(), tape.instructions().end());
         root.folds.assign(tape.foldOperands().begin(), tape.foldOperands().end());
+        root.origin.resize(root.instrs.size());
+        std::iota(root.origin.begin(), root.origin.end(), 0u);
+        m_whole = tape.instructions().data();
         int32_t memo = -1;
         const int first[3] = {0, 0, 0};
         node(root, memo, box, 0, first, range);
@@ -342,7 +420,7 @@ class Builder {
     // The mean instructions per leaf cell, against the whole tape's.
     double meanLeafInstrs() const {
         double sum = 0;
-        for (uint32_t t : m_out->cellTape) sum += m_out->spans[2 * t + 1];
+        for (uint32_t t : m_out->cellTape) sum += m_lengths[t];
         return sum / static_cast<double>(m_out->cellTape.size());
     }
 
@@ -351,6 +429,8 @@ class Builder {
     struct Local {
         PruneScratch scratch;
         std::vector<FlatTape> levels = std::vector<FlatTape>(kMaxLevels);
+        CompactScratch compactScratch;
+        std::vector<Instr> compact;  // a leaf tape in the form the cells keep (compactTape)
     };
 
     // The octree node over leaf cells first[a] + [0, range[a]), pruned from `parent` (whose leaf
@@ -378,7 +458,7 @@ class Builder {
         const Interval v = pruner.value();
         const bool far = v.lo > diagonal || v.hi < -diagonal;
         if (!(split[0] || split[1] || split[2]) || far || tape.instrs.size() <= kSmallTape) {
-            const uint32_t id = leafId(tape, memo);
+            const uint32_t id = leafId(local, tape, memo);
             const int* res = m_out->res;
             for (int z = first[2]; z < first[2] + range[2]; ++z)
                 for (int y = first[1]; y < first[1] + range[1]; ++y)
@@ -418,14 +498,20 @@ class Builder {
     }
 
     // The id of a leaf's tape: `memo`, or a new one for the tape, appended to the leaf tapes.
-    uint32_t leafId(const FlatTape& t, int32_t& memo) {
+    uint32_t leafId(Local& local, const FlatTape& t, int32_t& memo) {
+        {
+            std::lock_guard<std::mutex> lock(m_mutex);
+            if (memo >= 0) return static_cast<uint32_t>(memo);
+        }
+        compactTape(t, m_whole, local.compact, local.compactScratch);
         std::lock_guard<std::mutex> lock(m_mutex);
-        if (memo >= 0) return static_cast<uint32_t>(memo);
+        if (memo >= 0) return static_cast<uint32_t>(memo);  // a sibling's, meanwhile
         std::vector<Instr>& all = m_out->instrs;
-        memo = static_cast<int32_t>(m_out->spans.size() / 2);
+        memo = static_cast<int32_t>(m_lengths.size());
+        m_lengths.push_back(static_cast<uint32_t>(t.instrs.size()));
         m_out->spans.push_back(static_cast<uint32_t>(all.size()));
-        m_out->spans.push_back(static_cast<uint32_t>(t.instrs.size()));
-        all.insert(all.end(), t.instrs.begin(), t.instrs.end());
+        m_out->spans.push_back(static_cast<uint32_t>(local.compact.size()));
+        all.insert(all.end(), local.compact.begin(), local.compact.end());
         return static_cast<uint32_t>(memo);
     }
 
@@ -433,6 +519,8 @@ class Builder {
     std::shared_ptr<PrunedTapes> m_out;
     tbb::enumerable_thread_specific<Local> m_locals;
     std::mutex m_mutex;
+    const Instr* m_whole = nullptr;
+    std::vector<uint32_t> m_lengths;  // per leaf tape, its instructions before compactTape
 };
 
 // The box the cells cover before its margin: the scene's bounds, or (a top-level union with

@@ -15,8 +15,10 @@ namespace sdft {
 // A tape's instructions with the compiler's fold records (Tape::foldOperands), the form pruning
 // reads and writes.
 struct FlatTape {
+    static constexpr uint32_t kMade = ~0u;  // origin: an instruction the pruning made (a copy)
     std::vector<Instr> instrs;
     std::vector<FoldOperands> folds;
+    std::vector<uint32_t> origin;  // per instruction, its index in the whole tape, or kMade
 };
 
 // `tape` pruned for the points of `cell`: each fold operand whose value over the cell, bounded by
@@ -34,7 +36,8 @@ FlatTape pruneTape(const FlatTape& tape, const float* consts, const Bounds3& cel
 inline constexpr float kOutsideMargin = 0.02f;
 
 // The octree's leaf cells and their tapes for a compiled tape, or null when pruning would not
-// pay (no fold, a short tape, cells that keep most of it, or no finite box to put them in).
+// pay (no fold, a short tape, cells that keep most of it, or no finite box to put them in). A
+// leaf tape keeps each stretch it shares with the whole tape as one Op::Run.
 std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root);
 
 }  // namespace sdft

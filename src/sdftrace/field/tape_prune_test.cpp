@@ -1,10 +1,12 @@
 // Hierarchical pruning (tape_prune.h): the cells' tapes give the whole tape's values, scalar and
 // batch, on random scenes of many operands of every operator; traced hits stay where the whole
-// tape puts them; tapes too small to gain are left alone.
+// tape puts them; the cells keep stretches of the whole tape as Runs; tapes too small to gain are
+// left alone.
 #include "sdftrace/field/tape_prune.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "sdftrace/field/node.h"
@@ -150,6 +152,66 @@ TEST(Pruning, HitsMatchTheWholeTape) {
         }
         EXPECT_GT(hits, static_cast<int>(rays.size()) / 4);
     }
+}
+
+// Operands in an order that follows space (a random walk, as a molecule's atoms or a sculpt's
+// strokes come): the cells keep their stretches of the whole tape as Runs, a fraction of the
+// instructions they stand for, every Run and jump inside its tape, and the values unchanged,
+// scalar and batch, with bounds culling's guards inside the Runs and outside them (the operands
+// are exact distances, so that culling keeps the values too).
+TEST(Pruning, CellsKeepStretchesOfTheWholeTapeAsRuns) {
+    Rng rng(5);
+    std::vector<NodePtr> c{node::plane({0, 1, 0}, 0.1f)};
+    Vec3 at(0, 0.5f, 0);
+    for (int i = 0; i < 1500; ++i) {
+        at = at + rng.direction() * 0.12f;
+        at.y = std::clamp(at.y, 0.2f, 1.0f);
+        // Every seventh a group of three, some of which a cell drops, so that its guard's jump
+        // is renumbered.
+        NodePtr leaf = node::sphere(0.1f);
+        if (i % 7 == 0)
+            leaf = node::unite({node::sphere(0.08f),
+                                node::translate(node::box(Vec3(0.06f)), rng.inCube(0.3f)),
+                                node::translate(node::sphere(0.05f), rng.inCube(0.3f))});
+        c.push_back(node::translate(leaf, at));
+    }
+    const NodePtr root = node::unite(c);
+    const Tape whole = compileTape(root, {.pruning = false});
+    const Tape pruned = compileTape(root);
+    ASSERT_NE(pruned.pruned(), nullptr);
+    const PrunedTapes& p = *pruned.pruned();
+    size_t stood = 0, runs = 0;
+    for (size_t t = 0; t < p.spans.size() / 2; ++t) {
+        if (static_cast<int32_t>(t) == p.outsideTape) continue;
+        const uint32_t first = p.spans[2 * t], count = p.spans[2 * t + 1];
+        for (uint32_t i = first; i < first + count; ++i) {
+            const Instr& in = p.instrs[i];
+            if (in.op == Op::Run) {
+                ASSERT_LT(in.k, in.jump);
+                ASSERT_LE(in.jump, whole.size());
+                stood += in.jump - in.k;
+                ++runs;
+            } else {
+                if (in.op == Op::CullIfFar) ASSERT_LE(in.jump, count) << "tape " << t;
+                ++stood;
+            }
+        }
+    }
+    EXPECT_GT(runs, 0u);
+    EXPECT_LT(3 * p.instrs.size(), stood);
+    const Bounds3 box = p.box;
+    std::vector<float> x, y, z;
+    for (int i = 0; i < 4000; ++i) {
+        Vec3 q = rng.inBox(box.lo, box.hi);
+        if (i % 3) q = q + rng.direction() * (0.01f - whole.eval(q)) * 0.5f;
+        ASSERT_NEAR(whole.eval(q), pruned.eval(q), 1e-5f * (std::fabs(whole.eval(q)) + 1));
+        x.push_back(q.x), y.push_back(q.y), z.push_back(q.z);
+    }
+    std::vector<float> out(x.size());
+    BatchScratch scratch;
+    pruned.evalBatch(x.data(), y.data(), z.data(), out.data(), static_cast<int>(x.size()), scratch);
+    for (size_t i = 0; i < x.size(); ++i)
+        ASSERT_EQ(out[i], pruned.eval({x[i], y[i], z[i]})) << "point " << i;
 }
 
 TEST(Pruning, SmallOrUnprunableTapesKeepTheWholeTape) {
