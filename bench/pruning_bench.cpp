@@ -255,8 +255,8 @@ void parseRow(const std::string& kind, int n, const Options& o) {
 }
 
 // The pruned cells' build alone (--build-only 1): compileTape with pruning on less off, median
-// of --reps; the leaf cells, their distinct tapes, and the instructions a leaf cell's tape holds
-// on average against the whole tape's.
+// of --reps; the leaf cells, their distinct tapes and the bytes they take, and the entries of a
+// leaf cell's tape on average (an instruction, or a Run of the whole tape's).
 void buildRow(const std::string& kind, int n, const Options& o) {
     const Scene scene = parseSceneText(sceneText(objectsOf(kind, n), n, "above"), kind + ".json");
     std::vector<double> on, off;
@@ -318,7 +318,7 @@ int main(int argc, char** argv) {
         const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, o.threads);
         std::printf(
             "| scene | N | tape | compile | pruning build | leaf cells | tapes | their size | "
-            "instructions per leaf |\n|---|---|---|---|---|---|---|---|---|\n");
+            "entries per leaf tape |\n|---|---|---|---|---|---|---|---|---|\n");
         for (const std::string& kind : o.kinds)
             for (int n = 64; n <= o.max; n *= 4) sdft::buildRow(kind, n, o);
         return 0;

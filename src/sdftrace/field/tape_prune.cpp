@@ -562,9 +562,7 @@ std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root
     // About one leaf cell per primitive along the longest axis, 2 to 64 cells.
     const double perAxis = std::cbrt(static_cast<double>(primitives));
     const int levels = std::clamp(static_cast<int>(std::lround(std::log2(perAxis))) + 1, 1, 6);
-    // The margin (tape_prune.h): at most one leaf cell, so that a flat scene's cells stay on it.
-    const float edge = maxComponent(box.extent()) / static_cast<float>(1 << levels);
-    box = box.expanded(std::min(kOutsideMargin * length(box.extent()), edge) + 1e-6f);
+    box = box.expanded(kOutsideMargin * length(box.extent()) + 1e-6f);
     Builder builder(tape, box, maxComponent(box.extent()) / static_cast<float>(1 << levels));
     // Cells whose tapes are not much shorter than the whole are not worth their lookups.
     if (builder.meanLeafInstrs() > kWorthwhileShare * static_cast<double>(tape.size()))

@@ -30,9 +30,10 @@ struct FlatTape {
 // `changed` tells whether anything was removed.
 FlatTape pruneTape(const FlatTape& tape, const float* consts, const Bounds3& cell, bool& changed);
 
-// The cells' box is the scene's (or its bounded operands') grown by this share of its diagonal,
-// or by one leaf cell where that is less; points outside it take the outside tape
-// (PrunedTapes::outsideTape), which gives the same values.
+// The cells' box is the scene's (or its bounded operands') grown by this share of its diagonal;
+// points outside it take the outside tape (PrunedTapes::outsideTape), which gives the same values
+// at a higher cost per evaluation (a hierarchy over every operand), so the margin keeps the air
+// just around the scene in cells.
 inline constexpr float kOutsideMargin = 0.02f;
 
 // The octree's leaf cells and their tapes for a compiled tape, or null when pruning would not
