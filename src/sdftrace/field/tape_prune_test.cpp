@@ -1,7 +1,7 @@
 // Hierarchical pruning (tape_prune.h): the cells' tapes give the whole tape's values, scalar and
-// batch, on random scenes of many operands of every operator; traced hits stay where the whole
-// tape puts them; the cells keep stretches of the whole tape as Runs; tapes too small to gain are
-// left alone.
+// batch, and its materials, on random scenes of many operands of every operator; traced hits stay
+// where the whole tape puts them; the cells keep stretches of the whole tape as Runs; tapes too
+// small to gain are left alone.
 #include "sdftrace/field/tape_prune.h"
 
 #include <gtest/gtest.h>
@@ -152,6 +152,48 @@ TEST(Pruning, HitsMatchTheWholeTape) {
         }
         EXPECT_GT(hits, static_cast<int>(rays.size()) / 4);
     }
+}
+
+// The material at points near the surfaces (what shading reads) is the whole tape's: the same
+// material dominates with the same weight, hard and smooth operators alike.
+TEST(Pruning, CellTapesGiveTheWholeTapesMaterials) {
+    Rng rng(19);
+    std::vector<NodePtr> c{node::withMaterial(node::plane({0, 1, 0}, 0.1f), 0)};
+    const float spread = 0.6f * std::sqrt(400.0f);
+    for (int i = 0; i < 400; ++i)
+        c.push_back(node::withMaterial(randomGroup(rng, spread), 1 + i % 5));
+    const NodePtr root = node::unite(c);
+    const Tape whole = compileTape(root, {.boundsCulling = false, .pruning = false});
+    const Tape pruned = compileTape(root, {.boundsCulling = false, .pruning = true});
+    ASSERT_NE(pruned.pruned(), nullptr);
+    auto dominant = [](const MaterialBlend& m) {
+        int best = 0;
+        for (int i = 1; i < m.count; ++i)
+            if (m.weight[i] > m.weight[best]) best = i;
+        return best;
+    };
+    const Bounds3 box = pruned.pruned()->box;
+    int checked = 0;
+    for (int i = 0; i < 3000 && checked < 1000; ++i) {
+        Vec3 q = rng.inBox(box.lo, box.hi);
+        for (int step = 0; step < 2; ++step) {  // towards the surface along the gradient
+            constexpr float h = 1e-3f;
+            const Vec3 g(whole.eval(q + Vec3(h, 0, 0)) - whole.eval(q - Vec3(h, 0, 0)),
+                         whole.eval(q + Vec3(0, h, 0)) - whole.eval(q - Vec3(0, h, 0)),
+                         whole.eval(q + Vec3(0, 0, h)) - whole.eval(q - Vec3(0, 0, h)));
+            if (!(length(g) > 0)) break;
+            q = q - normalize(g) * whole.eval(q);
+        }
+        if (std::fabs(whole.eval(q)) > 0.05f) continue;
+        ++checked;
+        const MaterialBlend a = whole.evalMaterial(q), b = pruned.evalMaterial(q);
+        ASSERT_GT(a.count, 0);
+        ASSERT_GT(b.count, 0);
+        const int da = dominant(a), db = dominant(b);
+        ASSERT_EQ(a.id[da], b.id[db]) << "point " << i;
+        ASSERT_NEAR(a.weight[da], b.weight[db], 1e-4f) << "point " << i;
+    }
+    EXPECT_GT(checked, 400);
 }
 
 // Operands in an order that follows space (a random walk, as a molecule's atoms or a sculpt's
