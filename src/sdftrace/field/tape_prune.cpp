@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <new>
 #include <numeric>
 
 #include "sdftrace/field/tape_view.h"
@@ -327,9 +328,9 @@ void compactTape(const FlatTape& t, const Instr* whole, std::vector<Instr>& out,
         }
         const Instr& in = t.instrs[j];
         if (in.op != Op::CullIfFar) continue;
-        bool whole_ = in.jump - j == whole[t.origin[j]].jump - t.origin[j];
-        for (size_t i = j + 1; whole_ && i < in.jump; ++i) whole_ = follows(i);
-        if (!whole_) copied[j] = 1, starts[in.jump] = 1;
+        bool intact = in.jump - j == whole[t.origin[j]].jump - t.origin[j];
+        for (size_t i = j + 1; intact && i < in.jump; ++i) intact = follows(i);
+        if (!intact) copied[j] = 1, starts[in.jump] = 1;
     }
     // The entries: a Run per stretch of two or more, the rest one by one.
     std::vector<uint32_t>& entryOf = scratch.entryOf;
@@ -365,7 +366,11 @@ void compactTape(const FlatTape& t, const Instr* whole, std::vector<Instr>& out,
 // computing them (about 10 us a page on a virtual machine).
 template <typename T>
 void reserveLarge(std::vector<T>& v, size_t n) {
-    v.reserve(n);
+    try {
+        v.reserve(n);
+    } catch (const std::bad_alloc&) {  // a system that counts address space: grow as needed
+        return;
+    }
 #ifdef MADV_HUGEPAGE
     constexpr uintptr_t kHuge = uintptr_t{1} << 21;
     const auto begin = (reinterpret_cast<uintptr_t>(v.data()) + kHuge - 1) & ~(kHuge - 1);
@@ -383,7 +388,10 @@ constexpr double kWorthwhileShare = 0.5;
 // The octree's top levels run their children in parallel; below, each subtree is one thread's.
 constexpr int kParallelLevels = 2;
 constexpr int kMaxLevels = 32;
-constexpr size_t kLeafGuess = 384, kMaxReserve = size_t{1} << 26;
+// The leaf tapes' array is reserved for this many entries per cell (compactTape: a few Runs and
+// copies, a hundred at most in the benchmark's scenes), at most kMaxReserve: address space, not
+// memory, and growing it would copy and fault in the whole array again.
+constexpr size_t kLeafGuess = 256, kMaxReserve = size_t{1} << 25;
 
 class Builder {
   public:
@@ -400,9 +408,8 @@ class Builder {
         }
         const size_t cells = static_cast<size_t>(range[0]) * range[1] * range[2];
         m_out->cellTape.assign(cells, 0);
-        // Room for the leaf tapes, as many as the cells of up to kLeafGuess instructions, and for
-        // the outside tape (addOutsideTape: the operands and a guard and union per group);
-        // reserved, not touched.
+        // Room for the leaf tapes and the outside tape after them (addOutsideTape: the operands
+        // and a guard and union per group); reserved, not touched.
         const size_t whole = tape.size();
         reserveLarge(m_out->instrs,
                      std::min(cells * std::min(whole, kLeafGuess), kMaxReserve) + 2 * whole + 64);
