@@ -13,6 +13,7 @@
 #include <mutex>
 #include <new>
 #include <numeric>
+#include <span>
 
 #include "sdftrace/field/tape_view.h"
 
@@ -385,6 +386,8 @@ constexpr size_t kSmallTape = 12;
 // share of the instructions.
 constexpr size_t kWorthPruning = 48;
 constexpr double kWorthwhileShare = 0.5;
+// Under bounds culling, at least this many outer guards per instruction of a leaf tape.
+constexpr double kGuardsPerLeafInstr = 0.3;
 // The octree's top levels run their children in parallel; below, each subtree is one thread's.
 constexpr int kParallelLevels = 2;
 constexpr int kMaxLevels = 32;
@@ -530,6 +533,21 @@ class Builder {
     std::vector<uint32_t> m_lengths;  // per leaf tape, its instructions before compactTape
 };
 
+// The guards (CullIfFar) that every evaluation of the whole tape tests: those outside any other
+// guard's operand.
+size_t outerGuards(std::span<const Instr> instrs) {
+    size_t count = 0;
+    for (size_t j = 0; j < instrs.size();) {
+        if (instrs[j].op == Op::CullIfFar) {
+            ++count;
+            j = instrs[j].jump;
+        } else {
+            ++j;
+        }
+    }
+    return count;
+}
+
 // The box the cells cover before its margin: the scene's bounds, or (a top-level union with
 // planes) those of its bounded operands.
 Bounds3 cellBox(const Node& root) {
@@ -571,9 +589,13 @@ std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root
     const int levels = std::clamp(static_cast<int>(std::lround(std::log2(perAxis))) + 1, 1, 6);
     box = box.expanded(kOutsideMargin * length(box.extent()) + 1e-6f);
     Builder builder(tape, box, maxComponent(box.extent()) / static_cast<float>(1 << levels));
-    // Cells whose tapes are not much shorter than the whole are not worth their lookups.
-    if (builder.meanLeafInstrs() > kWorthwhileShare * static_cast<double>(tape.size()))
-        return nullptr;
+    // Cells whose tapes are not much shorter than the whole are not worth their lookups, nor,
+    // under bounds culling, those of a few big operands (a handful of blended strokes): culling
+    // already skips the far ones after one guard each, and what pruning saves is those guards.
+    const double leaf = builder.meanLeafInstrs();
+    if (leaf > kWorthwhileShare * static_cast<double>(tape.size())) return nullptr;
+    const size_t guards = outerGuards(tape.instructions());
+    if (guards > 0 && static_cast<double>(guards) < kGuardsPerLeafInstr * leaf) return nullptr;
     return builder.finish();
 }
 

@@ -263,6 +263,27 @@ TEST(Pruning, SmallOrUnprunableTapesKeepTheWholeTape) {
     std::vector<NodePtr> same;
     for (int i = 0; i < 30; ++i) same.push_back(node::sphere(1.0f + 0.001f * i));
     EXPECT_EQ(compileTape(node::unite(same)).pruned(), nullptr);
+    // A few big blended strokes: bounds culling skips the far ones after one guard each, which is
+    // all the cells would save; with many strokes the guards add up and the cells pay.
+    auto strokes = [](int count) {
+        Rng rng(3);
+        const float spread = 0.5f * std::sqrt(static_cast<float>(count));
+        std::vector<NodePtr> all;
+        for (int s = 0; s < count; ++s) {
+            Vec3 p = rng.inBox({-spread, 0.2f, -spread}, {spread, 0.6f, spread});
+            NodePtr stroke;
+            for (int i = 0; i < 16; ++i) {
+                const Vec3 q = p + rng.direction() * 0.08f;
+                NodePtr c = node::capsule(p, q, 0.035f);
+                stroke = stroke ? node::smoothUnion(stroke, c, 0.06f) : c;
+                p = q;
+            }
+            all.push_back(stroke);
+        }
+        return node::unite(all);
+    };
+    EXPECT_EQ(compileTape(strokes(4)).pruned(), nullptr);
+    EXPECT_NE(compileTape(strokes(256)).pruned(), nullptr);
 }
 
 }  // namespace
