@@ -72,7 +72,8 @@ struct FrameView {
 };
 
 // Compiles the field part of `plan` from the scene's root node by `plan.settings`: the tape (with
-// bounds culling when enabled), the convex objects and the DDA grid.
+// bounds culling when enabled), the DDA grid and, when `plan.materials` has a dielectric, the
+// convex objects.
 void compileField(RenderPlan& plan, const NodePtr& root);
 
 }  // namespace sdft
