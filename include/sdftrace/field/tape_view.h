@@ -53,19 +53,15 @@ struct TapeCells {
 // of the whole tape, then the tape goes on after it. A jump (CullIfFar) counts within the
 // stretch it is in.
 struct TapeWalk {
-    const Instr* tape = nullptr;  // and its count: what runs
-    uint32_t count = 0;
-    SDFT_HOST_DEVICE void begin(const Instr* whole) {
-        m_whole = whole;
-        m_code = tape;
-        m_end = count;
-    }
+    // `tape` (count instructions) runs; its Runs read `whole`.
+    SDFT_HOST_DEVICE TapeWalk(const Instr* tape, uint32_t count, const Instr* whole)
+        : m_tape(tape), m_whole(whole), m_code(tape), m_count(count), m_end(count) {}
     // The instruction at pc, or null past the end; pc moves into and out of Runs.
     SDFT_HOST_DEVICE const Instr* at(uint32_t& pc) {
         for (;;) {
             if (pc >= m_end) {
-                if (m_code == tape) return nullptr;
-                m_code = tape, m_end = count, pc = m_resume + 1;
+                if (m_code == m_tape) return nullptr;
+                m_code = m_tape, m_end = m_count, pc = m_resume + 1;
                 continue;
             }
             const Instr& in = m_code[pc];
@@ -75,9 +71,10 @@ struct TapeWalk {
     }
 
   private:
-    const Instr* m_whole = nullptr;
-    const Instr* m_code = nullptr;
-    uint32_t m_end = 0, m_resume = 0;
+    const Instr* m_tape;
+    const Instr* m_whole;
+    const Instr* m_code;  // the tape, or the whole tape inside a Run
+    uint32_t m_count, m_end, m_resume = 0;
 };
 
 struct TapeView {
@@ -201,9 +198,10 @@ SDFT_HOST_DEVICE inline float evalTapeAt(const TapeView& t, Vec3 p, MaterialBlen
     Vec3 pts[kTapeMaxPointRegs];
     MaterialBlend mats[kMaterial ? kMaterialRegs : 1];
     pts[0] = p;
-    TapeWalk walk;
-    t.tapeAt(p, walk.tape, walk.count);
-    walk.begin(t.instrs);
+    const Instr* tape;
+    uint32_t count;
+    t.tapeAt(p, tape, count);
+    TapeWalk walk(tape, count, t.instrs);
     for (uint32_t pc = 0; const Instr* next = walk.at(pc); ++pc) {
         const Instr& in = *next;
         const float* k = t.consts + in.k;

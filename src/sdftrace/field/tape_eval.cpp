@@ -156,10 +156,7 @@ void Tape::evalChunk(const Instr* instrs, uint32_t count, const float* x, const 
         break;                                                                 \
     }
 
-    TapeWalk walk;
-    walk.tape = instrs;
-    walk.count = count;
-    walk.begin(m_instrs.data());
+    TapeWalk walk(instrs, count, m_instrs.data());
     for (uint32_t pc = 0; const Instr* next = walk.at(pc); ++pc) {
         const Instr& in = *next;
         const float* k = consts + in.k;

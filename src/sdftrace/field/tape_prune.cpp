@@ -14,6 +14,7 @@
 #include <new>
 #include <numeric>
 #include <span>
+#include <vector>
 
 #include "sdftrace/field/tape_view.h"
 
@@ -24,6 +25,21 @@ namespace {
 struct Interval {
     float lo = -kInfinity, hi = kInfinity;
 };
+
+// A tape's instructions with the compiler's fold records (Tape::foldOperands), the form pruning
+// reads and writes.
+struct FlatTape {
+    static constexpr uint32_t kMade = ~0u;  // origin: an instruction the pruning made (a copy)
+    std::vector<Instr> instrs;
+    std::vector<FoldOperands> folds;
+    std::vector<uint32_t> origin;  // per instruction, its index in the whole tape, or kMade
+};
+
+// The cells' box is the scene's (or its bounded operands') grown by this share of its diagonal;
+// points outside it take the outside tape (PrunedTapes::outsideTape), which gives the same values
+// at a higher cost per evaluation (a hierarchy over every operand), so the margin keeps the air
+// just around the scene in cells.
+constexpr float kOutsideMargin = 0.02f;
 
 bool isCombine(Op op) { return op >= Op::Union && op <= Op::SmoothDifference; }
 bool isHardCombine(Op op) { return op >= Op::Union && op <= Op::Difference; }
@@ -85,6 +101,12 @@ struct PruneScratch {
     std::vector<int32_t> hard;  // the hard folds' members, in order
 };
 
+// A tape pruned for the points of a cell: each fold operand whose value over the cell, bounded by
+// its value at the cell's centre and the Lipschitz bound of its subtree, can never be the one
+// that decides the fold is removed (hard union, intersection and difference), or whose blend
+// weight is zero over the cell (smooth union, intersection and difference: |a - b| >= k). The
+// result equals the tape's at every point of the cell (up to one rounding of a smooth blend's
+// a + (b - a) at weight 1). Operands under a grid, a repetition or a displacement are kept.
 class Pruner {
   public:
     Pruner(const FlatTape& t, const float* consts, const Bounds3& cell, PruneScratch& s)
@@ -564,15 +586,6 @@ Bounds3 cellBox(const Node& root) {
 }
 
 }  // namespace
-
-FlatTape pruneTape(const FlatTape& tape, const float* consts, const Bounds3& cell, bool& changed) {
-    PruneScratch scratch;
-    Pruner pruner(tape, consts, cell, scratch);
-    FlatTape out;
-    changed = pruner.run();
-    if (changed) pruner.emit(out);
-    return out;
-}
 
 std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root) {
     size_t primitives = 0, folds = 0;
