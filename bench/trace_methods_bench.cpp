@@ -1,6 +1,7 @@
 // Keinert et al. 2014 §3.1-3.2 measured: classic sphere tracing vs over-relaxation vs
 // over-relaxation + screen-space selection, and the same with Bálint & Valasek's adaptive factor
-// instead of the fixed one (decision 22), on several scenes, primary rays only, all in one run.
+// instead of the fixed one (decision 22), and Galin et al.'s segment tracing (decision 23), on
+// several scenes, primary rays only, all in one run.
 //
 // Counters per benchmark: evals/ray (field evaluations per primary ray, hardware-independent),
 // items_per_second (rays/s), hit_diff_% (share of pixels whose hit/miss differs from classic),
@@ -61,13 +62,22 @@ enum Method {
     kEnhancedNoCulling,
     kAdaptive,
     kAdaptiveScreenSpace,
-    kAdaptiveEnhanced
+    kAdaptiveEnhanced,
+    kSegment,
+    kSegmentScreenSpace,
+    kSegmentEnhanced
 };
 
 TraceOptions options(Method m, const Prepared& p) {
     TraceOptions o = TraceOptions::classic();
     o.pixelRadius = Camera(p.scene.camera).pixelRadius();
-    o.rootIters = 0;  // the papers' methods; the root refinement is measured in exact_hits_test
+    o.rootIters = 0;      // the papers' methods; the root refinement is measured in exact_hits_test
+    if (m >= kSegment) {  // Galin et al.'s segment tracing instead of any over-relaxation
+        o.segmentTracing = true;
+        o.screenSpace = m >= kSegmentScreenSpace;
+        if (m == kSegmentEnhanced) o.discontinuityIters = 3;
+        return o;
+    }
     if (m >= kAdaptive) {  // Bálint & Valasek's adaptive factor instead of Keinert's fixed one
         o.adaptiveRelaxation = true;
         o.screenSpace = m >= kAdaptiveScreenSpace;
@@ -137,7 +147,10 @@ void registerAll() {
                                {"enhanced-no-culling", kEnhancedNoCulling},
                                {"adaptive", kAdaptive},
                                {"adaptive+screen", kAdaptiveScreenSpace},
-                               {"adaptive-enhanced", kAdaptiveEnhanced}}) {
+                               {"adaptive-enhanced", kAdaptiveEnhanced},
+                               {"segment", kSegment},
+                               {"segment+screen", kSegmentScreenSpace},
+                               {"segment-enhanced", kSegmentEnhanced}}) {
             benchmark::RegisterBenchmark((std::string("Methods/") + scene + "/" + name).c_str(),
                                          Methods, std::string(scene), m)
                 ->Unit(benchmark::kMillisecond)

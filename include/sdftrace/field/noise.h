@@ -105,7 +105,8 @@ SDFT_HOST_DEVICE inline float turbulence(Vec3 p, int octaves, float gain) {
 }
 
 // Lipschitz bound of fbm(p * frequency) * amplitude: sum_i amplitude gain^i frequency 2^i L_perlin.
-inline float fbmLipschitz(float amplitude, float frequency, int octaves, float gain) {
+SDFT_HOST_DEVICE inline float fbmLipschitz(float amplitude, float frequency, int octaves,
+                                           float gain) {
     float sum = 0, term = amplitude * frequency * kPerlinLipschitz;
     for (int i = 0; i < octaves; ++i, term *= 2 * gain) sum += term;
     return sum;

@@ -37,7 +37,8 @@ struct SphereTraceState {
     // The march's latest samples on each side of the surface (values sign * f): the root
     // refinement's bracket or secant starts from them.
     float posT = 0, posV = 0, prevPosT = 0, prevPosV = 0, negT = 0, negV = 0;
-    float hitT = 0, hitF = 0;  // the placement the march chose (kept when no root is near)
+    float hitT = 0, hitF = 0;   // the placement the march chose (kept when no root is near)
+    float segment = kInfinity;  // segment tracing: the segment the next march sample bounds
     int steps = 0, refineLeft = 0;
     uint8_t samples = 0;  // bit 0: pos valid, bit 1: prevPos valid, bit 2: neg valid
     bool bracketed = false;
@@ -302,16 +303,36 @@ SDFT_HOST_DEVICE inline RelaxedStep adaptiveRelaxation(SphereTraceState& s, floa
     return {s.stepLength, false};
 }
 
+// Galin et al. 2020, §3 (Algorithm 2): with |f(t + x) - f(t)| <= slope x on the segment
+// [t, t + length] ahead, a step of |f| / slope cannot cross the surface, up to the segment's end;
+// never shorter than the plain step |f| / L. The next segment is kGrowth times the step (their
+// kappa): long enough to allow a longer step, short enough that its slope stays tight.
+SDFT_HOST_DEVICE inline RelaxedStep segmentStep(SphereTraceState& s, float f, float signedRadius,
+                                                float radius, float slope, float length) {
+    constexpr float kGrowth = 2.0f;
+    float move = signedRadius;
+    if (signedRadius > 0) {
+        const float ahead = slope > 0 ? std::fabs(f) / slope : kInfinity;
+        move = maxf(radius, minf(ahead, length));
+    }
+    s.segment = kGrowth * std::fabs(move);
+    s.stepLength = move;
+    s.previousRadius = radius;
+    return {move, false};
+}
+
 // Keinert et al. 2014, Listing 2: one march step, over-relaxed (the fixed factor of §3.1, or
 // Bálint & Valasek's adaptive one) with the safe fallback, and screen-space intersection-point
-// selection (§3.2).
+// selection (§3.2); or, given the slope of f along the segment ahead (slope >= 0), a step of
+// segment tracing (Galin et al. 2020).
 SDFT_HOST_DEVICE inline void marchStep(SphereTraceState& s, float f, float invL,
-                                       const TraceOptions& o) {
+                                       const TraceOptions& o, float slope, float length) {
     if (s.sign == 0) s.sign = f < 0 ? -1.0f : 1.0f;  // a ray starting inside traces out
     float signedRadius = s.sign * f * invL;
     float radius = std::fabs(signedRadius);
-    const RelaxedStep step = o.adaptiveRelaxation ? adaptiveRelaxation(s, signedRadius, radius)
-                                                  : fixedRelaxation(s, signedRadius, radius);
+    const RelaxedStep step = slope >= 0 ? segmentStep(s, f, signedRadius, radius, slope, length)
+                             : o.adaptiveRelaxation ? adaptiveRelaxation(s, signedRadius, radius)
+                                                    : fixedRelaxation(s, signedRadius, radius);
     const bool sorFail = step.abandoned;
     float error = hitError(s, radius, o);
     if (!sorFail && error < s.candidateError && s.t <= s.tMax) {
@@ -404,9 +425,22 @@ SDFT_HOST_DEVICE inline void refineStep(SphereTraceState& s, float f, float invL
 
 }  // namespace detail
 
+// Whether the next evaluation should also bound the field's slope along the ray (segment
+// tracing), and over how long a segment from the query point.
+SDFT_HOST_DEVICE inline bool sphereTraceWantsSegment(const SphereTraceState& s,
+                                                     const TraceOptions& o) {
+    return o.segmentTracing && s.phase == SphereTraceState::kMarch;
+}
+SDFT_HOST_DEVICE inline float sphereTraceSegment(const SphereTraceState& s) {
+    return maxf(minf(s.segment, s.tMax - s.t), 0.0f);
+}
+
 // Consumes f(queryPoint()) and moves the state on. invL = 1 / Lipschitz bound of the field.
+// With segment tracing, slope >= 0 bounds |df/dt| on [t, t + length] (sphereTraceSegment's
+// segment, or a shorter one); a negative slope: none, the plain or over-relaxed step.
 SDFT_HOST_DEVICE inline void sphereTraceAdvance(SphereTraceState& s, float f, float invL,
-                                                const TraceOptions& o) {
+                                                const TraceOptions& o, float slope = -1,
+                                                float length = 0) {
     s.result.evaluations++;
     if (s.phase != SphereTraceState::kRoot) {
         // The sign is set by the first march step; until then every value counts as in front.
@@ -415,7 +449,7 @@ SDFT_HOST_DEVICE inline void sphereTraceAdvance(SphereTraceState& s, float f, fl
     }
     switch (s.phase) {
         case SphereTraceState::kMarch:
-            detail::marchStep(s, f, invL, o);
+            detail::marchStep(s, f, invL, o, slope, length);
             break;
         case SphereTraceState::kLinear:
             detail::linearStep(s, f, invL, o);

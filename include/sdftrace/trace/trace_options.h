@@ -17,6 +17,12 @@ struct TraceOptions {
     // unbounding radii, as long as the next sphere would still overlap this one were the surface
     // a plane; Keinert's overlap test and fallback keep it safe. Replaces the fixed omega.
     bool adaptiveRelaxation = false;
+    // Galin et al. 2020 ("Segment Tracing Using Local Lipschitz Bounds"), primary rays: every
+    // march sample also bounds the field's slope along the segment ahead (field/tape_segment.h),
+    // and the ray steps |f| / slope, at most to the segment's end and at least the plain step; the
+    // next segment is twice the step. Replaces the over-relaxation (fixed or adaptive) of the
+    // march when on.
+    bool segmentTracing = false;
     // Keinert et al. 2014, §3.2: pick the point with the smallest screen-space unbounding radius
     // and stop once it is under half a pixel. Needs pixelRadius (radius of a pixel at t = 1).
     bool screenSpace = true;
@@ -42,10 +48,13 @@ struct TraceOptions {
     // shadow-map and path rays): the primary rays' march and fixed relaxation, a plain threshold,
     // no screen-space selection, no refinement, no fixed step count. These rays start on a surface
     // (refracted ones inside it), where the adaptive factor's first slopes mislead it (it falls
-    // back about as often as it saves), so they keep the fixed omega.
+    // back about as often as it saves), so they keep the fixed omega; and they are traced one by
+    // one, where a segment bound costs 3-4 plain evaluations, more than it saves on them, so they
+    // do not segment-trace.
     SDFT_HOST_DEVICE TraceOptions secondary() const {
         TraceOptions o = *this;
         o.adaptiveRelaxation = false;
+        o.segmentTracing = false;
         o.screenSpace = false;
         o.forceHit = false;
         o.discontinuityIters = 0;
@@ -66,6 +75,7 @@ struct TraceOptions {
         TraceOptions o;
         o.omega = 1;
         o.adaptiveRelaxation = false;
+        o.segmentTracing = false;
         o.screenSpace = false;
         o.discontinuityIters = 0;
         return o;

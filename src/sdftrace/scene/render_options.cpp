@@ -57,6 +57,14 @@ std::vector<RenderOption> makeTable() {
          .doc = "primary rays: each step's over-relaxation from the slope of the last two "
                 "distances, up to 2, with the same safe fallback (Bálint & Valasek 2018)",
          SDFT_MEMBER(trace.adaptiveRelaxation)},
+        {.key = "segment_tracing",
+         .flags = "--segment-tracing",
+         .group = "Tracer",
+         .type = T::Bool,
+         .doc = "camera rays: step by a bound on the field's slope along the segment ahead "
+                "instead of its global Lipschitz bound, long steps along grazing floors and "
+                "walls, no over-relaxation (Galin et al. 2020)",
+         SDFT_MEMBER(trace.segmentTracing)},
         {.key = "screen_space",
          .flags = "--screen-space",
          .group = "Tracer",

@@ -8,6 +8,59 @@ TraceResult traceRay(const Tape& tape, const RaySegment& seg, const TraceOptions
     return traceTapeRay(tape.view(), seg, o);
 }
 
+namespace {
+
+// One step of every active ray: their query points' values in one batch.
+void plainStep(const Tape& tape, float invL, const TraceOptions& o, PacketScratch& sc) {
+    const int count = static_cast<int>(sc.active.size());
+    for (int j = 0; j < count; ++j) {
+        const Vec3 p = sc.states[sc.active[j]].queryPoint();
+        sc.x[j] = p.x, sc.y[j] = p.y, sc.z[j] = p.z;
+    }
+    tape.evalBatch(sc.x.data(), sc.y.data(), sc.z.data(), sc.f.data(), count, sc.batch);
+    for (int j = 0; j < count; ++j) sphereTraceAdvance(sc.states[sc.active[j]], sc.f[j], invL, o);
+}
+
+// One step of every active ray under segment tracing: the marching rays' values and slopes in one
+// segment batch, the others' (refinement) values in one plain batch.
+void segmentStep(const Tape& tape, float invL, const TraceOptions& o, PacketScratch& sc) {
+    int marching = 0, plain = 0;
+    for (int i : sc.active) {
+        const SphereTraceState& s = sc.states[i];
+        const Vec3 p = s.queryPoint();
+        if (sphereTraceWantsSegment(s, o)) {
+            const int j = marching++;
+            sc.x[j] = p.x, sc.y[j] = p.y, sc.z[j] = p.z;
+            sc.ux[j] = s.ray.direction.x, sc.uy[j] = s.ray.direction.y,
+            sc.uz[j] = s.ray.direction.z;
+            sc.len[j] = sphereTraceSegment(s);
+        } else {
+            // The plain lanes fill the arrays from the back.
+            const size_t j = sc.x.size() - 1 - static_cast<size_t>(plain++);
+            sc.x[j] = p.x, sc.y[j] = p.y, sc.z[j] = p.z;
+        }
+    }
+    const SegmentLanes lanes{sc.x.data(),  sc.y.data(),   sc.z.data(), sc.ux.data(),   sc.uy.data(),
+                             sc.uz.data(), sc.len.data(), sc.f.data(), sc.slope.data()};
+    if (marching > 0) evalSegmentBatch(tape, lanes, marching, sc.segment);
+    const size_t back = sc.x.size() - static_cast<size_t>(plain);
+    if (plain > 0)
+        tape.evalBatch(sc.x.data() + back, sc.y.data() + back, sc.z.data() + back,
+                       sc.f.data() + back, plain, sc.batch);
+    marching = 0, plain = 0;
+    for (int i : sc.active) {
+        SphereTraceState& s = sc.states[i];
+        if (sphereTraceWantsSegment(s, o)) {
+            const int j = marching++;
+            sphereTraceAdvance(s, sc.f[j], invL, o, sc.slope[j], sc.len[j]);
+        } else {
+            sphereTraceAdvance(s, sc.f[sc.x.size() - 1 - static_cast<size_t>(plain++)], invL, o);
+        }
+    }
+}
+
+}  // namespace
+
 void tracePacket(const Tape& tape, std::span<const RaySegment> segments, const TraceOptions& o,
                  std::span<TraceResult> results, PacketScratch& sc) {
     SDFT_CHECK(results.size() == segments.size());
@@ -24,21 +77,17 @@ void tracePacket(const Tape& tape, std::span<const RaySegment> segments, const T
     sc.y.resize(n);
     sc.z.resize(n);
     sc.f.resize(n);
+    if (o.segmentTracing) {
+        for (auto* v : {&sc.ux, &sc.uy, &sc.uz, &sc.len, &sc.slope}) v->resize(n);
+    }
     while (!sc.active.empty()) {
-        int count = static_cast<int>(sc.active.size());
-        for (int j = 0; j < count; ++j) {
-            Vec3 p = sc.states[sc.active[j]].queryPoint();
-            sc.x[j] = p.x;
-            sc.y[j] = p.y;
-            sc.z[j] = p.z;
-        }
-        tape.evalBatch(sc.x.data(), sc.y.data(), sc.z.data(), sc.f.data(), count, sc.batch);
+        if (o.segmentTracing)
+            segmentStep(tape, invL, o, sc);
+        else
+            plainStep(tape, invL, o, sc);
         int kept = 0;
-        for (int j = 0; j < count; ++j) {
-            SphereTraceState& s = sc.states[sc.active[j]];
-            sphereTraceAdvance(s, sc.f[j], invL, o);
-            if (!s.done()) sc.active[kept++] = sc.active[j];
-        }
+        for (int i : sc.active)
+            if (!sc.states[i].done()) sc.active[kept++] = i;
         sc.active.resize(kept);
     }
     for (size_t i = 0; i < n; ++i) results[i] = sc.states[i].result;

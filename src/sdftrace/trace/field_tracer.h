@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "sdftrace/field/tape.h"
+#include "sdftrace/field/tape_segment_batch.h"
 #include "sdftrace/trace/sphere_tracer.h"
 #include "sdftrace/trace/trace_tape.h"
 
@@ -19,6 +20,9 @@ struct PacketScratch {
     std::vector<int> active;
     std::vector<float> x, y, z, f;
     BatchScratch batch;
+    // Segment tracing: the marching rays' directions, segments and slopes.
+    std::vector<float> ux, uy, uz, len, slope;
+    SegmentBatchScratch segment;
 };
 
 // Traces every segment; results[i] belongs to segments[i]. Same answers as traceRay.

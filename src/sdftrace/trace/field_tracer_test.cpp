@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "sdftrace/field/random_scenes.h"
 #include "sdftrace/field/test_util.h"
 
 namespace sdft {
@@ -121,12 +122,14 @@ void compareMethods(const NodePtr& root, float orbit, float target, uint32_t see
     relaxedWide.omega = 1.8f;         // more fallbacks: exercises the safe path of Listing 2
     TraceOptions adaptive = classic;  // Bálint & Valasek's factor, up to 2
     adaptive.adaptiveRelaxation = true;
+    TraceOptions segment = classic;  // Galin et al.'s steps by the slope ahead
+    segment.segmentTracing = true;
     TraceOptions
         enhanced;  // defaults: adaptive relaxation, screen-space, 3 discontinuity iterations
     enhanced.maxSteps = 1000;
     enhanced.pixelRadius = 2e-4f;
 
-    Comparison cRelaxed, cWide, cAdaptive, cEnhanced, cClassic;
+    Comparison cRelaxed, cWide, cAdaptive, cSegment, cEnhanced, cClassic;
     int depthChecked = 0;
     for (const RaySegment& seg : rays) {
         Truth truth = groundTruth(exact, seg);
@@ -135,13 +138,18 @@ void compareMethods(const NodePtr& root, float orbit, float target, uint32_t see
         TraceResult w = traceRay(tape, seg, relaxedWide);
         TraceResult d = traceRay(tape, seg, adaptive);
         TraceResult e = traceRay(tape, seg, enhanced);
+        TraceResult g = traceRay(tape, seg, segment);
         checkAgainstTruth(exact, seg, truth, a, classic, "classic", cClassic);
         checkAgainstTruth(exact, seg, truth, b, relaxed, "relaxed", cRelaxed);
         checkAgainstTruth(exact, seg, truth, w, relaxedWide, "relaxed 1.8", cWide);
         checkAgainstTruth(exact, seg, truth, d, adaptive, "adaptive", cAdaptive);
         checkAgainstTruth(exact, seg, truth, e, enhanced, "enhanced", cEnhanced);
-        for (auto [other, cmp] :
-             {std::pair{&b, &cRelaxed}, {&w, &cWide}, {&d, &cAdaptive}, {&e, &cEnhanced}}) {
+        checkAgainstTruth(exact, seg, truth, g, segment, "segment", cSegment);
+        for (auto [other, cmp] : {std::pair{&b, &cRelaxed},
+                                  {&w, &cWide},
+                                  {&d, &cAdaptive},
+                                  {&g, &cSegment},
+                                  {&e, &cEnhanced}}) {
             cmp->rays++;
             if (other->hit != a.hit) cmp->hitMismatch++;
         }
@@ -156,6 +164,7 @@ void compareMethods(const NodePtr& root, float orbit, float target, uint32_t see
                                       {&b, 2e-3f},
                                       {&w, 2e-3f},
                                       {&d, 2e-3f},
+                                      {&g, 2e-3f},
                                       {&e, 4 * enhanced.pixelRadius * truth.t / cosine + 2e-3f}}) {
                     if (r->hit) {
                         EXPECT_NEAR(r->t, truth.t, tol);
@@ -170,6 +179,7 @@ void compareMethods(const NodePtr& root, float orbit, float target, uint32_t see
     EXPECT_LE(cRelaxed.hitMismatch, cRelaxed.rays / 100) << "relaxed";
     EXPECT_LE(cWide.hitMismatch, cWide.rays / 100) << "relaxed 1.8";
     EXPECT_LE(cAdaptive.hitMismatch, cAdaptive.rays / 100) << "adaptive";
+    EXPECT_LE(cSegment.hitMismatch, cSegment.rays / 100) << "segment";
     EXPECT_LE(cEnhanced.hitMismatch, cEnhanced.rays / 50) << "enhanced";
     // Rays skimming a plane may exhaust the step budget; they must stay rare.
     EXPECT_LE(cClassic.exhausted, static_cast<int>(rays.size()) / 25);
@@ -271,19 +281,27 @@ void expectHitsWithinTau(const TraceOptions& o) {
     EXPECT_GT(hits[1], 500);
 }
 
+// Packets (the batch evaluators, segment bounds included) trace as rays one by one do (the
+// scalar evaluators), on a scene of every kind of node and on a pruned one.
 TEST(SphereTracer, PacketTracingEqualsRayByRay) {
-    Tape tape = compileTape(testing::everyKindTree());
-    std::vector<RaySegment> rays = makeRays(tape, 7, 3, 700, 9);
-    TraceOptions o;
-    o.pixelRadius = 1e-3f;
-    std::vector<TraceResult> packet(rays.size());
-    PacketScratch scratch;
-    tracePacket(tape, rays, o, packet, scratch);
-    for (size_t i = 0; i < rays.size(); ++i) {
-        TraceResult single = traceRay(tape, rays[i], o);
-        ASSERT_EQ(packet[i].hit, single.hit) << i;
-        ASSERT_EQ(packet[i].t, single.t) << i;
-        ASSERT_EQ(packet[i].evaluations, single.evaluations) << i;
+    testing::Rng rng(9);
+    for (const NodePtr& root : {testing::everyKindTree(), testing::randomScene(rng, 300, true)}) {
+        const Tape tape = compileTape(root);
+        const std::vector<RaySegment> rays = makeRays(tape, 7, 3, 700, 9);
+        for (const bool segmentTracing : {false, true}) {
+            TraceOptions o;
+            o.pixelRadius = 1e-3f;
+            o.segmentTracing = segmentTracing;
+            std::vector<TraceResult> packet(rays.size());
+            PacketScratch scratch;
+            tracePacket(tape, rays, o, packet, scratch);
+            for (size_t i = 0; i < rays.size(); ++i) {
+                TraceResult single = traceRay(tape, rays[i], o);
+                ASSERT_EQ(packet[i].hit, single.hit) << i;
+                ASSERT_EQ(packet[i].t, single.t) << i;
+                ASSERT_EQ(packet[i].evaluations, single.evaluations) << i;
+            }
+        }
     }
 }
 
@@ -329,6 +347,58 @@ TEST(SphereTracer, AdaptiveRelaxationNeedsFewerEvaluationsThanAFixedFactor) {
         EXPECT_LT(evalsFixed, evalsClassic);
         EXPECT_GT(fallbacks, 0);
     }
+}
+
+// Galin et al.'s segment tracing along a street (a floor, walls of boxes, a few balls) seen from
+// eye height: rays that skim the floor and the walls, where plain sphere tracing crawls, take a
+// few long steps; the hits stay where plain tracing puts them.
+Vec3 normalOf(const Tape& tape, Vec3 p) {
+    constexpr float h = 1e-3f;
+    return normalize(Vec3(tape.eval(p + Vec3(h, 0, 0)) - tape.eval(p - Vec3(h, 0, 0)),
+                          tape.eval(p + Vec3(0, h, 0)) - tape.eval(p - Vec3(0, h, 0)),
+                          tape.eval(p + Vec3(0, 0, h)) - tape.eval(p - Vec3(0, 0, h))));
+}
+
+TEST(SphereTracer, SegmentTracingNeedsFarFewerEvaluationsAlongGrazingSurfaces) {
+    using namespace node;
+    std::vector<NodePtr> parts{plane({0, 1, 0}, 0)};
+    for (int i = 0; i < 6; ++i) {
+        const float z = -6.0f + 2.5f * static_cast<float>(i);
+        parts.push_back(translate(box({0.8f, 1.5f, 1.0f}), {-2.5f, 1.5f, z}));
+        parts.push_back(translate(box({0.8f, 1.0f + 0.2f * i, 1.0f}), {2.5f, 1.0f, z}));
+        parts.push_back(translate(sphere(0.3f), {0.6f * (i % 3) - 0.6f, 0.3f, z + 1.0f}));
+    }
+    const Tape tape = compileTape(unite(parts));
+    testing::Rng rng(31);
+    TraceOptions classic = TraceOptions::classic();
+    classic.tau = 1e-4f;
+    classic.maxSteps = 1000;
+    TraceOptions segment = classic;
+    segment.segmentTracing = true;
+    long evalsClassic = 0, evalsSegment = 0;
+    int mismatches = 0, hits = 0;
+    const int count = 2000;
+    for (int i = 0; i < count; ++i) {
+        const Vec3 eye(rng.uniform(-1, 1), rng.uniform(0.2f, 0.6f), 10);
+        const Vec3 target(rng.uniform(-5, 5), rng.uniform(-0.3f, 0.8f), -10);
+        const RaySegment ray{{eye, normalize(target - eye)}, 0, 60};
+        const TraceResult a = traceRay(tape, ray, classic), b = traceRay(tape, ray, segment);
+        evalsClassic += a.evaluations;
+        evalsSegment += b.evaluations;
+        if (a.hit != b.hit) {
+            ++mismatches;
+        } else if (a.hit) {
+            // The same surface point, off the surface by the hit threshold at most (along a
+            // grazing ray, a sliver of tau off the floor is a long way along the ray).
+            ++hits;
+            const Vec3 n = normalOf(tape, ray.ray.at(a.t));
+            EXPECT_LE(std::fabs((b.t - a.t) * dot(n, ray.ray.direction)), 2.5f * classic.tau)
+                << "ray " << i;
+        }
+    }
+    EXPECT_GT(hits, count / 2);
+    EXPECT_LE(mismatches, count / 100);
+    EXPECT_LT(static_cast<double>(evalsSegment), 0.6 * static_cast<double>(evalsClassic));
 }
 
 TEST(SphereTracer, FixedStepModeSpendsTheSameStepsOnEveryRay) {
