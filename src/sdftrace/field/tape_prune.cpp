@@ -46,9 +46,11 @@ bool isHardCombine(Op op) { return op >= Op::Union && op <= Op::Difference; }
 bool writesScalar(Op op) { return op != Op::CullIfFar && op < Op::Translate; }
 
 // The interval of a binary op's result from its operands' (operators.h: the polynomial smooth
-// minimum lies within k/4 below the minimum).
+// minimum lies within k/4 below the minimum). Only the smooth ops and morph have constants (a
+// hard op's k may point past the tape's last constant).
 Interval combine(Op op, Interval a, Interval b, const float* k) {
-    const float blend = k[0] > 0 ? 0.25f * k[0] : 0.0f;
+    const bool smooth = op >= Op::SmoothUnion && op <= Op::SmoothDifference;
+    const float blend = smooth && k[0] > 0 ? 0.25f * k[0] : 0.0f;
     switch (op) {
         case Op::Union:
             return {std::min(a.lo, b.lo), std::min(a.hi, b.hi)};
