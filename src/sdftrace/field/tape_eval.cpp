@@ -5,6 +5,7 @@
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/simd.h"
 #include "sdftrace/field/grid_distance.h"
+#include "sdftrace/field/lane_groups.h"
 #include "sdftrace/field/noise.h"
 #include "sdftrace/field/operators.h"
 #include "sdftrace/field/primitives.h"
@@ -103,18 +104,11 @@ void Tape::evalChunkByCell(const float* x, const float* y, const float* z, float
     uint32_t* order = scratch.order.data();
     float *gx = scratch.gx.data(), *gy = scratch.gy.data(), *gz = scratch.gz.data(),
           *go = scratch.gout.data();
-    constexpr uint32_t kDone = TapeCells::kWhole - 1;
     for (int from = 0; from < n; ++from) {
-        const uint32_t t = laneTape[from];
-        if (t == kDone) continue;
-        int m = 0;
-        for (int l = from; l < n; ++l) {
-            if (laneTape[l] != t) continue;
-            order[m] = static_cast<uint32_t>(l);
-            gx[m] = x[l], gy[m] = y[l], gz[m] = z[l];
-            laneTape[l] = kDone;
-            ++m;
-        }
+        uint32_t t;
+        const int m = takeLaneGroup(laneTape, from, n, order, t);
+        if (m == 0) continue;
+        for (int g = 0; g < m; ++g) gx[g] = x[order[g]], gy[g] = y[order[g]], gz[g] = z[order[g]];
         v.tapeSpan(t, first, count);
         evalChunk(first, count, gx, gy, gz, go, m, scratch);
         for (int g = 0; g < m; ++g) out[order[g]] = go[g];

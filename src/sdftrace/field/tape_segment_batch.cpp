@@ -5,6 +5,7 @@
 
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/simd.h"
+#include "sdftrace/field/lane_groups.h"
 #include "sdftrace/field/tape_segment.h"
 
 namespace sdft {
@@ -293,18 +294,12 @@ SDFT_HOT_INLINE void evalChunk(const TapeView& view, const SegmentLanes& in, int
     uint32_t* order = s.order.data();
     float* gathered = s.gathered.data();
     const float* inputs[7] = {all.x, all.y, all.z, all.ux, all.uy, all.uz, all.len};
-    constexpr uint32_t kDone = TapeCells::kWhole - 1;
     for (int from = 0; from < n; ++from) {
-        const uint32_t t = laneTape[from];
-        if (t == kDone) continue;
-        int m = 0;
-        for (int l = from; l < n; ++l) {
-            if (laneTape[l] != t) continue;
-            order[m] = static_cast<uint32_t>(l);
-            for (int c = 0; c < 7; ++c) gathered[c * W + m] = inputs[c][l];
-            laneTape[l] = kDone;
-            ++m;
-        }
+        uint32_t t;
+        const int m = takeLaneGroup(laneTape, from, n, order, t);
+        if (m == 0) continue;
+        for (int i = 0; i < m; ++i)
+            for (int c = 0; c < 7; ++c) gathered[c * W + i] = inputs[c][order[i]];
         const Group group{gathered,         gathered + W,
                           gathered + 2 * W, gathered + 3 * W,
                           gathered + 4 * W, gathered + 5 * W,
