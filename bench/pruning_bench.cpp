@@ -6,11 +6,12 @@
 //
 // Each scene from three cameras (above, close among the objects, grazing the ground); at the end,
 // the JSON parse alone of scenes of --parse primitives. With --build-only 1, the pruned cells'
-// build alone, per scene kind and N.
+// build alone, per scene kind and N. --tracer picks the primary rays' tracer: the renderer's
+// default, --classic's plain sphere tracing, or segment tracing (decision 23).
 //
 //   build/release/bench/sdftrace_pruning_bench [--reps 3] [--threads 2] [--max 65536]
 //       [--max-off 16384] [--kinds clusters,city,molecule,sculpt] [--views above,close,grazing]
-//       [--parse 100000] [--build-only 1]
+//       [--parse 100000] [--build-only 1] [--tracer default|classic|segment]
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -163,6 +164,7 @@ std::string sceneText(const std::string& objects, int n, const std::string& view
 struct Options {
     int reps = 3, threads = 2, max = 65536, maxOff = 16384, parseN = 100000;
     bool buildOnly = false;
+    std::string tracer = "default";  // or classic (Hart's), segment (Galin et al.'s)
     std::vector<std::string> kinds{"clusters", "city", "molecule", "sculpt"};
     std::vector<std::string> views{"above", "close", "grazing"};
 };
@@ -178,6 +180,8 @@ Run renderScene(const Scene& parsed, bool pruning, const Options& o) {
     Scene s = parsed;
     s.settings.pruning = pruning;
     s.settings.threads = o.threads;
+    if (o.tracer == "classic") s.settings.trace = TraceOptions::classic();
+    if (o.tracer == "segment") s.settings.trace.segmentTracing = true;
     Run r;
     const auto t0 = Clock::now();
     const RenderPlan plan = planRender(s);
@@ -304,6 +308,8 @@ int main(int argc, char** argv) {
             o.buildOnly = v != "0";
         else if (a == "--parse")
             o.parseN = std::stoi(v);
+        else if (a == "--tracer" && (v == "default" || v == "classic" || v == "segment"))
+            o.tracer = v;
         else if (a == "--kinds" || a == "--views") {
             std::vector<std::string>& list = a == "--kinds" ? o.kinds : o.views;
             list.clear();
@@ -323,8 +329,8 @@ int main(int argc, char** argv) {
             for (int n = 64; n <= o.max; n *= 4) sdft::buildRow(kind, n, o);
         return 0;
     }
-    std::printf("## Pruning: %d threads, %dx%d, no shadows, medians of %d\n\n", o.threads,
-                sdft::kWidth, sdft::kHeight, o.reps);
+    std::printf("## Pruning: %d threads, %dx%d, no shadows, medians of %d, %s tracer\n\n",
+                o.threads, sdft::kWidth, sdft::kHeight, o.reps, o.tracer.c_str());
     std::printf(
         "| scene | camera | N | parse | pruning build | evals / pixel | frame | per eval | "
         "evals / pixel (off) | frame (off) | per eval (off) | frame speed-up | depth mismatches |\n"
