@@ -81,71 +81,37 @@ SDFT_HOT_INLINE void primitiveSlopes(const Registers& r, const Instr& in, bool s
 // puts those back.
 SDFT_HOT_INLINE bool cullLanes(const Registers& r, const Instr& in, bool straight, const float* k,
                                const Group& g) {
-    uint8_t* __restrict mask = r.culled + static_cast<size_t>(in.cull) * W;
-    float* __restrict saved = r.culledLen + static_cast<size_t>(in.cull) * W;
-    float* __restrict len = g.len;
-    const float* __restrict acc = r.s(in.b), * __restrict accSlope = r.sl(in.b);
-    const float* __restrict px = r.p(in.a, 0), * __restrict py = r.p(in.a, 1), * __restrict pz = r.p(in.a, 2);
-    const float uniform = r.speeds[in.a];
+    uint8_t* mask = r.culled + static_cast<size_t>(in.cull) * W;
+    float* saved = r.culledLen + static_cast<size_t>(in.cull) * W;
+    const float *acc = r.s(in.b), *accSlope = r.sl(in.b);
     int skipped = 0;
     for (int l = 0; l < g.n; ++l) {
-        // tape_ops::cullSkips and segment_ops::cullClip, branch-free so that it vectorizes.
-        const float dx = maxf(maxf(k[0] - px[l], px[l] - k[3]), 0.0f);
-        const float dy = maxf(maxf(k[1] - py[l], py[l] - k[4]), 0.0f);
-        const float dz = maxf(maxf(k[2] - pz[l], pz[l] - k[5]), 0.0f);
-        const float d2 = dx * dx + dy * dy + dz * dz, lead = acc[l] + k[6];
-        const bool skip = (lead <= 0.0f) | (d2 >= lead * lead);
-        const float closing = accSlope[l] + (uniform >= 0 ? uniform : r.speed(in.a, l));
-        const float clipped = minf(len[l], maxf(std::sqrt(d2) - lead, 0.0f) / closing);
-        const bool clip = skip & straight & (lead > 0) & (closing > 0);
-        len[l] = clip ? clipped : len[l];
-        saved[l] = len[l];
+        const Vec3 p = r.point(in.a, l);
+        const bool skip = tape_ops::cullSkips(p, acc[l], k);
+        if (skip)
+            g.len[l] = segment_ops::cullClip(p, r.speed(in.a, l), straight, acc[l], accSlope[l],
+                                             g.len[l], k);
+        saved[l] = g.len[l];
         mask[l] = skip;
         skipped += skip;
     }
     return skipped == g.n;
 }
 
-// Union ... Morph: values as tape_ops::binary, slopes as segment_ops::combineSlope (the unions,
-// the most common, written branch-free so that they vectorize); a culled operand's lanes keep
-// the accumulator and get back the segment its guard left them.
+// Union ... Morph: values as tape_ops::binary, slopes as segment_ops::combineSlope; a culled
+// operand's lanes keep the accumulator and get back the segment its guard left them.
 SDFT_HOT_INLINE void combine(const Registers& r, const Instr& in, const float* k, const Group& g) {
-    float* __restrict o = r.s(in.out), * __restrict os = r.sl(in.out), * __restrict len = g.len;
-    const float* __restrict a = r.s(in.a), * __restrict sa = r.sl(in.a);
-    const float* __restrict b = r.s(in.b), * __restrict sb = r.sl(in.b);
-    const bool culled = in.cull >= 0;
-    const uint8_t* __restrict mask = culled ? r.culled + static_cast<size_t>(in.cull) * W : nullptr;
-    const float* __restrict saved =
-        culled ? r.culledLen + static_cast<size_t>(in.cull) * W : nullptr;
-    if (in.op == Op::Union || (in.op == Op::SmoothUnion && k[0] > 0)) {
-        const bool smooth = in.op == Op::SmoothUnion;
-        const float gap = smooth ? k[0] : 0.0f;
-        for (int l = 0; l < g.n; ++l) {
-            const float ra = sa[l] * len[l], rb = sb[l] * len[l];
-            const bool dropA = a[l] - ra - (b[l] + rb) >= gap;
-            const bool dropB = b[l] - rb - (a[l] + ra) >= gap;
-            const float slope = dropA ? sb[l] : (dropB ? sa[l] : maxf(sa[l], sb[l]));
-            float value;
-            if (smooth) {  // ops::smoothMin with k > 0
-                const float h = clampf(0.5f + 0.5f * (b[l] - a[l]) / gap, 0.0f, 1.0f);
-                value = b[l] + (a[l] - b[l]) * h - gap * h * (1.0f - h);
-            } else {
-                value = minf(a[l], b[l]);
-            }
-            const bool keep = culled && mask[l];
-            o[l] = keep ? a[l] : value;
-            os[l] = keep ? sa[l] : slope;
-            len[l] = keep ? saved[l] : len[l];
-        }
-        return;
-    }
+    float *o = r.s(in.out), *os = r.sl(in.out);
+    const float *a = r.s(in.a), *sa = r.sl(in.a), *b = r.s(in.b), *sb = r.sl(in.b);
+    const uint8_t* mask = in.cull >= 0 ? r.culled + static_cast<size_t>(in.cull) * W : nullptr;
+    const float* saved = in.cull >= 0 ? r.culledLen + static_cast<size_t>(in.cull) * W : nullptr;
     float h;
     for (int l = 0; l < g.n; ++l) {
-        if (culled && mask[l]) {
+        if (mask && mask[l]) {
             o[l] = a[l], os[l] = sa[l];
-            len[l] = saved[l];
+            g.len[l] = saved[l];
         } else {
-            os[l] = segment_ops::combineSlope(in.op, a[l], sa[l], b[l], sb[l], len[l], k);
+            os[l] = segment_ops::combineSlope(in.op, a[l], sa[l], b[l], sb[l], g.len[l], k);
             o[l] = tape_ops::binary(in.op, a[l], b[l], k, h);
         }
     }

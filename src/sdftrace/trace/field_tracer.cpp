@@ -11,7 +11,7 @@ TraceResult traceRay(const Tape& tape, const RaySegment& seg, const TraceOptions
 namespace {
 
 // One step of every active ray: their query points' values in one batch.
-void plainStep(const Tape& tape, float invL, const TraceOptions& o, PacketScratch& sc) {
+void stepPlain(const Tape& tape, float invL, const TraceOptions& o, PacketScratch& sc) {
     const int count = static_cast<int>(sc.active.size());
     for (int j = 0; j < count; ++j) {
         const Vec3 p = sc.states[sc.active[j]].queryPoint();
@@ -23,7 +23,9 @@ void plainStep(const Tape& tape, float invL, const TraceOptions& o, PacketScratc
 
 // One step of every active ray under segment tracing: the marching rays' values and slopes in one
 // segment batch, the others' (refinement) values in one plain batch.
-void segmentStep(const Tape& tape, float invL, const TraceOptions& o, PacketScratch& sc) {
+void stepSegments(const Tape& tape, float invL, const TraceOptions& o, PacketScratch& sc) {
+    // The marching lanes fill the arrays from the front, the plain ones from the back.
+    const size_t last = sc.x.size() - 1;
     int marching = 0, plain = 0;
     for (int i : sc.active) {
         const SphereTraceState& s = sc.states[i];
@@ -35,15 +37,14 @@ void segmentStep(const Tape& tape, float invL, const TraceOptions& o, PacketScra
             sc.uz[j] = s.ray.direction.z;
             sc.len[j] = sphereTraceSegment(s);
         } else {
-            // The plain lanes fill the arrays from the back.
-            const size_t j = sc.x.size() - 1 - static_cast<size_t>(plain++);
+            const size_t j = last - static_cast<size_t>(plain++);
             sc.x[j] = p.x, sc.y[j] = p.y, sc.z[j] = p.z;
         }
     }
     const SegmentLanes lanes{sc.x.data(),  sc.y.data(),   sc.z.data(), sc.ux.data(),   sc.uy.data(),
                              sc.uz.data(), sc.len.data(), sc.f.data(), sc.slope.data()};
     if (marching > 0) evalSegmentBatch(tape, lanes, marching, sc.segment);
-    const size_t back = sc.x.size() - static_cast<size_t>(plain);
+    const size_t back = last + 1 - static_cast<size_t>(plain);
     if (plain > 0)
         tape.evalBatch(sc.x.data() + back, sc.y.data() + back, sc.z.data() + back,
                        sc.f.data() + back, plain, sc.batch);
@@ -54,7 +55,7 @@ void segmentStep(const Tape& tape, float invL, const TraceOptions& o, PacketScra
             const int j = marching++;
             sphereTraceAdvance(s, sc.f[j], invL, o, sc.slope[j], sc.len[j]);
         } else {
-            sphereTraceAdvance(s, sc.f[sc.x.size() - 1 - static_cast<size_t>(plain++)], invL, o);
+            sphereTraceAdvance(s, sc.f[last - static_cast<size_t>(plain++)], invL, o);
         }
     }
 }
@@ -82,9 +83,9 @@ void tracePacket(const Tape& tape, std::span<const RaySegment> segments, const T
     }
     while (!sc.active.empty()) {
         if (o.segmentTracing)
-            segmentStep(tape, invL, o, sc);
+            stepSegments(tape, invL, o, sc);
         else
-            plainStep(tape, invL, o, sc);
+            stepPlain(tape, invL, o, sc);
         int kept = 0;
         for (int i : sc.active)
             if (!sc.states[i].done()) sc.active[kept++] = i;
