@@ -144,8 +144,26 @@ TEST(Cluster, AnimationsAreTheSingleProcessFramesBitForBit) {
                        dir.file("room-many-" + std::to_string(i) + ".pfm"));
 }
 
-// Open and closed meshes, 2 to 5 ranks, both block sizes: the gathered grid is the
-// single-process file byte for byte (.sdfg); a .vdb differs only in the UUID of its header.
+// The .sdfg every rank wrote holds the single-process bake's samples: converted to the raw
+// version 1 (the samples of every surface block, as one process stores them) both are the same
+// bytes, and the distributed file saved again is the single-process file byte for byte.
+void expectSameGrid(const TempDir& dir, const std::string& one, const std::string& many) {
+    for (const char* f : {"one-raw.sdfg", "many-raw.sdfg", "many-again.sdfg"})
+        std::filesystem::remove(dir.file(f));
+    ASSERT_EQ(single("convert " + one + " " + dir.file("one-raw.sdfg") + " --uncompressed").status,
+              0);
+    const RunResult r =
+        single("convert " + many + " " + dir.file("many-raw.sdfg") + " --uncompressed");
+    ASSERT_EQ(r.status, 0) << r.err;
+    ASSERT_EQ(single("convert " + many + " " + dir.file("many-again.sdfg")).status, 0);
+    expectSameFile(dir.file("one-raw.sdfg"), dir.file("many-raw.sdfg"));
+    expectSameFile(one, dir.file("many-again.sdfg"));
+}
+
+// Open and closed meshes, 2 to 5 ranks, both block sizes, both sign methods, sections small
+// enough that every chunk spans several ranks' parts and large enough that ranks own chunks: the
+// .sdfg that every rank writes holds the single-process grid's samples; a .vdb (gathered on rank
+// 0) differs only in the UUID of its header.
 TEST(Cluster, SparseExactBakesAreTheSingleProcessGridBitForBit) {
     REQUIRE_MPI();
     TempDir dir;
@@ -157,7 +175,8 @@ TEST(Cluster, SparseExactBakesAreTheSingleProcessGridBitForBit) {
         {"stanford-bunny.obj", "--res 80", 2},
         {"elephant-with-holes.obj", "--res 72 --block 8 --band 4", 3},
         {"teapot.obj", "--res 64 --sign parity", 2},
-        {"suzanne.obj", "--res 20", 5},  // more ranks than some slabs have layers
+        {"suzanne.obj", "--res 20", 5},          // more ranks than the grid has tile layers
+        {"stanford-bunny.obj", "--res 320", 4},  // 7 MiB of samples: chunks in several ranks
     };
     for (const Case& c : cases) {
         const std::string args =
@@ -166,11 +185,19 @@ TEST(Cluster, SparseExactBakesAreTheSingleProcessGridBitForBit) {
         ASSERT_EQ(a.status, 0) << a.err;
         const RunResult b = mpirun(c.ranks, args + " -o " + dir.file("many.sdfg"));
         ASSERT_EQ(b.status, 0) << b.err;
-        EXPECT_NE(b.err.find(std::to_string(c.ranks) + " ranks, one slab each"), std::string::npos)
-            << b.err;
-        SCOPED_TRACE(c.mesh);
-        expectSameFile(dir.file("one.sdfg"), dir.file("many.sdfg"));
+        EXPECT_NE(b.err.find(std::to_string(c.ranks) + " ranks, "), std::string::npos) << b.err;
+        EXPECT_NE(b.err.find("written by every rank"), std::string::npos) << b.err;
+        SCOPED_TRACE(c.mesh + " " + c.flags);
+        expectSameGrid(dir, dir.file("one.sdfg"), dir.file("many.sdfg"));
     }
+    // --verify reads the whole grid: assembled on rank 0, the single-process file itself.
+    const std::string verify =
+        "bake " + kSource + "/data/meshes/teapot.obj --res 48 --verify -q -o ";
+    ASSERT_EQ(single(verify + dir.file("one.sdfg")).status, 0);
+    const RunResult v = mpirun(2, verify + dir.file("many.sdfg"));
+    ASSERT_EQ(v.status, 0) << v.err;
+    EXPECT_NE(v.err.find("2 ranks, one slab each"), std::string::npos) << v.err;
+    expectSameFile(dir.file("one.sdfg"), dir.file("many.sdfg"));
     const std::string args = "bake " + kSource + "/data/meshes/suzanne.obj --res 48 -q";
     ASSERT_EQ(single(args + " -o " + dir.file("one.vdb")).status, 0);
     ASSERT_EQ(mpirun(2, args + " -o " + dir.file("many.vdb")).status, 0);
@@ -234,6 +261,43 @@ TEST(Cluster, AFailureOnOneRankStopsEveryRankWithOneErrorAndNoOutput) {
                  " --max-memory 64K" + bake);
     expectJobFailed(r, "", dir, 0);
     EXPECT_NE(r.err.find("budget of 64 KiB"), std::string::npos) << r.err;
+}
+
+// A rank that dies (SIGKILL, as the kernel's OOM killer sends) while baking its slab, or while
+// the ranks write the file (rank 0, which made the temporary file, or another): mpirun ends the
+// job, and no output or temporary file is left.
+TEST(Cluster, ARankKilledMidBakeLeavesNoFile) {
+    REQUIRE_MPI();
+    TempDir dir;
+    for (const char* when : {"1:kill", "0:kill-write", "2:kill-write"}) {
+        SCOPED_TRACE(when);
+        const RunResult r =
+            runShell(kMpiEnv + "SDFTRACE_INJECT_FAILURE=" + when + " " + kMpirun +
+                     " -x SDFTRACE_INJECT_FAILURE -np 3 " + kCli + " bake " + kSource +
+                     "/data/meshes/teapot.obj --res 64 -q -o " + dir.file("out.sdfg"));
+        EXPECT_NE(r.status, 0) << r.err;
+        EXPECT_EQ(dir.count(), 0) << "an output or temporary file was left";
+    }
+}
+
+// A grid larger than one rank's memory budget: one process is refused, four ranks under the same
+// budget each bake a quarter and write it, and the file holds the single-process samples.
+TEST(Cluster, ABakeBeyondOneRanksBudgetCompletesOnSeveralRanks) {
+    REQUIRE_MPI();
+    TempDir dir;
+    const std::string bake = "bake " + kSource + "/data/meshes/teapot.obj --res 512 -q -o ";
+    const RunResult refused = single("--max-memory 16M " + bake + dir.file("one.sdfg"));
+    EXPECT_NE(refused.status, 0);
+    EXPECT_NE(refused.err.find("memory budget of 16 MiB"), std::string::npos) << refused.err;
+    const RunResult r = mpirun(4, "--max-memory 16M " + bake + dir.file("many.sdfg"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    ASSERT_EQ(single(bake + dir.file("one.sdfg")).status, 0);
+    const RunResult info = single("info " + dir.file("one.sdfg"));
+    ASSERT_EQ(info.status, 0);
+    const size_t at = info.out.find("memory:");
+    ASSERT_NE(at, std::string::npos) << info.out;
+    EXPECT_GT(std::stod(info.out.substr(info.out.find("about", at) + 6)), 16.0) << info.out;
+    expectSameGrid(dir, dir.file("one.sdfg"), dir.file("many.sdfg"));
 }
 
 // One GPU per rank: every rank asks for its own (the machine's GPUs in turn), as one process

@@ -27,6 +27,7 @@
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_file.h"
 #include "sdftrace/io/mesh_io.h"
+#include "sdftrace/io/sdfg_io.h"
 #include "sdftrace/scene/animated_scene.h"
 #include "sdftrace/scene/parse_scene.h"
 
@@ -261,6 +262,31 @@ void printMeshBakeSummary(const BakeArgs& a, const MeshBakeResult& r,
                  r.grid.memoryBytes() / 1048576.0, peakResidentMiB(), stages.c_str());
 }
 
+// The summary lines of a bake every rank wrote (bakeExactToSdfg).
+void printDistributedBakeSummary(const BakeArgs& a, const DistributedBakeSummary& r,
+                                 double loadSeconds) {
+    const GridShape& shape = r.shape;
+    std::string stages = "load " + std::to_string(loadSeconds).substr(0, 5) + " s";
+    double total = loadSeconds;
+    for (const BakeStage& st : r.stages) {
+        char one[96];
+        std::snprintf(one, sizeof one, ", %s %.3f s", st.name.c_str(), st.seconds);
+        stages += one;
+        if (st.name.rfind("rank 0 ", 0) != 0) total += st.seconds;
+    }
+    std::fprintf(stderr, "sdftrace bake: %s: %s\n", meshBakeMethodName(a.bake.method),
+                 r.details.c_str());
+    std::fprintf(stderr,
+                 "sdftrace bake: %s, %dx%dx%d cells (voxel %.4g), sparse (%llu surface / %llu "
+                 "inside / %llu outside blocks), file %.2f MiB, peak memory %.0f MiB (the "
+                 "largest of any rank)\nsdftrace bake: %s; total %.3f s\n",
+                 meshBakeMethodName(a.bake.method), shape.cells[0], shape.cells[1], shape.cells[2],
+                 shape.voxelSize, static_cast<unsigned long long>(r.surface),
+                 static_cast<unsigned long long>(r.inside),
+                 static_cast<unsigned long long>(r.outside), r.fileBytes / 1048576.0, r.peakMiB,
+                 stages.c_str(), total);
+}
+
 // Whether the mesh bakes on the GPU: cuda insists (an error names what the GPU lacks, before
 // anything is loaded), auto takes it where a GPU is present and bakes the method, else says why
 // not on stderr.
@@ -303,6 +329,19 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
                     a.bake.sampling.resolution);
         if (across) checkMeshBake(mesh, o, share);
     });
+    // A .sdfg is written by every rank, none holding the whole grid; other outputs, --verify and
+    // --texcoords need the grid assembled on rank 0.
+    if (across && std::filesystem::path(a.output).extension() == ".sdfg" && !a.verify &&
+        a.texcoords.empty()) {
+        if (comm.root())
+            std::fprintf(stderr, "sdftrace bake: %s: %s\n", a.scene.c_str(),
+                         report.summary().c_str());
+        const auto t1 = std::chrono::steady_clock::now();
+        const DistributedBakeSummary r =
+            bakeExactToSdfg(comm, mesh, o, a.output, SdfgWriteOptions{}.level);
+        if (comm.root()) printDistributedBakeSummary(a, r, seconds(t0, t1));
+        return 0;
+    }
     if (comm.distributed() && !comm.root()) {
         if (across) serveRounds(comm, [&](const Bytes& c) { return exactSlabWorker(mesh, o, c); });
         return 0;

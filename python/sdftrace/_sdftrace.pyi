@@ -27,7 +27,7 @@ class Field:
     def to_grid(self: Field, resolution: int = 128, dense: bool = False, band: float = 3.0, block: int = 4, padding: float = 2.0, bounds: Optional[Tuple[List[float], List[float]]] = None) -> Grid:
         """Samples f / L at the vertices of a grid over the field's bounds (or `bounds`), with `padding` voxels of margin: dense, or a sparse block grid keeping the blocks within `band` voxels of the surface.
 
-resolution: cells along the longest axis of the region (the others in proportion); an integer in [8, 4096] [128].
+resolution: cells along the longest axis of the region (the others in proportion); an integer in [8, 16384] [128].
 dense: store every sample; false: a sparse block grid with per-block cell masks (Jamriška §3); True or False [False].
 band: sparse: narrow band half-width in voxels (blocks farther from the surface are dropped); a half-width in voxels in [2, 64] [3].
 block: sparse: cells per block edge; one of 4, 8 [4].
@@ -152,7 +152,7 @@ def bake(mesh: object, faces: object = None, resolution: int = 128, method: str 
 
 mesh: a file path (OBJ, PLY, STL, OFF, glTF), or an N x 3 array of vertex positions.
 faces: with a vertex array, the M x 3 array of triangle vertex indices; None with a path.
-resolution: cells along the longest axis of the region (the others in proportion); an integer in [8, 4096] [128].
+resolution: cells along the longest axis of the region (the others in proportion); an integer in [8, 16384] [128].
 method: exact (closest points: a closest point transform when dense, triangles scattered over the band when sparse), jfa (jump flooding, RTSDF §2.2), danielsson (vector distance transform, Liktor §3.2), edt (exact separable distance transform of the voxelized surface), rtsdf (ray-sampled near the surface, jump-flooded beyond; RTSDF §2.1, §2.3); one of exact, jfa, danielsson, edt, rtsdf [exact].
 band: sparse: narrow band half-width in voxels (blocks farther from the surface are dropped); a half-width in voxels in [2, 64] [3].
 dense: store every sample; false: a sparse block grid with per-block cell masks (Jamriška §3); True or False [False].

@@ -75,6 +75,17 @@ class Communicator {
     // every rank throws RankFailure with the lowest failing rank's error, reported by rank 0.
     void agree(const std::string& error);
 
+    // Collective: waits until every rank has arrived, polling with short sleeps (MPI's own barrier
+    // spins a core that ranks still working on this machine could use).
+    void barrier();
+    // Collective: rank 0's `bytes` on every rank.
+    void broadcast(Bytes& bytes);
+    // Collective: every rank's `mine` (of any length), in rank order.
+    std::vector<std::vector<uint64_t>> allGather(const std::vector<uint64_t>& mine);
+    // Collective: sends out[r] to rank r (out has size() entries, each under 2 GiB); returns what
+    // each rank sent to this one.
+    std::vector<Bytes> allToAll(const std::vector<Bytes>& out);
+
     // Ends every rank now (the last resort when an error leaves other ranks waiting).
     [[noreturn]] void abort(int code);
     // Rank 0: the other ranks wait for nothing more from this one (their work is done), so an
@@ -88,6 +99,29 @@ class Communicator {
     int m_rank = 0, m_size = 1, m_localSize = 1, m_localRank = 0;
     bool m_mpi = false, m_othersDone = false;
     std::string m_host;
+};
+
+// A file that every rank writes parts of at offsets of its own (MPI-IO, so that it works on the
+// parallel and network file systems of clusters; one process: plain positioned writes). Errors
+// come back as text, so that the ranks can agree on them (Communicator::agree) instead of
+// leaving the others waiting in a collective call.
+class SharedFile {
+  public:
+    SharedFile() = default;
+    SharedFile(const SharedFile&) = delete;
+    SharedFile& operator=(const SharedFile&) = delete;
+    ~SharedFile();  // closes the file if close() was not called (not collectively)
+    // Collective: opens `path`, which exists (rank 0 made it), for writing. "" or the error.
+    std::string open(Communicator& comm, const std::string& path);
+    // Independent: writes `bytes` at `offset`. "" or the error.
+    std::string writeAt(uint64_t offset, const void* data, size_t bytes);
+    // Collective: flushes and closes. "" or the error.
+    std::string close();
+
+  private:
+    void* m_handle = nullptr;  // MPI_File (MPI-IO) or null
+    int m_fd = -1;             // one process
+    bool m_mpi = false;
 };
 
 // How a waiting rank polls: sleeps of 20 us at first, doubling to 1 ms (a blocking MPI receive

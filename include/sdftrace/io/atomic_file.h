@@ -41,6 +41,23 @@ class AtomicOutput {
     bool m_committed = false;
 };
 
+// Another process's temporary output that this one writes into (the ranks of a distributed bake
+// write parts of rank 0's file): removed by removeTemporaryOutputs while registered, so that a
+// job whose writer was killed leaves no partial file, and by the destructor unless released.
+class SharedTemporary {
+  public:
+    explicit SharedTemporary(std::string path);
+    ~SharedTemporary();
+    SharedTemporary(const SharedTemporary&) = delete;
+    SharedTemporary& operator=(const SharedTemporary&) = delete;
+    // The file was committed (renamed into place): leave it.
+    void release();
+
+  private:
+    std::string m_path;
+    int m_slot = -1;
+};
+
 // Writes `bytes` to `path` atomically (AtomicOutput).
 void writeFileAtomically(const std::string& path, const void* data, size_t bytes);
 

@@ -18,7 +18,7 @@ std::vector<BakeOption> makeTable() {
          .flags = "--res,--resolution",
          .meshOnly = false,
          .type = T::Int,
-         .range = {8, 4096},
+         .range = {8, 16384},
          .what = "an integer",
          .doc = "cells along the longest axis of the region (the others in proportion)",
          SDFT_MEMBER(sampling.resolution)},

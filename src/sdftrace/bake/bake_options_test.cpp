@@ -123,9 +123,9 @@ TEST(BakeOptions, ARefusedValueNamesWhereTheKeyAndWhatIsAccepted) {
         return std::string("no error");
     };
     EXPECT_EQ(message([&] { setBakeOption(o, "resolution", 4, "bake"); }),
-              "bake: resolution = 4: expected an integer in [8, 4096], got 4");
+              "bake: resolution = 4: expected an integer in [8, 16384], got 4");
     EXPECT_EQ(message([&] { setBakeOption(o, "resolution", 64.5, "bake"); }),
-              "bake: resolution = 64.5: expected an integer in [8, 4096], got 64.5");
+              "bake: resolution = 64.5: expected an integer in [8, 16384], got 64.5");
     EXPECT_EQ(message([&] { setBakeOption(o, "band", NAN, "to_grid"); }),
               "to_grid: band = nan: expected a half-width in voxels in [2, 64], got nan");
     EXPECT_EQ(message([&] { setBakeOption(o, "method", "magic", "bake"); }),

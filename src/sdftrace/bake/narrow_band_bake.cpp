@@ -20,12 +20,15 @@
 #include "exact_sampler.h"
 #include "sdftrace/bake/closest_point.h"
 #include "sdftrace/bake/exact_bake.h"
+#include "sdftrace/bake/exact_slab.h"
 #include "sdftrace/bake/segment_crossing.h"
 #include "sdftrace/bake/surface_seeds.h"
 #include "sdftrace/exec/huge_pages.h"
 #include "sdftrace/exec/progress.h"
 #include "sdftrace/exec/thread_arena.h"
+#include "sdftrace/field/block_apron_layout.h"
 #include "sdftrace/field/sparse_grid_builder.h"
+#include "sdftrace/io/block_aprons.h"
 
 namespace sdft {
 
@@ -58,6 +61,8 @@ class NarrowBandBake {
     Grid run(ExactBakeStats* stats);
     // The slab's blocks only (bakeExactSlab).
     SlabSamples runSlab(ExactBakeStats* stats);
+    // The same as a .sdfg's sections (bakeExactSlabSections).
+    SlabSections runSlabSections(const NextLayerFlags& nextLayer, ExactBakeStats* stats);
 
   private:
     using Carried = RowSampler::Carried;
@@ -72,6 +77,8 @@ class NarrowBandBake {
     Grid gather(ExactBakeStats* stats);
     void keptBlocks();
     void blockSamples(size_t b, float* out) const;
+    void splitBlock(size_t b, const std::vector<uint8_t>& next, float* own, uint64_t* mask,
+                    std::vector<float>* kept) const;
 
     // Blocks and owners are stored for the window of z layers a slab needs (the whole grid
     // without slabs): index arithmetic takes global layers.
@@ -132,20 +139,21 @@ class NarrowBandBake {
     size_t m_perOwner;
     std::atomic<size_t> m_queries{0}, m_signs{0}, m_filmSums{0};
 
-    OwnerLists m_band;                     // lists grown by the band (scatter)
-    OwnerLists m_near;                     // grown by a voxel (crossing tests)
-    std::vector<uint8_t> m_flags;          // BlockFlag per block
-    std::vector<uint8_t> m_candidate;      // may hold surface: an owner lists a triangle
-    std::vector<uint8_t> m_keep;           // surface blocks (the candidates' array, then)
-    std::vector<int32_t> m_slot;           // per owner: its slot in m_owned, -1 if not needed
-    std::vector<uint8_t> m_rowNeeded;      // per row of owners: any needed
-    int32_t m_owners = 0;                  // needed owners
-    std::unique_ptr<float[]> m_owned;      // per needed owner, B^3 samples
-    std::vector<uint8_t> m_nearBits;       // per owner: blocks it gives a sample within the band
-    std::vector<uint8_t> m_heldBy;         // per owner: surface blocks that hold its vertices
-    std::vector<float> m_gradient;         // per owner: the winding number's gradient bound
-    std::vector<int32_t> m_cornerWinding;  // per owner: W at its first vertex
-    std::vector<size_t> m_kept;            // surface block indices, in order
+    OwnerLists m_band;                        // lists grown by the band (scatter)
+    OwnerLists m_near;                        // grown by a voxel (crossing tests)
+    std::vector<uint8_t> m_flags;             // BlockFlag per block
+    std::vector<uint8_t> m_candidate;         // may hold surface: an owner lists a triangle
+    std::vector<uint8_t> m_keep;              // surface blocks (the candidates' array, then)
+    std::vector<int32_t> m_slot;              // per owner: its slot in m_owned, -1 if not needed
+    std::vector<uint8_t> m_rowNeeded;         // per row of owners: any needed
+    int32_t m_owners = 0;                     // needed owners
+    std::unique_ptr<float[]> m_owned;         // per needed owner, B^3 samples
+    std::vector<uint8_t> m_nearBits;          // per owner: blocks it gives a sample within the band
+    std::vector<uint8_t> m_heldBy;            // per owner: surface blocks that hold its vertices
+    std::vector<float> m_gradient;            // per owner: the winding number's gradient bound
+    std::vector<int32_t> m_cornerWinding;     // per owner: W at its first vertex
+    std::vector<size_t> m_kept;               // surface block indices, in order
+    std::vector<std::array<int, 3>> m_apron;  // the apron's vertices (runSlabSections)
 };
 
 NarrowBandBake::NarrowBandBake(const TriangleMesh& mesh, const GridShape& s, int B,
@@ -286,6 +294,7 @@ OwnerLists NarrowBandBake::binTriangles(float grow) {
 // they need (markCandidates).
 void NarrowBandBake::scatter() {
     m_band = binTriangles(m_reach);
+    m_band.ranges = std::vector<VertexRange>();  // recomputed where needed (ownerDistances)
     markCandidates();
 }
 
@@ -411,7 +420,9 @@ size_t NarrowBandBake::ownerDistances(int oi, int oj, int ok,
         const auto& tri = mesh.triangles[t];
         const Vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]],
                    c = mesh.positions[tri[2]];
-        const VertexRange& r = m_band.ranges[t];
+        // The triangle's vertex range again rather than a stored copy (26 MB for a million
+        // triangles on every rank of a distributed bake, most of them outside its slab).
+        const VertexRange r = triangleVertexRange(m_s, a, b, c, m_reach);
         const int lo[3] = {std::max(i0, r.lo[0]), std::max(j0, r.lo[1]), std::max(k0, r.lo[2])};
         const int hi[3] = {std::min(i0 + B - 1, r.hi[0]), std::min(j0 + B - 1, r.hi[1]),
                            std::min(k0 + B - 1, r.hi[2])};
@@ -940,6 +951,91 @@ SlabSamples NarrowBandBake::runSlab(ExactBakeStats* stats) {
     return out;
 }
 
+// Block b's own samples and apron mask (and its kept apron samples, if `kept`), as the version-4
+// writer splits the assembled grid's (block_aprons.h: splitAprons): an apron vertex is implicit
+// where the block that owns it is a surface block, which then holds the same value (the samples
+// are one value per vertex). `next`: the flags of the layer past the slab.
+void NarrowBandBake::splitBlock(size_t b, const std::vector<uint8_t>& next, float* own,
+                                uint64_t* mask, std::vector<float>* kept) const {
+    const int B = m_B, V = B + 1;
+    const size_t layer = static_cast<size_t>(m_nb[0]) * m_nb[1];
+    const int at[3] = {static_cast<int>(b % m_nb[0]), static_cast<int>((b / m_nb[0]) % m_nb[1]),
+                       m_b0 + static_cast<int>(b / layer)};
+    float block[9 * 9 * 9];  // (B+1)^3, B <= 8
+    blockSamples(b, block);
+    for (int k = 0; k < B; ++k)
+        for (int j = 0; j < B; ++j)
+            for (int i = 0; i < B; ++i) *own++ = block[(k * V + j) * V + i];
+    bool surface[8] = {false};  // per neighbour entry: its owner holds samples
+    for (int code = 1; code < 8; ++code) {
+        int o[3];
+        if (!neighbourBlock(at, code, m_nb, o)) continue;
+        const uint8_t f = o[2] < m_z1 ? m_flags[blockIndex(o[0], o[1], o[2])]
+                                      : next.at((static_cast<size_t>(o[1]) * m_nb[0]) + o[0]);
+        surface[code] = f == static_cast<uint8_t>(BlockFlag::Surface);
+    }
+    int a = 0;
+    for (const auto& p : m_apron) {
+        const int code = (p[0] == B) | (p[1] == B) << 1 | (p[2] == B) << 2;
+        if (!surface[code]) {
+            mask[a / 64] |= uint64_t{1} << (a % 64);
+            if (kept) kept->push_back(block[(p[2] * V + p[1]) * V + p[0]]);
+        }
+        ++a;
+    }
+}
+
+SlabSections NarrowBandBake::runSlabSections(const NextLayerFlags& nextLayer,
+                                             ExactBakeStats* stats) {
+    phases();
+    keptBlocks();
+    SlabSections out;
+    out.slab = {m_z0, m_z1};
+    const size_t layer = static_cast<size_t>(m_nb[0]) * m_nb[1];
+    std::vector<uint8_t> first;
+    if (m_z1 > m_z0)
+        first.assign(m_flags.begin() + (m_z0 - m_b0) * layer,
+                     m_flags.begin() + (m_z0 - m_b0 + 1) * layer);
+    const std::vector<uint8_t> next = nextLayer(first);
+    if (m_z1 < m_nb[2] && next.size() != layer)
+        throw std::runtime_error("exact bake: the next slab's first layer has the wrong size");
+    m_apron = apronPositions(m_B);
+    const size_t perOwn = static_cast<size_t>(m_B) * m_B * m_B;
+    const int words = apronWords(m_B);
+    out.surfaceBlocks = m_kept.size();
+    assignHuge(out.own, m_kept.size() * perOwn, 0.0f);
+    out.apronMasks.assign(m_kept.size() * words, 0);
+    // The kept samples by pieces of blocks in parallel, joined in block order.
+    constexpr size_t kPiece = 4096;
+    std::vector<std::vector<float>> pieces((m_kept.size() + kPiece - 1) / kPiece);
+    m_arena.execute([&] {
+        tbb::parallel_for(size_t(0), pieces.size(), [&](size_t piece) {
+            const size_t end = std::min(m_kept.size(), (piece + 1) * kPiece);
+            for (size_t n = piece * kPiece; n < end; ++n)
+                splitBlock(m_kept[n], next, out.own.data() + n * perOwn,
+                           out.apronMasks.data() + n * words, &pieces[piece]);
+        });
+    });
+    size_t total = 0;
+    for (const auto& p : pieces) total += p.size();
+    out.kept.reserve(total);
+    for (auto& p : pieces) {
+        out.kept.insert(out.kept.end(), p.begin(), p.end());
+        p = std::vector<float>();
+    }
+    out.flags.assign(m_flags.begin() + (m_z0 - m_b0) * layer,
+                     m_flags.begin() + (m_z1 - m_b0) * layer);
+    m_flags = std::vector<uint8_t>();
+    m_owned.reset();
+    m_phases.mark("other blocks and sections");
+    report(stats, m_queries, m_signs, m_filmSums);
+    if (stats) {
+        stats->surfaceBlocks = m_kept.size();
+        stats->phases = std::move(m_stages);
+    }
+    return out;
+}
+
 }  // namespace
 
 Grid bakeExactSparse(const TriangleMesh& mesh, const GridShape& s, int B, float bandVoxels,
@@ -956,6 +1052,14 @@ SlabSamples bakeExactSlab(const TriangleMesh& mesh, const GridShape& shape, int 
                           ExactBakeStats* stats, bool progress) {
     return NarrowBandBake(mesh, shape, blockSize, bandVoxels, sign, threads, progress, slab)
         .runSlab(stats);
+}
+
+SlabSections bakeExactSlabSections(const TriangleMesh& mesh, const GridShape& shape, int blockSize,
+                                   float bandVoxels, SignMethod sign, BlockSlab slab,
+                                   const NextLayerFlags& nextLayer, int threads,
+                                   ExactBakeStats* stats, bool progress) {
+    return NarrowBandBake(mesh, shape, blockSize, bandVoxels, sign, threads, progress, slab)
+        .runSlabSections(nextLayer, stats);
 }
 
 Grid assembleExactSlabs(const GridShape& shape, int blockSize, float bandVoxels,

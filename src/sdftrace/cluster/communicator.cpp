@@ -2,9 +2,11 @@
 // the job is one process and messages cannot be sent.
 #include "sdftrace/cluster/communicator.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
@@ -174,11 +176,167 @@ void Communicator::agree(const std::string& error) {
 #endif
 }
 
+void Communicator::barrier() {
+#if SDFT_HAVE_MPI
+    if (!m_mpi) return;
+    MPI_Request request;
+    MPI_Ibarrier(MPI_COMM_WORLD, &request);
+    Backoff backoff;
+    for (int done = 0;;) {
+        MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+        if (done) return;
+        backoff.wait();
+    }
+#endif
+}
+
+void Communicator::broadcast(Bytes& bytes) {
+#if SDFT_HAVE_MPI
+    if (!m_mpi) return;
+    uint64_t n = bytes.size();
+    MPI_Bcast(&n, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    bytes.resize(n);
+    for (size_t at = 0; at < n; at += kPiece)
+        MPI_Bcast(bytes.data() + at, static_cast<int>(std::min<size_t>(kPiece, n - at)), MPI_BYTE,
+                  0, MPI_COMM_WORLD);
+#else
+    (void)bytes;
+#endif
+}
+
+std::vector<std::vector<uint64_t>> Communicator::allGather(const std::vector<uint64_t>& mine) {
+    std::vector<std::vector<uint64_t>> all(static_cast<size_t>(m_size));
+#if SDFT_HAVE_MPI
+    if (m_mpi) {
+        const int count = static_cast<int>(mine.size());
+        std::vector<int> counts(all.size()), displs(all.size(), 0);
+        MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+        for (size_t r = 1; r < all.size(); ++r) displs[r] = displs[r - 1] + counts[r - 1];
+        std::vector<uint64_t> flat(static_cast<size_t>(displs.back() + counts.back()));
+        MPI_Allgatherv(mine.data(), count, MPI_UINT64_T, flat.data(), counts.data(), displs.data(),
+                       MPI_UINT64_T, MPI_COMM_WORLD);
+        for (size_t r = 0; r < all.size(); ++r)
+            all[r].assign(flat.begin() + displs[r], flat.begin() + displs[r] + counts[r]);
+        return all;
+    }
+#endif
+    all[0] = mine;
+    return all;
+}
+
+std::vector<Bytes> Communicator::allToAll(const std::vector<Bytes>& out) {
+    if (out.size() != static_cast<size_t>(m_size))
+        throw std::logic_error("Communicator::allToAll: one buffer per rank");
+#if SDFT_HAVE_MPI
+    if (m_mpi) {
+        const size_t n = out.size();
+        std::vector<int> sendCounts(n), sendDispls(n, 0), recvCounts(n), recvDispls(n, 0);
+        Bytes flat;
+        for (size_t r = 0; r < n; ++r) {
+            if (out[r].size() >= kPiece) throw std::logic_error("Communicator::allToAll: 1 GiB");
+            sendCounts[r] = static_cast<int>(out[r].size());
+            sendDispls[r] = static_cast<int>(flat.size());
+            flat.insert(flat.end(), out[r].begin(), out[r].end());
+        }
+        MPI_Alltoall(sendCounts.data(), 1, MPI_INT, recvCounts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+        size_t total = 0;
+        for (size_t r = 0; r < n; ++r) {
+            recvDispls[r] = static_cast<int>(total);
+            total += static_cast<size_t>(recvCounts[r]);
+        }
+        if (total >= kPiece) throw std::logic_error("Communicator::allToAll: 1 GiB");
+        Bytes in(total);
+        MPI_Alltoallv(flat.data(), sendCounts.data(), sendDispls.data(), MPI_BYTE, in.data(),
+                      recvCounts.data(), recvDispls.data(), MPI_BYTE, MPI_COMM_WORLD);
+        std::vector<Bytes> got(n);
+        for (size_t r = 0; r < n; ++r)
+            got[r].assign(in.begin() + recvDispls[r], in.begin() + recvDispls[r] + recvCounts[r]);
+        return got;
+    }
+#endif
+    return out;
+}
+
 void Communicator::abort(int code) {
 #if SDFT_HAVE_MPI
     if (m_mpi) MPI_Abort(MPI_COMM_WORLD, code);
 #endif
     std::_Exit(code);
+}
+
+SharedFile::~SharedFile() {
+#if SDFT_HAVE_MPI
+    if (m_handle) {
+        auto* f = static_cast<MPI_File*>(m_handle);
+        delete f;  // not closed collectively: the job is ending
+    }
+#endif
+    if (m_fd >= 0) ::close(m_fd);
+}
+
+std::string SharedFile::open(Communicator& comm, const std::string& path) {
+#if SDFT_HAVE_MPI
+    if (comm.distributed()) {
+        auto* f = new MPI_File;
+        const int rc =
+            MPI_File_open(MPI_COMM_WORLD, path.c_str(), MPI_MODE_WRONLY, MPI_INFO_NULL, f);
+        if (rc != MPI_SUCCESS) {
+            delete f;
+            char text[MPI_MAX_ERROR_STRING];
+            int n = 0;
+            MPI_Error_string(rc, text, &n);
+            return path + ": cannot open for writing (" + std::string(text, n) + ")";
+        }
+        m_handle = f;
+        m_mpi = true;
+        return "";
+    }
+#endif
+    (void)comm;
+    m_fd = ::open(path.c_str(), O_WRONLY);
+    return m_fd < 0 ? path + ": cannot open for writing (" + std::strerror(errno) + ")" : "";
+}
+
+std::string SharedFile::writeAt(uint64_t offset, const void* data, size_t bytes) {
+    const auto* p = static_cast<const char*>(data);
+#if SDFT_HAVE_MPI
+    if (m_mpi) {
+        auto* f = static_cast<MPI_File*>(m_handle);
+        for (size_t at = 0; at < bytes; at += kPiece) {
+            const int n = static_cast<int>(std::min(kPiece, bytes - at));
+            MPI_Status status;
+            const int rc = MPI_File_write_at(*f, static_cast<MPI_Offset>(offset + at), p + at, n,
+                                             MPI_BYTE, &status);
+            int wrote = 0;
+            MPI_Get_count(&status, MPI_BYTE, &wrote);
+            if (rc != MPI_SUCCESS || wrote != n) return "write failed (MPI-IO)";
+        }
+        return "";
+    }
+#endif
+    for (size_t at = 0; at < bytes;) {
+        const ssize_t n = ::pwrite(m_fd, p + at, bytes - at, static_cast<off_t>(offset + at));
+        if (n <= 0) return std::string("write failed (") + std::strerror(n < 0 ? errno : EIO) + ")";
+        at += static_cast<size_t>(n);
+    }
+    return "";
+}
+
+std::string SharedFile::close() {
+    std::string error;
+#if SDFT_HAVE_MPI
+    if (m_mpi && m_handle) {
+        auto* f = static_cast<MPI_File*>(m_handle);
+        if (MPI_File_close(f) != MPI_SUCCESS) error = "close failed (MPI-IO)";
+        delete f;
+        m_handle = nullptr;
+    }
+#endif
+    if (m_fd >= 0) {
+        if (::close(m_fd) != 0) error = std::string("close failed (") + std::strerror(errno) + ")";
+        m_fd = -1;
+    }
+    return error;
 }
 
 void Backoff::wait() {

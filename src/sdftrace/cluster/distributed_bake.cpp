@@ -11,6 +11,7 @@
 #include "sdftrace/bake/surface_seeds.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/progress.h"
+#include "sdftrace/field/block_table.h"
 
 namespace sdft {
 
@@ -103,11 +104,13 @@ class SlabWorker : public RoundWorker {
 
 }  // namespace
 
-std::vector<BlockSlab> balancedSlabs(const TriangleMesh& mesh, const GridShape& shape,
-                                     int blockSize, float bandVoxels, int count) {
+namespace {
+
+// Cost per block layer: the triangles whose band reaches it, and the layer's own arrays (one
+// triangle's worth per 64 blocks).
+std::vector<double> layerCosts(const TriangleMesh& mesh, const GridShape& shape, int blockSize,
+                               float bandVoxels) {
     const int layers = blockLayers(shape, blockSize);
-    // Cost per block layer: the triangles whose band reaches it, and the layer's own arrays
-    // (one triangle's worth per 64 blocks).
     std::vector<double> cost(layers, 1.0 + static_cast<double>(shape.cells[0]) * shape.cells[1] /
                                                (64.0 * blockSize * blockSize));
     const float grow = bandVoxels * shape.voxelSize;
@@ -119,6 +122,13 @@ std::vector<BlockSlab> balancedSlabs(const TriangleMesh& mesh, const GridShape& 
         const int z1 = std::min(layers - 1, r.hi[2] / blockSize);
         for (int z = z0; z <= z1; ++z) cost[z] += 1;
     }
+    return cost;
+}
+
+// Consecutive runs of `cost`'s units into `count` slabs of about equal cost; with `atLeastOne`
+// every slab gets a unit (count <= units).
+std::vector<BlockSlab> splitCosts(const std::vector<double>& cost, int count, bool atLeastOne) {
+    const int units = static_cast<int>(cost.size());
     double total = 0;
     for (double c : cost) total += c;
     std::vector<BlockSlab> slabs;
@@ -126,11 +136,35 @@ std::vector<BlockSlab> balancedSlabs(const TriangleMesh& mesh, const GridShape& 
     double sum = 0;
     for (int k = 0; k < count; ++k) {
         const double goal = total * (k + 1) / count;
+        const int leave = atLeastOne ? count - k - 1 : 0;  // units the later slabs need
         int end = at;
-        while (end < layers && (k == count - 1 || sum + cost[end] * 0.5 <= goal))
+        while (end < units - leave &&
+               (k == count - 1 || (atLeastOne && end == at) || sum + cost[end] * 0.5 <= goal))
             sum += cost[end++];
         slabs.push_back({at, end});
         at = end;
+    }
+    return slabs;
+}
+
+}  // namespace
+
+std::vector<BlockSlab> balancedSlabs(const TriangleMesh& mesh, const GridShape& shape,
+                                     int blockSize, float bandVoxels, int count) {
+    return splitCosts(layerCosts(mesh, shape, blockSize, bandVoxels), count, false);
+}
+
+std::vector<BlockSlab> tileSlabs(const TriangleMesh& mesh, const GridShape& shape, int blockSize,
+                                 float bandVoxels, int count) {
+    const std::vector<double> layer = layerCosts(mesh, shape, blockSize, bandVoxels);
+    const int layers = static_cast<int>(layer.size());
+    std::vector<double> tile((layers + kTileBlocks - 1) / kTileBlocks, 0.0);
+    for (int z = 0; z < layers; ++z) tile[z / kTileBlocks] += layer[z];
+    std::vector<BlockSlab> slabs =
+        splitCosts(tile, std::min(count, static_cast<int>(tile.size())), true);
+    for (BlockSlab& s : slabs) {
+        s.first *= kTileBlocks;
+        s.last = std::min(layers, s.last * kTileBlocks);
     }
     return slabs;
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <utility>
 
 #include "sdftrace/core/error.h"
 
@@ -126,6 +127,20 @@ void AtomicOutput::commit() {
     if (syncError && syncError != EINVAL) fail(syncError);
     if (std::rename(m_temp.c_str(), m_final.c_str()) != 0) fail(errno);
     m_committed = true;
+}
+
+SharedTemporary::SharedTemporary(std::string path)
+    : m_path(std::move(path)), m_slot(claimSlot(m_path)) {}
+
+SharedTemporary::~SharedTemporary() {
+    if (!m_path.empty()) ::unlink(m_path.c_str());
+    releaseSlot(m_slot);
+}
+
+void SharedTemporary::release() {
+    m_path.clear();
+    releaseSlot(m_slot);
+    m_slot = -1;
 }
 
 void writeFileAtomically(const std::string& path, const void* data, size_t bytes) {

@@ -13,9 +13,6 @@
 
 namespace sdft {
 
-namespace {
-
-// The apron's local vertices (some coordinate == B), z slowest, x fastest.
 std::vector<std::array<int, 3>> apronPositions(int B) {
     std::vector<std::array<int, 3>> out;
     for (int k = 0; k <= B; ++k)
@@ -24,6 +21,8 @@ std::vector<std::array<int, 3>> apronPositions(int B) {
                 if (i == B || j == B || k == B) out.push_back({i, j, k});
     return out;
 }
+
+namespace {
 
 struct Layout {
     int B, V, own, per, apron, words;

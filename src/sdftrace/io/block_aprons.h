@@ -7,6 +7,7 @@
 // decompress them straight into the builder's, so neither side copies the grid.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -25,6 +26,9 @@ struct ApronSamples {
 // Apron positions per block ((B+1)^3 - B^3) and the mask words they take.
 int apronSize(int blockSize);
 int apronWords(int blockSize);
+// The apron's local vertices (some coordinate == B), z slowest, x fastest: the order of the masks'
+// bits and of the kept samples.
+std::vector<std::array<int, 3>> apronPositions(int blockSize);
 
 // The aprons of a sparse grid's surface blocks; their own samples are the first
 // surfaceBlockCount() * B^3 of grid.blockSamples().

@@ -16,6 +16,7 @@
 #include <memory>
 
 #include "block_aprons.h"
+#include "sdfg_layout.h"
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/exec/all_finite.h"
@@ -26,23 +27,7 @@ namespace sdft {
 
 namespace {
 
-constexpr char kMagic[4] = {'S', 'D', 'F', 'G'};
 constexpr int kMaxCells = 32768;
-
-// Fixed 64-byte header; all fields little-endian (the formats supported are little-endian hosts).
-struct Header {
-    char magic[4];
-    uint32_t version;
-    uint32_t kind;
-    int32_t cells[3];
-    float origin[3];
-    float voxelSize;
-    uint32_t blockSize;
-    float background;
-    uint64_t payloadBytes;
-    uint64_t checksum;
-};
-static_assert(sizeof(Header) == 64, "the .sdfg header is 64 bytes");
 
 }  // namespace
 
@@ -56,21 +41,38 @@ uint64_t fnv1a64(const void* data, size_t bytes, uint64_t h) {
 }
 
 namespace {
-// The header's fields that describe the grid (payload size and checksum left to the writer).
-Header headerOf(const Grid& grid, uint32_t version) {
-    const GridShape& s = grid.shape();
-    Header h{};
+
+using Header = SdfgHeader;
+using CompressedHeader = SdfgCompressedHeader;
+using TableHeader = SdfgTableHeader;
+constexpr const char* kMagic = kSdfgMagic;
+constexpr uint32_t kChunkBytes = kSdfgChunkBytes;
+
+}  // namespace
+
+SdfgHeader sdfgHeader(const GridShape& s, GridKind kind, int blockSize, float background,
+                      uint32_t version) {
+    SdfgHeader h{};
     h.version = version;
-    std::memcpy(h.magic, kMagic, 4);
-    h.kind = static_cast<uint32_t>(grid.kind());
+    std::memcpy(h.magic, kSdfgMagic, 4);
+    h.kind = static_cast<uint32_t>(kind);
     for (int a = 0; a < 3; ++a) {
         h.cells[a] = s.cells[a];
         h.origin[a] = s.origin[a];
     }
     h.voxelSize = s.voxelSize;
-    h.blockSize = grid.kind() == GridKind::Sparse ? grid.blockSize() : 0;
-    h.background = grid.background();
+    h.blockSize = kind == GridKind::Sparse ? static_cast<uint32_t>(blockSize) : 0;
+    h.background = background;
     return h;
+}
+
+namespace {
+
+// The header's fields that describe the grid (payload size and checksum left to the writer).
+Header headerOf(const Grid& grid, uint32_t version) {
+    return sdfgHeader(grid.shape(), grid.kind(),
+                      grid.kind() == GridKind::Sparse ? grid.blockSize() : 0, grid.background(),
+                      version);
 }
 
 void saveRaw(const Grid& grid, const std::string& path) {
@@ -115,31 +117,6 @@ void saveRaw(const Grid& grid, const std::string& path) {
 
 // ---- versions 3 to 5: compressed sections ----
 
-constexpr uint32_t kChunkBytes = 1u << 22;  // uncompressed bytes per chunk (4 MiB)
-
-// After the 64-byte header of a version-3 to -5 file.
-struct CompressedHeader {
-    uint32_t texKind;     // 0: no texture coordinates; else TexcoordKind
-    uint32_t chunkBytes;  // uncompressed bytes per chunk (the last of a section may be shorter)
-    // Stored samples: dense, every vertex; sparse, (B+1)^3 per surface block (versions 3 and 4)
-    // or B^3 per sample block (version 5).
-    uint64_t sampleCount;
-    // Sparse: the apron samples kept explicitly (versions 3 and 4, block_aprons.h) or the sample
-    // blocks past the surface ones (version 5).
-    uint64_t apronCount;
-    uint64_t chunkCount;  // then chunkCount u64 compressed sizes, then the chunks
-};
-static_assert(sizeof(CompressedHeader) == 32);
-
-// Version 4 follows it with the number of own pages of the block table (sparse; 0 when dense),
-// which sizes the section of their flags; version 5 (sparse) with the stored grid's surface
-// block count and Lipschitz bounds too.
-struct TableHeader {
-    uint64_t ownPages;
-    uint64_t surfaceBlocks;            // version 5
-    float lipschitz, gentleLipschitz;  // version 5
-};
-static_assert(sizeof(TableHeader) == 24);
 size_t tableHeaderBytes(uint32_t version) { return version >= 5 ? 24 : version == 4 ? 8 : 0; }
 
 // The sections of the uncompressed payload, in file order. Dense: samples. Sparse: the block
@@ -188,27 +165,35 @@ void unshuffleFloats(const char* in, char* out, uint64_t bytes) {
         for (int b = 0; b < 4; ++b) out[4 * i + b] = in[b * n + i];
 }
 
-// One chunk, its floats byte-shuffled (in `scratch`), compressed by zstd with its checksum.
-std::vector<char> compressChunk(const std::vector<Section>& sections, const Chunk& ch, int level,
-                                std::vector<char>& scratch, const std::string& path) {
-    const Section& sec = sections[static_cast<size_t>(ch.section)];
-    const char* src = sec.data + ch.offset;
-    if (sec.floats) {
-        if (scratch.size() < ch.bytes) scratch.resize(ch.bytes);
-        shuffleFloats(src, scratch.data(), ch.bytes);
+}  // namespace
+
+std::vector<char> compressSdfgChunk(const char* src, uint64_t bytes, bool floats, int level,
+                                    std::vector<char>& scratch, const std::string& path) {
+    if (floats) {
+        if (scratch.size() < bytes) scratch.resize(bytes);
+        shuffleFloats(src, scratch.data(), bytes);
         src = scratch.data();
     }
     ZSTD_CCtx* ctx = ZSTD_createCCtx();
     ZSTD_CCtx_setParameter(ctx, ZSTD_c_compressionLevel, level);
     ZSTD_CCtx_setParameter(ctx, ZSTD_c_checksumFlag, 1);
-    std::vector<char> out(ZSTD_compressBound(ch.bytes));
-    const size_t n = ZSTD_compress2(ctx, out.data(), out.size(), src, ch.bytes);
+    std::vector<char> out(ZSTD_compressBound(bytes));
+    const size_t n = ZSTD_compress2(ctx, out.data(), out.size(), src, bytes);
     ZSTD_freeCCtx(ctx);
     if (ZSTD_isError(n))
         throw InputError(path + ": compression failed (" + ZSTD_getErrorName(n) + ")");
     out.resize(n);
     out.shrink_to_fit();
     return out;
+}
+
+namespace {
+
+// One chunk, its floats byte-shuffled, compressed by zstd with its checksum.
+std::vector<char> compressChunk(const std::vector<Section>& sections, const Chunk& ch, int level,
+                                std::vector<char>& scratch, const std::string& path) {
+    const Section& sec = sections[static_cast<size_t>(ch.section)];
+    return compressSdfgChunk(sec.data + ch.offset, ch.bytes, sec.floats, level, scratch, path);
 }
 
 // Chunks compressed on every core and written in order as they come: the file is written while
@@ -277,7 +262,7 @@ void saveCompressed(const Grid& grid, const std::string& path, int level, uint32
     std::vector<Section> sections;
     ApronSamples aprons;
     std::vector<uint8_t> flags, tileKinds;
-    TableHeader th{0};
+    TableHeader th{};
     if (grid.kind() == GridKind::Dense) {
         sections.push_back(section(grid.samples(), true));
     } else if (version >= 5) {
@@ -635,7 +620,7 @@ BlockTable tableOf(const int blocks[3], const std::vector<uint8_t>& tileKinds,
 // before anything is allocated from their numbers.
 struct Compressed {
     CompressedHeader ch{};
-    TableHeader th{0};
+    TableHeader th{};
     std::vector<uint64_t> sectionBytes;  // uncompressed, in file order
     uint64_t total = 0;                  // their sum
     std::vector<Chunk> chunks;
