@@ -322,6 +322,27 @@ TEST(Cluster, EveryRankAsksForItsGpuAsOneProcessDoes) {
     EXPECT_NE(still.err.find("on 2 ranks"), std::string::npos) << still.err;
     expectSameFile(dir.file("one.pfm"), dir.file("many.pfm"));
 
+    // Bakes: a method the GPU bakes runs on rank 0 alone, choosing its device as one process
+    // does; the sparse exact bake, split across the ranks, runs on their CPUs (the GPU does not
+    // bake it), refused under cuda with the single process's reason.
+    const std::string jfa = "bake " + kSource + "/data/meshes/suzanne.obj --res 32 --method jfa ";
+    const RunResult bakeCuda = mpirun(2, jfa + "--device cuda -o " + dir.file("jfa.sdfg"));
+    EXPECT_NE(bakeCuda.status, 0);
+    EXPECT_EQ(linesWith(bakeCuda.err, "sdftrace: error:"), 1) << bakeCuda.err;
+    EXPECT_EQ(linesWith(bakeCuda.err, "--device cuda: " + gpuInfo().why), 1) << bakeCuda.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("jfa.sdfg")));
+    ASSERT_EQ(single(jfa + "-q -o " + dir.file("jfa-one.sdfg")).status, 0);
+    const RunResult bakeAuto = mpirun(2, jfa + "--device auto -o " + dir.file("jfa-many.sdfg"));
+    ASSERT_EQ(bakeAuto.status, 0) << bakeAuto.err;
+    EXPECT_EQ(linesWith(bakeAuto.err, "--device auto: baking on the CPU"), 1) << bakeAuto.err;
+    expectSameFile(dir.file("jfa-one.sdfg"), dir.file("jfa-many.sdfg"));
+    const RunResult exactCuda =
+        mpirun(2, "bake " + kSource + "/data/meshes/suzanne.obj --res 32 --device cuda -o " +
+                      dir.file("exact.sdfg"));
+    EXPECT_NE(exactCuda.status, 0);
+    EXPECT_EQ(linesWith(exactCuda.err, "sdftrace: error:"), 1) << exactCuda.err;
+    EXPECT_EQ(linesWith(exactCuda.err, "runs on the CPU only"), 1) << exactCuda.err;
+
     const std::string frames = "render " + kSource +
                                "/examples/animated.json --time 0:0.2 --fps 10 --width 48 "
                                "--height 32 --frame-pattern ";

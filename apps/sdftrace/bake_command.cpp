@@ -23,6 +23,7 @@
 #include "sdftrace/core/memory_budget.h"
 #include "sdftrace/field/sample_grid.h"
 #include "sdftrace/gpu/device.h"
+#include "sdftrace/gpu/gpu_device.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/grid_file.h"
 #include "sdftrace/io/mesh_file.h"
@@ -149,6 +150,19 @@ MeshBakeOptions bakeOptionsFromFlags(const BakeArgs& a) {
 void checkMemory(double bytes, int resolution) {
     checkMemoryBudget(bytes, "--res " + std::to_string(resolution), "the bake's arrays",
                       "use a lower resolution or a sparse exact bake");
+}
+
+// A distributed bake's share on each of `ranks` ranks: `shared` bytes split among them, `fixed`
+// on every rank (the mesh and its trees). Refused with the ranks the budget would need.
+void checkRankMemory(double shared, double fixed, int ranks, int resolution) {
+    const double budget = memoryBudgetBytes();
+    std::string advice = "use a lower resolution";
+    if (budget > fixed)
+        advice += " or about " +
+                  std::to_string(static_cast<long long>(std::ceil(shared / (budget - fixed)))) +
+                  " ranks with this budget";
+    checkMemoryBudget(shared / ranks + fixed, "--res " + std::to_string(resolution),
+                      "the bake's arrays on each of " + std::to_string(ranks) + " ranks", advice);
 }
 
 double seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
@@ -289,19 +303,12 @@ void printDistributedBakeSummary(const BakeArgs& a, const DistributedBakeSummary
 
 // Whether the mesh bakes on the GPU: cuda insists (an error names what the GPU lacks, before
 // anything is loaded), auto takes it where a GPU is present and bakes the method, else says why
-// not on stderr.
-bool bakeOnGpu(const BakeArgs& a, const MeshBakeOptions& o, bool distributed) {
+// not on stderr. Under mpirun the ranks that bake choose as one process does (a method the GPU
+// bakes runs on rank 0 alone, on its GPU); the others do not bake.
+bool bakeOnGpu(const BakeArgs& a, const MeshBakeOptions& o, bool bakesHere) {
     Device d = Device::Cpu;
     parseDevice(a.device, d);  // CLI11 checked the name
-    if (distributed) {
-        if (d == Device::Cuda)
-            throw InputError("--device cuda: cannot be combined with mpirun yet; use --device cpu");
-        if (d == Device::Auto && !a.quiet)
-            std::fprintf(stderr,
-                         "sdftrace bake: --device auto: baking on the CPU (a distributed job "
-                         "bakes on its ranks' CPUs)\n");
-        return false;
-    }
+    if (!bakesHere) return false;
     const DeviceChoice c = chooseBakeDevice(d, o, "--device " + a.device);
     if (d == Device::Auto && !c.gpu && !a.quiet)
         std::fprintf(stderr, "sdftrace bake: --device auto: baking on the CPU (%s)\n",
@@ -317,16 +324,24 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
     bool across = false, gpu = false;
     together(comm, [&] {
         o = meshBakeOptions(a);
-        gpu = bakeOnGpu(a, o, comm.distributed());
         across = comm.distributed() && o.method == MeshBakeMethod::Exact &&
                  o.sampling.kind == GridKind::Sparse;
+        // Ranks on one machine take its GPUs in turn, as renders do.
+        if (comm.distributed() && a.device != "cpu") useGpuOfLocalRank(comm.localRank());
+        gpu = bakeOnGpu(a, o, comm.root() || across);
         if (comm.distributed() && !across && !comm.root()) return;  // rank 0 bakes alone
         mesh = loadMesh(a.scene, &report);
         // Each rank checks its own budget for its share of the grid's working arrays.
         const double share = across ? 1.0 / comm.size() : 1.0;
-        checkMemory(meshBakeBytes(mesh, gridShapeFor(mesh.bounds(), o.sampling), o,
-                                  a.verify && comm.root(), share),
-                    a.bake.sampling.resolution);
+        const GridShape shape = gridShapeFor(mesh.bounds(), o.sampling);
+        const bool verify = a.verify && comm.root();
+        if (across) {
+            const double fixed = meshBakeBytes(mesh, shape, o, verify, 0);
+            checkRankMemory(meshBakeBytes(mesh, shape, o, verify, 1) - fixed, fixed, comm.size(),
+                            a.bake.sampling.resolution);
+        } else {
+            checkMemory(meshBakeBytes(mesh, shape, o, verify, share), a.bake.sampling.resolution);
+        }
         if (across) checkMeshBake(mesh, o, share);
     });
     // A .sdfg is written by every rank, none holding the whole grid; other outputs, --verify and

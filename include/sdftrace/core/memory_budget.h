@@ -1,7 +1,8 @@
 // The memory budget: every allocation whose size a user controls (films, grids, bake arrays,
 // seeds, BVHs, shadow maps, histories) is checked against it before it is made, so that a request
 // too large fails with one line instead of an out-of-memory kill halfway through. The CLI's
-// --max-memory sets it; the default is half of this machine's physical memory.
+// --max-memory sets it; the default is half of this machine's physical memory, divided among the
+// ranks of an MPI job that share the machine.
 #pragma once
 
 #include <new>
@@ -17,6 +18,9 @@ double memoryBudgetBytes();
 void setMemoryBudgetBytes(double bytes);
 // True when the budget was set (--max-memory), not the default.
 bool memoryBudgetIsSet();
+// The processes of one job on this machine (Communicator::init, under mpirun): each one's default
+// budget is its share of half the machine's memory.
+void setMemorySharers(int processes);
 
 // Throws InputError "<what>: needs <bytes> (<for>), more than the memory budget of <budget>
 // (<where it comes from>); <advice>" when `bytes` exceeds the budget. `what` names the flag, file

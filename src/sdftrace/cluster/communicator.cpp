@@ -12,6 +12,8 @@
 #include <cstring>
 #include <thread>
 
+#include "sdftrace/core/memory_budget.h"
+
 #if SDFT_HAVE_MPI
 #include <mpi.h>
 #endif
@@ -64,6 +66,8 @@ void Communicator::init(int& argc, char**& argv) {
     c.m_localRank = envInt("OMPI_COMM_WORLD_LOCAL_RANK",
                            envInt("MPI_LOCALRANKID", c.m_rank % c.m_localSize, 0), 0);
     c.m_mpi = true;
+    // The ranks on this machine share its memory as they share its cores.
+    setMemorySharers(c.m_localSize);
 #else
     (void)argc;
     (void)argv;

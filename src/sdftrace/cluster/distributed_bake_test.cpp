@@ -159,7 +159,9 @@ TEST(DistributedBake, SlabSectionsJoinIntoTheWholeGridsSections) {
                 const SlabSections s = bakeExactSlabSections(
                     c.mesh, shape, c.block, c.band, c.sign, slabs[i],
                     [&](const std::vector<uint8_t>& mine) {
-                        if (i > 0) EXPECT_EQ(mine, first[i]);
+                        if (i > 0) {
+                            EXPECT_EQ(mine, first[i]);
+                        }
                         return i + 1 < slabs.size() ? first[i + 1] : std::vector<uint8_t>();
                     },
                     2);

@@ -15,7 +15,15 @@ namespace sdft {
 
 namespace {
 std::atomic<double> g_budget{0.0};  // 0: the default
+std::atomic<int> g_sharers{1};
+
+// Where the default comes from, for error messages.
+std::string defaultSource() {
+    std::string s = "half of this machine's " + formatBytes(physicalMemoryBytes());
+    if (g_sharers.load() > 1) s += " shared by " + std::to_string(g_sharers.load()) + " ranks";
+    return s;
 }
+}  // namespace
 
 double peakResidentMiB() {
     rusage u{};
@@ -33,8 +41,10 @@ double physicalMemoryBytes() {
 
 double memoryBudgetBytes() {
     const double set = g_budget.load();
-    return set > 0 ? set : 0.5 * physicalMemoryBytes();
+    return set > 0 ? set : 0.5 * physicalMemoryBytes() / g_sharers.load();
 }
+
+void setMemorySharers(int processes) { g_sharers.store(processes > 1 ? processes : 1); }
 
 void setMemoryBudgetBytes(double bytes) { g_budget.store(bytes > 0 ? bytes : 0.0); }
 
@@ -56,7 +66,7 @@ std::string formatBytes(double bytes) {
 void throwOverBudget(const std::string& what) {
     throw InputError(what + ": reading it needs more memory than the budget of " +
                      formatBytes(memoryBudgetBytes()) + " (" +
-                     (memoryBudgetIsSet() ? "--max-memory" : "half of this machine's memory") +
+                     (memoryBudgetIsSet() ? "--max-memory" : defaultSource()) +
                      "), or the file is damaged; raise --max-memory if it is not");
 }
 
@@ -64,10 +74,8 @@ void checkMemoryBudget(double bytes, const std::string& what, const std::string&
                        const std::string& advice) {
     const double budget = memoryBudgetBytes();
     if (!(bytes > budget)) return;
-    const std::string source = memoryBudgetIsSet() ? "--max-memory"
-                                                   : "half of this machine's " +
-                                                         formatBytes(physicalMemoryBytes()) +
-                                                         "; raise it with --max-memory";
+    const std::string source =
+        memoryBudgetIsSet() ? "--max-memory" : defaultSource() + "; raise it with --max-memory";
     throw InputError(what + ": needs " + formatBytes(bytes) + " (" + forWhat +
                      "), more than the memory budget of " + formatBytes(budget) + " (" + source +
                      "); " + advice);
