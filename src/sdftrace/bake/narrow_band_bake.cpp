@@ -28,7 +28,6 @@
 #include "sdftrace/exec/thread_arena.h"
 #include "sdftrace/field/block_apron_layout.h"
 #include "sdftrace/field/sparse_grid_builder.h"
-#include "sdftrace/io/block_aprons.h"
 
 namespace sdft {
 
@@ -46,10 +45,9 @@ uint8_t subsetMask(int li, int lj, int lk) {
     return kSubsetMask[(li == 0) | (lj == 0) << 1 | (lk == 0) << 2];
 }
 
-// Per owner block, the triangles whose bounds grown by some distance overlap its vertices (a
-// prefix-summed list), and per triangle its vertex range.
+// Per owner block (or per needed owner's slot), the triangles whose bounds grown by some distance
+// overlap its vertices (a prefix-summed list).
 struct OwnerLists {
-    std::vector<VertexRange> ranges;
     std::vector<uint32_t> start, items;
 };
 
@@ -102,7 +100,7 @@ class NarrowBandBake {
         return (m_heldBy[sl] & subsetMask(li, lj, lk)) != 0;
     }
 
-    OwnerLists binTriangles(float grow);
+    OwnerLists binTriangles(float grow, bool bySlot);
     template <class F>
     void forOwnersNearPlane(size_t t, const VertexRange& r, float grow, F&& f) const;
     void markCandidates();
@@ -111,7 +109,7 @@ class NarrowBandBake {
     size_t ownerDistances(int oi, int oj, int ok, std::vector<std::pair<float, uint32_t>>& order);
     void nearestToTriangle(Vec3 a, Vec3 b, Vec3 c, const int lo[3], const int hi[3], int i0, int j0,
                            int k0, float* out) const;
-    bool crossings(Vec3 a, Vec3 b, size_t o, int& delta) const;
+    bool crossings(Vec3 a, Vec3 b, size_t slot, int& delta) const;
     void ownerGradients();
     struct SlabSigns;
     void signVertexRow(int ok, int k, int j, SlabSigns& slab);
@@ -248,32 +246,44 @@ void NarrowBandBake::forOwnersNearPlane(size_t t, const VertexRange& r, float gr
             }
 }
 
-OwnerLists NarrowBandBake::binTriangles(float grow) {
+// bySlot: lists for the needed owners only, indexed by their slots (the crossing tests, once the
+// slots are known: a dense table over the window's owners is 60 MB per rank at 2048 cells).
+OwnerLists NarrowBandBake::binTriangles(float grow, bool bySlot) {
     const TriangleMesh& mesh = m_mesh;
     OwnerLists l;
-    l.ranges.resize(mesh.triangles.size());
-    assignHuge(l.start, m_numOwners + 1, 0u);
+    const size_t lists = bySlot ? static_cast<size_t>(m_owners) : m_numOwners;
+    assignHuge(l.start, lists + 1, 0u);
+    // Each triangle's vertex range, computed in both passes rather than stored.
+    const auto range = [&](size_t t) {
+        const auto& tri = mesh.triangles[t];
+        return triangleVertexRange(m_s, mesh.positions[tri[0]], mesh.positions[tri[1]],
+                                   mesh.positions[tri[2]], grow);
+    };
+    const auto forLists = [&](size_t t, const VertexRange& r, auto&& f) {
+        forOwnersNearPlane(t, r, grow, [&](size_t o) {
+            if (!bySlot) return f(o);
+            if (const int32_t sl = m_slot[o]; sl >= 0) f(static_cast<size_t>(sl));
+        });
+    };
     // In parallel: counts and slots by atomic increments. The order within a list varies from run
     // to run; its users do not depend on it (the distances sort their list, the crossings sum
     // theirs).
     m_arena.execute([&] {
         tbb::parallel_for(size_t(0), mesh.triangles.size(), [&](size_t t) {
-            const auto& tri = mesh.triangles[t];
-            const VertexRange& r = l.ranges[t] = triangleVertexRange(
-                m_s, mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]], grow);
+            const VertexRange r = range(t);
             if (r.empty()) return;
-            forOwnersNearPlane(t, r, grow, [&](size_t o) {
+            forLists(t, r, [&](size_t o) {
                 std::atomic_ref<uint32_t>(l.start[o + 1]).fetch_add(1, std::memory_order_relaxed);
             });
         });
     });
-    for (size_t o = 0; o < m_numOwners; ++o) l.start[o + 1] += l.start[o];
-    assignHuge(l.items, l.start[m_numOwners], 0u);
+    for (size_t o = 0; o < lists; ++o) l.start[o + 1] += l.start[o];
+    assignHuge(l.items, l.start[lists], 0u);
     m_arena.execute([&] {
         tbb::parallel_for(size_t(0), mesh.triangles.size(), [&](size_t t) {
-            const VertexRange& r = l.ranges[t];
+            const VertexRange r = range(t);
             if (r.empty()) return;
-            forOwnersNearPlane(t, r, grow, [&](size_t o) {
+            forLists(t, r, [&](size_t o) {
                 uint32_t at =
                     std::atomic_ref<uint32_t>(l.start[o]).fetch_add(1, std::memory_order_relaxed);
                 l.items[at] = static_cast<uint32_t>(t);
@@ -282,7 +292,7 @@ OwnerLists NarrowBandBake::binTriangles(float grow) {
     });
     // The starts served as cursors and now hold the ends, that is the next list's start: one
     // place back (no copy of the starts, 240 MB at 2048 cells).
-    std::memmove(l.start.data() + 1, l.start.data(), m_numOwners * sizeof(uint32_t));
+    std::memmove(l.start.data() + 1, l.start.data(), lists * sizeof(uint32_t));
     l.start[0] = 0;
     return l;
 }
@@ -293,8 +303,7 @@ OwnerLists NarrowBandBake::binTriangles(float grow) {
 // the band (as a narrow-band level set stores them). Then the candidate blocks and the owners
 // they need (markCandidates).
 void NarrowBandBake::scatter() {
-    m_band = binTriangles(m_reach);
-    m_band.ranges = std::vector<VertexRange>();  // recomputed where needed (ownerDistances)
+    m_band = binTriangles(m_reach, false);
     markCandidates();
 }
 
@@ -574,8 +583,7 @@ void NarrowBandBake::surfaceBlocks() {
     // Triangles meeting a segment of length h that ends at a vertex come within h of it: the
     // crossing tests read lists grown by one voxel only.
     if (m_integerWinding) {
-        m_near = binTriangles(1.01f * m_h);
-        m_near.ranges = std::vector<VertexRange>();
+        m_near = binTriangles(1.01f * m_h, true);
     }
 }
 
@@ -608,13 +616,13 @@ void NarrowBandBake::dropUnheldOwners() {
     m_owners = kept;
 }
 
-// The signed crossings of segment ab with the mesh's triangles listed near owner o; false when
-// one is too close to call. The triangles' planes are not stored (a million-triangle mesh's take
-// 80 MB at the bake's peak): those whose bounds meet the segment are prepared here.
-bool NarrowBandBake::crossings(Vec3 a, Vec3 b, size_t o, int& delta) const {
+// The signed crossings of segment ab with the mesh's triangles listed near the owner in slot sl;
+// false when one is too close to call. The triangles' planes are not stored (a million-triangle
+// mesh's take 80 MB at the bake's peak): those whose bounds meet the segment are prepared here.
+bool NarrowBandBake::crossings(Vec3 a, Vec3 b, size_t sl, int& delta) const {
     const float eps = 1e-5f * m_h;
     const auto& pos = m_mesh.positions;
-    for (uint32_t n = m_near.start[o]; n < m_near.start[o + 1]; ++n) {
+    for (uint32_t n = m_near.start[sl]; n < m_near.start[sl + 1]; ++n) {
         const auto& tri = m_mesh.triangles[m_near.items[n]];
         const Vec3 ta = pos[tri[0]], tb = pos[tri[1]], tc = pos[tri[2]];
         if (segmentMissesBox(a, b, min(ta, min(tb, tc)), max(ta, max(tb, tc)), eps)) continue;
@@ -753,7 +761,7 @@ void NarrowBandBake::signVertexRow(int ok, int k, int j, SlabSigns& slab) {
         const bool meshClear = have && (d > step || nd > step);
         if (m_integerWinding) {
             int meshDelta = 0, filmDelta = 0;
-            if (have && (meshClear || crossings(np, p, o, meshDelta)) &&
+            if (have && (meshClear || crossings(np, p, static_cast<size_t>(sl), meshDelta)) &&
                 m_sampler.filmCrossings(np, p, slab.films, filmDelta)) {
                 c = m_sampler.carry(nCarried, meshDelta + filmDelta, meshDelta,
                                     m_gradient[sl] * m_h, p, slab.refreshed);

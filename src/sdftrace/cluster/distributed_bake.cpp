@@ -106,13 +106,14 @@ class SlabWorker : public RoundWorker {
 
 namespace {
 
-// Cost per block layer: the triangles whose band reaches it, and the layer's own arrays (one
-// triangle's worth per 64 blocks).
+// Cost per block layer: the blocks that triangles' bands reach in it (each triangle's footprint,
+// the blocks of its grown bounds across x and y: what the slab scatters, measures and keeps the
+// samples of), and the layer's own per-block arrays (a sixteenth of that per block).
 std::vector<double> layerCosts(const TriangleMesh& mesh, const GridShape& shape, int blockSize,
                                float bandVoxels) {
     const int layers = blockLayers(shape, blockSize);
     std::vector<double> cost(layers, 1.0 + static_cast<double>(shape.cells[0]) * shape.cells[1] /
-                                               (64.0 * blockSize * blockSize));
+                                               (16.0 * blockSize * blockSize));
     const float grow = bandVoxels * shape.voxelSize;
     for (const auto& t : mesh.triangles) {
         const VertexRange r = triangleVertexRange(shape, mesh.positions[t[0]], mesh.positions[t[1]],
@@ -120,7 +121,13 @@ std::vector<double> layerCosts(const TriangleMesh& mesh, const GridShape& shape,
         if (r.empty()) continue;
         const int z0 = std::max(0, r.lo[2] / blockSize - 1);
         const int z1 = std::min(layers - 1, r.hi[2] / blockSize);
-        for (int z = z0; z <= z1; ++z) cost[z] += 1;
+        // A triangle's footprint in a layer: the blocks of its bounds in x and y, at most the
+        // layer (a large diagonal triangle's bounds hold more blocks than it reaches; its area
+        // over its z layers is a fairer share of them).
+        const double bx = r.hi[0] / blockSize - r.lo[0] / blockSize + 1;
+        const double by = r.hi[1] / blockSize - r.lo[1] / blockSize + 1;
+        const double footprint = std::min(bx * by, bx + by + (bx * by) / (z1 - z0 + 1));
+        for (int z = z0; z <= z1; ++z) cost[z] += footprint;
     }
     return cost;
 }

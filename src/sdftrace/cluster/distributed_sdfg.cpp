@@ -14,8 +14,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "../io/block_aprons.h"
-#include "../io/sdfg_layout.h"
 #include "sdftrace/bake/exact_slab.h"
 #include "sdftrace/cluster/distributed_bake.h"
 #include "sdftrace/core/memory_budget.h"
@@ -23,6 +21,7 @@
 #include "sdftrace/field/block_table.h"
 #include "sdftrace/io/atomic_file.h"
 #include "sdftrace/io/sdfg_io.h"
+#include "sdftrace/io/sdfg_layout.h"
 
 namespace sdft {
 

@@ -2,9 +2,25 @@
 // layout (decision 10): code = (x == B) + 2 (y == B) + 4 (z == B), 0 for the block's own B^3.
 #pragma once
 
+#include <array>
 #include <vector>
 
 namespace sdft {
+
+// Apron positions per block ((B+1)^3 - B^3: the vertices with some local coordinate equal to B)
+// and the 64-bit mask words they take (.sdfg versions 3 and 4 store a mask per block).
+inline int apronSize(int B) { return (B + 1) * (B + 1) * (B + 1) - B * B * B; }
+inline int apronWords(int B) { return (apronSize(B) + 63) / 64; }
+// The apron's local vertices, z slowest, x fastest: the order of the masks' bits and of the kept
+// samples.
+inline std::vector<std::array<int, 3>> apronPositions(int B) {
+    std::vector<std::array<int, 3>> out;
+    for (int k = 0; k <= B; ++k)
+        for (int j = 0; j <= B; ++j)
+            for (int i = 0; i <= B; ++i)
+                if (i == B || j == B || k == B) out.push_back({i, j, k});
+    return out;
+}
 
 struct ApronLayout {
     int B, V;

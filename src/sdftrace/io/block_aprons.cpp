@@ -13,15 +13,6 @@
 
 namespace sdft {
 
-std::vector<std::array<int, 3>> apronPositions(int B) {
-    std::vector<std::array<int, 3>> out;
-    for (int k = 0; k <= B; ++k)
-        for (int j = 0; j <= B; ++j)
-            for (int i = 0; i <= B; ++i)
-                if (i == B || j == B || k == B) out.push_back({i, j, k});
-    return out;
-}
-
 namespace {
 
 struct Layout {
@@ -45,9 +36,6 @@ struct Layout {
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 }  // namespace
-
-int apronSize(int B) { return (B + 1) * (B + 1) * (B + 1) - B * B * B; }
-int apronWords(int B) { return (apronSize(B) + 63) / 64; }
 
 ApronSamples splitAprons(const Grid& grid) {
     const Layout L(grid.shape(), grid.blockSize());

@@ -7,12 +7,12 @@
 // decompress them straight into the builder's, so neither side copies the grid.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "sdftrace/field/block_apron_layout.h"  // apronSize, apronWords, apronPositions
 #include "sdftrace/field/grid.h"
 #include "sdftrace/field/sparse_grid_builder.h"
 
@@ -22,13 +22,6 @@ struct ApronSamples {
     std::vector<uint64_t> masks;    // per surface block, apronWords() words: bit = kept explicitly
     std::vector<float> explicitly;  // the kept apron samples, block by block, in apron order
 };
-
-// Apron positions per block ((B+1)^3 - B^3) and the mask words they take.
-int apronSize(int blockSize);
-int apronWords(int blockSize);
-// The apron's local vertices (some coordinate == B), z slowest, x fastest: the order of the masks'
-// bits and of the kept samples.
-std::vector<std::array<int, 3>> apronPositions(int blockSize);
 
 // The aprons of a sparse grid's surface blocks; their own samples are the first
 // surfaceBlockCount() * B^3 of grid.blockSamples().
