@@ -55,7 +55,7 @@ void addConvertCommand(CLI::App& app, Action& action) {
     cmd->add_flag(
         "--uncompressed", args->uncompressed,
         ".sdfg: write version 1 (2 with texture coordinates), the raw buffers, instead of "
-        "the compressed version 4");
+        "the compressed version 5 (4 for dense grids)");
     cmd->callback([&action, args] { action = [args] { return runConvert(*args); }; });
 }
 
