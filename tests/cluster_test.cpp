@@ -261,6 +261,12 @@ TEST(Cluster, AFailureOnOneRankStopsEveryRankWithOneErrorAndNoOutput) {
                  " --max-memory 64K" + bake);
     expectJobFailed(r, "", dir, 0);
     EXPECT_NE(r.err.find("budget of 64 KiB"), std::string::npos) << r.err;
+    // A budget that passes the estimate but not the slab's arrays: rank 1 runs out mid-bake.
+    const std::string large =
+        " bake " + kSource + "/data/meshes/teapot.obj --res 512 -q -o " + dir.file("out.sdfg");
+    r = runShell(kMpiEnv + kMpirun + " -np 1 " + kCli + large + " : -np 1 " + kCli +
+                 " --max-memory 10M" + large);
+    expectJobFailed(r, "out of memory (an allocation over the memory budget of 10 MiB", dir, 0);
 }
 
 // A rank that dies (SIGKILL, as the kernel's OOM killer sends) while baking its slab, or while
