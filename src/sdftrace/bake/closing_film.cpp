@@ -20,7 +20,7 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t v) {
 }
 }  // namespace
 
-ClosingFilm::ClosingFilm(const TriangleMesh& mesh) : m_closed(mesh) {
+ClosingFilm::ClosingFilm(const TriangleMesh& mesh) : m_source(&mesh) {
     // The boundary chain: per undirected edge (a < b), the count of a -> b minus that of b -> a
     // (sorted keys, the direction in the lowest bit).
     SDFT_CHECK(mesh.positions.size() < (size_t(1) << 31));
@@ -43,6 +43,8 @@ ClosingFilm::ClosingFilm(const TriangleMesh& mesh) : m_closed(mesh) {
         n = m;
     }
     if (rim.empty()) return;
+    keys = std::vector<uint64_t>();
+    m_closed = mesh;
 
     // Connected pieces of the rim (each is itself a cycle: every vertex has as many edges in as
     // out), one apex each at the mean of its vertices.

@@ -29,11 +29,12 @@ namespace sdft {
 
 class ClosingFilm {
   public:
-    explicit ClosingFilm(const TriangleMesh& mesh);
+    explicit ClosingFilm(const TriangleMesh& mesh);  // mesh must outlive the film
 
     bool empty() const { return m_films.empty(); }  // M is already a 2-cycle (watertight)
-    // M's triangles followed by the films' (the apexes appended to M's positions).
-    const TriangleMesh& closedMesh() const { return m_closed; }
+    // M's triangles followed by the films' (the apexes appended to M's positions); M itself
+    // when it is watertight (no copy: M must outlive the films).
+    const TriangleMesh& closedMesh() const { return m_films.empty() ? *m_source : m_closed; }
     const std::vector<CrossingTriangle>& filmTriangles() const { return m_films; }
     size_t components() const { return m_cones.size(); }  // connected pieces of the rim
 
@@ -90,7 +91,8 @@ class ClosingFilm {
     };
     int buildGroups(int* cones, int count);
 
-    TriangleMesh m_closed;
+    const TriangleMesh* m_source;
+    TriangleMesh m_closed;  // empty when M is watertight
     std::vector<CrossingTriangle> m_films;
     // Per rim piece, its apex and film triangles; their other corners as arrays for windingFast.
     struct Cone {
