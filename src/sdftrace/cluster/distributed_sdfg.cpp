@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -68,7 +69,7 @@ constexpr bool kFloats[kSections] = {false, false, true, false, true};
 
 // The block table of the slab's layers (tiles are the whole grid's: the slab starts on a tile
 // layer) as version 4 stores it.
-void tableOf(Part& p, const int nb[3]) {
+void blockTableOf(Part& p, const int nb[3]) {
     const int layers = p.slab.slab.last - p.slab.slab.first;
     if (layers <= 0) return;
     const int blocks[3] = {nb[0], nb[1], layers};
@@ -241,14 +242,167 @@ Part bakePart(Communicator& comm, const TriangleMesh& mesh, const MeshBakeOption
     return p;
 }
 
-// The header and chunk table rank 0 writes, from every rank's counts and chunk sizes.
+// What each rank tells the others after its slab: its sections' sizes, then these counts (in
+// that order, a u64 each; seconds as the bits of a double).
+enum Count : size_t {
+    kSurface = kSections,
+    kKept,
+    kOwnPageBytes,
+    kInside,
+    kOutside,
+    kQueries,
+    kSigns,
+    kFilmSums,
+    kSlabSeconds,
+    kCounts
+};
+
+uint64_t bitsOf(double v) {
+    uint64_t b = 0;
+    std::memcpy(&b, &v, sizeof b);
+    return b;
+}
+
+double doubleOf(uint64_t b) {
+    double v = 0;
+    std::memcpy(&v, &b, sizeof v);
+    return v;
+}
+
+std::vector<uint64_t> countsOf(const Part& p, const ExactBakeStats& stats) {
+    std::vector<uint64_t> mine(p.bytes, p.bytes + kSections);
+    double seconds = 0;
+    for (const BakeStage& st : stats.phases) seconds += st.seconds;
+    mine.insert(mine.end(),
+                {p.slab.surfaceBlocks, p.slab.kept.size(), p.ownPages.size(), p.inside, p.outside,
+                 stats.distanceQueries, stats.signEvaluations, stats.filmSums, bitsOf(seconds)});
+    return mine;
+}
+
+// The header and chunk table rank 0 writes, from every rank's counts and chunk sizes (pairs of
+// global chunk number and compressed size), and where each chunk goes in the file.
 struct Table {
     SdfgHeader h;
     SdfgCompressedHeader ch{};
     uint64_t ownPages = 0;
-    std::vector<uint64_t> sizes;
+    std::vector<uint64_t> sizes, at;
     uint64_t dataStart = 0;
 };
+
+Table tableOf(const Layout& L, const std::vector<std::vector<uint64_t>>& counts,
+              const std::vector<std::vector<uint64_t>>& chunkSizes, const GridShape& shape,
+              const SampleOptions& so) {
+    Table t;
+    t.sizes.assign(L.firstChunk[kSections], 0);
+    for (const std::vector<uint64_t>& r : chunkSizes)
+        for (size_t i = 0; i + 1 < r.size(); i += 2) t.sizes.at(r[i]) = r[i + 1];
+    uint64_t surface = 0;
+    for (const std::vector<uint64_t>& r : counts) {
+        surface += r[kSurface];
+        t.ch.apronCount += r[kKept];
+        t.ownPages += r[kOwnPageBytes] / kPageEntries;
+    }
+    const uint64_t V = static_cast<uint64_t>(so.blockSize) + 1;
+    t.h =
+        sdfgHeader(shape, GridKind::Sparse, so.blockSize, (so.bandVoxels - 1) * shape.voxelSize, 4);
+    t.ch.chunkBytes = kSdfgChunkBytes;
+    t.ch.sampleCount = surface * V * V * V;
+    t.ch.chunkCount = t.sizes.size();
+    t.dataStart = sizeof t.h + sizeof t.ch + sizeof t.ownPages + t.sizes.size() * sizeof(uint64_t);
+    uint64_t payload = t.dataStart - sizeof t.h;
+    t.at.resize(t.sizes.size());
+    for (size_t i = 0; i < t.sizes.size(); ++i) {
+        t.at[i] = sizeof t.h + payload;
+        payload += t.sizes[i];
+    }
+    t.h.payloadBytes = payload;
+    t.h.checksum = fnv1a64(t.sizes.data(), t.sizes.size() * sizeof(uint64_t),
+                           fnv1a64(&t.ownPages, sizeof t.ownPages, fnv1a64(&t.ch, sizeof t.ch)));
+    return t;
+}
+
+// Rank 0 makes the file under a temporary name (the header's room zeroed); every rank writes its
+// chunks into it with MPI-IO; rank 0 then writes the header and chunk table and renames the file
+// into place. Every rank has the temporary file removed if it is stopped meanwhile.
+void writeFile(Communicator& comm, const std::string& path, const Table& t,
+               const std::vector<OwnChunk>& chunks) {
+    std::string error;
+    std::unique_ptr<AtomicOutput> out;
+    Bytes temp;
+    try {
+        if (comm.root()) {
+            out = std::make_unique<AtomicOutput>(path);
+            std::vector<char> head(t.dataStart, 0);
+            out->write(head.data(), head.size());
+            out->writeAt(0, head.data(), head.size());  // flushed: the file exists, sized
+            temp.assign(out->tempPath().begin(), out->tempPath().end());
+        }
+    } catch (...) {
+        error = describeException(std::current_exception());
+    }
+    checkpoint(comm, error);
+    comm.broadcast(temp);
+    const std::string tempPath(temp.begin(), temp.end());
+    std::unique_ptr<SharedTemporary> shared;
+    if (!comm.root()) shared = std::make_unique<SharedTemporary>(tempPath);
+    injectedFailure(comm, true);
+    SharedFile file;
+    checkpoint(comm, file.open(comm, tempPath));
+    for (const OwnChunk& c : chunks) {
+        error = file.writeAt(t.at[c.number], c.packed.data(), c.packed.size());
+        if (!error.empty()) {
+            error = path + ": " + error;
+            break;
+        }
+    }
+    const std::string closed = file.close();
+    if (error.empty() && !closed.empty()) error = path + ": " + closed;
+    checkpoint(comm, error);
+    try {
+        if (comm.root()) {
+            out->writeAt(0, &t.h, sizeof t.h);
+            out->writeAt(sizeof t.h, &t.ch, sizeof t.ch);
+            out->writeAt(sizeof t.h + sizeof t.ch, &t.ownPages, sizeof t.ownPages);
+            out->writeAt(sizeof t.h + sizeof t.ch + sizeof t.ownPages, t.sizes.data(),
+                         t.sizes.size() * sizeof(uint64_t));
+            out->commit();
+        }
+    } catch (...) {
+        error = describeException(std::current_exception());
+    }
+    checkpoint(comm, error);
+    if (shared) shared->release();  // rank 0 renamed it into place
+}
+
+// Rank 0's report from every rank's counts and peaks: the job's counters, rank 0's phases, the
+// slowest slab.
+DistributedBakeSummary summaryOf(const std::vector<std::vector<uint64_t>>& counts,
+                                 const std::vector<std::vector<uint64_t>>& peaks,
+                                 const ExactBakeStats& rank0, const MeshBakeOptions& o,
+                                 const GridShape& shape) {
+    DistributedBakeSummary sum;
+    sum.shape = shape;
+    ExactBakeStats total;
+    double slowest = 0;
+    for (const std::vector<uint64_t>& r : counts) {
+        sum.surface += r[kSurface];
+        sum.inside += r[kInside];
+        sum.outside += r[kOutside];
+        total.distanceQueries += r[kQueries];
+        total.signEvaluations += r[kSigns];
+        total.filmSums += r[kFilmSums];
+        slowest = std::max(slowest, doubleOf(r[kSlabSeconds]));
+    }
+    for (const std::vector<uint64_t>& r : peaks)
+        sum.peakMiB = std::max(sum.peakMiB, doubleOf(r[0]));
+    total.surfaceBlocks = sum.surface;
+    for (const BakeStage& b : rank0.phases) sum.stages.push_back({"rank 0 " + b.name, b.seconds});
+    char name[64];
+    std::snprintf(name, sizeof name, "slabs (slowest rank %.3f s)", slowest);
+    sum.stages.push_back({name, 0});  // the phase's seconds: the caller's
+    sum.details = exactBakeDetails(total, o, shape);
+    return sum;
+}
 
 }  // namespace
 
@@ -266,26 +420,18 @@ DistributedBakeSummary bakeExactToSdfg(Communicator& comm, const TriangleMesh& m
     Part p = bakePart(comm, mesh, o, shape, slabs, stats);
     std::string error;
     try {
-        tableOf(p, nb);
+        blockTableOf(p, nb);
         sectionsOf(p);
     } catch (...) {
         error = describeException(std::current_exception());
     }
     checkpoint(comm, error);
     const double bakeSeconds = since(start);
-    const auto written = Clock::now();
+    const auto writeStart = Clock::now();
 
-    // Every rank's sizes and counts.
-    std::vector<uint64_t> mine(p.bytes, p.bytes + kSections);
-    double slabSeconds = 0;
-    for (const BakeStage& st : stats.phases) slabSeconds += st.seconds;
-    uint64_t secondsBits = 0;
-    std::memcpy(&secondsBits, &slabSeconds, sizeof secondsBits);
-    mine.insert(mine.end(),
-                {p.slab.surfaceBlocks, p.slab.kept.size(), p.ownPages.size(), p.inside, p.outside,
-                 stats.distanceQueries, stats.signEvaluations, stats.filmSums, secondsBits});
-    const std::vector<std::vector<uint64_t>> all = comm.allGather(mine);
-    const Layout L = layoutOf(all);
+    // Every rank's sizes and counts, then the chunks that start in this rank's parts compressed.
+    const std::vector<std::vector<uint64_t>> counts = comm.allGather(countsOf(p, stats));
+    const Layout L = layoutOf(counts);
     std::vector<OwnChunk> chunks;
     try {
         chunks = ownChunks(L, p, me, comm.allToAll(headsOut(L, p, me)));
@@ -295,113 +441,18 @@ DistributedBakeSummary bakeExactToSdfg(Communicator& comm, const TriangleMesh& m
     }
     p = Part();  // compressed now
     checkpoint(comm, error);
-
-    // The chunk table: every rank's (chunk number, compressed size) pairs.
-    std::vector<uint64_t> sizes;
+    std::vector<uint64_t> sizes;  // (chunk number, compressed size) pairs
     for (const OwnChunk& c : chunks) sizes.insert(sizes.end(), {c.number, c.packed.size()});
-    Table t;
-    t.sizes.assign(L.firstChunk[kSections], 0);
-    for (const std::vector<uint64_t>& r : comm.allGather(sizes))
-        for (size_t i = 0; i + 1 < r.size(); i += 2) t.sizes.at(r[i]) = r[i + 1];
-    DistributedBakeSummary sum;
-    sum.shape = shape;
-    for (const std::vector<uint64_t>& r : all) {
-        sum.surface += r[5];
-        t.ch.apronCount += r[6];
-        t.ownPages += r[7] / kPageEntries;
-        sum.inside += r[8];
-        sum.outside += r[9];
-    }
-    t.h = sdfgHeader(shape, GridKind::Sparse, B, (so.bandVoxels - 1) * shape.voxelSize, 4);
-    t.ch.chunkBytes = kSdfgChunkBytes;
-    t.ch.sampleCount = sum.surface * (B + 1) * (B + 1) * (B + 1);
-    t.ch.chunkCount = t.sizes.size();
-    t.dataStart = sizeof t.h + sizeof t.ch + sizeof t.ownPages + t.sizes.size() * sizeof(uint64_t);
-    uint64_t payload = t.dataStart - sizeof t.h;
-    std::vector<uint64_t> chunkAt(t.sizes.size());
-    for (size_t i = 0; i < t.sizes.size(); ++i) {
-        chunkAt[i] = sizeof t.h + payload;
-        payload += t.sizes[i];
-    }
-    t.h.payloadBytes = payload;
-    t.h.checksum = fnv1a64(t.sizes.data(), t.sizes.size() * sizeof(uint64_t),
-                           fnv1a64(&t.ownPages, sizeof t.ownPages, fnv1a64(&t.ch, sizeof t.ch)));
+    const Table t = tableOf(L, counts, comm.allGather(sizes), shape, so);
+    writeFile(comm, path, t, chunks);
+    const std::vector<std::vector<uint64_t>> peaks = comm.allGather({bitsOf(peakResidentMiB())});
 
-    // Rank 0 makes the file under a temporary name; every rank writes its chunks into it.
-    std::unique_ptr<AtomicOutput> out;
-    Bytes temp;
-    try {
-        if (comm.root()) {
-            out = std::make_unique<AtomicOutput>(path);
-            std::vector<char> head(t.dataStart, 0);
-            out->write(head.data(), head.size());
-            out->writeAt(0, head.data(), head.size());  // flushed: the file exists, sized
-            temp.assign(out->tempPath().begin(), out->tempPath().end());
-        }
-    } catch (...) {
-        error = describeException(std::current_exception());
-    }
-    checkpoint(comm, error);
-    comm.broadcast(temp);
-    // Every rank removes the temporary file if it is stopped while the file is incomplete.
-    std::unique_ptr<SharedTemporary> shared;
-    if (!comm.root())
-        shared = std::make_unique<SharedTemporary>(std::string(temp.begin(), temp.end()));
-    injectedFailure(comm, true);
-    SharedFile file;
-    error = file.open(comm, std::string(temp.begin(), temp.end()));
-    checkpoint(comm, error);
-    for (const OwnChunk& c : chunks) {
-        if (!error.empty()) break;
-        error = file.writeAt(chunkAt[c.number], c.packed.data(), c.packed.size());
-        if (!error.empty()) error = path + ": " + error;
-    }
-    const std::string closed = file.close();
-    if (error.empty() && !closed.empty()) error = path + ": " + closed;
-    checkpoint(comm, error);
-    try {
-        if (comm.root()) {
-            out->writeAt(0, &t.h, sizeof t.h);
-            out->writeAt(sizeof t.h, &t.ch, sizeof t.ch);
-            out->writeAt(sizeof t.h + sizeof t.ch, &t.ownPages, sizeof t.ownPages);
-            out->writeAt(sizeof t.h + sizeof t.ch + sizeof t.ownPages, t.sizes.data(),
-                         t.sizes.size() * sizeof(uint64_t));
-            out->commit();
-        }
-    } catch (...) {
-        error = describeException(std::current_exception());
-    }
-    const double peak = peakResidentMiB();
-    uint64_t peakBits = 0;
-    std::memcpy(&peakBits, &peak, sizeof peakBits);
-    const std::vector<std::vector<uint64_t>> peaks = comm.allGather({peakBits});
-    checkpoint(comm, error);
-    if (shared) shared->release();  // rank 0 renamed it into place
-
-    ExactBakeStats total;
-    double slowest = 0;
-    for (const std::vector<uint64_t>& r : all) {
-        total.distanceQueries += r[10];
-        total.signEvaluations += r[11];
-        total.filmSums += r[12];
-        double s = 0;
-        std::memcpy(&s, &r[13], sizeof s);
-        slowest = std::max(slowest, s);
-    }
-    for (const std::vector<uint64_t>& r : peaks) {
-        double v = 0;
-        std::memcpy(&v, &r[0], sizeof v);
-        sum.peakMiB = std::max(sum.peakMiB, v);
-    }
-    total.surfaceBlocks = sum.surface;
+    DistributedBakeSummary sum = summaryOf(counts, peaks, stats, o, shape);
     sum.fileBytes = sizeof t.h + t.h.payloadBytes;
-    for (const BakeStage& b : stats.phases) sum.stages.push_back({"rank 0 " + b.name, b.seconds});
-    char name[64];
-    std::snprintf(name, sizeof name, "slabs (slowest rank %.3f s)", slowest);
-    sum.stages.push_back({name, bakeSeconds});
-    sum.stages.push_back({"write", since(written)});
-    sum.details = exactBakeDetails(total, o, shape) + ", " + std::to_string(comm.size()) +
-                  " ranks, " + std::to_string(slabs.size()) + " slabs, written by every rank";
+    sum.stages.back().seconds = bakeSeconds;
+    sum.stages.push_back({"write", since(writeStart)});
+    sum.details += ", " + std::to_string(comm.size()) + " ranks, " + std::to_string(slabs.size()) +
+                   " slabs, written by every rank";
     return sum;
 }
 
