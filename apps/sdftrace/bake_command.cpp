@@ -233,9 +233,6 @@ void printFieldVerify(const FieldVerification& v) {
                      v.signedCentres);
 }
 
-// A mesh file, by any method of mesh_bake.h; --verify compares with the exact bake. Under mpirun
-// the sparse exact bake runs on every rank, one slab each (cluster/distributed_bake.h); the other
-// methods run on rank 0.
 // The mesh bake's options from the flags (validated).
 MeshBakeOptions meshBakeOptions(const BakeArgs& a) {
     MeshBakeOptions o = a.bake;
@@ -243,17 +240,23 @@ MeshBakeOptions meshBakeOptions(const BakeArgs& a) {
     return o;
 }
 
+// "load 0.123 s, <stage> 0.456 s, ...": the summary's list of phases.
+std::string stagesText(double loadSeconds, const std::vector<BakeStage>& stages) {
+    std::string text = "load " + std::to_string(loadSeconds).substr(0, 5) + " s";
+    for (const BakeStage& st : stages) {
+        char one[96];
+        std::snprintf(one, sizeof one, ", %s %.3f s", st.name.c_str(), st.seconds);
+        text += one;
+    }
+    return text;
+}
+
 // The summary lines of a finished mesh bake (t0: start, t1: loaded, t2: baked, t3 / t4: around
 // the write).
 void printMeshBakeSummary(const BakeArgs& a, const MeshBakeResult& r,
                           const std::array<std::chrono::steady_clock::time_point, 5>& t) {
     const GridShape& shape = r.grid.shape();
-    std::string stages = "load " + std::to_string(seconds(t[0], t[1])).substr(0, 5) + " s";
-    for (const BakeStage& st : r.stages) {
-        char one[96];
-        std::snprintf(one, sizeof one, ", %s %.3f s", st.name.c_str(), st.seconds);
-        stages += one;
-    }
+    std::string stages = stagesText(seconds(t[0], t[1]), r.stages);
     char tail[96];
     std::snprintf(tail, sizeof tail, ", write %.3f s; total %.3f s", seconds(t[3], t[4]),
                   seconds(t[0], t[4]) - seconds(t[2], t[3]));
@@ -280,14 +283,10 @@ void printMeshBakeSummary(const BakeArgs& a, const MeshBakeResult& r,
 void printDistributedBakeSummary(const BakeArgs& a, const DistributedBakeSummary& r,
                                  double loadSeconds) {
     const GridShape& shape = r.shape;
-    std::string stages = "load " + std::to_string(loadSeconds).substr(0, 5) + " s";
-    double total = loadSeconds;
-    for (const BakeStage& st : r.stages) {
-        char one[96];
-        std::snprintf(one, sizeof one, ", %s %.3f s", st.name.c_str(), st.seconds);
-        stages += one;
+    const std::string stages = stagesText(loadSeconds, r.stages);
+    double total = loadSeconds;  // rank 0's phases are within the slabs' time
+    for (const BakeStage& st : r.stages)
         if (st.name.rfind("rank 0 ", 0) != 0) total += st.seconds;
-    }
     std::fprintf(stderr, "sdftrace bake: %s: %s\n", meshBakeMethodName(a.bake.method),
                  r.details.c_str());
     std::fprintf(stderr,
@@ -316,6 +315,23 @@ bool bakeOnGpu(const BakeArgs& a, const MeshBakeOptions& o, bool bakesHere) {
     return c.gpu;
 }
 
+// Each rank checks its own budget before any work: its share of a bake split across the ranks
+// (`across`), else the whole bake's.
+void checkBakeMemory(const BakeArgs& a, const MeshBakeOptions& o, const TriangleMesh& mesh,
+                     const Communicator& comm, bool across) {
+    const GridShape shape = gridShapeFor(mesh.bounds(), o.sampling);
+    const bool verify = a.verify && comm.root();
+    const int resolution = a.bake.sampling.resolution;
+    if (!across) return checkMemory(meshBakeBytes(mesh, shape, o, verify, 1.0), resolution);
+    const double fixed = meshBakeBytes(mesh, shape, o, verify, 0);
+    checkRankMemory(meshBakeBytes(mesh, shape, o, verify, 1) - fixed, fixed, comm.size(),
+                    resolution);
+    checkMeshBake(mesh, o, 1.0 / comm.size());
+}
+
+// A mesh file, by any method of mesh_bake.h; --verify compares with the exact bake. Under mpirun
+// the sparse exact bake runs on every rank, one slab each (cluster/distributed_bake.h); the other
+// methods run on rank 0.
 int bakeMesh(const BakeArgs& a, Communicator& comm) {
     MeshBakeOptions o;
     auto t0 = std::chrono::steady_clock::now();
@@ -331,18 +347,7 @@ int bakeMesh(const BakeArgs& a, Communicator& comm) {
         gpu = bakeOnGpu(a, o, comm.root() || across);
         if (comm.distributed() && !across && !comm.root()) return;  // rank 0 bakes alone
         mesh = loadMesh(a.scene, &report);
-        // Each rank checks its own budget for its share of the grid's working arrays.
-        const double share = across ? 1.0 / comm.size() : 1.0;
-        const GridShape shape = gridShapeFor(mesh.bounds(), o.sampling);
-        const bool verify = a.verify && comm.root();
-        if (across) {
-            const double fixed = meshBakeBytes(mesh, shape, o, verify, 0);
-            checkRankMemory(meshBakeBytes(mesh, shape, o, verify, 1) - fixed, fixed, comm.size(),
-                            a.bake.sampling.resolution);
-        } else {
-            checkMemory(meshBakeBytes(mesh, shape, o, verify, share), a.bake.sampling.resolution);
-        }
-        if (across) checkMeshBake(mesh, o, share);
+        checkBakeMemory(a, o, mesh, comm, across);
     });
     // A .sdfg is written by every rank, none holding the whole grid; other outputs, --verify and
     // --texcoords need the grid assembled on rank 0.

@@ -93,21 +93,18 @@ SDFT_HOST_DEVICE inline float combineSlope(Op op, float a, float la, float b, fl
         op == Op::SmoothUnion || op == Op::SmoothIntersection || op == Op::SmoothDifference;
     const float gap = smooth && k[0] > 0 ? k[0] : 0.0f;  // the smooth ops are exact beyond it
     const float both = maxf(la, lb);
+    if (op == Op::Difference || op == Op::SmoothDifference) b = -b;  // max(a, -b)
+    // Whether a stays above b over the segment by the gap, or b above a.
+    const bool aAbove = a - ra - (b + rb) >= gap, bAbove = b - rb - (a + ra) >= gap;
     switch (op) {
         case Op::Union:
-        case Op::SmoothUnion:
-            if (a - ra - (b + rb) >= gap) return lb;
-            if (b - rb - (a + ra) >= gap) return la;
-            return both;
-        case Op::Difference:
-        case Op::SmoothDifference:  // max(a, -b)
-            b = -b;
-            [[fallthrough]];
+        case Op::SmoothUnion:  // the lower operand decides
+            return aAbove ? lb : bAbove ? la : both;
         case Op::Intersection:
         case Op::SmoothIntersection:
-            if (b - rb - (a + ra) >= gap) return lb;
-            if (a - ra - (b + rb) >= gap) return la;
-            return both;
+        case Op::Difference:
+        case Op::SmoothDifference:  // the higher one decides
+            return bAbove ? lb : aAbove ? la : both;
         case Op::Morph:
             return std::fabs(1 - k[0]) * la + std::fabs(k[0]) * lb;
         default:
@@ -167,10 +164,7 @@ SDFT_HOST_DEVICE inline SegmentBound evalTapeSegment(const TapeView& t, Vec3 p, 
     pts[0] = p;
     vel[0] = u;
     straight[0] = true;
-    const Instr* tape;
-    uint32_t count;
-    t.tapeAt(p, tape, count);
-    TapeWalk walk(tape, count, t.instrs);
+    TapeWalk walk = t.walkAt(p);
     for (uint32_t pc = 0; const Instr* next = walk.at(pc); ++pc) {
         const Instr& in = *next;
         const float* k = t.consts + in.k;

@@ -103,6 +103,13 @@ struct TapeView {
     SDFT_HOST_DEVICE void tapeAt(Vec3 p, const Instr*& first, uint32_t& n) const {
         tapeSpan(cells.instrs ? cells.tapeOf(p) : TapeCells::kWhole, first, n);
     }
+    // A walk of the instructions that evaluate the field at p (tapeAt).
+    SDFT_HOST_DEVICE TapeWalk walkAt(Vec3 p) const {
+        const Instr* first;
+        uint32_t n;
+        tapeAt(p, first, n);
+        return TapeWalk(first, n, instrs);
+    }
 };
 static_assert(std::is_trivially_copyable_v<TapeView>);
 
@@ -198,10 +205,7 @@ SDFT_HOST_DEVICE inline float evalTapeAt(const TapeView& t, Vec3 p, MaterialBlen
     Vec3 pts[kTapeMaxPointRegs];
     MaterialBlend mats[kMaterial ? kMaterialRegs : 1];
     pts[0] = p;
-    const Instr* tape;
-    uint32_t count;
-    t.tapeAt(p, tape, count);
-    TapeWalk walk(tape, count, t.instrs);
+    TapeWalk walk = t.walkAt(p);
     for (uint32_t pc = 0; const Instr* next = walk.at(pc); ++pc) {
         const Instr& in = *next;
         const float* k = t.consts + in.k;

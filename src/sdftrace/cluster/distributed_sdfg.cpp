@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -257,25 +258,13 @@ enum Count : size_t {
     kCounts
 };
 
-uint64_t bitsOf(double v) {
-    uint64_t b = 0;
-    std::memcpy(&b, &v, sizeof b);
-    return b;
-}
-
-double doubleOf(uint64_t b) {
-    double v = 0;
-    std::memcpy(&v, &b, sizeof v);
-    return v;
-}
-
 std::vector<uint64_t> countsOf(const Part& p, const ExactBakeStats& stats) {
     std::vector<uint64_t> mine(p.bytes, p.bytes + kSections);
     double seconds = 0;
     for (const BakeStage& st : stats.phases) seconds += st.seconds;
-    mine.insert(mine.end(),
-                {p.slab.surfaceBlocks, p.slab.kept.size(), p.ownPages.size(), p.inside, p.outside,
-                 stats.distanceQueries, stats.signEvaluations, stats.filmSums, bitsOf(seconds)});
+    mine.insert(mine.end(), {p.slab.surfaceBlocks, p.slab.kept.size(), p.ownPages.size(), p.inside,
+                             p.outside, stats.distanceQueries, stats.signEvaluations,
+                             stats.filmSums, std::bit_cast<uint64_t>(seconds)});
     return mine;
 }
 
@@ -391,10 +380,10 @@ DistributedBakeSummary summaryOf(const std::vector<std::vector<uint64_t>>& count
         total.distanceQueries += r[kQueries];
         total.signEvaluations += r[kSigns];
         total.filmSums += r[kFilmSums];
-        slowest = std::max(slowest, doubleOf(r[kSlabSeconds]));
+        slowest = std::max(slowest, std::bit_cast<double>(r[kSlabSeconds]));
     }
     for (const std::vector<uint64_t>& r : peaks)
-        sum.peakMiB = std::max(sum.peakMiB, doubleOf(r[0]));
+        sum.peakMiB = std::max(sum.peakMiB, std::bit_cast<double>(r[0]));
     total.surfaceBlocks = sum.surface;
     for (const BakeStage& b : rank0.phases) sum.stages.push_back({"rank 0 " + b.name, b.seconds});
     char name[64];
@@ -445,7 +434,8 @@ DistributedBakeSummary bakeExactToSdfg(Communicator& comm, const TriangleMesh& m
     for (const OwnChunk& c : chunks) sizes.insert(sizes.end(), {c.number, c.packed.size()});
     const Table t = tableOf(L, counts, comm.allGather(sizes), shape, so);
     writeFile(comm, path, t, chunks);
-    const std::vector<std::vector<uint64_t>> peaks = comm.allGather({bitsOf(peakResidentMiB())});
+    const std::vector<std::vector<uint64_t>> peaks =
+        comm.allGather({std::bit_cast<uint64_t>(peakResidentMiB())});
 
     DistributedBakeSummary sum = summaryOf(counts, peaks, stats, o, shape);
     sum.fileBytes = sizeof t.h + t.h.payloadBytes;
