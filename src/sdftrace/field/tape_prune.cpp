@@ -9,6 +9,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <mutex>
 #include <new>
@@ -16,6 +18,7 @@
 #include <span>
 #include <vector>
 
+#include "sdftrace/exec/simd.h"
 #include "sdftrace/field/tape_view.h"
 
 namespace sdft {
@@ -45,34 +48,6 @@ bool isCombine(Op op) { return op >= Op::Union && op <= Op::SmoothDifference; }
 bool isHardCombine(Op op) { return op >= Op::Union && op <= Op::Difference; }
 bool writesScalar(Op op) { return op != Op::CullIfFar && op < Op::Translate; }
 
-// The interval of a binary op's result from its operands' (operators.h: the polynomial smooth
-// minimum lies within k/4 below the minimum). Only the smooth ops and morph have constants (a
-// hard op's k may point past the tape's last constant).
-Interval combine(Op op, Interval a, Interval b, const float* k) {
-    const bool smooth = op >= Op::SmoothUnion && op <= Op::SmoothDifference;
-    const float blend = smooth && k[0] > 0 ? 0.25f * k[0] : 0.0f;
-    switch (op) {
-        case Op::Union:
-            return {std::min(a.lo, b.lo), std::min(a.hi, b.hi)};
-        case Op::Intersection:
-            return {std::max(a.lo, b.lo), std::max(a.hi, b.hi)};
-        case Op::Difference:
-            return {std::max(a.lo, -b.hi), std::max(a.hi, -b.lo)};
-        case Op::SmoothUnion:
-            return {std::min(a.lo, b.lo) - blend, std::min(a.hi, b.hi)};
-        case Op::SmoothIntersection:
-            return {std::max(a.lo, b.lo), std::max(a.hi, b.hi) + blend};
-        case Op::SmoothDifference:
-            return {std::max(a.lo, -b.hi), std::max(a.hi, -b.lo) + blend};
-        case Op::Morph:
-            if (k[0] >= 0 && k[0] <= 1)
-                return {(1 - k[0]) * a.lo + k[0] * b.lo, (1 - k[0]) * a.hi + k[0] * b.hi};
-            return {};
-        default:
-            return {};
-    }
-}
-
 // How far a point operator can move two points apart, per unit (infinite: not Lipschitz).
 float stretch(Op op, const float* k) {
     switch (op) {
@@ -86,159 +61,331 @@ float stretch(Op op, const float* k) {
     }
 }
 
-// The pruner's working memory, one per thread, reused from cell to cell (a build visits tens of
+// One pass over a parent's tape prunes it for up to this many cells at once (an octree node's
+// children): each instruction is decoded once and bounded over every cell, lane by lane.
+constexpr int kLanes = 8;
+using LaneMask = uint8_t;  // bit l: lane l
+
+// Eight floats (or comparison results) that the compiler keeps in vector registers, two SSE
+// registers or one AVX register wide, aligned to their size in both builds (the baseline's
+// default is 16 bytes, which the AVX2 build's aligned moves would fault on). min and max as
+// std::min and std::max have them (the first operand where the comparison fails, NaN included),
+// so the lanes compute what the scalar code would. They are passed only to inlined functions, so
+// -Wpsabi's note on their calling convention without AVX does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+using F8 = float __attribute__((vector_size(kLanes * sizeof(float)), aligned(32)));
+using I8 = int32_t __attribute__((vector_size(kLanes * sizeof(int32_t)), aligned(32)));
+inline F8 splat(float x) { return F8{} + x; }
+inline F8 vmin(F8 a, F8 b) { return b < a ? b : a; }
+inline F8 vmax(F8 a, F8 b) { return a < b ? b : a; }
+inline F8 vabs(F8 a) { return a < 0 ? -a : a; }
+inline LaneMask maskOf(I8 m) {
+    LaneMask bits = 0;
+    for (int l = 0; l < kLanes; ++l) bits |= static_cast<LaneMask>((m[l] & 1) << l);
+    return bits;
+}
+
+// An interval per lane.
+struct LaneInterval {
+    F8 lo, hi;
+};
+
+// The pruner's working memory, one per thread, reused from pass to pass (a build visits tens of
 // thousands of cells; allocating per cell cost more than the pruning).
 struct PruneScratch {
     struct Chain {
         Op op;
         int32_t first, front;  // the fold's first operand, its first member
-        float best;            // the best bound an operand guarantees
-        bool valid, replaceFirst;
+        bool valid;
+        LaneMask replaceFirst;
+        F8 best;  // the best bound an operand guarantees
     };
-    std::vector<Interval> out;
+    std::vector<LaneInterval> out;
     std::vector<int32_t> accDef, rhsDef, chainOf;
-    std::vector<uint8_t> drop, copy;
-    std::vector<uint32_t> next;
     std::vector<Chain> chains;
-    std::vector<int32_t> hard;  // the hard folds' members, in order
+    std::vector<int32_t> hard;   // the hard folds' members, in order
+    std::vector<uint32_t> next;  // emit's renumbering
 };
 
-// A tape pruned for the points of a cell: each fold operand whose value over the cell, bounded by
-// its value at the cell's centre and the Lipschitz bound of its subtree, can never be the one
-// that decides the fold is removed (hard union, intersection and difference), or whose blend
-// weight is zero over the cell (smooth union, intersection and difference: |a - b| >= k). The
-// result equals the tape's at every point of the cell (up to one rounding of a smooth blend's
-// a + (b - a) at weight 1). Operands under a grid, a repetition or a displacement are kept.
+// What a pass decides for its cells: per instruction, the lanes that drop it and those that turn
+// it into a copy of its second operand; per lane, the tape's values over the cell.
+struct PruneResult {
+    std::vector<LaneMask> drop, copy;
+    Interval value[kLanes];
+    LaneMask changed = 0;  // the lanes that drop anything
+};
+
+// A tape pruned for the points of each of up to kLanes cells of one size: each fold operand
+// whose value over the cell, bounded by its value at the cell's centre and the Lipschitz bound
+// of its subtree, can never be the one that decides the fold is removed (hard union,
+// intersection and difference), or whose blend weight is zero over the cell (smooth union,
+// intersection and difference: |a - b| >= k). The result equals the tape's at every point of the
+// cell (up to one rounding of a smooth blend's a + (b - a) at weight 1). Operands under a grid, a
+// repetition or a displacement are kept.
 class Pruner {
   public:
-    Pruner(const FlatTape& t, const float* consts, const Bounds3& cell, PruneScratch& s)
-        : m_t(t), m_k(consts), m_n(t.instrs.size()), m_s(s) {
-        m_centre = (cell.lo + cell.hi) * 0.5f;
-        m_radius = 0.5f * length(cell.hi - cell.lo);
+    Pruner(const FlatTape& t, const float* consts, const Bounds3* cells, int n, PruneScratch& s,
+           PruneResult& r)
+        : m_t(t), m_k(consts), m_n(t.instrs.size()), m_s(s), m_r(r) {
+        SDFT_CHECK(n >= 1 && n <= kLanes);
+        for (int l = 0; l < kLanes; ++l) {  // spare lanes repeat the first cell
+            const Bounds3& cell = cells[l < n ? l : 0];
+            m_centre[l] = (cell.lo + cell.hi) * 0.5f;
+            m_radius[l] = 0.5f * length(cell.hi - cell.lo);
+        }
+        m_lanes = static_cast<LaneMask>((1u << n) - 1);
         // accDef, rhsDef and chainOf are read only where bounds() wrote them (folds).
         m_s.out.resize(m_n);
         m_s.accDef.resize(m_n);
         m_s.rhsDef.resize(m_n);
         m_s.chainOf.resize(m_n);
-        m_s.drop.assign(m_n, 0);
-        m_s.copy.assign(m_n, 0);
         m_s.chains.clear();
         m_s.hard.clear();
+        m_r.drop.assign(m_n, 0);
+        m_r.copy.assign(m_n, 0);
+        m_r.changed = 0;
     }
-    // The tape's values over the cell (its last result's interval), once run.
-    Interval value() const { return m_value; }
-    // Whether anything is dropped; emit() then writes the pruned tape.
-    bool run() {
-        bounds();
-        decideHard();
-        return m_changed;
+    // Bounds every instruction over the cells and decides what each drops (into the result).
+    void run() {
+        if (useAvx2())
+            runAvx2();
+        else
+            runBaseline();
+        m_r.changed &= m_lanes;
     }
 
-    // The kept instructions, renumbered: jumps, fold records, copies.
-    void emit(FlatTape& out) const {
-        const std::vector<uint8_t>& drop = m_s.drop;
-        std::vector<uint32_t>& next = m_s.next;  // new index of the first kept instruction >= i
-        next.resize(m_n + 1);
-        out.instrs.clear();
-        out.folds.clear();
-        out.origin.clear();
-        uint32_t kept = 0;
-        for (size_t i = 0; i < m_n; ++i) {
-            next[i] = kept;
-            if (drop[i]) continue;
-            ++kept;
-            Instr in = m_t.instrs[i];
-            FoldOperands f{};
-            if (m_s.copy[i]) {
-                in.op = Op::Copy;
-                in.a = in.b;
-                in.b = 0;
-                in.cull = -1;
-            } else if (isCombine(in.op)) {  // fold records point back: renumbered already
-                f = {next[m_t.folds[i].operand], next[m_t.folds[i].fold]};
+    // How many instructions each lane keeps.
+    static void countKept(const PruneResult& r, uint32_t count[kLanes]) {
+        std::fill_n(count, kLanes, 0u);
+        for (const LaneMask d : r.drop)
+            for (int l = 0; l < kLanes; ++l) count[l] += (~d >> l) & 1;
+    }
+
+    // One pass over the tape (`kept`: countKept's): the pruned tapes of the lanes in `full`, into
+    // out[l] (the kept instructions, renumbered: jumps, fold records, copies), and for those in
+    // `indexed`, the tape's indices of the instructions they keep, in index[l], for a LaneView over
+    // `next` (scratch: each lane's index of the first kept instruction >= i), each with its origin.
+    static void emit(const FlatTape& t, const PruneResult& r, const uint32_t kept[kLanes],
+                     LaneMask full, FlatTape* const* out, LaneMask indexed,
+                     std::array<std::vector<uint32_t>, kLanes>& index,
+                     std::vector<uint32_t>& next) {
+        const size_t n = t.instrs.size();
+        uint32_t pos[kLanes];
+        std::copy_n(kept, kLanes, pos);
+        for (int l = 0; l < kLanes; ++l) {
+            if (full >> l & 1) {
+                out[l]->instrs.resize(pos[l]);
+                out[l]->folds.resize(pos[l]);
+                out[l]->origin.resize(pos[l]);
+            } else if (indexed >> l & 1) {
+                index[l].resize(2 * size_t{pos[l]});
             }
-            out.instrs.push_back(in);
-            out.folds.push_back(f);
-            out.origin.push_back(m_s.copy[i] ? FlatTape::kMade : m_t.origin[i]);
+            pos[l] = 0;
         }
-        next[m_n] = kept;
-        for (Instr& in : out.instrs)  // guards jump forward, past their (kept) operator
-            if (in.op == Op::CullIfFar) in.jump = next[in.jump - 1] + 1;
+        next.resize((n + 1) * kLanes);
+        const unsigned lanes = full | indexed;
+        for (size_t i = 0; i < n; ++i) {
+            std::copy_n(pos, kLanes, next.data() + i * kLanes);
+            unsigned keep = ~r.drop[i] & lanes;
+            if (!keep) continue;
+            const Instr& in = t.instrs[i];
+            const bool combine = isCombine(in.op);
+            for (; keep; keep &= keep - 1) {
+                const int l = std::countr_zero(keep);
+                const uint32_t j = pos[l]++;
+                if (!(full >> l & 1)) {
+                    index[l][2 * j] = static_cast<uint32_t>(i);
+                    index[l][2 * j + 1] = r.copy[i] >> l & 1 ? FlatTape::kMade : t.origin[i];
+                    continue;
+                }
+                FlatTape& o = *out[l];
+                o.instrs[j] = in;
+                o.folds[j] = {};
+                o.origin[j] = t.origin[i];
+                if (r.copy[i] >> l & 1) {
+                    Instr& c = o.instrs[j];
+                    c.op = Op::Copy;
+                    c.a = c.b;
+                    c.b = 0;
+                    c.cull = -1;
+                    o.origin[j] = FlatTape::kMade;
+                } else if (combine) {  // fold records point back
+                    o.folds[j] = {next[t.folds[i].operand * kLanes + l],
+                                  next[t.folds[i].fold * kLanes + l]};
+                }
+            }
+        }
+        std::copy_n(pos, kLanes, next.data() + n * kLanes);
+        for (int l = 0; l < kLanes; ++l) {  // guards jump forward, past their (kept) operator
+            if (!(full >> l & 1)) continue;
+            for (Instr& in : out[l]->instrs)
+                if (in.op == Op::CullIfFar) in.jump = next[(in.jump - 1) * kLanes + l] + 1;
+        }
     }
 
   private:
-    // Forward pass: every scalar instruction's interval over the cell; smooth folds decided and
-    // hard ones gathered into chains on the way.
+    // The pass built twice (exec/simd.h): eight lanes are one AVX2 register.
+    SDFT_TARGET_AVX2 void runAvx2() {
+        bounds();
+        decideHard();
+    }
+    SDFT_TARGET_BASELINE void runBaseline() {
+        bounds();
+        decideHard();
+    }
+
+    // Forward pass: every scalar instruction's interval over each cell; smooth folds decided
+    // and hard ones gathered into chains on the way.
     void bounds() {
-        Vec3 pc[kTapeMaxPointRegs];
-        float ps[kTapeMaxPointRegs];
-        Interval sr[kTapeMaxScalarRegs];
+        F8 px[kTapeMaxPointRegs], py[kTapeMaxPointRegs], pz[kTapeMaxPointRegs],
+            ps[kTapeMaxPointRegs];
+        LaneInterval sr[kTapeMaxScalarRegs];
         int32_t writer[kTapeMaxScalarRegs];
         std::fill_n(writer, kTapeMaxScalarRegs, -1);
-        pc[0] = m_centre;
-        ps[0] = 1;
+        for (int l = 0; l < kLanes; ++l) {
+            px[0][l] = m_centre[l].x;
+            py[0][l] = m_centre[l].y;
+            pz[0][l] = m_centre[l].z;
+        }
+        ps[0] = splat(1);
+        const F8 inf = splat(kInfinity);
+        int32_t last = -1;
         for (size_t i = 0; i < m_n; ++i) {
             const Instr& in = m_t.instrs[i];
             const float* k = m_k + in.k;
-            Interval r;
             const Op op = in.op;
             if (op == Op::CullIfFar) continue;
+            LaneInterval& r = m_s.out[i];
             if (op < Op::Grid) {
-                const float v = tape_ops::primitive(op, pc[in.a], k);
-                const float reach = m_radius * ps[in.a];
-                if (std::isfinite(v) && reach < kInfinity) {
-                    // A margin for the rounding of the centre's value and the radius.
-                    const float pad = 1e-5f * (std::fabs(v) + reach) + 1e-7f;
-                    r = {v - reach - pad, v + reach + pad};
+                const F8 v = primitiveLanes(op, px[in.a], py[in.a], pz[in.a], k);
+                const F8 reach = m_radius * ps[in.a];
+                // A margin for the rounding of the centre's value and the radius.
+                const F8 pad = 1e-5f * (vabs(v) + reach) + 1e-7f;
+                const I8 known = (vabs(v) < inf) & (reach < inf);
+                r.lo = known ? v - reach - pad : -inf;
+                r.hi = known ? v + reach + pad : inf;
+            } else if (op >= Op::Translate && op <= Op::RepeatPoint) {  // a point operator
+                pointLanes(op, k, px[in.a], py[in.a], pz[in.a], px[in.out], py[in.out], pz[in.out]);
+                const F8 x = px[in.out], y = py[in.out], z = pz[in.out];
+                const I8 finite = (x - x == 0) & (y - y == 0) & (z - z == 0);
+                ps[in.out] = finite ? ps[in.a] * stretch(op, k) : inf;
+                continue;
+            } else {
+                if (op >= Op::Union && op <= Op::Morph) {
+                    m_s.accDef[i] = writer[in.a];
+                    m_s.rhsDef[i] = writer[in.b];
                 }
-            } else if (op == Op::Grid) {
-                r = {};
-            } else if (op <= Op::Morph) {
-                m_s.accDef[i] = writer[in.a];
-                m_s.rhsDef[i] = writer[in.b];
-                r = combine(op, sr[in.a], sr[in.b], k);
+                scalarLanes(op, sr[in.a], sr[in.b], k, r);
                 if (isHardCombine(op))
                     joinChain(static_cast<int32_t>(i));
-                else if (op != Op::Morph)
+                else if (isCombine(op) && op != Op::Morph)
                     decideSmooth(static_cast<int32_t>(i));
-            } else if (op == Op::Complement) {
-                r = {-sr[in.a].hi, -sr[in.a].lo};
-            } else if (op == Op::Copy) {
-                r = sr[in.a];
-            } else if (op == Op::ScaleValue) {
-                const Interval a = sr[in.a];
-                r = k[0] > 0 ? Interval{a.lo * k[0], a.hi * k[0]}
-                             : (k[0] < 0 ? Interval{a.hi * k[0], a.lo * k[0]} : Interval{0, 0});
-            } else if (op == Op::RepeatBound) {
-                r = {-kInfinity, sr[in.a].hi};  // min(a, a bound)
-            } else if (op == Op::FloorByBounds) {
-                r = {sr[in.a].lo, kInfinity};  // max(a, a box distance)
-            } else if (op == Op::Displace) {
-                r = {};
-            } else {  // a point operator
-                pc[in.out] = tape_ops::pointOp(op, pc[in.a], k);
-                ps[in.out] = ps[in.a] * stretch(op, k);
-                if (!isFinite(pc[in.out])) ps[in.out] = kInfinity;
-                continue;
             }
-            if (!(r.lo == r.lo)) r.lo = -kInfinity;
-            if (!(r.hi == r.hi)) r.hi = kInfinity;
-            m_s.out[i] = r;
+            r.lo = r.lo == r.lo ? r.lo : -inf;  // NaN: unknown
+            r.hi = r.hi == r.hi ? r.hi : inf;
             if (writesScalar(op)) {
                 sr[in.out] = r;
                 writer[in.out] = static_cast<int32_t>(i);
-                m_value = r;
+                last = static_cast<int32_t>(i);
             }
+        }
+        for (int l = 0; l < kLanes; ++l)
+            m_r.value[l] =
+                last < 0 ? Interval{} : Interval{m_s.out[last].lo[l], m_s.out[last].hi[l]};
+    }
+
+    // A point operator on each lane's point (a translation, the common one, in vectors).
+    static void pointLanes(Op op, const float* k, F8 x, F8 y, F8 z, F8& ox, F8& oy, F8& oz) {
+        if (op == Op::Translate) {
+            ox = x - k[0];
+            oy = y - k[1];
+            oz = z - k[2];
+            return;
+        }
+        for (int l = 0; l < kLanes; ++l) {
+            const Vec3 q = tape_ops::pointOp(op, Vec3(x[l], y[l], z[l]), k);
+            ox[l] = q.x;
+            oy[l] = q.y;
+            oz[l] = q.z;
         }
     }
 
-    // An operand's interval as its hard fold sees it (a difference negates all but the first).
-    Interval operand(Op op, int32_t m) const {
-        const Interval b = m_s.out[m_s.rhsDef[m]];
-        return op == Op::Difference ? Interval{-b.hi, -b.lo} : b;
+    // A primitive's value at each lane's point.
+    static F8 primitiveLanes(Op op, F8 x, F8 y, F8 z, const float* k) {
+        F8 v = splat(kInfinity);
+        switch (op) {
+#define SDFT_PRUNE_PRIMITIVE(Kind, name, eval, ...)                              \
+    case Op::Kind:                                                               \
+        for (int l = 0; l < kLanes; ++l) v[l] = eval(Vec3(x[l], y[l], z[l]), k); \
+        break;
+            SDFT_PRIMITIVES(SDFT_PRUNE_PRIMITIVE)
+#undef SDFT_PRUNE_PRIMITIVE
+            default:
+                break;
+        }
+        return v;
     }
-    static bool ruledOut(const PruneScratch::Chain& c, Interval v) {
-        return c.op == Op::Union ? v.lo > c.best : v.hi < c.best;
+
+    // The interval of a scalar instruction's result from its operands', per lane (combine: the
+    // folds; the unary ops; unknown for grids and displacements).
+    static void scalarLanes(Op op, const LaneInterval& a, const LaneInterval& b, const float* k,
+                            LaneInterval& r) {
+        // The smooth ops lie within k/4 of the hard ones (operators.h); a hard op's k may point
+        // past the tape's last constant, so it is read only for the smooth ones.
+        const bool smooth = op >= Op::SmoothUnion && op <= Op::SmoothDifference;
+        const float blend = smooth && k[0] > 0 ? 0.25f * k[0] : 0.0f;
+        const F8 inf = splat(kInfinity);
+        switch (op) {
+            case Op::Union:
+            case Op::SmoothUnion:
+                r = {vmin(a.lo, b.lo) - blend, vmin(a.hi, b.hi)};
+                return;
+            case Op::Intersection:
+            case Op::SmoothIntersection:
+                r = {vmax(a.lo, b.lo), vmax(a.hi, b.hi) + blend};
+                return;
+            case Op::Difference:
+            case Op::SmoothDifference:
+                r = {vmax(a.lo, -b.hi), vmax(a.hi, -b.lo) + blend};
+                return;
+            case Op::Morph:
+                if (k[0] >= 0 && k[0] <= 1) {
+                    r = {(1 - k[0]) * a.lo + k[0] * b.lo, (1 - k[0]) * a.hi + k[0] * b.hi};
+                    return;
+                }
+                break;
+            case Op::Complement:
+                r = {-a.hi, -a.lo};
+                return;
+            case Op::Copy:
+                r = a;
+                return;
+            case Op::ScaleValue:
+                r = k[0] > 0   ? LaneInterval{a.lo * k[0], a.hi * k[0]}
+                    : k[0] < 0 ? LaneInterval{a.hi * k[0], a.lo * k[0]}
+                               : LaneInterval{F8{}, F8{}};
+                return;
+            case Op::RepeatBound:  // min(a, a bound)
+                r = {-inf, a.hi};
+                return;
+            case Op::FloorByBounds:  // max(a, a box distance)
+                r = {a.lo, inf};
+                return;
+            default:  // a grid, a displacement
+                break;
+        }
+        r = {-inf, inf};
+    }
+
+    // An operand's intervals as its hard fold sees them (a difference negates all but the
+    // first).
+    LaneInterval operand(Op op, int32_t m) const {
+        const LaneInterval& b = m_s.out[m_s.rhsDef[m]];
+        return op == Op::Difference ? LaneInterval{-b.hi, -b.lo} : b;
+    }
+    // The lanes in which the values `v` all lie beyond the chain's best bound.
+    static LaneMask ruledOut(const PruneScratch::Chain& c, const LaneInterval& v) {
+        return maskOf(c.op == Op::Union ? v.lo > c.best : v.hi < c.best);
     }
 
     // Hard folds, as chains of one operator through the accumulator (min, max and max(a, -b)
@@ -252,8 +399,9 @@ class Pruner {
             m_s.chainOf[i] = m_s.chainOf[j];
         } else {
             m_s.chainOf[i] = static_cast<int32_t>(chains.size());
-            const Interval a = j >= 0 ? m_s.out[j] : Interval{};
-            chains.push_back({op, j, i, op == Op::Union ? a.hi : a.lo, j >= 0, false});
+            const F8 unknown = splat(op == Op::Union ? kInfinity : -kInfinity);
+            const F8 best = j < 0 ? unknown : (op == Op::Union ? m_s.out[j].hi : m_s.out[j].lo);
+            chains.push_back({op, j, i, j >= 0, 0, best});
         }
         m_s.hard.push_back(i);
         PruneScratch::Chain& c = chains[m_s.chainOf[i]];
@@ -261,8 +409,8 @@ class Pruner {
             c.valid = false;
             return;
         }
-        const Interval v = operand(op, i);
-        c.best = op == Op::Union ? std::min(c.best, v.hi) : std::max(c.best, v.lo);
+        const LaneInterval v = operand(op, i);
+        c.best = op == Op::Union ? vmin(c.best, v.hi) : vmax(c.best, v.lo);
     }
 
     // An operand whose values over the cell all lie beyond the best bound another operand of its
@@ -272,18 +420,21 @@ class Pruner {
     void decideHard() {
         std::vector<PruneScratch::Chain>& chains = m_s.chains;
         for (PruneScratch::Chain& c : chains)
-            c.replaceFirst = c.valid && c.op != Op::Difference && ruledOut(c, m_s.out[c.first]);
+            c.replaceFirst = c.valid && c.op != Op::Difference ? ruledOut(c, m_s.out[c.first]) : 0;
         for (const int32_t i : m_s.hard) {  // drop the ruled-out operands
             const PruneScratch::Chain& c = chains[m_s.chainOf[i]];
-            if (c.valid && ruledOut(c, operand(c.op, i))) dropOperand(i);
+            if (!c.valid) continue;
+            const LaneMask out = ruledOut(c, operand(c.op, i));
+            if (out) dropOperand(i, out);
         }
         for (const int32_t i : m_s.hard) {  // the first member left replaces a dropped first
             PruneScratch::Chain& c = chains[m_s.chainOf[i]];
-            if (!c.replaceFirst || m_s.drop[i]) continue;
-            dropRange(m_t.folds[c.front].fold, static_cast<uint32_t>(c.first));
-            if (m_t.instrs[i].cull >= 0) m_s.drop[m_t.folds[i].operand - 1] = 1;
-            m_s.copy[i] = 1;
-            c.replaceFirst = false;
+            const LaneMask lanes = c.replaceFirst & static_cast<LaneMask>(~m_r.drop[i]);
+            if (!lanes) continue;
+            dropRange(m_t.folds[c.front].fold, static_cast<uint32_t>(c.first), lanes);
+            if (m_t.instrs[i].cull >= 0) m_r.drop[m_t.folds[i].operand - 1] |= lanes;
+            m_r.copy[i] |= lanes;
+            c.replaceFirst &= static_cast<LaneMask>(~lanes);
         }
     }
 
@@ -294,31 +445,32 @@ class Pruner {
         const float k = m_k[in.k];
         if (!(k > 0) || m_s.accDef[i] < 0 || m_s.rhsDef[i] < 0) return;
         const float margin = k * (1 + 1e-5f);
-        const Interval a = m_s.out[m_s.accDef[i]], b = m_s.out[m_s.rhsDef[i]];
-        const bool inactive = in.op == Op::SmoothUnion          ? b.lo - a.hi >= margin
-                              : in.op == Op::SmoothIntersection ? a.lo - b.hi >= margin
-                                                                : a.lo + b.lo >= margin;
-        if (inactive) dropOperand(i);
+        const LaneInterval &a = m_s.out[m_s.accDef[i]], &b = m_s.out[m_s.rhsDef[i]];
+        const LaneMask inactive = maskOf(in.op == Op::SmoothUnion          ? b.lo - a.hi >= margin
+                                         : in.op == Op::SmoothIntersection ? a.lo - b.hi >= margin
+                                                                           : a.lo + b.lo >= margin);
+        if (inactive) dropOperand(i, inactive);
     }
 
-    // A fold member and its operand, with the operand's guard.
-    void dropOperand(int32_t m) {
+    // A fold member and its operand, with the operand's guard, in the given lanes.
+    void dropOperand(int32_t m, LaneMask lanes) {
         const uint32_t from = m_t.folds[m].operand - (m_t.instrs[m].cull >= 0 ? 1 : 0);
-        dropRange(from, static_cast<uint32_t>(m));
+        dropRange(from, static_cast<uint32_t>(m), lanes);
     }
-    void dropRange(uint32_t from, uint32_t to) {
-        std::fill(m_s.drop.begin() + from, m_s.drop.begin() + to + 1, 1);
-        m_changed = true;
+    void dropRange(uint32_t from, uint32_t to, LaneMask lanes) {
+        LaneMask* d = m_r.drop.data();
+        for (uint32_t x = from; x <= to; ++x) d[x] |= lanes;
+        m_r.changed |= lanes;
     }
 
     const FlatTape& m_t;
     const float* m_k;
     size_t m_n;
     PruneScratch& m_s;
-    Vec3 m_centre;
-    float m_radius = 0;
-    Interval m_value;
-    bool m_changed = false;
+    PruneResult& m_r;
+    Vec3 m_centre[kLanes];
+    F8 m_radius;
+    LaneMask m_lanes = 0;
 };
 
 // compactTape's working memory, one per thread.
@@ -331,15 +483,57 @@ struct CompactScratch {
     std::vector<Entry> entries;
 };
 
+// A pruned tape as compactTape reads it: a FlatTape's instructions as they are.
+struct FlatView {
+    const FlatTape& t;
+    size_t size() const { return t.instrs.size(); }
+    uint32_t origin(size_t j) const { return t.origin[j]; }
+    Op op(size_t j) const { return t.instrs[j].op; }
+    uint32_t jump(size_t j) const { return t.instrs[j].jump; }
+    Instr instr(size_t j) const { return t.instrs[j]; }
+};
+
+// A pruned tape as compactTape reads it: one lane of a pass (Pruner::emit's leaf lanes), the
+// parent tape's instructions at `index`, renumbered on the way as emit would.
+struct LaneView {
+    const FlatTape& parent;
+    const std::vector<LaneMask>& copy;
+    int lane;
+    const uint32_t* index;  // per instruction, the parent's index and the origin
+    size_t n;
+    const uint32_t* next;  // emit's renumbering (kLanes per parent instruction)
+    size_t size() const { return n; }
+    uint32_t at(size_t j) const { return index[2 * j]; }
+    bool copied(size_t j) const { return copy[at(j)] >> lane & 1; }
+    uint32_t origin(size_t j) const { return index[2 * j + 1]; }
+    Op op(size_t j) const { return copied(j) ? Op::Copy : parent.instrs[at(j)].op; }
+    uint32_t jump(size_t j) const {  // guards jump past their (kept) operator
+        return next[(parent.instrs[at(j)].jump - 1) * kLanes + lane] + 1;
+    }
+    Instr instr(size_t j) const {
+        Instr in = parent.instrs[at(j)];
+        if (copied(j)) {
+            in.op = Op::Copy;
+            in.a = in.b;
+            in.b = 0;
+            in.cull = -1;
+        } else if (in.op == Op::CullIfFar) {
+            in.jump = jump(j);
+        }
+        return in;
+    }
+};
+
 // A pruned tape as the cells keep it: each stretch of instructions that the whole tape has as
 // they are (consecutive there, every jump inside) becomes one Op::Run of the whole tape's
 // instructions, and the rest is copied, its jumps renumbered. `whole` is the whole tape's.
-void compactTape(const FlatTape& t, const Instr* whole, std::vector<Instr>& out,
+template <typename View>
+void compactTape(const View& t, const Instr* whole, std::vector<Instr>& out,
                  CompactScratch& scratch) {
-    const size_t n = t.instrs.size();
-    auto verbatim = [&](size_t j) { return t.origin[j] != FlatTape::kMade; };
+    const size_t n = t.size();
+    auto verbatim = [&](size_t j) { return t.origin(j) != FlatTape::kMade; };
     auto follows = [&](size_t j) {  // j continues j - 1's stretch of the whole tape
-        return j > 0 && verbatim(j) && verbatim(j - 1) && t.origin[j] == t.origin[j - 1] + 1;
+        return j > 0 && verbatim(j) && verbatim(j - 1) && t.origin(j) == t.origin(j - 1) + 1;
     };
     // A guard may sit in a Run when its operand is the whole tape's, unbroken; the others are
     // copied, and the instruction each jumps to must start an entry.
@@ -351,11 +545,11 @@ void compactTape(const FlatTape& t, const Instr* whole, std::vector<Instr>& out,
             copied[j] = 1;
             continue;
         }
-        const Instr& in = t.instrs[j];
-        if (in.op != Op::CullIfFar) continue;
-        bool intact = in.jump - j == whole[t.origin[j]].jump - t.origin[j];
-        for (size_t i = j + 1; intact && i < in.jump; ++i) intact = follows(i);
-        if (!intact) copied[j] = 1, starts[in.jump] = 1;
+        if (t.op(j) != Op::CullIfFar) continue;
+        const uint32_t jump = t.jump(j);
+        bool intact = jump - j == whole[t.origin(j)].jump - t.origin(j);
+        for (size_t i = j + 1; intact && i < jump; ++i) intact = follows(i);
+        if (!intact) copied[j] = 1, starts[jump] = 1;
     }
     // The entries: a Run per stretch of two or more, the rest one by one.
     std::vector<uint32_t>& entryOf = scratch.entryOf;
@@ -373,14 +567,14 @@ void compactTape(const FlatTape& t, const Instr* whole, std::vector<Instr>& out,
     entryOf[n] = static_cast<uint32_t>(entries.size());
     out.clear();
     for (const CompactScratch::Entry& e : entries) {
-        Instr in = t.instrs[e.first];
+        Instr in{};
         if (e.count > 1) {
-            in = Instr{};
             in.op = Op::Run;
-            in.k = t.origin[e.first];
-            in.jump = t.origin[e.first] + e.count;
-        } else if (in.op == Op::CullIfFar) {
-            in.jump = entryOf[in.jump];
+            in.k = t.origin(e.first);
+            in.jump = t.origin(e.first) + e.count;
+        } else {
+            in = t.instr(e.first);
+            if (in.op == Op::CullIfFar) in.jump = entryOf[in.jump];
         }
         out.push_back(in);
     }
@@ -446,9 +640,19 @@ class Builder {
         root.origin.resize(root.instrs.size());
         std::iota(root.origin.begin(), root.origin.end(), 0u);
         m_whole = tape.instructions().data();
+        // The root cell pruned from the whole tape, then its subtree.
+        Local& local = m_locals.local();
+        PruneResult result;
+        Pruner(root, m_consts, &box, 1, local.scratch, result).run();
+        FlatTape pruned;
+        FlatTape* out = &pruned;
+        uint32_t kept[kLanes];
+        Pruner::countKept(result, kept);
+        if (result.changed)
+            Pruner::emit(root, result, kept, 1, &out, 0, local.index, local.scratch.next);
         int32_t memo = -1;
-        const int first[3] = {0, 0, 0};
-        node(root, memo, box, 0, first, range);
+        Cell cell{box, result.value[0], {0, 0, 0}, {range[0], range[1], range[2]}};
+        node(result.changed ? pruned : root, memo, cell, 0);
     }
     std::shared_ptr<PrunedTapes> finish() { return m_out; }
     // The mean instructions per leaf cell, against the whole tape's.
@@ -459,80 +663,133 @@ class Builder {
     }
 
   private:
-    // One thread's: its pruner's scratch and the tape of each level of the subtree it descends.
+    // One thread's: its pruner's scratch, and per level of the subtree it descends, the pass
+    // over that level's tape and the tape of the child it is in.
     struct Local {
         PruneScratch scratch;
-        std::vector<FlatTape> levels = std::vector<FlatTape>(kMaxLevels);
+        std::vector<PruneResult> results = std::vector<PruneResult>(kMaxLevels);
+        std::vector<std::array<FlatTape, kLanes>> levels =
+            std::vector<std::array<FlatTape, kLanes>>(kMaxLevels);
+        std::array<std::vector<uint32_t>, kLanes> index;  // a pass's leaf lanes (Pruner::emit)
         CompactScratch compactScratch;
         std::vector<Instr> compact;  // a leaf tape in the form the cells keep (compactTape)
     };
+    // An octree node: its box, the field's values over it, and its leaf cells first[a] +
+    // [0, range[a]).
+    struct Cell {
+        Bounds3 box;
+        Interval value;
+        int first[3], range[3];
+    };
 
-    // The octree node over leaf cells first[a] + [0, range[a]), pruned from `parent` (whose leaf
-    // id, once it has one, is `parentMemo`); it splits the axes at least half as long as its
-    // longest, so that its cells stay about cubic.
-    void node(const FlatTape& parent, int32_t& parentMemo, const Bounds3& box, int level,
-              const int first[3], const int range[3]) {
-        SDFT_CHECK(level < kMaxLevels);
-        Local& local = m_locals.local();
-        FlatTape own;  // the top levels' tapes; a subtree's live in its thread's levels
-        FlatTape& mine = level < kParallelLevels ? own : local.levels[level];
-        Pruner pruner(parent, m_consts, box, local.scratch);
-        const bool changed = pruner.run();
-        if (changed) pruner.emit(mine);
-        const FlatTape& tape = changed ? mine : parent;
-        int32_t ownMemo = -1;
-        int32_t& memo = changed ? ownMemo : parentMemo;
-        const Vec3 extent = box.extent();
+    // Whether a cell whose tape has `size` instructions is a leaf; if not, the axes it splits:
+    // those at least half as long as its longest, so that its cells stay about cubic.
+    static bool isLeaf(const Cell& cell, size_t size, bool split[3]) {
+        const Vec3 extent = cell.box.extent();
         const float longest = maxComponent(extent);
-        bool split[3];
-        for (int a = 0; a < 3; ++a) split[a] = range[a] > 1 && extent[a] >= 0.5f * longest;
+        for (int a = 0; a < 3; ++a) split[a] = cell.range[a] > 1 && extent[a] >= 0.5f * longest;
         // A cell farther than its diagonal from the surface (outside or inside) is not split:
         // rays cross it in a step or two, so a shorter tape would hardly be used.
         const float diagonal = length(extent);
-        const Interval v = pruner.value();
-        const bool far = v.lo > diagonal || v.hi < -diagonal;
-        if (!(split[0] || split[1] || split[2]) || far || tape.instrs.size() <= kSmallTape) {
-            const uint32_t id = leafId(local, tape, memo);
-            const int* res = m_out->res;
-            for (int z = first[2]; z < first[2] + range[2]; ++z)
-                for (int y = first[1]; y < first[1] + range[1]; ++y)
-                    std::fill_n(m_out->cellTape.begin() +
-                                    (static_cast<size_t>(z) * res[1] + y) * res[0] + first[0],
-                                range[0], id);
+        const bool far = cell.value.lo > diagonal || cell.value.hi < -diagonal;
+        return !(split[0] || split[1] || split[2]) || far || size <= kSmallTape;
+    }
+
+    // The subtree of `cell`, whose tape is `tape` (its leaf id, once it has one, is `memo`): a
+    // leaf, or eight (four, two) children pruned from `tape` in one pass. Children that are
+    // leaves are compacted straight from the pass (no tape of their own); the others get their
+    // tapes and subtrees.
+    void node(const FlatTape& tape, int32_t& memo, const Cell& cell, int level) {
+        SDFT_CHECK(level < kMaxLevels);
+        bool split[3];
+        if (isLeaf(cell, tape.instrs.size(), split)) {
+            leaf(FlatView{tape}, memo, cell);
             return;
         }
-        // Child c: bit a says which half along a split axis (0 along the others).
+        Cell children[kLanes];
+        Bounds3 boxes[kLanes];
+        int n = 0;
+        for (int c = 0; c < 8; ++c)  // child c: bit a says which half along a split axis
+            if (childCell(cell, split, c, children[n])) boxes[n] = children[n].box, ++n;
+        // The top levels' passes and tapes are the node's own (their children run in parallel,
+        // and a waiting thread may take up another node of the same level); below, its thread's.
+        Local& local = m_locals.local();
+        PruneResult ownResult;
+        std::array<FlatTape, kLanes> ownTapes;
+        const bool parallel = level < kParallelLevels;
+        PruneResult& result = parallel ? ownResult : local.results[level];
+        std::array<FlatTape, kLanes>& tapes = parallel ? ownTapes : local.levels[level + 1];
+        Pruner(tape, m_consts, boxes, n, local.scratch, result).run();
+        uint32_t kept[kLanes];
+        Pruner::countKept(result, kept);
+        LaneMask full = 0, leaves = 0;
+        for (int c = 0; c < n; ++c) {
+            children[c].value = result.value[c];
+            bool s[3];
+            if (result.changed >> c & 1)
+                (isLeaf(children[c], kept[c], s) ? leaves : full) |= static_cast<LaneMask>(1 << c);
+        }
+        FlatTape* out[kLanes];
+        for (int c = 0; c < kLanes; ++c) out[c] = &tapes[c];
+        Pruner::emit(tape, result, kept, full, out, leaves, local.index, local.scratch.next);
+        for (int c = 0; c < n; ++c) {  // before any subtree reuses the thread's scratch
+            if (!(leaves >> c & 1)) continue;
+            int32_t ownMemo = -1;
+            leaf(LaneView{tape, result.copy, c, local.index[c].data(), kept[c],
+                          local.scratch.next.data()},
+                 ownMemo, children[c]);
+        }
         auto child = [&](int c) {
-            Bounds3 b = box;
-            int f[3], r[3];
-            for (int a = 0; a < 3; ++a) {
-                f[a] = first[a];
-                r[a] = range[a];
-                const bool high = (c >> a) & 1;
-                if (!split[a]) {
-                    if (high) return;
-                    continue;
-                }
-                r[a] = range[a] / 2;
-                const float mid = 0.5f * (box.lo[a] + box.hi[a]);
-                if (high) {
-                    f[a] += r[a];
-                    b.lo[a] = mid;
-                } else {
-                    b.hi[a] = mid;
-                }
-            }
-            node(tape, memo, b, level + 1, f, r);
+            int32_t ownMemo = -1;
+            if (full >> c & 1)
+                node(tapes[c], ownMemo, children[c], level + 1);
+            else if (!(leaves >> c & 1))
+                node(tape, memo, children[c], level + 1);
         };
-        if (level < kParallelLevels) {
-            tbb::parallel_for(0, 8, child);
+        if (parallel) {
+            tbb::parallel_for(0, n, child);
         } else {
-            for (int c = 0; c < 8; ++c) child(c);
+            for (int c = 0; c < n; ++c) child(c);
         }
     }
 
+    // Child c of `cell` (bit a: the upper half along split axis a), or false where c names an
+    // upper half along an axis that is not split.
+    static bool childCell(const Cell& cell, const bool split[3], int c, Cell& out) {
+        out = cell;
+        for (int a = 0; a < 3; ++a) {
+            const bool high = (c >> a) & 1;
+            if (!split[a]) {
+                if (high) return false;
+                continue;
+            }
+            out.range[a] = cell.range[a] / 2;
+            const float mid = 0.5f * (cell.box.lo[a] + cell.box.hi[a]);
+            if (high) {
+                out.first[a] += out.range[a];
+                out.box.lo[a] = mid;
+            } else {
+                out.box.hi[a] = mid;
+            }
+        }
+        return true;
+    }
+
+    // A leaf: its cells take the id of its tape `t` (a FlatView or a LaneView).
+    template <typename View>
+    void leaf(const View& t, int32_t& memo, const Cell& cell) {
+        const uint32_t id = leafId(m_locals.local(), t, memo);
+        const int* res = m_out->res;
+        for (int z = cell.first[2]; z < cell.first[2] + cell.range[2]; ++z)
+            for (int y = cell.first[1]; y < cell.first[1] + cell.range[1]; ++y)
+                std::fill_n(m_out->cellTape.begin() +
+                                (static_cast<size_t>(z) * res[1] + y) * res[0] + cell.first[0],
+                            cell.range[0], id);
+    }
+
     // The id of a leaf's tape: `memo`, or a new one for the tape, appended to the leaf tapes.
-    uint32_t leafId(Local& local, const FlatTape& t, int32_t& memo) {
+    template <typename View>
+    uint32_t leafId(Local& local, const View& t, int32_t& memo) {
         {
             std::lock_guard<std::mutex> lock(m_mutex);
             if (memo >= 0) return static_cast<uint32_t>(memo);
@@ -542,7 +799,7 @@ class Builder {
         if (memo >= 0) return static_cast<uint32_t>(memo);  // a sibling's, meanwhile
         std::vector<Instr>& all = m_out->instrs;
         memo = static_cast<int32_t>(m_lengths.size());
-        m_lengths.push_back(static_cast<uint32_t>(t.instrs.size()));
+        m_lengths.push_back(static_cast<uint32_t>(t.size()));
         m_out->spans.push_back(static_cast<uint32_t>(all.size()));
         m_out->spans.push_back(static_cast<uint32_t>(local.compact.size()));
         all.insert(all.end(), local.compact.begin(), local.compact.end());

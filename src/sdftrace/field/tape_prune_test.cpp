@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sdftrace/exec/simd.h"
 #include "sdftrace/field/node.h"
 #include "sdftrace/field/random_scenes.h"
 #include "sdftrace/field/tape.h"
@@ -43,6 +44,41 @@ TEST(Pruning, CellTapesGiveTheWholeTapesValuesOnRandomScenes) {
             ASSERT_NEAR(a, b, 1e-5f * (std::fabs(a) + 1)) << "scene " << scene << " point " << i;
         }
     }
+}
+
+// The pruning pass is built twice (exec/simd.h): both builds give every cell the same tape,
+// instruction for instruction, on random scenes of every operator and on hard and smooth folds.
+TEST(Pruning, BothBuildsGiveTheSameCells) {
+    if (!cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    Rng rng(5);
+    const SimdLevel was = simdLevel();
+    int pruned = 0;
+    auto cells = [](const Tape& t) {  // each cell's tape, as its instructions' fields
+        std::vector<std::vector<uint64_t>> out;
+        const PrunedTapes& p = *t.pruned();
+        for (const uint32_t id : p.cellTape) {
+            std::vector<uint64_t>& fields = out.emplace_back();
+            for (uint32_t j = 0; j < p.spans[2 * id + 1]; ++j) {
+                const Instr& in = p.instrs[p.spans[2 * id] + j];
+                fields.insert(fields.end(), {uint64_t(in.op), in.a, in.b, in.out, in.k, in.jump,
+                                             uint64_t(uint32_t(in.cull))});
+            }
+        }
+        return out;
+    };
+    for (int scene = 0; scene < 6; ++scene) {
+        const NodePtr root = randomScene(rng, 120 + 60 * scene, scene % 2 == 0);
+        setSimdLevel(SimdLevel::Baseline);
+        const Tape baseline = compileTape(root);
+        setSimdLevel(SimdLevel::Avx2);
+        const Tape avx2 = compileTape(root);
+        ASSERT_EQ(baseline.pruned() != nullptr, avx2.pruned() != nullptr) << "scene " << scene;
+        if (!avx2.pruned()) continue;
+        ++pruned;
+        EXPECT_EQ(cells(baseline), cells(avx2)) << "scene " << scene;
+    }
+    setSimdLevel(was);
+    EXPECT_GE(pruned, 4);
 }
 
 TEST(Pruning, BatchMatchesScalarAcrossCells) {
