@@ -12,6 +12,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <mutex>
 #include <new>
 #include <numeric>
@@ -70,16 +71,18 @@ using LaneMask = uint8_t;  // bit l: lane l
 // registers or one AVX register wide, aligned to their size in both builds (the baseline's
 // default is 16 bytes, which the AVX2 build's aligned moves would fault on). min and max as
 // std::min and std::max have them (the first operand where the comparison fails, NaN included),
-// so the lanes compute what the scalar code would. They are passed only to inlined functions, so
-// -Wpsabi's note on their calling convention without AVX does not apply.
+// so the lanes compute what the scalar code would. Every function that handles them is inlined
+// into the pass's two builds (SDFT_TARGET_AVX2 and SDFT_TARGET_BASELINE flatten), so -Wpsabi's
+// warning that their calling convention differs without AVX does not apply; parameters are
+// passed by reference all the same.
 #pragma GCC diagnostic ignored "-Wpsabi"
 using F8 = float __attribute__((vector_size(kLanes * sizeof(float)), aligned(32)));
 using I8 = int32_t __attribute__((vector_size(kLanes * sizeof(int32_t)), aligned(32)));
 inline F8 splat(float x) { return F8{} + x; }
-inline F8 vmin(F8 a, F8 b) { return b < a ? b : a; }
-inline F8 vmax(F8 a, F8 b) { return a < b ? b : a; }
-inline F8 vabs(F8 a) { return a < 0 ? -a : a; }
-inline LaneMask maskOf(I8 m) {
+inline F8 vmin(const F8& a, const F8& b) { return b < a ? b : a; }
+inline F8 vmax(const F8& a, const F8& b) { return a < b ? b : a; }
+inline F8 vabs(const F8& a) { return a < 0 ? -a : a; }
+inline LaneMask maskOf(const I8& m) {
     LaneMask bits = 0;
     for (int l = 0; l < kLanes; ++l) bits |= static_cast<LaneMask>((m[l] & 1) << l);
     return bits;
@@ -156,9 +159,29 @@ class Pruner {
 
     // How many instructions each lane keeps.
     static void countKept(const PruneResult& r, uint32_t count[kLanes]) {
-        std::fill_n(count, kLanes, 0u);
-        for (const LaneMask d : r.drop)
-            for (int l = 0; l < kLanes; ++l) count[l] += (~d >> l) & 1;
+        // Eight instructions' masks to a word; per lane, a byte of a word counts its drops (at
+        // most 255 words before the bytes are summed).
+        constexpr uint64_t kOnes = 0x0101010101010101ull;
+        const size_t n = r.drop.size();
+        uint64_t dropped[kLanes] = {};
+        for (size_t i = 0; i < n;) {
+            uint64_t acc[kLanes] = {};
+            for (int w = 0; w < 255 && i + 8 <= n; ++w, i += 8) {
+                uint64_t word;
+                std::memcpy(&word, r.drop.data() + i, 8);
+                for (int l = 0; l < kLanes; ++l) acc[l] += (word >> l) & kOnes;
+            }
+            constexpr uint64_t kBytes = 0x00FF00FF00FF00FFull, kShorts = 0x0001000100010001ull;
+            for (int l = 0; l < kLanes; ++l) {  // the bytes summed in 16-bit fields, then all
+                const uint64_t pairs = (acc[l] & kBytes) + ((acc[l] >> 8) & kBytes);
+                dropped[l] += (pairs * kShorts) >> 48;
+            }
+            if (i + 8 > n) {
+                for (; i < n; ++i)
+                    for (int l = 0; l < kLanes; ++l) dropped[l] += (r.drop[i] >> l) & 1;
+            }
+        }
+        for (int l = 0; l < kLanes; ++l) count[l] = static_cast<uint32_t>(n - dropped[l]);
     }
 
     // One pass over the tape (`kept`: countKept's): the pruned tapes of the lanes in `full`, into
@@ -295,7 +318,8 @@ class Pruner {
     }
 
     // A point operator on each lane's point (a translation, the common one, in vectors).
-    static void pointLanes(Op op, const float* k, F8 x, F8 y, F8 z, F8& ox, F8& oy, F8& oz) {
+    static void pointLanes(Op op, const float* k, const F8& x, const F8& y, const F8& z, F8& ox,
+                           F8& oy, F8& oz) {
         if (op == Op::Translate) {
             ox = x - k[0];
             oy = y - k[1];
@@ -311,7 +335,7 @@ class Pruner {
     }
 
     // A primitive's value at each lane's point.
-    static F8 primitiveLanes(Op op, F8 x, F8 y, F8 z, const float* k) {
+    static F8 primitiveLanes(Op op, const F8& x, const F8& y, const F8& z, const float* k) {
         F8 v = splat(kInfinity);
         switch (op) {
 #define SDFT_PRUNE_PRIMITIVE(Kind, name, eval, ...)                              \
@@ -524,9 +548,10 @@ struct LaneView {
     }
 };
 
-// A pruned tape as the cells keep it: each stretch of instructions that the whole tape has as
-// they are (consecutive there, every jump inside) becomes one Op::Run of the whole tape's
-// instructions, and the rest is copied, its jumps renumbered. `whole` is the whole tape's.
+// A pruned tape as the cells keep it, appended to `out`: each stretch of instructions that the
+// whole tape has as they are (consecutive there, every jump inside) becomes one Op::Run of the
+// whole tape's instructions, and the rest is copied, its jumps renumbered. `whole` is the whole
+// tape's.
 template <typename View>
 void compactTape(const View& t, const Instr* whole, std::vector<Instr>& out,
                  CompactScratch& scratch) {
@@ -565,7 +590,6 @@ void compactTape(const View& t, const Instr* whole, std::vector<Instr>& out,
         j = e;
     }
     entryOf[n] = static_cast<uint32_t>(entries.size());
-    out.clear();
     for (const CompactScratch::Entry& e : entries) {
         Instr in{};
         if (e.count > 1) {
@@ -629,11 +653,10 @@ class Builder {
         }
         const size_t cells = static_cast<size_t>(range[0]) * range[1] * range[2];
         m_out->cellTape.assign(cells, 0);
-        // Room for the leaf tapes and the outside tape after them (addOutsideTape: the operands
-        // and a guard and union per group); reserved, not touched.
+        // Room for each thread's leaf tapes; reserved, not touched.
         const size_t whole = tape.size();
-        reserveLarge(m_out->instrs,
-                     std::min(cells * std::min(whole, kLeafGuess), kMaxReserve) + 2 * whole + 64);
+        m_leafGuess = std::min(cells * std::min(whole, kLeafGuess), kMaxReserve);
+        m_outsideGuess = 2 * whole + 64;
         FlatTape root;
         root.instrs.assign(tape.instructions().begin(), tape.instructions().end());
         root.folds.assign(tape.foldOperands().begin(), tape.foldOperands().end());
@@ -653,6 +676,7 @@ class Builder {
         int32_t memo = -1;
         Cell cell{box, result.value[0], {0, 0, 0}, {range[0], range[1], range[2]}};
         node(result.changed ? pruned : root, memo, cell, 0);
+        gather();
     }
     std::shared_ptr<PrunedTapes> finish() { return m_out; }
     // The mean instructions per leaf cell, against the whole tape's.
@@ -672,7 +696,10 @@ class Builder {
             std::vector<std::array<FlatTape, kLanes>>(kMaxLevels);
         std::array<std::vector<uint32_t>, kLanes> index;  // a pass's leaf lanes (Pruner::emit)
         CompactScratch compactScratch;
-        std::vector<Instr> compact;  // a leaf tape in the form the cells keep (compactTape)
+        // The leaf tapes this thread made (compactTape's form), one after another, and per
+        // tape its id, first instruction, instructions and instructions before compactTape.
+        std::vector<Instr> leafInstrs;
+        std::vector<uint32_t> leafId, leafFirst, leafCount, leafLength;
     };
     // An octree node: its box, the field's values over it, and its leaf cells first[a] +
     // [0, range[a]).
@@ -787,23 +814,58 @@ class Builder {
                             cell.range[0], id);
     }
 
-    // The id of a leaf's tape: `memo`, or a new one for the tape, appended to the leaf tapes.
+    // The id of a leaf's tape: `memo`, or a new one for the tape, appended to the thread's leaf
+    // tapes (gather() puts them together). Only the memo is shared between threads.
     template <typename View>
     uint32_t leafId(Local& local, const View& t, int32_t& memo) {
         {
             std::lock_guard<std::mutex> lock(m_mutex);
             if (memo >= 0) return static_cast<uint32_t>(memo);
         }
-        compactTape(t, m_whole, local.compact, local.compactScratch);
-        std::lock_guard<std::mutex> lock(m_mutex);
-        if (memo >= 0) return static_cast<uint32_t>(memo);  // a sibling's, meanwhile
+        std::vector<Instr>& mine = local.leafInstrs;
+        if (mine.capacity() == 0) reserveLarge(mine, m_leafGuess);
+        const size_t first = mine.size();
+        compactTape(t, m_whole, mine, local.compactScratch);
+        uint32_t id;
+        {
+            std::lock_guard<std::mutex> lock(m_mutex);
+            if (memo >= 0) {  // a sibling's, meanwhile
+                mine.resize(first);
+                return static_cast<uint32_t>(memo);
+            }
+            memo = static_cast<int32_t>(id = m_tapes++);
+        }
+        local.leafId.push_back(id);
+        local.leafFirst.push_back(static_cast<uint32_t>(first));
+        local.leafCount.push_back(static_cast<uint32_t>(mine.size() - first));
+        local.leafLength.push_back(static_cast<uint32_t>(t.size()));
+        return id;
+    }
+
+    // The threads' leaf tapes into the cells' one array: the longest thread's array becomes it
+    // (no copy; reserved with room to spare for the outside tape after the leaves,
+    // addOutsideTape's operands and a guard and union per group), the others appended.
+    void gather() {
+        Local* longest = nullptr;
+        for (Local& l : m_locals)
+            if (!longest || l.leafInstrs.size() > longest->leafInstrs.size()) longest = &l;
         std::vector<Instr>& all = m_out->instrs;
-        memo = static_cast<int32_t>(m_lengths.size());
-        m_lengths.push_back(static_cast<uint32_t>(t.size()));
-        m_out->spans.push_back(static_cast<uint32_t>(all.size()));
-        m_out->spans.push_back(static_cast<uint32_t>(local.compact.size()));
-        all.insert(all.end(), local.compact.begin(), local.compact.end());
-        return static_cast<uint32_t>(memo);
+        if (longest) all = std::move(longest->leafInstrs);
+        size_t total = all.size() + m_outsideGuess;
+        for (const Local& l : m_locals) total += l.leafInstrs.size();
+        if (all.capacity() < total) all.reserve(total);
+        m_out->spans.assign(2 * size_t{m_tapes}, 0);
+        m_lengths.assign(m_tapes, 0);
+        for (Local& l : m_locals) {
+            const auto base = static_cast<uint32_t>(&l == longest ? 0 : all.size());
+            if (&l != longest) all.insert(all.end(), l.leafInstrs.begin(), l.leafInstrs.end());
+            for (size_t k = 0; k < l.leafId.size(); ++k) {
+                const uint32_t id = l.leafId[k];
+                m_out->spans[2 * size_t{id}] = base + l.leafFirst[k];
+                m_out->spans[2 * size_t{id} + 1] = l.leafCount[k];
+                m_lengths[id] = l.leafLength[k];
+            }
+        }
     }
 
     const float* m_consts;
@@ -811,6 +873,8 @@ class Builder {
     tbb::enumerable_thread_specific<Local> m_locals;
     std::mutex m_mutex;
     const Instr* m_whole = nullptr;
+    size_t m_leafGuess = 0, m_outsideGuess = 0;  // reserveLarge's sizes
+    uint32_t m_tapes = 0;                        // leaf tapes so far (under m_mutex)
     std::vector<uint32_t> m_lengths;  // per leaf tape, its instructions before compactTape
 };
 
