@@ -1,6 +1,7 @@
 // Tree -> tape compilation: a post-order walk emitting one instruction per node, with registers
 // recycled as soon as their last reader is emitted (each value in a tree has exactly one reader).
 #include <algorithm>
+#include <unordered_map>
 
 #include "sdftrace/core/error.h"
 #include "sdftrace/core/macros.h"
@@ -76,6 +77,17 @@ class Compiler {
         push(op, q, point, 0, addConsts(k));
         return q;
     }
+    // nodeBounds(n), each union's kept: a union's operands and their guards ask for the bounds
+    // of every union below them, which in a deep hierarchy of unions (the pruned cells' outside
+    // tape) is every subtree once per level above it. The same arithmetic as nodeBounds.
+    Bounds3 bounds(const Node& n) {
+        if (n.kind != NodeKind::Union) return nodeBounds(n);
+        if (const auto it = m_unionBounds.find(&n); it != m_unionBounds.end()) return it->second;
+        Bounds3 b;
+        for (const NodePtr& c : n.children) b = unite(b, bounds(*c));
+        m_unionBounds.emplace(&n, b);
+        return b;
+    }
 
     std::vector<Instr>& m_instrs;
     std::vector<FoldOperands>& m_folds;
@@ -89,6 +101,7 @@ class Compiler {
     // The point register of the node that assigned the current material (its frame is the
     // textures' frame); live while its subtree is emitted.
     uint16_t m_materialPoint = 0;
+    std::unordered_map<const Node*, Bounds3> m_unionBounds;  // bounds()'s
 };
 
 static_assert(static_cast<int>(Op::Grid) - static_cast<int>(Op::Sphere) ==
@@ -230,7 +243,7 @@ uint16_t Compiler::emitUnion(const Node& n, uint16_t point, int material) {
     std::vector<const Node*> order;
     for (const NodePtr& c : n.children) order.push_back(c.get());
     std::stable_partition(order.begin(), order.end(),
-                          [](const Node* c) { return !nodeBounds(*c).finite(); });
+                          [this](const Node* c) { return !bounds(*c).finite(); });
     const uint32_t fold = here();
     uint16_t acc = emit(*order[0], point, material);
     for (size_t i = 1; i < order.size(); ++i)
@@ -255,7 +268,7 @@ uint16_t Compiler::emitSmoothUnion(const Node& n, uint16_t point, int material) 
 void Compiler::emitGuarded(Op op, uint16_t acc, const Node& operand, uint16_t point, int material,
                            float margin, bool cullable, const std::vector<float>& opConsts,
                            uint32_t fold) {
-    Bounds3 box = nodeBounds(operand);
+    Bounds3 box = bounds(operand);
     bool cull = m_options.boundsCulling && cullable && box.finite() && !box.empty();
     size_t guard = m_instrs.size();
     int slot = -1;

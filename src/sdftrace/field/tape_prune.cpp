@@ -895,8 +895,8 @@ size_t outerGuards(std::span<const Instr> instrs) {
 
 // The box the cells cover before its margin: the scene's bounds, or (a top-level union with
 // planes) those of its bounded operands.
-Bounds3 cellBox(const Node& root) {
-    Bounds3 box = nodeBounds(root);
+Bounds3 cellBox(const Tape& tape, const Node& root) {
+    Bounds3 box = tape.bounds();  // nodeBounds(root), which compileTape has taken
     if ((!box.finite() || box.empty()) && root.kind == NodeKind::Union) {
         box = Bounds3{};
         for (const NodePtr& c : root.children) {
@@ -918,7 +918,7 @@ std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root
     }
     // Small tapes gain nothing from cells (their lookups cost more than they save).
     if (folds == 0 || tape.size() < kWorthPruning) return nullptr;
-    Bounds3 box = cellBox(root);
+    Bounds3 box = cellBox(tape, root);
     if (box.empty()) return nullptr;
     // About one leaf cell per primitive along the longest axis, 2 to 64 cells.
     const double perAxis = std::cbrt(static_cast<double>(primitives));
