@@ -97,7 +97,7 @@ class Tape {
 
   private:
     friend Tape compileTape(const NodePtr& root, const CompileOptions& options);
-    friend void addOutsideTape(Tape& tape, const Node& root, PrunedTapes& pruned);
+    friend void addOutsideTape(Tape& tape, const Tape& outside, PrunedTapes& pruned);
     int findUniformMaterial() const;
     void evalChunk(const Instr* instrs, uint32_t count, const float* x, const float* y,
                    const float* z, float* out, int n, BatchScratch& scratch) const;

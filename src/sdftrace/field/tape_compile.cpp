@@ -1,6 +1,9 @@
 // Tree -> tape compilation: a post-order walk emitting one instruction per node, with registers
 // recycled as soon as their last reader is emitted (each value in a tree has exactly one reader).
+#include <tbb/task_group.h>
+
 #include <algorithm>
+#include <optional>
 #include <unordered_map>
 
 #include "sdftrace/core/error.h"
@@ -332,14 +335,15 @@ TapeCells cellsView(const PrunedTapes& p) {
 }
 }  // namespace
 
+namespace {
+
 // The tape of points outside the pruned cells' box (PrunedTapes::outsideTape) for a top-level
 // union with bounds culling: its unbounded operands (planes) first, then the others as a
 // hierarchy of unions each guarded by its box. Culling skips a group whose box is no nearer than
 // the running minimum, so the value is the whole tape's minimum (exactly so for operands whose
-// value dominates the distance to their box), at a cost that grows with log N, not N. Its
-// constants go after the tape's.
-void addOutsideTape(Tape& tape, const Node& root, PrunedTapes& pruned) {
-    if (root.kind != NodeKind::Union || !tape.m_grids.empty()) return;
+// value dominates the distance to their box), at a cost that grows with log N, not N. Null for
+// fewer than eight bounded operands.
+std::optional<Tape> outsideTapeOf(const Node& root) {
     std::vector<NodePtr> planes;
     std::vector<Placed> bounded;
     for (const NodePtr& c : root.children) {
@@ -349,10 +353,16 @@ void addOutsideTape(Tape& tape, const Node& root, PrunedTapes& pruned) {
         else
             planes.push_back(c);
     }
-    if (bounded.size() < 8) return;
+    if (bounded.size() < 8) return std::nullopt;
     planes.push_back(unionHierarchy(bounded.begin(), bounded.end()));
-    const Tape outside = compileTape(planes.size() == 1 ? planes[0] : node::unite(planes),
-                                     {.boundsCulling = true, .pruning = false});
+    return compileTape(planes.size() == 1 ? planes[0] : node::unite(planes),
+                       {.boundsCulling = true, .pruning = false});
+}
+
+}  // namespace
+
+// The outside tape after the cells' tapes; its constants go after the tape's.
+void addOutsideTape(Tape& tape, const Tape& outside, PrunedTapes& pruned) {
     if (outside.m_numCulls > tape.m_numCulls) tape.m_numCulls = outside.m_numCulls;
     const auto base = static_cast<uint32_t>(tape.m_consts.size());
     tape.m_consts.insert(tape.m_consts.end(), outside.m_consts.begin(), outside.m_consts.end());
@@ -380,8 +390,17 @@ Tape compileTape(const NodePtr& root, const CompileOptions& options) {
     tape.m_bounds = nodeBounds(*root);
     tape.m_uniformMaterial = tape.findUniformMaterial();
     if (options.pruning) {
+        // The outside tape (of a top-level union, with bounds culling) is compiled while the
+        // cells are built: the two do not depend on each other, and the cells' build leaves
+        // cores idle at its top levels.
+        std::optional<Tape> outside;
+        tbb::task_group outsideTask;
+        if (options.boundsCulling && root->kind == NodeKind::Union && tape.m_grids.empty() &&
+            mayPrune(tape))
+            outsideTask.run([&] { outside = outsideTapeOf(*root); });
         std::shared_ptr<PrunedTapes> pruned = buildPrunedTapes(tape, *root);
-        if (pruned && options.boundsCulling) addOutsideTape(tape, *root, *pruned);
+        outsideTask.wait();
+        if (pruned && outside) addOutsideTape(tape, *outside, *pruned);
         if (pruned) tape.m_cells = cellsView(*pruned);
         tape.m_pruned = std::move(pruned);
     }

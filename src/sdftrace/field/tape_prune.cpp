@@ -910,14 +910,17 @@ Bounds3 cellBox(const Tape& tape, const Node& root) {
 
 }  // namespace
 
-std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root) {
-    size_t primitives = 0, folds = 0;
-    for (const Instr& in : tape.instructions()) {
-        primitives += in.op <= Op::Grid;
-        folds += isCombine(in.op);
-    }
+bool mayPrune(const Tape& tape) {
     // Small tapes gain nothing from cells (their lookups cost more than they save).
-    if (folds == 0 || tape.size() < kWorthPruning) return nullptr;
+    if (tape.size() < kWorthPruning) return false;
+    return std::any_of(tape.instructions().begin(), tape.instructions().end(),
+                       [](const Instr& in) { return isCombine(in.op); });
+}
+
+std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root) {
+    if (!mayPrune(tape)) return nullptr;
+    size_t primitives = 0;
+    for (const Instr& in : tape.instructions()) primitives += in.op <= Op::Grid;
     Bounds3 box = cellBox(tape, root);
     if (box.empty()) return nullptr;
     // About one leaf cell per primitive along the longest axis, 2 to 64 cells.

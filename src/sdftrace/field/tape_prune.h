@@ -17,4 +17,8 @@ namespace sdft {
 // the whole tape as one Op::Run.
 std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root);
 
+// Whether buildPrunedTapes may find cells worth their lookups (a tape long enough, with a fold);
+// false means it returns null at once.
+bool mayPrune(const Tape& tape);
+
 }  // namespace sdft
