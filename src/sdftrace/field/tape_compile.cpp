@@ -80,9 +80,10 @@ class Compiler {
         push(op, q, point, 0, addConsts(k));
         return q;
     }
-    // nodeBounds(n), each union's kept: a union's operands and their guards ask for the bounds
-    // of every union below them, which in a deep hierarchy of unions (the pruned cells' outside
-    // tape) is every subtree once per level above it. The same arithmetic as nodeBounds.
+    // nodeBounds(n), with each union's bounds kept for the rest of the compile: the operands of a
+    // union and their guards ask for the bounds of every union below them, which in a deep
+    // hierarchy of unions (the pruned cells' outside tape) is each subtree once per level above
+    // it. A union's bounds as nodeBounds takes them (its operands' united in order).
     Bounds3 bounds(const Node& n) {
         if (n.kind != NodeKind::Union) return nodeBounds(n);
         if (const auto it = m_unionBounds.find(&n); it != m_unionBounds.end()) return it->second;

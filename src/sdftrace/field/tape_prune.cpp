@@ -93,6 +93,22 @@ struct LaneInterval {
     F8 lo, hi;
 };
 
+// A fold member turned into a copy of its operand (the first operand left when the first was
+// dropped; Pruner::decideHard).
+Instr copyOf(Instr in) {
+    in.op = Op::Copy;
+    in.a = in.b;
+    in.b = 0;
+    in.cull = -1;
+    return in;
+}
+
+// A kept guard's jump in lane l's pruned tape: past its (kept) operator. `next` is
+// Pruner::emit's renumbering.
+uint32_t laneJump(const uint32_t* next, uint32_t jump, int lane) {
+    return next[(jump - 1) * kLanes + lane] + 1;
+}
+
 // The pruner's working memory, one per thread, reused from pass to pass (a build visits tens of
 // thousands of cells; allocating per cell cost more than the pruning).
 struct PruneScratch {
@@ -193,18 +209,16 @@ class Pruner {
                      std::array<std::vector<uint32_t>, kLanes>& index,
                      std::vector<uint32_t>& next) {
         const size_t n = t.instrs.size();
-        uint32_t pos[kLanes];
-        std::copy_n(kept, kLanes, pos);
         for (int l = 0; l < kLanes; ++l) {
             if (full >> l & 1) {
-                out[l]->instrs.resize(pos[l]);
-                out[l]->folds.resize(pos[l]);
-                out[l]->origin.resize(pos[l]);
+                out[l]->instrs.resize(kept[l]);
+                out[l]->folds.resize(kept[l]);
+                out[l]->origin.resize(kept[l]);
             } else if (indexed >> l & 1) {
-                index[l].resize(2 * size_t{pos[l]});
+                index[l].resize(2 * size_t{kept[l]});
             }
-            pos[l] = 0;
         }
+        uint32_t pos[kLanes] = {};
         next.resize((n + 1) * kLanes);
         const unsigned lanes = full | indexed;
         for (size_t i = 0; i < n; ++i) {
@@ -222,17 +236,11 @@ class Pruner {
                     continue;
                 }
                 FlatTape& o = *out[l];
-                o.instrs[j] = in;
+                const bool copy = r.copy[i] >> l & 1;
+                o.instrs[j] = copy ? copyOf(in) : in;
                 o.folds[j] = {};
-                o.origin[j] = t.origin[i];
-                if (r.copy[i] >> l & 1) {
-                    Instr& c = o.instrs[j];
-                    c.op = Op::Copy;
-                    c.a = c.b;
-                    c.b = 0;
-                    c.cull = -1;
-                    o.origin[j] = FlatTape::kMade;
-                } else if (combine) {  // fold records point back
+                o.origin[j] = copy ? FlatTape::kMade : t.origin[i];
+                if (!copy && combine) {  // fold records point back
                     o.folds[j] = {next[t.folds[i].operand * kLanes + l],
                                   next[t.folds[i].fold * kLanes + l]};
                 }
@@ -242,7 +250,7 @@ class Pruner {
         for (int l = 0; l < kLanes; ++l) {  // guards jump forward, past their (kept) operator
             if (!(full >> l & 1)) continue;
             for (Instr& in : out[l]->instrs)
-                if (in.op == Op::CullIfFar) in.jump = next[(in.jump - 1) * kLanes + l] + 1;
+                if (in.op == Op::CullIfFar) in.jump = laneJump(next.data(), in.jump, l);
         }
     }
 
@@ -531,19 +539,11 @@ struct LaneView {
     bool copied(size_t j) const { return copy[at(j)] >> lane & 1; }
     uint32_t origin(size_t j) const { return index[2 * j + 1]; }
     Op op(size_t j) const { return copied(j) ? Op::Copy : parent.instrs[at(j)].op; }
-    uint32_t jump(size_t j) const {  // guards jump past their (kept) operator
-        return next[(parent.instrs[at(j)].jump - 1) * kLanes + lane] + 1;
-    }
+    uint32_t jump(size_t j) const { return laneJump(next, parent.instrs[at(j)].jump, lane); }
     Instr instr(size_t j) const {
         Instr in = parent.instrs[at(j)];
-        if (copied(j)) {
-            in.op = Op::Copy;
-            in.a = in.b;
-            in.b = 0;
-            in.cull = -1;
-        } else if (in.op == Op::CullIfFar) {
-            in.jump = jump(j);
-        }
+        if (copied(j)) return copyOf(in);
+        if (in.op == Op::CullIfFar) in.jump = jump(j);
         return in;
     }
 };
