@@ -204,10 +204,35 @@ class Pruner {
     // out[l] (the kept instructions, renumbered: jumps, fold records, copies), and for those in
     // `indexed`, the tape's indices of the instructions they keep, in index[l], for a LaneView over
     // `next` (scratch: each lane's index of the first kept instruction >= i), each with its origin.
-    static void emit(const FlatTape& t, const PruneResult& r, const uint32_t kept[kLanes],
-                     LaneMask full, FlatTape* const* out, LaneMask indexed,
-                     std::array<std::vector<uint32_t>, kLanes>& index,
-                     std::vector<uint32_t>& next) {
+    struct Emit {
+        const FlatTape& t;
+        const PruneResult& r;
+        const uint32_t* kept;
+        LaneMask full;
+        FlatTape* const* out;
+        LaneMask indexed;
+        std::array<std::vector<uint32_t>, kLanes>& index;
+        std::vector<uint32_t>& next;
+    };
+    // Built twice like the pass (exec/simd.h).
+    static void emit(const Emit& e) {
+        if (useAvx2())
+            emitAvx2(e);
+        else
+            emitBaseline(e);
+    }
+
+  private:
+    SDFT_TARGET_AVX2 static void emitAvx2(const Emit& e) { emitPass(e); }
+    SDFT_TARGET_BASELINE static void emitBaseline(const Emit& e) { emitPass(e); }
+    static void emitPass(const Emit& e) {
+        const FlatTape& t = e.t;
+        const PruneResult& r = e.r;
+        const uint32_t* kept = e.kept;
+        const LaneMask full = e.full, indexed = e.indexed;
+        FlatTape* const* out = e.out;
+        std::array<std::vector<uint32_t>, kLanes>& index = e.index;
+        std::vector<uint32_t>& next = e.next;
         const size_t n = t.instrs.size();
         for (int l = 0; l < kLanes; ++l) {
             if (full >> l & 1) {
@@ -218,18 +243,23 @@ class Pruner {
                 index[l].resize(2 * size_t{kept[l]});
             }
         }
-        uint32_t pos[kLanes] = {};
+        // Each lane's count of kept instructions so far, in vector registers: stored to `next`
+        // whole, it would have stalled on the increments' partial stores from memory.
+        const I8 laneBit = {1, 2, 4, 8, 16, 32, 64, 128};
+        I8 pos = {};
         next.resize((n + 1) * kLanes);
         const unsigned lanes = full | indexed;
         for (size_t i = 0; i < n; ++i) {
-            std::copy_n(pos, kLanes, next.data() + i * kLanes);
+            std::memcpy(next.data() + i * kLanes, &pos, sizeof pos);
             unsigned keep = ~r.drop[i] & lanes;
             if (!keep) continue;
+            const I8 at = pos;
+            pos -= (laneBit & static_cast<int32_t>(keep)) == laneBit;  // true is -1
             const Instr& in = t.instrs[i];
             const bool combine = isCombine(in.op);
             for (; keep; keep &= keep - 1) {
                 const int l = std::countr_zero(keep);
-                const uint32_t j = pos[l]++;
+                const auto j = static_cast<uint32_t>(at[l]);
                 if (!(full >> l & 1)) {
                     index[l][2 * j] = static_cast<uint32_t>(i);
                     index[l][2 * j + 1] = r.copy[i] >> l & 1 ? FlatTape::kMade : t.origin[i];
@@ -246,7 +276,7 @@ class Pruner {
                 }
             }
         }
-        std::copy_n(pos, kLanes, next.data() + n * kLanes);
+        std::memcpy(next.data() + n * kLanes, &pos, sizeof pos);
         for (int l = 0; l < kLanes; ++l) {  // guards jump forward, past their (kept) operator
             if (!(full >> l & 1)) continue;
             for (Instr& in : out[l]->instrs)
@@ -254,7 +284,6 @@ class Pruner {
         }
     }
 
-  private:
     // The pass built twice (exec/simd.h): eight lanes are one AVX2 register.
     SDFT_TARGET_AVX2 void runAvx2() {
         bounds();
@@ -270,7 +299,12 @@ class Pruner {
     void bounds() {
         F8 px[kTapeMaxPointRegs], py[kTapeMaxPointRegs], pz[kTapeMaxPointRegs],
             ps[kTapeMaxPointRegs];
-        LaneInterval sr[kTapeMaxScalarRegs];
+        // A scalar register's interval is its writer's (no copies: the intervals are a
+        // vector register pair each, and copying them member by member stalled the loads that
+        // followed on their partial stores).
+        const LaneInterval unknown{splat(-kInfinity), splat(kInfinity)};
+        const LaneInterval* sr[kTapeMaxScalarRegs];
+        std::fill_n(sr, kTapeMaxScalarRegs, &unknown);
         int32_t writer[kTapeMaxScalarRegs];
         std::fill_n(writer, kTapeMaxScalarRegs, -1);
         for (int l = 0; l < kLanes; ++l) {
@@ -306,7 +340,7 @@ class Pruner {
                     m_s.accDef[i] = writer[in.a];
                     m_s.rhsDef[i] = writer[in.b];
                 }
-                scalarLanes(op, sr[in.a], sr[in.b], k, r);
+                scalarLanes(op, *sr[in.a], *sr[in.b], k, r);
                 if (isHardCombine(op))
                     joinChain(static_cast<int32_t>(i));
                 else if (isCombine(op) && op != Op::Morph)
@@ -315,7 +349,7 @@ class Pruner {
             r.lo = r.lo == r.lo ? r.lo : -inf;  // NaN: unknown
             r.hi = r.hi == r.hi ? r.hi : inf;
             if (writesScalar(op)) {
-                sr[in.out] = r;
+                sr[in.out] = &r;
                 writer[in.out] = static_cast<int32_t>(i);
                 last = static_cast<int32_t>(i);
             }
@@ -409,15 +443,21 @@ class Pruner {
         r = {-inf, inf};
     }
 
-    // An operand's intervals as its hard fold sees them (a difference negates all but the
-    // first).
-    LaneInterval operand(Op op, int32_t m) const {
+    // An operand's values over the cell as its hard fold sees them (a difference negates all but
+    // the first): the side that bounds the fold's result, and the side that rules the operand
+    // out. Vectors, not an interval's copy (copied member by member, it stalled the loads).
+    F8 boundOf(Op op, int32_t m) const {
         const LaneInterval& b = m_s.out[m_s.rhsDef[m]];
-        return op == Op::Difference ? LaneInterval{-b.hi, -b.lo} : b;
+        return op == Op::Union ? b.hi : op == Op::Intersection ? b.lo : -b.hi;
     }
-    // The lanes in which the values `v` all lie beyond the chain's best bound.
-    static LaneMask ruledOut(const PruneScratch::Chain& c, const LaneInterval& v) {
-        return maskOf(c.op == Op::Union ? v.lo > c.best : v.hi < c.best);
+    F8 nearOf(Op op, int32_t m) const {
+        const LaneInterval& b = m_s.out[m_s.rhsDef[m]];
+        return op == Op::Union ? b.lo : op == Op::Intersection ? b.hi : -b.lo;
+    }
+    // The lanes in which the values whose near side is `near` all lie beyond the chain's best
+    // bound.
+    static LaneMask ruledOut(const PruneScratch::Chain& c, const F8& near) {
+        return maskOf(c.op == Op::Union ? near > c.best : near < c.best);
     }
 
     // Hard folds, as chains of one operator through the accumulator (min, max and max(a, -b)
@@ -441,8 +481,8 @@ class Pruner {
             c.valid = false;
             return;
         }
-        const LaneInterval v = operand(op, i);
-        c.best = op == Op::Union ? vmin(c.best, v.hi) : vmax(c.best, v.lo);
+        const F8 bound = boundOf(op, i);
+        c.best = op == Op::Union ? vmin(c.best, bound) : vmax(c.best, bound);
     }
 
     // An operand whose values over the cell all lie beyond the best bound another operand of its
@@ -452,11 +492,14 @@ class Pruner {
     void decideHard() {
         std::vector<PruneScratch::Chain>& chains = m_s.chains;
         for (PruneScratch::Chain& c : chains)
-            c.replaceFirst = c.valid && c.op != Op::Difference ? ruledOut(c, m_s.out[c.first]) : 0;
+            c.replaceFirst =
+                c.valid && c.op != Op::Difference
+                    ? ruledOut(c, c.op == Op::Union ? m_s.out[c.first].lo : m_s.out[c.first].hi)
+                    : 0;
         for (const int32_t i : m_s.hard) {  // drop the ruled-out operands
             const PruneScratch::Chain& c = chains[m_s.chainOf[i]];
             if (!c.valid) continue;
-            const LaneMask out = ruledOut(c, operand(c.op, i));
+            const LaneMask out = ruledOut(c, nearOf(c.op, i));
             if (out) dropOperand(i, out);
         }
         for (const int32_t i : m_s.hard) {  // the first member left replaces a dropped first
@@ -672,7 +715,7 @@ class Builder {
         uint32_t kept[kLanes];
         Pruner::countKept(result, kept);
         if (result.changed)
-            Pruner::emit(root, result, kept, 1, &out, 0, local.index, local.scratch.next);
+            Pruner::emit({root, result, kept, 1, &out, 0, local.index, local.scratch.next});
         int32_t memo = -1;
         Cell cell{box, result.value[0], {0, 0, 0}, {range[0], range[1], range[2]}};
         node(result.changed ? pruned : root, memo, cell, 0);
@@ -758,7 +801,7 @@ class Builder {
         }
         FlatTape* out[kLanes];
         for (int c = 0; c < kLanes; ++c) out[c] = &tapes[c];
-        Pruner::emit(tape, result, kept, full, out, leaves, local.index, local.scratch.next);
+        Pruner::emit({tape, result, kept, full, out, leaves, local.index, local.scratch.next});
         for (int c = 0; c < n; ++c) {  // before any subtree reuses the thread's scratch
             if (!(leaves >> c & 1)) continue;
             int32_t ownMemo = -1;
