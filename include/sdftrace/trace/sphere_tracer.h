@@ -241,9 +241,17 @@ SDFT_HOST_DEVICE inline void endMarch(SphereTraceState& s, float invL, const Tra
         return;
     }
     if (o.discontinuityIters > 0) {
+        // n moves, then one evaluation for f(p_n). The first move starts from the march's own
+        // sample at the candidate, whose value is known: it is recorded again, as an evaluation
+        // there would have been, and the move made without one.
         s.phase = SphereTraceState::kRefine;
-        s.refineLeft = o.discontinuityIters + 1;  // n moves, then one evaluation for f(p_n)
+        s.refineLeft = o.discontinuityIters + 1;
         s.t = s.candidateT;
+        if (s.candidateError < kInfinity) {
+            recordSample(s, s.t, s.sign * s.candidateValue);
+            --s.refineLeft;
+            s.t += s.sign * s.candidateValue * invL - permittedError(s.t, o);
+        }
         return;
     }
     beginRoot(s, s.candidateT, s.candidateValue, invL, o);

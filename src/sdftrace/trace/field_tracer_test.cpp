@@ -492,17 +492,22 @@ TEST(SphereTracer, HybridRegulaFalsiConvergesOntoTheSurface) {
     EXPECT_LT(skippedThin, hits / 50);
 }
 
+// Keinert's placement of the hit itself (no root refinement), after `iters` iterations of the
+// discontinuity reduction.
+TraceOptions keinertPlacement(int iters) {
+    TraceOptions o;
+    o.pixelRadius = 2e-3f;
+    o.discontinuityIters = iters;
+    o.rootIters = 0;
+    return o;
+}
+
 TEST(SphereTracer, DiscontinuityReductionPullsHitsOntoTheErrorLevelSet) {
     // Keinert §3.4: after the march f(p) scatters below err(t); the fixed-point iteration aims
     // every hit at f(p) = err(t), so the scatter |f(p) - err(t)| shrinks.
     Tape tape = compileTape(testing::everyKindTree());
     std::vector<RaySegment> rays = makeRays(tape, 7, 3, 1500, 15);
-    TraceOptions off;
-    off.pixelRadius = 2e-3f;
-    off.discontinuityIters = 0;
-    off.rootIters = 0;  // Keinert's placement itself
-    TraceOptions on = off;
-    on.discontinuityIters = 3;
+    const TraceOptions off = keinertPlacement(0), on = keinertPlacement(3);
     double scatterOff = 0, scatterOn = 0;
     int n = 0;
     for (const auto& seg : rays) {
@@ -514,6 +519,31 @@ TEST(SphereTracer, DiscontinuityReductionPullsHitsOntoTheErrorLevelSet) {
     }
     ASSERT_GT(n, 300);
     EXPECT_LT(scatterOn, 0.5 * scatterOff);
+}
+
+TEST(SphereTracer, DiscontinuityReductionSpendsOneEvaluationPerIteration) {
+    // Keinert §3.4, eq. 3 from the march's chosen sample, whose value the march already has: n
+    // iterations move the hit n times, each from a fresh value but the first, for n evaluations.
+    Tape tape = compileTape(testing::everyKindTree());
+    std::vector<RaySegment> rays = makeRays(tape, 7, 3, 1500, 16);
+    const TraceOptions off = keinertPlacement(0), on = keinertPlacement(3);
+    const float invL = 1.0f / tape.lipschitz();
+    int n = 0;
+    for (const auto& seg : rays) {  // rays start in free space: f > 0 ahead of the surface
+        TraceResult a = traceRay(tape, seg, off), b = traceRay(tape, seg, on);
+        ASSERT_EQ(a.hit, b.hit);  // the march alone decides
+        if (!a.hit) continue;
+        EXPECT_EQ(b.evaluations, a.evaluations + on.discontinuityIters);
+        float t = a.t, f = a.value;  // the march's sample: a.value is f there
+        for (int i = 0; i < on.discontinuityIters; ++i) {
+            t = t + f * invL - t * on.pixelRadius;
+            f = tape.eval(seg.ray.at(t));
+        }
+        EXPECT_NEAR(b.t, t, 1e-6f * t);
+        EXPECT_NEAR(b.value, f, 1e-5f * t * tape.lipschitz());
+        ++n;
+    }
+    EXPECT_GT(n, 300);
 }
 
 }  // namespace
