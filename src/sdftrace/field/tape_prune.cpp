@@ -10,13 +10,16 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <mutex>
 #include <new>
 #include <numeric>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "sdftrace/exec/simd.h"
@@ -25,6 +28,8 @@
 namespace sdft {
 
 namespace {
+
+std::atomic<LeafCompaction> g_leafCompaction{LeafCompaction::Lanes};
 
 struct Interval {
     float lo = -kInfinity, hi = kInfinity;
@@ -37,6 +42,7 @@ struct FlatTape {
     std::vector<Instr> instrs;
     std::vector<FoldOperands> folds;
     std::vector<uint32_t> origin;  // per instruction, its index in the whole tape, or kMade
+    bool made = false;             // whether any origin is kMade
 };
 
 // The cells' box is the scene's (or its bounded operands') grown by this share of its diagonal;
@@ -132,6 +138,7 @@ struct PruneResult {
     std::vector<LaneMask> drop, copy;
     Interval value[kLanes];
     LaneMask changed = 0;  // the lanes that drop anything
+    LaneMask copied = 0;   // the lanes that turn anything into a copy
 };
 
 // A tape pruned for the points of each of up to kLanes cells of one size: each fold operand
@@ -163,6 +170,7 @@ class Pruner {
         m_r.drop.assign(m_n, 0);
         m_r.copy.assign(m_n, 0);
         m_r.changed = 0;
+        m_r.copied = 0;
     }
     // Bounds every instruction over the cells and decides what each drops (into the result).
     void run() {
@@ -201,17 +209,16 @@ class Pruner {
     }
 
     // One pass over the tape (`kept`: countKept's): the pruned tapes of the lanes in `full`, into
-    // out[l] (the kept instructions, renumbered: jumps, fold records, copies), and for those in
-    // `indexed`, the tape's indices of the instructions they keep, in index[l], for a LaneView over
-    // `next` (scratch: each lane's index of the first kept instruction >= i), each with its origin.
+    // out[l] (the kept instructions, renumbered: jumps, fold records, copies), and for them and
+    // those in `counted`, `next`: per instruction i and lane, the lane's index of its first kept
+    // instruction >= i (LaneCompactor reads the counted ones).
     struct Emit {
         const FlatTape& t;
         const PruneResult& r;
         const uint32_t* kept;
         LaneMask full;
         FlatTape* const* out;
-        LaneMask indexed;
-        std::array<std::vector<uint32_t>, kLanes>& index;
+        LaneMask counted;
         std::vector<uint32_t>& next;
     };
     // Built twice like the pass (exec/simd.h).
@@ -229,9 +236,8 @@ class Pruner {
         const FlatTape& t = e.t;
         const PruneResult& r = e.r;
         const uint32_t* kept = e.kept;
-        const LaneMask full = e.full, indexed = e.indexed;
+        const LaneMask full = e.full;
         FlatTape* const* out = e.out;
-        std::array<std::vector<uint32_t>, kLanes>& index = e.index;
         std::vector<uint32_t>& next = e.next;
         const size_t n = t.instrs.size();
         for (int l = 0; l < kLanes; ++l) {
@@ -239,8 +245,7 @@ class Pruner {
                 out[l]->instrs.resize(kept[l]);
                 out[l]->folds.resize(kept[l]);
                 out[l]->origin.resize(kept[l]);
-            } else if (indexed >> l & 1) {
-                index[l].resize(2 * size_t{kept[l]});
+                out[l]->made = (r.copied >> l & 1) || t.made;
             }
         }
         // Each lane's count of kept instructions so far, in vector registers: stored to `next`
@@ -248,23 +253,18 @@ class Pruner {
         const I8 laneBit = {1, 2, 4, 8, 16, 32, 64, 128};
         I8 pos = {};
         next.resize((n + 1) * kLanes);
-        const unsigned lanes = full | indexed;
+        const unsigned lanes = full | e.counted;
         for (size_t i = 0; i < n; ++i) {
             std::memcpy(next.data() + i * kLanes, &pos, sizeof pos);
-            unsigned keep = ~r.drop[i] & lanes;
+            const unsigned keep = ~r.drop[i] & lanes;
             if (!keep) continue;
             const I8 at = pos;
             pos -= (laneBit & static_cast<int32_t>(keep)) == laneBit;  // true is -1
             const Instr& in = t.instrs[i];
             const bool combine = isCombine(in.op);
-            for (; keep; keep &= keep - 1) {
-                const int l = std::countr_zero(keep);
+            for (unsigned write = keep & full; write; write &= write - 1) {
+                const int l = std::countr_zero(write);
                 const auto j = static_cast<uint32_t>(at[l]);
-                if (!(full >> l & 1)) {
-                    index[l][2 * j] = static_cast<uint32_t>(i);
-                    index[l][2 * j + 1] = r.copy[i] >> l & 1 ? FlatTape::kMade : t.origin[i];
-                    continue;
-                }
                 FlatTape& o = *out[l];
                 const bool copy = r.copy[i] >> l & 1;
                 o.instrs[j] = copy ? copyOf(in) : in;
@@ -509,6 +509,7 @@ class Pruner {
             dropRange(m_t.folds[c.front].fold, static_cast<uint32_t>(c.first), lanes);
             if (m_t.instrs[i].cull >= 0) m_r.drop[m_t.folds[i].operand - 1] |= lanes;
             m_r.copy[i] |= lanes;
+            m_r.copied |= lanes;
             c.replaceFirst &= static_cast<LaneMask>(~lanes);
         }
     }
@@ -568,35 +569,11 @@ struct FlatView {
     Instr instr(size_t j) const { return t.instrs[j]; }
 };
 
-// A pruned tape as compactTape reads it: one lane of a pass (Pruner::emit's leaf lanes), the
-// parent tape's instructions at `index`, renumbered on the way as emit would.
-struct LaneView {
-    const FlatTape& parent;
-    const std::vector<LaneMask>& copy;
-    int lane;
-    const uint32_t* index;  // per instruction, the parent's index and the origin
-    size_t n;
-    const uint32_t* next;  // emit's renumbering (kLanes per parent instruction)
-    size_t size() const { return n; }
-    uint32_t at(size_t j) const { return index[2 * j]; }
-    bool copied(size_t j) const { return copy[at(j)] >> lane & 1; }
-    uint32_t origin(size_t j) const { return index[2 * j + 1]; }
-    Op op(size_t j) const { return copied(j) ? Op::Copy : parent.instrs[at(j)].op; }
-    uint32_t jump(size_t j) const { return laneJump(next, parent.instrs[at(j)].jump, lane); }
-    Instr instr(size_t j) const {
-        Instr in = parent.instrs[at(j)];
-        if (copied(j)) return copyOf(in);
-        if (in.op == Op::CullIfFar) in.jump = jump(j);
-        return in;
-    }
-};
-
 // A pruned tape as the cells keep it, appended to `out`: each stretch of instructions that the
 // whole tape has as they are (consecutive there, every jump inside) becomes one Op::Run of the
 // whole tape's instructions, and the rest is copied, its jumps renumbered. `whole` is the whole
 // tape's.
-template <typename View>
-void compactTape(const View& t, const Instr* whole, std::vector<Instr>& out,
+void compactTape(const FlatView& t, const Instr* whole, std::vector<Instr>& out,
                  CompactScratch& scratch) {
     const size_t n = t.size();
     auto verbatim = [&](size_t j) { return t.origin(j) != FlatTape::kMade; };
@@ -646,6 +623,160 @@ void compactTape(const View& t, const Instr* whole, std::vector<Instr>& out,
         out.push_back(in);
     }
 }
+
+// The tapes of a pass's leaf lanes as compactTape would make them from their pruned tapes, made
+// in one walk over the parent's tape for all of them, each lane's entries as its kept
+// instructions come (no pruned tape of their own). `next` is Pruner::emit's, with the lanes
+// counted. An instruction that extends every lane's open stretch (the common case) is one vector
+// step; where a lane's entry ends, that lane goes one by one.
+class LaneCompactor {
+  public:
+    struct Lane {
+        std::vector<Instr> out;  // the compacted tape
+        // Copied guards whose jump is still to be set, innermost last: their entry, and the
+        // parent's instruction they jump to (the lane's first kept one from there starts an
+        // entry, as compactTape's `starts`).
+        std::vector<std::pair<uint32_t, uint32_t>> pending;
+        Instr first{};  // the open stretch's first instruction
+    };
+    struct Job {
+        const FlatTape& t;
+        const PruneResult& r;
+        LaneMask lanes;
+        const uint32_t* next;
+        const Instr* whole;
+        std::array<Lane, kLanes>& out;
+    };
+
+    static void run(const Job& job) {
+        if (useAvx2())
+            runAvx2(job);
+        else
+            runBaseline(job);
+    }
+
+  private:
+    // Per lane, in vector registers: the open stretch (verbatim instructions, consecutive in the
+    // whole tape; `open` says which lanes have one): its last origin and length; and the
+    // innermost pending guard's target (kNone: none).
+    struct State {
+        I8 last{}, count{}, target{};
+        LaneMask open = 0;
+    };
+    static constexpr int32_t kNone = INT32_MAX;
+
+    SDFT_TARGET_AVX2 static void runAvx2(const Job& job) { pass(job); }
+    SDFT_TARGET_BASELINE static void runBaseline(const Job& job) { pass(job); }
+
+    static void pass(const Job& job) {
+        const FlatTape& t = job.t;
+        const PruneResult& r = job.r;
+        for (int l = 0; l < kLanes; ++l) {
+            job.out[l].out.clear();
+            job.out[l].pending.clear();
+        }
+        State st;
+        st.target = I8{} + kNone;
+        const I8 laneBit = {1, 2, 4, 8, 16, 32, 64, 128};
+        const LaneMask mayCopy = t.made ? job.lanes : (r.copied & job.lanes);
+        const size_t n = t.instrs.size();
+        for (size_t i = 0; i < n; ++i) {
+            const unsigned keep = ~r.drop[i] & job.lanes;
+            if (!keep) continue;
+            const Instr& in = t.instrs[i];
+            const uint32_t origin = t.origin[i];
+            // compactTape's `copied`: not the whole tape's, or a guard over an operand that is
+            // not the whole tape's unbroken (as long, and no copies in it: as the pruning is, a
+            // member that becomes a copy loses its guard, so only the length decides; the copies
+            // are looked for all the same where there may be some).
+            unsigned copied = origin == FlatTape::kMade ? keep : r.copy[i] & keep;
+            if (in.op == Op::CullIfFar && origin != FlatTape::kMade) {
+                I8 g, j;
+                std::memcpy(&g, job.next + i * kLanes, sizeof g);
+                std::memcpy(&j, job.next + (in.jump - 1) * kLanes, sizeof j);
+                const auto span = static_cast<int32_t>(job.whole[origin].jump - origin);
+                unsigned broken = maskOf(j + 1 - g != span) & keep;
+                for (unsigned m = keep & ~broken & mayCopy; m; m &= m - 1) {
+                    const int l = std::countr_zero(m);
+                    if (anyCopy(t, r, i + 1, in.jump, l)) broken |= 1u << l;
+                }
+                copied |= broken;
+            }
+            const I8 o = I8{} + static_cast<int32_t>(origin);
+            const unsigned extend =
+                keep & st.open & ~copied &
+                maskOf((st.last + 1 == o) & (static_cast<int32_t>(i) < st.target));
+            const I8 grow = (laneBit & static_cast<int32_t>(extend)) == laneBit;  // true is -1
+            st.last = grow ? o : st.last;
+            st.count -= grow;
+            for (unsigned m = keep & ~extend; m; m &= m - 1) {
+                const int l = std::countr_zero(m);
+                start(st, job.out[l], l, static_cast<int32_t>(i), in, r.copy[i] >> l & 1, origin,
+                      copied >> l & 1);
+            }
+        }
+        for (int l = 0; l < kLanes; ++l) {
+            if (!(job.lanes >> l & 1)) continue;
+            close(st, job.out[l], l);
+            resolve(st, job.out[l], l, kNone);  // a jump to the end: past the last entry
+        }
+    }
+
+    // Lane l's instruction i of the parent, `in` (turned into a copy in the lane: laneCopy), that
+    // does not extend the lane's open stretch: it starts an entry.
+    static void start(State& st, Lane& c, int l, int32_t i, const Instr& in, bool laneCopy,
+                      uint32_t origin, bool copied) {
+        close(st, c, l);
+        resolve(st, c, l, i);
+        if (copied) {  // an entry of its own
+            c.out.push_back(laneCopy ? copyOf(in) : in);
+            if (in.op == Op::CullIfFar) pend(st, c, l, in.jump);
+            return;
+        }
+        st.open |= static_cast<LaneMask>(1u << l);
+        c.first = in;  // verbatim: not a copy
+        st.count[l] = 1;
+        st.last[l] = static_cast<int32_t>(origin);
+    }
+    // Lane l's open stretch as its entry: a Run, or its one instruction.
+    static void close(State& st, Lane& c, int l) {
+        if (!(st.open >> l & 1)) return;
+        st.open &= static_cast<LaneMask>(~(1u << l));
+        const auto count = static_cast<uint32_t>(st.count[l]),
+                   end = static_cast<uint32_t>(st.last[l]) + 1;
+        if (count > 1) {
+            Instr run{};
+            run.op = Op::Run;
+            run.k = end - count;
+            run.jump = end;
+            c.out.push_back(run);
+            return;
+        }
+        c.out.push_back(c.first);
+        if (c.first.op == Op::CullIfFar) pend(st, c, l, c.first.jump);
+    }
+    // The last entry of lane l, a guard, jumps to the entry that starts at parent instruction
+    // `target` or after it.
+    static void pend(State& st, Lane& c, int l, uint32_t target) {
+        c.pending.emplace_back(static_cast<uint32_t>(c.out.size() - 1), target);
+        st.target[l] = static_cast<int32_t>(target);
+    }
+    // The guards that jump to parent instruction `i` or before it jump to the next entry.
+    static void resolve(State& st, Lane& c, int l, int32_t i) {
+        while (!c.pending.empty() && static_cast<int32_t>(c.pending.back().second) <= i) {
+            c.out[c.pending.back().first].jump = static_cast<uint32_t>(c.out.size());
+            c.pending.pop_back();
+        }
+        st.target[l] = c.pending.empty() ? kNone : static_cast<int32_t>(c.pending.back().second);
+    }
+    // Whether lane l keeps a copy among the parent's instructions [from, to).
+    static bool anyCopy(const FlatTape& t, const PruneResult& r, size_t from, size_t to, int l) {
+        for (size_t i = from; i < to; ++i)
+            if (!(r.drop[i] >> l & 1) && ((r.copy[i] >> l & 1) || t.origin[i] == FlatTape::kMade))
+                return true;
+        return false;
+    }
+};
 
 // Room for `n` elements, backed by huge pages where the system gives them on request: a build
 // writes tens of megabytes of fresh leaf tapes, and faulting them in 4 KiB pages cost more than
@@ -714,8 +845,7 @@ class Builder {
         FlatTape* out = &pruned;
         uint32_t kept[kLanes];
         Pruner::countKept(result, kept);
-        if (result.changed)
-            Pruner::emit({root, result, kept, 1, &out, 0, local.index, local.scratch.next});
+        if (result.changed) Pruner::emit({root, result, kept, 1, &out, 0, local.scratch.next});
         int32_t memo = -1;
         Cell cell{box, result.value[0], {0, 0, 0}, {range[0], range[1], range[2]}};
         node(result.changed ? pruned : root, memo, cell, 0);
@@ -737,7 +867,7 @@ class Builder {
         std::vector<PruneResult> results = std::vector<PruneResult>(kMaxLevels);
         std::vector<std::array<FlatTape, kLanes>> levels =
             std::vector<std::array<FlatTape, kLanes>>(kMaxLevels);
-        std::array<std::vector<uint32_t>, kLanes> index;  // a pass's leaf lanes (Pruner::emit)
+        std::array<LaneCompactor::Lane, kLanes> lanes;  // a pass's leaf lanes
         CompactScratch compactScratch;
         // The leaf tapes this thread made (compactTape's form), one after another, and per
         // tape its id, first instruction, instructions and instructions before compactTape.
@@ -773,7 +903,12 @@ class Builder {
         SDFT_CHECK(level < kMaxLevels);
         bool split[3];
         if (isLeaf(cell, tape.instrs.size(), split)) {
-            leaf(FlatView{tape}, memo, cell);
+            Local& local = m_locals.local();
+            leaf(leafId(local, memo, static_cast<uint32_t>(tape.instrs.size()),
+                        [&](std::vector<Instr>& mine) {
+                            compactTape(FlatView{tape}, m_whole, mine, local.compactScratch);
+                        }),
+                 cell);
             return;
         }
         Cell children[kLanes];
@@ -799,15 +934,24 @@ class Builder {
             if (result.changed >> c & 1)
                 (isLeaf(children[c], kept[c], s) ? leaves : full) |= static_cast<LaneMask>(1 << c);
         }
+        if (g_leafCompaction.load(std::memory_order_relaxed) == LeafCompaction::OneByOne)
+            full |= std::exchange(leaves, 0);  // each leaf its own tape, compacted as a leaf
         FlatTape* out[kLanes];
         for (int c = 0; c < kLanes; ++c) out[c] = &tapes[c];
-        Pruner::emit({tape, result, kept, full, out, leaves, local.index, local.scratch.next});
-        for (int c = 0; c < n; ++c) {  // before any subtree reuses the thread's scratch
-            if (!(leaves >> c & 1)) continue;
-            int32_t ownMemo = -1;
-            leaf(LaneView{tape, result.copy, c, local.index[c].data(), kept[c],
-                          local.scratch.next.data()},
-                 ownMemo, children[c]);
+        Pruner::emit({tape, result, kept, full, out, leaves, local.scratch.next});
+        if (leaves) {  // before any subtree reuses the thread's scratch
+            LaneCompactor::run(
+                {tape, result, leaves, local.scratch.next.data(), m_whole, local.lanes});
+            for (int c = 0; c < n; ++c) {
+                if (!(leaves >> c & 1)) continue;
+                const std::vector<Instr>& compact = local.lanes[c].out;
+                int32_t ownMemo = -1;
+                leaf(leafId(local, ownMemo, kept[c],
+                            [&](std::vector<Instr>& mine) {
+                                mine.insert(mine.end(), compact.begin(), compact.end());
+                            }),
+                     children[c]);
+            }
         }
         auto child = [&](int c) {
             int32_t ownMemo = -1;
@@ -845,10 +989,8 @@ class Builder {
         return true;
     }
 
-    // A leaf: its cells take the id of its tape `t` (a FlatView or a LaneView).
-    template <typename View>
-    void leaf(const View& t, int32_t& memo, const Cell& cell) {
-        const uint32_t id = leafId(m_locals.local(), t, memo);
+    // A leaf: its cells take the id of its tape.
+    void leaf(uint32_t id, const Cell& cell) {
         const int* res = m_out->res;
         for (int z = cell.first[2]; z < cell.first[2] + cell.range[2]; ++z)
             for (int y = cell.first[1]; y < cell.first[1] + cell.range[1]; ++y)
@@ -857,10 +999,11 @@ class Builder {
                             cell.range[0], id);
     }
 
-    // The id of a leaf's tape: `memo`, or a new one for the tape, appended to the thread's leaf
-    // tapes (gather() puts them together). Only the memo is shared between threads.
-    template <typename View>
-    uint32_t leafId(Local& local, const View& t, int32_t& memo) {
+    // The id of a leaf's tape: `memo`, or a new one for the tape (`length` instructions before
+    // compactTape), which compact(mine) appends to the thread's leaf tapes (gather() puts them
+    // together). Only the memo is shared between threads.
+    template <typename Compact>
+    uint32_t leafId(Local& local, int32_t& memo, uint32_t length, Compact&& compact) {
         {
             std::lock_guard<std::mutex> lock(m_mutex);
             if (memo >= 0) return static_cast<uint32_t>(memo);
@@ -868,7 +1011,7 @@ class Builder {
         std::vector<Instr>& mine = local.leafInstrs;
         if (mine.capacity() == 0) reserveLarge(mine, m_leafGuess);
         const size_t first = mine.size();
-        compactTape(t, m_whole, mine, local.compactScratch);
+        compact(mine);
         uint32_t id;
         {
             std::lock_guard<std::mutex> lock(m_mutex);
@@ -881,7 +1024,7 @@ class Builder {
         local.leafId.push_back(id);
         local.leafFirst.push_back(static_cast<uint32_t>(first));
         local.leafCount.push_back(static_cast<uint32_t>(mine.size() - first));
-        local.leafLength.push_back(static_cast<uint32_t>(t.size()));
+        local.leafLength.push_back(length);
         return id;
     }
 
@@ -952,6 +1095,8 @@ Bounds3 cellBox(const Tape& tape, const Node& root) {
 }
 
 }  // namespace
+
+LeafCompaction setLeafCompaction(LeafCompaction way) { return g_leafCompaction.exchange(way); }
 
 bool mayPrune(const Tape& tape) {
     // Small tapes gain nothing from cells (their lookups cost more than they save).

@@ -17,6 +17,12 @@ namespace sdft {
 // the whole tape as one Op::Run.
 std::shared_ptr<PrunedTapes> buildPrunedTapes(const Tape& tape, const Node& root);
 
+// How the leaf cells' tapes are made: for all the leaf children of a node in one walk over its tape
+// (the default), or each child pruned into a tape of its own first and compacted from that (the
+// plain way, which tests hold the other to). Returns the previous way.
+enum class LeafCompaction { Lanes, OneByOne };
+LeafCompaction setLeafCompaction(LeafCompaction way);
+
 // Whether buildPrunedTapes may find cells worth their lookups (a tape long enough, with a fold);
 // false means it returns null at once.
 bool mayPrune(const Tape& tape);

@@ -46,39 +46,61 @@ TEST(Pruning, CellTapesGiveTheWholeTapesValuesOnRandomScenes) {
     }
 }
 
-// The pruning pass is built twice (exec/simd.h): both builds give every cell the same tape,
-// instruction for instruction, on random scenes of every operator and on hard and smooth folds.
-TEST(Pruning, BothBuildsGiveTheSameCells) {
-    if (!cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
-    Rng rng(5);
-    const SimdLevel was = simdLevel();
-    int pruned = 0;
-    auto cells = [](const Tape& t) {  // each cell's tape, as its instructions' fields
-        std::vector<std::vector<uint64_t>> out;
-        const PrunedTapes& p = *t.pruned();
-        for (const uint32_t id : p.cellTape) {
-            std::vector<uint64_t>& fields = out.emplace_back();
-            for (uint32_t j = 0; j < p.spans[2 * id + 1]; ++j) {
-                const Instr& in = p.instrs[p.spans[2 * id] + j];
-                fields.insert(fields.end(), {uint64_t(in.op), in.a, in.b, in.out, in.k, in.jump,
-                                             uint64_t(uint32_t(in.cull))});
-            }
+// Each cell's tape, as its instructions' fields.
+std::vector<std::vector<uint64_t>> cellTapes(const Tape& t) {
+    std::vector<std::vector<uint64_t>> out;
+    const PrunedTapes& p = *t.pruned();
+    for (const uint32_t id : p.cellTape) {
+        std::vector<uint64_t>& fields = out.emplace_back();
+        for (uint32_t j = 0; j < p.spans[2 * id + 1]; ++j) {
+            const Instr& in = p.instrs[p.spans[2 * id] + j];
+            fields.insert(fields.end(), {uint64_t(in.op), in.a, in.b, in.out, in.k, in.jump,
+                                         uint64_t(uint32_t(in.cull))});
         }
-        return out;
-    };
+    }
+    return out;
+}
+
+// Random scenes of every operator, hard and smooth folds, each compiled twice (`before` sets up
+// each build): both give every cell the same tape, instruction for instruction.
+template <typename Setup>
+void expectSameCells(uint32_t seed, Setup before) {
+    Rng rng(seed);
+    int pruned = 0;
     for (int scene = 0; scene < 6; ++scene) {
         const NodePtr root = randomScene(rng, 120 + 60 * scene, scene % 2 == 0);
-        setSimdLevel(SimdLevel::Baseline);
-        const Tape baseline = compileTape(root);
-        setSimdLevel(SimdLevel::Avx2);
-        const Tape avx2 = compileTape(root);
-        ASSERT_EQ(baseline.pruned() != nullptr, avx2.pruned() != nullptr) << "scene " << scene;
-        if (!avx2.pruned()) continue;
+        before(0);
+        const Tape a = compileTape(root);
+        before(1);
+        const Tape b = compileTape(root);
+        ASSERT_EQ(a.pruned() != nullptr, b.pruned() != nullptr) << "scene " << scene;
+        if (!b.pruned()) continue;
         ++pruned;
-        EXPECT_EQ(cells(baseline), cells(avx2)) << "scene " << scene;
+        EXPECT_EQ(cellTapes(a), cellTapes(b)) << "scene " << scene;
     }
-    setSimdLevel(was);
     EXPECT_GE(pruned, 4);
+}
+
+// The pruning pass is built twice (exec/simd.h).
+TEST(Pruning, BothBuildsGiveTheSameCells) {
+    if (!cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    const SimdLevel was = simdLevel();
+    expectSameCells(
+        5, [](int build) { setSimdLevel(build == 0 ? SimdLevel::Baseline : SimdLevel::Avx2); });
+    setSimdLevel(was);
+}
+
+// A node's leaf children compacted together from its tape, and each from a tape of its own.
+TEST(Pruning, LeafTapesCompactedTogetherAsEachAlone) {
+    const LeafCompaction was = setLeafCompaction(LeafCompaction::Lanes);
+    for (const SimdLevel level : {SimdLevel::Baseline, SimdLevel::Avx2}) {
+        const SimdLevel simd = setSimdLevel(level);
+        expectSameCells(11, [](int build) {
+            setLeafCompaction(build == 0 ? LeafCompaction::OneByOne : LeafCompaction::Lanes);
+        });
+        setSimdLevel(simd);
+    }
+    setLeafCompaction(was);
 }
 
 TEST(Pruning, BatchMatchesScalarAcrossCells) {
