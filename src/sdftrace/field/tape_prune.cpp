@@ -88,10 +88,20 @@ inline F8 splat(float x) { return F8{} + x; }
 inline F8 vmin(const F8& a, const F8& b) { return b < a ? b : a; }
 inline F8 vmax(const F8& a, const F8& b) { return a < b ? b : a; }
 inline F8 vabs(const F8& a) { return a < 0 ? -a : a; }
+// A comparison's lanes as bits: the sign bits of its two halves (SSE's movmskps, in both
+// builds), or lane by lane.
 inline LaneMask maskOf(const I8& m) {
+#if SDFT_HAVE_AVX2_DISPATCH
+    using F4 = float __attribute__((vector_size(4 * sizeof(float))));
+    F4 lo, hi;
+    std::memcpy(&lo, &m, sizeof lo);
+    std::memcpy(&hi, reinterpret_cast<const char*>(&m) + sizeof lo, sizeof hi);
+    return static_cast<LaneMask>(__builtin_ia32_movmskps(lo) | __builtin_ia32_movmskps(hi) << 4);
+#else
     LaneMask bits = 0;
     for (int l = 0; l < kLanes; ++l) bits |= static_cast<LaneMask>((m[l] & 1) << l);
     return bits;
+#endif
 }
 
 // An interval per lane.
