@@ -84,7 +84,8 @@ std::vector<RenderOption> makeTable() {
          .type = T::Int,
          .range = {0, 64},
          .what = "an integer",
-         .doc = "fixed-point iterations after the march (Keinert §3.4; 0 = off)",
+         .doc = "fixed-point iterations after the march (Keinert §3.4; 0 = off), one evaluation "
+                "each per hit ray",
          SDFT_MEMBER(trace.discontinuityIters)},
         {.key = "fixed_steps",
          .flags = "--fixed-steps",
