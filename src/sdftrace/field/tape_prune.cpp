@@ -73,6 +73,20 @@ float stretch(Op op, const float* k) {
 constexpr int kLanes = 8;
 using LaneMask = uint8_t;  // bit l: lane l
 
+// A primitive's bounds in its frame where its value outside them is at least the distance to them
+// (primitive_table.h's "dominates bounds"), else an empty box.
+Bounds3 dominatedBounds(Op op, const float* k) {
+    switch (op) {
+#define SDFT_PRUNE_BOUNDS(Kind, name, eval, bounds, convex, dominates) \
+    case Op::Kind:                                                     \
+        return dominates ? bounds(k) : Bounds3{};
+        SDFT_PRIMITIVES(SDFT_PRUNE_BOUNDS)
+#undef SDFT_PRUNE_BOUNDS
+        default:
+            return Bounds3{};
+    }
+}
+
 // Eight floats (or comparison results) that the compiler keeps in vector registers, two SSE
 // registers or one AVX register wide, aligned to their size in both builds (the baseline's
 // default is 16 bytes, which the AVX2 build's aligned moves would fault on). min and max as
@@ -160,14 +174,18 @@ struct PruneResult {
 // repetition or a displacement are kept.
 class Pruner {
   public:
-    Pruner(const FlatTape& t, const float* consts, const Bounds3* cells, int n, PruneScratch& s,
-           PruneResult& r)
-        : m_t(t), m_k(consts), m_n(t.instrs.size()), m_s(s), m_r(r) {
+    // `local`: per instruction of the whole tape, dominatedBounds'.
+    Pruner(const FlatTape& t, const float* consts, const Bounds3* local, const Bounds3* cells,
+           int n, PruneScratch& s, PruneResult& r)
+        : m_t(t), m_k(consts), m_local(local), m_n(t.instrs.size()), m_s(s), m_r(r) {
         SDFT_CHECK(n >= 1 && n <= kLanes);
         for (int l = 0; l < kLanes; ++l) {  // spare lanes repeat the first cell
             const Bounds3& cell = cells[l < n ? l : 0];
             m_centre[l] = (cell.lo + cell.hi) * 0.5f;
             m_radius[l] = 0.5f * length(cell.hi - cell.lo);
+            m_half[0][l] = 0.5f * (cell.hi.x - cell.lo.x);
+            m_half[1][l] = 0.5f * (cell.hi.y - cell.lo.y);
+            m_half[2][l] = 0.5f * (cell.hi.z - cell.lo.z);
         }
         m_lanes = static_cast<LaneMask>((1u << n) - 1);
         // accDef, rhsDef and chainOf are read only where bounds() wrote them (folds).
@@ -317,6 +335,9 @@ class Pruner {
         std::fill_n(sr, kTapeMaxScalarRegs, &unknown);
         int32_t writer[kTapeMaxScalarRegs];
         std::fill_n(writer, kTapeMaxScalarRegs, -1);
+        // Whether a point register is the cell's point only translated: its cells are boxes of
+        // the cells' extents about px, py, pz.
+        bool boxed[kTapeMaxPointRegs] = {true};
         for (int l = 0; l < kLanes; ++l) {
             px[0][l] = m_centre[l].x;
             py[0][l] = m_centre[l].y;
@@ -339,7 +360,10 @@ class Pruner {
                 const I8 known = (vabs(v) < inf) & (reach < inf);
                 r.lo = known ? v - reach - pad : -inf;
                 r.hi = known ? v + reach + pad : inf;
+                if (boxed[in.a] && m_t.origin[i] != FlatTape::kMade)
+                    tighten(op, px[in.a], py[in.a], pz[in.a], k, m_local[m_t.origin[i]], r);
             } else if (op >= Op::Translate && op <= Op::RepeatPoint) {  // a point operator
+                boxed[in.out] = boxed[in.a] && op == Op::Translate;
                 pointLanes(op, k, px[in.a], py[in.a], pz[in.a], px[in.out], py[in.out], pz[in.out]);
                 const F8 x = px[in.out], y = py[in.out], z = pz[in.out];
                 const I8 finite = (x - x == 0) & (y - y == 0) & (z - z == 0);
@@ -367,6 +391,41 @@ class Pruner {
         for (int l = 0; l < kLanes; ++l)
             m_r.value[l] =
                 last < 0 ? Interval{} : Interval{m_s.out[last].lo[l], m_s.out[last].hi[l]};
+    }
+
+    // A primitive's values over the cells, tighter than the Lipschitz bound about their centres
+    // where (x, y, z) are the cells' centres in the primitive's frame, the cells boxes of the same
+    // extents there: a sphere's lie between the distances from its centre to the nearest and
+    // farthest points of the cell; a primitive whose value outside its bounds is at least the
+    // distance to them (`local`, the bounds; empty for the others) has values at least the gap
+    // between the cell and its bounds where they do not meet.
+    void tighten(Op op, const F8& x, const F8& y, const F8& z, const float* k, const Bounds3& local,
+                 LaneInterval& r) const {
+        const F8 zero{};
+        const F8* h = m_half;
+        if (op == Op::Sphere) {
+            const F8 ax = vabs(x), ay = vabs(y), az = vabs(z);
+            const F8 near =
+                lengthLanes(vmax(ax - h[0], zero), vmax(ay - h[1], zero), vmax(az - h[2], zero));
+            const F8 far = lengthLanes(ax + h[0], ay + h[1], az + h[2]);
+            const F8 pad = 1e-5f * (far + k[0]) + 1e-7f;
+            r.lo = vmax(r.lo, near - k[0] - pad);
+            r.hi = vmin(r.hi, far - k[0] + pad);
+            return;
+        }
+        if (local.empty()) return;
+        auto apart = [&](const F8& c, const F8& half, int a) {  // along axis a, or 0
+            return vmax(vmax(local.lo[a] - (c + half), (c - half) - local.hi[a]), zero);
+        };
+        const F8 gap = lengthLanes(apart(x, h[0], 0), apart(y, h[1], 1), apart(z, h[2], 2));
+        const F8 pad = 1e-5f * (gap + vabs(x) + vabs(y) + vabs(z)) + 1e-7f;
+        r.lo = gap > 0 ? vmax(r.lo, gap - pad) : r.lo;
+    }
+    static F8 lengthLanes(const F8& x, const F8& y, const F8& z) {
+        const F8 squared = x * x + y * y + z * z;
+        F8 out;
+        for (int l = 0; l < kLanes; ++l) out[l] = std::sqrt(squared[l]);
+        return out;
     }
 
     // A point operator on each lane's point (a translation, the common one, in vectors).
@@ -551,11 +610,13 @@ class Pruner {
 
     const FlatTape& m_t;
     const float* m_k;
+    const Bounds3* m_local;
     size_t m_n;
     PruneScratch& m_s;
     PruneResult& m_r;
     Vec3 m_centre[kLanes];
     F8 m_radius;
+    F8 m_half[3];  // the cells' half extents along x, y and z
     LaneMask m_lanes = 0;
 };
 
@@ -847,10 +908,14 @@ class Builder {
         root.origin.resize(root.instrs.size());
         std::iota(root.origin.begin(), root.origin.end(), 0u);
         m_whole = tape.instructions().data();
+        m_local.reserve(tape.size());
+        for (const Instr& in : tape.instructions())
+            m_local.push_back(in.op < Op::Grid ? dominatedBounds(in.op, m_consts + in.k)
+                                               : Bounds3{});
         // The root cell pruned from the whole tape, then its subtree.
         Local& local = m_locals.local();
         PruneResult result;
-        Pruner(root, m_consts, &box, 1, local.scratch, result).run();
+        Pruner(root, m_consts, m_local.data(), &box, 1, local.scratch, result).run();
         FlatTape pruned;
         FlatTape* out = &pruned;
         uint32_t kept[kLanes];
@@ -934,7 +999,7 @@ class Builder {
         const bool parallel = level < kParallelLevels;
         PruneResult& result = parallel ? ownResult : local.results[level];
         std::array<FlatTape, kLanes>& tapes = parallel ? ownTapes : local.levels[level + 1];
-        Pruner(tape, m_consts, boxes, n, local.scratch, result).run();
+        Pruner(tape, m_consts, m_local.data(), boxes, n, local.scratch, result).run();
         uint32_t kept[kLanes];
         Pruner::countKept(result, kept);
         LaneMask full = 0, leaves = 0;
@@ -1069,6 +1134,7 @@ class Builder {
     tbb::enumerable_thread_specific<Local> m_locals;
     std::mutex m_mutex;
     const Instr* m_whole = nullptr;
+    std::vector<Bounds3> m_local;  // per instruction of the whole tape: dominatedBounds
     size_t m_leafGuess = 0, m_outsideGuess = 0;  // reserveLarge's sizes
     uint32_t m_tapes = 0;                        // leaf tapes so far (under m_mutex)
     std::vector<uint32_t> m_lengths;  // per leaf tape, its instructions before compactTape
