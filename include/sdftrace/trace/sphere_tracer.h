@@ -85,6 +85,13 @@ SDFT_HOST_DEVICE inline float permittedError(float t, const TraceOptions& o) {
     return o.screenSpace ? t * o.pixelRadius : o.tau;
 }
 
+// Keinert et al. 2014, §3.4, eq. 3: the discontinuity reduction's move from the sample at s.t,
+// whose value is f: p_{i+1} = p_i + d (f(p_i) - err(|p_i - o|)).
+SDFT_HOST_DEVICE inline float discontinuityMove(const SphereTraceState& s, float f, float invL,
+                                                const TraceOptions& o) {
+    return s.t + s.sign * f * invL - permittedError(s.t, o);
+}
+
 SDFT_HOST_DEVICE inline void finish(SphereTraceState& s, bool hit, float t, float value) {
     s.result.hit = hit;
     s.result.t = hit ? t : kInfinity;
@@ -250,7 +257,7 @@ SDFT_HOST_DEVICE inline void endMarch(SphereTraceState& s, float invL, const Tra
         if (s.candidateError < kInfinity) {
             recordSample(s, s.t, s.sign * s.candidateValue);
             --s.refineLeft;
-            s.t += s.sign * s.candidateValue * invL - permittedError(s.t, o);
+            s.t = discontinuityMove(s, s.candidateValue, invL, o);
         }
         return;
     }
@@ -420,10 +427,10 @@ SDFT_HOST_DEVICE inline void falsiStep(SphereTraceState& s, float f, float invL)
     s.t = s.tA - s.fA * (s.tB - s.tA) / (s.fB - s.fA);
 }
 
-// Keinert et al. 2014, §3.4, eq. 3: p_{i+1} = p_i + d (f(p_i) - err(|p_i - o|)).
+// One iteration of the discontinuity reduction (Keinert §3.4) on f(p_i).
 SDFT_HOST_DEVICE inline void refineStep(SphereTraceState& s, float f, float invL,
                                         const TraceOptions& o) {
-    float next = s.t + s.sign * f * invL - permittedError(s.t, o);
+    const float next = discontinuityMove(s, f, invL, o);
     if (--s.refineLeft <= 0) {
         beginRoot(s, s.t, f, invL, o);
         return;

@@ -26,26 +26,26 @@ struct CompactScratch {
     std::vector<Entry> entries;
 };
 
-// A pruned tape as compactTape reads it: a FlatTape's instructions as they are.
-struct FlatView {
-    const FlatTape& t;
-    size_t size() const { return t.instrs.size(); }
-    uint32_t origin(size_t j) const { return t.origin[j]; }
-    Op op(size_t j) const { return t.instrs[j].op; }
-    uint32_t jump(size_t j) const { return t.instrs[j].jump; }
-    Instr instr(size_t j) const { return t.instrs[j]; }
-};
+// The entry of a leaf tape that stands for the whole tape's `count` instructions from `first`.
+inline Instr runOf(uint32_t first, uint32_t count) {
+    Instr run{};
+    run.op = Op::Run;
+    run.k = first;
+    run.jump = first + count;
+    return run;
+}
 
 // A pruned tape as the cells keep it, appended to `out`: each stretch of instructions that the
 // whole tape has as they are (consecutive there, every jump inside) becomes one Op::Run of the
 // whole tape's instructions, and the rest is copied, its jumps renumbered. `whole` is the whole
 // tape's.
-inline void compactTape(const FlatView& t, const Instr* whole, std::vector<Instr>& out,
+inline void compactTape(const FlatTape& t, const Instr* whole, std::vector<Instr>& out,
                         CompactScratch& scratch) {
-    const size_t n = t.size();
-    auto verbatim = [&](size_t j) { return t.origin(j) != FlatTape::kMade; };
+    const size_t n = t.instrs.size();
+    const std::vector<uint32_t>& origin = t.origin;
+    auto verbatim = [&](size_t j) { return origin[j] != FlatTape::kMade; };
     auto follows = [&](size_t j) {  // j continues j - 1's stretch of the whole tape
-        return j > 0 && verbatim(j) && verbatim(j - 1) && t.origin(j) == t.origin(j - 1) + 1;
+        return j > 0 && verbatim(j) && verbatim(j - 1) && origin[j] == origin[j - 1] + 1;
     };
     // A guard may sit in a Run when its operand is the whole tape's, unbroken; the others are
     // copied, and the instruction each jumps to must start an entry.
@@ -57,9 +57,9 @@ inline void compactTape(const FlatView& t, const Instr* whole, std::vector<Instr
             copied[j] = 1;
             continue;
         }
-        if (t.op(j) != Op::CullIfFar) continue;
-        const uint32_t jump = t.jump(j);
-        bool intact = jump - j == whole[t.origin(j)].jump - t.origin(j);
+        if (t.instrs[j].op != Op::CullIfFar) continue;
+        const uint32_t jump = t.instrs[j].jump;
+        bool intact = jump - j == whole[origin[j]].jump - origin[j];
         for (size_t i = j + 1; intact && i < jump; ++i) intact = follows(i);
         if (!intact) copied[j] = 1, starts[jump] = 1;
     }
@@ -78,15 +78,12 @@ inline void compactTape(const FlatView& t, const Instr* whole, std::vector<Instr
     }
     entryOf[n] = static_cast<uint32_t>(entries.size());
     for (const CompactScratch::Entry& e : entries) {
-        Instr in{};
         if (e.count > 1) {
-            in.op = Op::Run;
-            in.k = t.origin(e.first);
-            in.jump = t.origin(e.first) + e.count;
-        } else {
-            in = t.instr(e.first);
-            if (in.op == Op::CullIfFar) in.jump = entryOf[in.jump];
+            out.push_back(runOf(origin[e.first], e.count));
+            continue;
         }
+        Instr in = t.instrs[e.first];
+        if (in.op == Op::CullIfFar) in.jump = entryOf[in.jump];
         out.push_back(in);
     }
 }
@@ -212,11 +209,7 @@ class LaneCompactor {
         const auto count = static_cast<uint32_t>(st.count[l]),
                    end = static_cast<uint32_t>(st.last[l]) + 1;
         if (count > 1) {
-            Instr run{};
-            run.op = Op::Run;
-            run.k = end - count;
-            run.jump = end;
-            c.out.push_back(run);
+            c.out.push_back(runOf(end - count, count));
             return;
         }
         c.out.push_back(c.first);

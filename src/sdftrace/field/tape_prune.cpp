@@ -168,7 +168,7 @@ class Builder {
             Local& local = m_locals.local();
             leaf(leafId(local, memo, static_cast<uint32_t>(tape.instrs.size()),
                         [&](std::vector<Instr>& mine) {
-                            compactTape(FlatView{tape}, m_whole, mine, local.compactScratch);
+                            compactTape(tape, m_whole, mine, local.compactScratch);
                         }),
                  cell);
             return;
