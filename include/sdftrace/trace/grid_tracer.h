@@ -16,6 +16,8 @@ struct GridTraceOptions {
     CellIntersection cellMethod = CellIntersection::FalsePosition;
     int falsiIters = 1;    // §4.2: 1 is visually the same as 4 (Jamriška Table 1)
     bool bitMasks = true;  // §4.1: test the precomputed mask instead of the 8 corner signs
+    // traceGridRays: eight rays at a time in AVX2 registers (the same results; false: one by one)
+    bool packets = true;
 };
 
 struct GridTraceResult {
@@ -29,6 +31,13 @@ struct GridTraceResult {
 // First intersection of the ray with the zero level set on [tMin, tMax].
 GridTraceResult traceGridRay(const GridView& grid, const Ray& ray, float tMin, float tMax,
                              const GridTraceOptions& options);
+
+// traceGridRay on each of n rays, out[i] for rays[i] on [tMin[i], tMax[i]] (an empty result where
+// tMin[i] > tMax[i]). With AVX2, options.packets and a sparse grid's bit masks, eight rays at a
+// time walk the DDA together in vector registers (trace/grid_packet.cpp): the same results and
+// counters, faster on coherent rays (a tile's primary rays).
+void traceGridRays(const GridView& grid, const Ray* rays, const float* tMin, const float* tMax,
+                   int n, const GridTraceOptions& options, GridTraceResult* out);
 
 // Whether anything blocks the ray on [tMin, tMax]. With occluderThreshold > 0, Jamriška §7: walk
 // only the coarse blocks, stopping at the first inside block; after the first surface block, give

@@ -32,6 +32,9 @@ struct TileScratch {
     PacketScratch packet;
     std::vector<RaySegment> segments;
     std::vector<TraceResult> results;
+    std::vector<Ray> gridRays;  // a single grid's primary rays (tracePrimaryGrid)
+    std::vector<float> gridTMin, gridTMax;
+    std::vector<GridTraceResult> gridResults;
     std::vector<int> hitPixel;                   // tile-local index of each hit
     std::vector<MeshPrimary::Hit> triangleHits;  // hybrid mode: per pixel, t < inf on triangles
     std::vector<int> normalHits;                 // the hits whose normal is the field's gradient
@@ -408,19 +411,29 @@ void TileRenderer::stencilNormals(TileScratch& s) {
 // trav_steps and isect_tests AOVs.
 void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
     const bool trav = m_film.has(Aov::TravSteps), isect = m_film.has(Aov::IsectTests);
-    for (size_t i = 0; i < s.segments.size(); ++i) {
+    const size_t n = s.segments.size();
+    s.gridRays.resize(n);
+    s.gridTMin.resize(n);
+    s.gridTMax.resize(n);
+    s.gridResults.resize(n);
+    for (size_t i = 0; i < n; ++i) {
         const RaySegment& seg = s.segments[i];
         float t0, t1;  // [0, inf) without a buffer
         m_minMax.range(x0 + static_cast<int>(i) % tw, y0 + static_cast<int>(i) / tw, t0, t1);
-        const float tMin = std::max(seg.tMin, t0), tMax = std::min(seg.tMax, t1);
-        GridTraceResult g = tMin <= tMax
-                                ? traceGridRay(*m_grid, seg.ray, tMin, tMax, m_settings.gridTrace)
-                                : GridTraceResult{};
+        s.gridRays[i] = seg.ray;
+        s.gridTMin[i] = std::max(seg.tMin, t0);
+        s.gridTMax[i] = std::min(seg.tMax, t1);
+    }
+    // Eight neighbouring rays of a row at a time (packets through the DDA where AVX2 runs).
+    traceGridRays(*m_grid, s.gridRays.data(), s.gridTMin.data(), s.gridTMax.data(),
+                  static_cast<int>(n), m_settings.gridTrace, s.gridResults.data());
+    for (size_t i = 0; i < n; ++i) {
+        const GridTraceResult& g = s.gridResults[i];
         TraceResult r;
         r.hit = g.hit;
         r.t = g.t;
         r.evaluations = g.interpolations;
-        r.value = g.hit && m_gridHitValue ? m_grid->interpolate(seg.ray.at(g.t)) : 0.0f;
+        r.value = g.hit && m_gridHitValue ? m_grid->interpolate(s.segments[i].ray.at(g.t)) : 0.0f;
         s.results[i] = r;
         size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
         if (trav) m_film.travSteps[p] = static_cast<float>(g.traversalSteps);

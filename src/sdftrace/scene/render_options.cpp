@@ -404,6 +404,13 @@ std::vector<RenderOption> makeTable() {
          .type = T::Bool,
          .doc = "test the per-block cell masks instead of the 8 corner signs (§4.1)",
          SDFT_MEMBER(gridTrace.bitMasks)},
+        {.key = "ray_packets",
+         .flags = "--ray-packets",
+         .group = "Grids",
+         .type = T::Bool,
+         .doc = "DDA primary rays eight at a time in AVX2 registers, with the same hits as one by "
+                "one (off: one by one)",
+         SDFT_MEMBER(gridTrace.packets)},
         {.key = "grid_normals",
          .flags = "--grid-normals",
          .group = "Grids",
