@@ -1,7 +1,7 @@
 // Jamriška 2010, Tables 1-4, on the Stanford bunny (data/meshes/bunny_npm.obj, closed) made a level
 // set by OpenVDB's meshToLevelSet at about 128, 256 and 512 cells across, rendered 512x512 with 1
 // and 2 threads, and OpenVDB's LevelSetRayIntersector on the same level set and camera as the
-// baseline, all in one run.
+// baseline, all in one run; and primary rays one by one against packets of eight (decision 25).
 //
 //   build/release/bench/sdftrace_grid_bench --benchmark_repetitions=5
 //   --benchmark_report_aggregates_only=true
@@ -17,6 +17,7 @@
 #include <tbb/task_arena.h>
 
 #include <atomic>
+#include <chrono>
 #include <fstream>
 #include <map>
 #include <numeric>
@@ -209,6 +210,45 @@ void Normals(benchmark::State& state, int resolution, GridNormal method) {
     state.counters["points"] = static_cast<double>(points.size());
 }
 
+// Primary rays one by one against packets of eight (traceGridRays), one thread, in the renderer's
+// order: tiles of 16x16 pixels, rows of a tile in turn. The framed camera and a close one (the eye
+// at 0.4 of the distance, the bunny filling the view).
+void Packets(benchmark::State& state, int resolution, bool close, bool packets) {
+    const Level& l = level(resolution);
+    CameraDesc cd = l.camera;
+    if (close) cd.eye = cd.target + (cd.eye - cd.target) * 0.4f;
+    const Camera cam(cd);
+    constexpr int kTile = 16;
+    std::vector<Ray> rays;
+    for (int ty = 0; ty < kImage; ty += kTile)
+        for (int tx = 0; tx < kImage; tx += kTile)
+            for (int y = ty; y < ty + kTile; ++y)
+                for (int x = tx; x < tx + kTile; ++x) rays.push_back(cam.pixelRay(x, y));
+    const std::vector<float> tMin(rays.size(), 0.0f), tMax(rays.size(), 1e30f);
+    std::vector<GridTraceResult> out(kTile * kTile);
+    GridTraceOptions o;
+    o.packets = packets;
+    long steps = 0, hits = 0;
+    double seconds = 0;
+    for (auto _ : state) {
+        const auto start = std::chrono::steady_clock::now();
+        steps = hits = 0;
+        for (size_t i = 0; i < rays.size(); i += out.size()) {
+            traceGridRays(l.grid->view(), &rays[i], &tMin[i], &tMax[i], kTile * kTile, o,
+                          out.data());
+            for (const GridTraceResult& r : out) {
+                steps += r.traversalSteps;
+                hits += r.hit;
+            }
+        }
+        seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    state.counters["ns_per_ray"] =
+        seconds * 1e9 / (static_cast<double>(state.iterations()) * rays.size());
+    state.counters["steps_per_ray"] = static_cast<double>(steps) / rays.size();
+    state.counters["hits"] = static_cast<double>(hits);
+}
+
 // Table 4: shadow rays to five directional lights from every hit, plain vs occluder traversal.
 void Shadows(benchmark::State& state, int resolution, int threads, int occluder) {
     const Level& l = level(resolution);
@@ -276,6 +316,11 @@ void registerAll() {
                 reg("Shadows/bunny" + r + t + (n ? "/occluder" + std::to_string(n) : "/plain"),
                     [=](benchmark::State& s) { Shadows(s, res, threads, n); });
         }
+        for (bool close : {false, true})
+            for (bool packets : {false, true})
+                reg("Packets/bunny" + r + (close ? "/close" : "/framed") +
+                        (packets ? "/packets" : "/single"),
+                    [=](benchmark::State& s) { Packets(s, res, close, packets); });
         reg("Cells/bunny" + r + "/midpoint",
             [=](benchmark::State& s) { Cells(s, res, CellIntersection::Midpoint, 1); });
         reg("Cells/bunny" + r + "/false-position-1",
