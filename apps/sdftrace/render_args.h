@@ -73,6 +73,7 @@ FrameTimes frameTimes(const TimeSpan& span, double fps, const std::string& timeT
 
 // The flags' camera (validated) and render options over the scene's.
 void applyCamera(const RenderArgs& a, CameraDesc& cam);
+void applySettingOverrides(const RenderArgs& a, RenderSettings& settings);
 void applyOverrides(const RenderArgs& a, Scene& scene);
 
 // Whether progress is shown: on a terminal, and on a distributed job's rank 0 whatever its stderr

@@ -49,9 +49,7 @@ void applyCamera(const RenderArgs& a, CameraDesc& cam) {
 }
 
 // Flags override the scene's render block; --classic resets the tracer before them.
-void applyOverrides(const RenderArgs& a, Scene& scene) {
-    applyCamera(a, scene.camera);
-    RenderSettings& s = scene.settings;
+void applySettingOverrides(const RenderArgs& a, RenderSettings& s) {
     if (a.classic) s.trace = TraceOptions::classic();
     for (const OptionArg& arg : a.options) {
         if (!arg.given()) continue;
@@ -64,6 +62,11 @@ void applyOverrides(const RenderArgs& a, Scene& scene) {
         arg.option->give(s, v);
     }
     if (a.threads) s.threads = *a.threads;
+}
+
+void applyOverrides(const RenderArgs& a, Scene& scene) {
+    applyCamera(a, scene.camera);
+    applySettingOverrides(a, scene.settings);
 }
 
 namespace {
@@ -330,8 +333,12 @@ StillScene loadStill(const RenderArgs& a, const std::optional<TimeSpan>& span, b
         AssetCache cache;
         still.scene = still.anim->at(span->from, cache, prepareOptions(a, distributed));
     } else {
+        // A mesh or grid file's grid gets its gap lattice only if the render reads it.
+        RenderSettings settings;
+        applySettingOverrides(a, settings);
         LoadedInput input = loadSceneInput(a.scene, !a.quiet && stderrIsTerminal(),
-                                           prepareOptions(a, distributed).bakeMesh);
+                                           prepareOptions(a, distributed).bakeMesh,
+                                           loneGridReadsDistances(settings));
         if (!a.quiet && !input.note.empty())
             std::fprintf(stderr, "sdftrace render: %s\n", input.note.c_str());
         still.scene = std::move(input.scene);
