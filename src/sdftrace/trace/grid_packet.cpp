@@ -377,6 +377,12 @@ SDFT_TARGET_AVX2 void traceGridRaysAvx2(const GridView& g, const Ray* rays, cons
                                         GridTraceResult* out) {
     for (int i = 0; i < n; i += kLanes) {
         const int k = n - i < kLanes ? n - i : kLanes;
+        bool any = false;  // a packet the min/max buffer empties whole has nothing to trace
+        for (int l = 0; l < k; ++l) any |= tMin[i + l] <= tMax[i + l];
+        if (!any) {
+            for (int l = 0; l < k; ++l) out[i + l] = GridTraceResult{};
+            continue;
+        }
         if (g.blockSize == 8)
             tracePacket<8>(g, rays + i, tMin + i, tMax + i, k, o, out + i);
         else

@@ -92,10 +92,12 @@ Rays varietyOfRays() {
     // segment, a ray that misses the grid.
     const Vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     for (int i = 0; i < 60; ++i) r.add({rng.inCube(1.2f) - axes[i % 6] * 3, axes[i % 6]}, 0, 20);
+    // A whole packet that a min/max buffer empties (rays 7,128 to 7,135).
+    for (int i = 0; i < 8; ++i) r.add({{0, 0.2f, 3}, -axes[i % 6]}, 2, 1);
     r.add({{0, 0.2f, 3}, {0, 0, -1}}, 5, 1);
     r.add({{0, 0.2f, 3}, {0, 0, -1}}, 0.5f, 2.6f);
     r.add({{9, 9, 9}, {0, 1, 0}}, 0, 20);
-    return r;  // 7,131 rays: the last packet has 3 lanes
+    return r;  // 7,139 rays: the last packet has 3 lanes
 }
 
 TEST(GridPacket, EveryLaneEqualsTheSingleRayTraversal) {
