@@ -1,8 +1,10 @@
-// Helpers shared by the field tests: a fixed-seed RNG and a tree using every node kind.
+// Helpers shared by the field tests: a fixed-seed RNG, a tree using every node kind, and a grid
+// view without its empty-space skipping.
 #pragma once
 
 #include <random>
 
+#include "sdftrace/field/grid.h"
 #include "sdftrace/field/node.h"
 
 namespace sdft::testing {
@@ -47,6 +49,13 @@ inline NodePtr everyKindTree() {
     return unite({translate(a, {0, 0, 2}), b, rotated, translate(d, {2, 0, 0}),
                   translate(e, {-2, 0, 0}), translate(f, {0, -2, 0}), translate(g, {0, 2.5f, -2}),
                   translate(h, {0, 0, -3}), plane({0, 1, 0}, 3.0f)});
+}
+
+// The same view without empty-space skipping (the plain block traversal).
+inline GridView withoutSkipping(GridView v) {
+    v.blockSkip = nullptr;
+    v.tileSkip = nullptr;
+    return v;
 }
 
 }  // namespace sdft::testing

@@ -77,14 +77,33 @@ SDFT_TARGET_AVX2 inline Lanes setBits(const __m256i words[2], I8 bit) {
     return out;
 }
 
-// One step of a Dda (Dda::advance) on the lanes in `m`: the axis of the nearest boundary, its
-// parameter as the new t, the index moved, the next boundary computed from the index. Returns the
-// lanes whose index left [lo, hi].
+// A Dda (grid_dda.h) per lane: the current cube's index, its next boundary per axis, and t.
 struct Walker {
     I8 idx[3];
     F8 next[3];
     F8 t;
 };
+
+// Dda::init on the lanes in `m`: at t, in cubes of edge `size` with indices in [lo, hi].
+SDFT_TARGET_AVX2 inline void start(Walker& w, I8 m, F8 t, float size, const I8 lo[3],
+                                   const I8 hi[3], const I8 step[3], const I8 up[3],
+                                   const F8 org[3], const F8 dir[3], const F8 inv[3]) {
+    for (int a = 0; a < 3; ++a) {
+        const F8 at = org[a] + dir[a] * t;
+        const I8 i = __builtin_convertvector((F8)_mm256_floor_ps((__m256)(at / size)), I8);
+        const I8 idx = i < lo[a] ? lo[a] : (hi[a] < i ? hi[a] : i);
+        const F8 next = step[a] != 0
+                            ? (__builtin_convertvector(idx + up[a], F8) * size - org[a]) * inv[a]
+                            : F8{} + kInfinity;
+        w.idx[a] = m ? idx : w.idx[a];
+        w.next[a] = m ? next : w.next[a];
+    }
+    w.t = m ? t : w.t;
+}
+
+// One step of a Dda (Dda::advance) on the lanes in `m`: the axis of the nearest boundary, its
+// parameter as the new t, the index moved, the next boundary computed from the index. Returns the
+// lanes whose index left [lo, hi].
 SDFT_TARGET_AVX2 inline I8 advance(Walker& w, I8 m, const I8 step[3], const I8 up[3],
                                    const F8 org[3], const F8 inv[3], float size, const I8 lo[3],
                                    const I8 hi[3]) {
@@ -127,24 +146,6 @@ struct Packet {
     }
 };
 
-// Dda::init of the lanes in `m`'s block walkers at t (blocks of size B).
-template <int B>
-SDFT_TARGET_AVX2 void startBlocks(Packet<B>& p, I8 m, F8 t) {
-    const float size = static_cast<float>(B);
-    for (int a = 0; a < 3; ++a) {
-        const F8 at = p.org[a] + p.dir[a] * t;
-        const I8 i = __builtin_convertvector((F8)_mm256_floor_ps((__m256)(at / size)), I8);
-        const I8 idx = i < p.blockLo[a] ? p.blockLo[a] : (p.blockHi[a] < i ? p.blockHi[a] : i);
-        const F8 next =
-            p.step[a] != 0
-                ? (__builtin_convertvector(idx + p.up[a], F8) * size - p.org[a]) * p.inv[a]
-                : F8{} + kInfinity;
-        p.blocks.idx[a] = m ? idx : p.blocks.idx[a];
-        p.blocks.next[a] = m ? next : p.blocks.next[a];
-    }
-    p.blocks.t = m ? t : p.blocks.t;
-}
-
 // traceRay's setup (grid_dda::setup: the ray in grid units clipped to the grid's box, its sign)
 // and its block walker, for rays[0..n). Returns the lanes whose ray meets the grid.
 template <int B>
@@ -183,7 +184,8 @@ SDFT_TARGET_AVX2 Lanes startLanes(const GridView& g, Packet<B>& p, const Ray* ra
     }
     alive &= ~(t0 > t1);
     p.t1 = t1;
-    startBlocks(p, alive, t0);
+    start(p.blocks, alive, t0, static_cast<float>(B), p.blockLo, p.blockHi, p.step, p.up, p.org,
+          p.dir, p.inv);
     const Lanes lanes = bitsOf(alive);
     // A ray clipped to the box starts outside the solid; otherwise the first sample's sign.
     for (Lanes v = lanes; v; v &= v - 1) {
@@ -198,25 +200,14 @@ SDFT_TARGET_AVX2 Lanes startLanes(const GridView& g, Packet<B>& p, const Ray* ra
 template <int B>
 SDFT_TARGET_AVX2 void startWalks(const GridView& g, Packet<B>& p, Lanes walk) {
     const I8 m = maskOf(walk);
-    const F8 t = p.blocks.t;
-    I8 idx[3];
     for (int a = 0; a < 3; ++a) {
-        const I8 lo = p.blocks.idx[a] * B;
-        const I8 cells = I8{} + g.shape.cells[a];
-        const I8 hi = (lo + B < cells ? lo + B : cells) - 1;
-        const F8 at = p.org[a] + p.dir[a] * t;
-        const I8 i = __builtin_convertvector((F8)_mm256_floor_ps((__m256)at), I8);
-        idx[a] = i < lo ? lo : (hi < i ? hi : i);
-        const F8 boundary = (__builtin_convertvector(idx[a] + p.up[a], F8) - p.org[a]) * p.inv[a];
-        const F8 next = p.step[a] != 0 ? boundary : F8{} + kInfinity;
-        p.cells.idx[a] = m ? idx[a] : p.cells.idx[a];
-        p.cells.next[a] = m ? next : p.cells.next[a];
+        const I8 lo = p.blocks.idx[a] * B, cells = I8{} + g.shape.cells[a];
         p.cellLo[a] = m ? lo : p.cellLo[a];
-        p.cellHi[a] = m ? hi : p.cellHi[a];
+        p.cellHi[a] = m ? (lo + B < cells ? lo + B : cells) - 1 : p.cellHi[a];
     }
-    p.cells.t = m ? t : p.cells.t;
-    const I8 bit =
-        ((idx[2] - p.cellLo[2]) * B + (idx[1] - p.cellLo[1])) * B + (idx[0] - p.cellLo[0]);
+    start(p.cells, m, p.blocks.t, 1.0f, p.cellLo, p.cellHi, p.step, p.up, p.org, p.dir, p.inv);
+    const I8* c = p.cells.idx;
+    const I8 bit = ((c[2] - p.cellLo[2]) * B + (c[1] - p.cellLo[1])) * B + (c[0] - p.cellLo[0]);
     p.bit = m ? bit : p.bit;
 }
 
@@ -241,8 +232,8 @@ SDFT_TARGET_AVX2 void skipCubes(Packet<B>& p, Lanes lanes, I8 r, I8 shift, Lanes
     advancing |= bitsOf(m & ~left & (tCube <= p.blockExit));
     I8 go = m & ~left & ~(tCube <= p.blockExit);
     if (!bitsOf(go)) return;
-    startBlocks(p, go, tCube);
     const float size = static_cast<float>(B);
+    start(p.blocks, go, tCube, size, p.blockLo, p.blockHi, p.step, p.up, p.org, p.dir, p.inv);
     // Rounding can leave the point in the cube: step out of it block by block.
     for (;;) {
         I8 in = go;
@@ -302,9 +293,7 @@ SDFT_TARGET_AVX2 Lanes visitBlocks(const GridView& g, Packet<B>& p) {
         p.cellLanes |= walk;
     }
     Lanes stay = 0;
-    if (skip) {
-        skipCubes(p, skip, load(radius), load(shift), advancing, stay);
-    }
+    if (skip) skipCubes(p, skip, load(radius), load(shift), advancing, stay);
     p.blockLanes = stay;
     return advancing;
 }

@@ -65,12 +65,6 @@ int expectSameAsSingleRays(const GridView& g, const Rays& r, const GridTraceOpti
     return hits;
 }
 
-GridView withoutSkipping(GridView v) {
-    v.blockSkip = nullptr;
-    v.tileSkip = nullptr;
-    return v;
-}
-
 NodePtr shapes() {
     return node::unite({node::torus(0.8f, 0.25f),
                         node::translate(node::box({0.5f, 0.6f, 0.5f}), {0, 0.2f, 0}),
@@ -106,7 +100,7 @@ TEST(GridPacket, EveryLaneEqualsTheSingleRayTraversal) {
     for (int B : {4, 8}) {
         const Grid grid = gridOf(shapes(), 96, B);
         for (bool skipping : {true, false}) {
-            const GridView v = skipping ? grid.view() : withoutSkipping(grid.view());
+            const GridView v = skipping ? grid.view() : testing::withoutSkipping(grid.view());
             SCOPED_TRACE(::testing::Message() << "B " << B << ", skipping " << skipping);
             EXPECT_GT(expectSameAsSingleRays(v, rays, GridTraceOptions{}), 2000);
         }

@@ -46,13 +46,6 @@ const Fixture& fixture() {
     return f;
 }
 
-// The same view without empty-space skipping (the plain traversal).
-GridView withoutSkipping(GridView v) {
-    v.blockSkip = nullptr;
-    v.tileSkip = nullptr;
-    return v;
-}
-
 TEST(GridTracer, FindsTheFirstZeroOfTheReconstructionLikeSphereTracing) {
     const Fixture& f = fixture();
     GridView g = f.sparse->view();
@@ -103,7 +96,7 @@ TEST(GridTracer, BitMasksAndDenseTraversalChangeNoHit) {
 TEST(GridTracer, EmptySpaceSkippingChangesNoHit) {
     const Fixture& f = fixture();
     const GridView with = f.sparse->view();
-    const GridView without = withoutSkipping(with);
+    const GridView without = testing::withoutSkipping(with);
     ASSERT_NE(with.blockSkip, nullptr);
     ASSERT_NE(with.tileSkip, nullptr);
     int maxSkip = 0;
@@ -187,7 +180,7 @@ Grid twoSpheresInALargeGrid() {
 TEST(GridTracer, TileSkippingAcrossALargeEmptyGridChangesNoHit) {
     const Grid g = twoSpheresInALargeGrid();
     const GridView with = g.view();
-    const GridView without = withoutSkipping(with);
+    const GridView without = testing::withoutSkipping(with);
     size_t own = 0;
     for (int32_t p : g.tilePage()) own += p >= kFirstOwnPage;
     EXPECT_LT(own, 30u);
@@ -226,7 +219,7 @@ TEST(GridTracer, TileSkippingAcrossALargeEmptyGridChangesNoHit) {
 TEST(GridTracer, SkippingAlwaysMakesProgress) {
     const Grid g = twoSpheresInALargeGrid();
     const GridView with = g.view();
-    const GridView without = withoutSkipping(with);
+    const GridView without = testing::withoutSkipping(with);
     testing::Rng rng(5);
     for (int n = 0; n < 100000; ++n) {
         Vec3 from = rng.inBox(Vec3(-100.0f), Vec3(1700.0f));
