@@ -9,6 +9,8 @@
 //    the same threads. Both grid renderers then take the gradient of the trilinear interpolant in
 //    the hit's cell as the normal (OpenVDB: BoxStencil::gradient); sdftrace's default, smooth
 //    normals from interpolated central differences (32 samples), is timed too (column "smooth");
+//  - rays: sdftrace's primary rays with the Embree loop's per-pixel work and no more, in this
+//    process (renderGridRays): the render phase's rays without its shading and film;
 //  - whole process: the sdftrace process's wall time (PNG written) against the minimal OpenVDB
 //    program bench/openvdb_render.cpp as a process (reads the file, renders as above, writes a
 //    PPM);
@@ -46,6 +48,7 @@
 #include "sdftrace/math/camera.h"
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/trace/grid_tracer.h"
+#include "sdftrace/trace/minmax_buffer.h"
 
 using namespace sdft;
 
@@ -178,6 +181,49 @@ void renderEmbree(const EmbreeScene& e, const CameraDesc& cd, int threads,
         if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
             image[static_cast<size_t>(y) * cd.width + x] =
                 std::fabs(headlight({rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, r.direction));
+    });
+}
+
+// sdftrace's primary rays as the renderer casts them, with Embree's loop's per-pixel work and no
+// more: the min/max buffer (Jamriška §6) built for the camera, then per 16x16 tile the camera rays,
+// traceGridRays (packets of eight through the DDA, the eye's sign given), the trilinear
+// interpolant's gradient in the hit's cell (the trace's) and the headlight. The render phase adds
+// the renderer's shading, AOVs and film on top of this.
+void renderGridRays(const Grid& grid, const CameraDesc& cd, int threads,
+                    std::vector<float>& image) {
+    const Camera cam(cd);
+    const GridView g = grid.view();
+    image.assign(static_cast<size_t>(cd.width) * cd.height, 0.0f);
+    constexpr int kTile = 16;
+    const int tilesX = (cd.width + kTile - 1) / kTile, tilesY = (cd.height + kTile - 1) / kTile;
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        const MinMaxBuffer minMax = MinMaxBuffer::build(g, cam, 128);
+        const GridTraceOptions options;
+        const float eyeSign = gridSignAt(g, cd.eye);
+        tbb::parallel_for(0, tilesX * tilesY, [&](int tile) {
+            const int x0 = tile % tilesX * kTile, y0 = tile / tilesX * kTile;
+            const int x1 = std::min(x0 + kTile, cd.width), y1 = std::min(y0 + kTile, cd.height);
+            Ray rays[kTile * kTile];
+            float t0[kTile * kTile] = {}, t1[kTile * kTile] = {};
+            GridTraceResult hits[kTile * kTile];
+            int n = 0;
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x, ++n) {
+                    rays[n] = cam.pixelRay(x, y);
+                    minMax.range(x, y, t0[n], t1[n]);
+                }
+            traceGridRays(g, rays, t0, t1, n, options, hits, eyeSign);
+            n = 0;
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x, ++n)
+                    if (hits[n].hit) {
+                        const Vec3 nml = gridHitNormal(g, hits[n], rays[n].at(hits[n].t),
+                                                       GridNormal::AnalyticTrilinear);
+                        image[static_cast<size_t>(y) * cd.width + x] =
+                            headlight(nml, rays[n].direction);
+                    }
+        });
     });
 }
 
@@ -319,9 +365,9 @@ void runMesh(const std::string& path, const Options& o) {
         double(vdb->memUsage()) / grid.memoryBytes());
     std::printf(
         "| camera | size | sdftrace render | OpenVDB render | ratio | Embree | vs Embree | "
-        "smooth | ratio | sdftrace process | OpenVDB program | ratio | hits | hit mismatches | "
-        "DDA steps / tests per pixel |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+        "sdftrace rays | vs Embree | smooth | ratio | sdftrace process | OpenVDB program | ratio | "
+        "hits | hit mismatches | DDA steps / tests per pixel |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::fflush(stdout);
 
     const EmbreeScene embree(mesh);
@@ -340,7 +386,7 @@ void runMesh(const std::string& path, const Options& o) {
                                        " /tmp/sdftrace-scale-bench.ppm";
             if (o.commands)
                 std::fprintf(stderr, "%s %d²: %s\n", camName.c_str(), size, cmd.c_str());
-            std::vector<double> phase, smoothPhase, wall, vdbRender, vdbWhole, embreeMs;
+            std::vector<double> phase, smoothPhase, wall, vdbRender, vdbWhole, embreeMs, raysMs;
             float travSteps = 0, isectTests = 0, hitPercent = 0;
             std::vector<float> image;
             std::vector<uint8_t> vdbMask;
@@ -373,6 +419,9 @@ void runMesh(const std::string& path, const Options& o) {
                 t0 = Clock::now();
                 renderEmbree(embree, cd, o.threads, image);
                 embreeMs.push_back(ms(t0, Clock::now()));
+                t0 = Clock::now();
+                renderGridRays(grid, cd, o.threads, image);
+                raysMs.push_back(ms(t0, Clock::now()));
             }
             double w = 0;
             runProcess(
@@ -381,12 +430,14 @@ void runMesh(const std::string& path, const Options& o) {
             const long bad = mismatches(
                 hitsFromDepthPfm("/tmp/sdftrace-scale-depth.pfm", size, size), vdbMask, size, size);
             const double p = median(phase), vr = median(vdbRender), e = median(embreeMs),
-                         pw = median(wall), vw = median(vdbWhole), ps = median(smoothPhase);
+                         pw = median(wall), vw = median(vdbWhole), ps = median(smoothPhase),
+                         gr = median(raysMs);
             std::printf(
-                "| %s | %d² | %.1f ms | %.1f ms | %.2fx | %.1f ms | %.2fx | %.1f ms | %.2fx | "
-                "%.0f ms | %.0f ms | %.2fx | %.0f%% | %ld | %.1f / %.2f |\n",
-                camName.c_str(), size, p, vr, vr / p, e, p / e, ps, vr / ps, pw, vw, vw / pw,
-                hitPercent, bad, travSteps, isectTests);
+                "| %s | %d² | %.1f ms | %.1f ms | %.2fx | %.1f ms | %.2fx | %.1f ms | %.2fx | %.1f "
+                "ms | "
+                "%.2fx | %.0f ms | %.0f ms | %.2fx | %.0f%% | %ld | %.1f / %.2f |\n",
+                camName.c_str(), size, p, vr, vr / p, e, p / e, gr, gr / e, ps, vr / ps, pw, vw,
+                vw / pw, hitPercent, bad, travSteps, isectTests);
             std::fflush(stdout);
         }
     if (!o.keep) std::remove(vdbPath.c_str());

@@ -52,6 +52,7 @@ PrimaryPixelView primaryPixelView(const RenderPlan& plan, const FrameView& frame
     v.ddaGrid = ddaGridIndex(plan);
     v.gridTrace = plan.settings.gridTrace;
     v.gridNormals = plan.settings.gridNormals;
+    if (plan.ddaGrid) v.gridStartSign = gridSignAt(plan.ddaGrid->view(), frame.camera.eye);
     return v;
 }
 

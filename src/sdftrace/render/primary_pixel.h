@@ -43,6 +43,9 @@ struct PrimaryPixelView {
     // of §5 for its normals.
     int ddaGrid = -1;
     GridTraceOptions gridTrace;
+    // The grid's sign at the camera's eye (gridSignAt): every primary ray's sign at its start, as
+    // no surface block lies before it (traceGridRay's startSign).
+    float gridStartSign = 0;
     GridNormal gridNormals = GridNormal::InterpolationOfDifferences;
     // The DDA's primary rays narrowed to their min/max-buffer interval (Jamriška §6), where the
     // caller built one for this frame's camera (primaryMinMax); none: the whole ray.
@@ -72,7 +75,8 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
         v.minMax.range(x, y, t0, t1);
         const float tMin = fmaxf(seg.tMin, t0), tMax = fminf(seg.tMax, t1);
         if (!(tMin <= tMax)) return out;  // no surface block projects here: a miss
-        const GridTraceResult r = grid_dda::traceRay(g, seg.ray, tMin, tMax, v.gridTrace);
+        const GridTraceResult r =
+            grid_dda::traceRay(g, seg.ray, tMin, tMax, v.gridTrace, v.gridStartSign);
         out.trace.hit = r.hit;
         out.trace.t = r.t;
         out.trace.evaluations = r.interpolations;
@@ -82,7 +86,7 @@ SDFT_HOST_DEVICE inline PrimaryPixel tracePrimaryPixel(const PrimaryPixelView& v
             const Vec3 p = seg.ray.at(r.t);
             out.trace.value = g.interpolate(p);
             out.normal =
-                normalOrFacing(grid_dda::gradientNormal(g, p, v.gridNormals), seg.ray.direction);
+                normalOrFacing(grid_dda::hitNormal(g, r, p, v.gridNormals), seg.ray.direction);
         }
         return out;
     }

@@ -212,10 +212,10 @@ void TileRenderer::tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1) 
     s.tw = tw;
     s.segments.resize(count);
     s.results.resize(count);
-    for (int i = 0; i < count; ++i) {
-        s.segments[i] = {primaryRay(m_camera, x0 + i % tw, y0 + i / tw, m_view.pixelJitter), 0.0f,
-                         m_settings.maxDistance};
-    }
+    for (int y = y0, i = 0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x, ++i)
+            s.segments[i] = {primaryRay(m_camera, x, y, m_view.pixelJitter), 0.0f,
+                             m_settings.maxDistance};
     if (m_grid) {
         tracePrimaryGrid(s, x0, y0, tw);
     } else if (m_plan.meshPrimary && !m_plan.primaryField) {
@@ -345,12 +345,15 @@ void TileRenderer::writeFilm(const TileScratch& s) {
     const bool steps = m_film.has(Aov::Steps), normals = m_film.has(Aov::Normal),
                depth = m_film.has(Aov::Depth), error = m_film.has(Aov::Error),
                shadow = m_film.has(Aov::Shadow), ao = m_film.has(Aov::Ao);
-    for (int i = 0; i < count; ++i) {
-        size_t p = static_cast<size_t>(s.y0 + i / tw) * m_film.width + (s.x0 + i % tw);
-        m_film.color[3 * p + 0] = bg.x;
-        m_film.color[3 * p + 1] = bg.y;
-        m_film.color[3 * p + 2] = bg.z;
-        if (steps) m_film.steps[p] = static_cast<float>(s.results[i].evaluations);
+    for (int i = 0, row = 0; i < count; i += tw, ++row) {
+        const size_t p0 = static_cast<size_t>(s.y0 + row) * m_film.width + s.x0;
+        for (int x = 0; x < tw; ++x) {
+            const size_t p = p0 + x;
+            m_film.color[3 * p + 0] = bg.x;
+            m_film.color[3 * p + 1] = bg.y;
+            m_film.color[3 * p + 2] = bg.z;
+            if (steps) m_film.steps[p] = static_cast<float>(s.results[i + x].evaluations);
+        }
     }
     for (int h = 0; h < hits; ++h) {
         int i = s.hitPixel[h];
@@ -416,31 +419,36 @@ void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
     s.gridTMin.resize(n);
     s.gridTMax.resize(n);
     s.gridResults.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-        const RaySegment& seg = s.segments[i];
-        float t0, t1;  // [0, inf) without a buffer
-        m_minMax.range(x0 + static_cast<int>(i) % tw, y0 + static_cast<int>(i) / tw, t0, t1);
-        s.gridRays[i] = seg.ray;
-        s.gridTMin[i] = std::max(seg.tMin, t0);
-        s.gridTMax[i] = std::min(seg.tMax, t1);
-    }
+    const int rows = static_cast<int>(n) / tw;
+    for (int y = 0, i = 0; y < rows; ++y)
+        for (int x = 0; x < tw; ++x, ++i) {
+            const RaySegment& seg = s.segments[i];
+            float t0, t1;  // [0, inf) without a buffer
+            m_minMax.range(x0 + x, y0 + y, t0, t1);
+            s.gridRays[i] = seg.ray;
+            s.gridTMin[i] = std::max(seg.tMin, t0);
+            s.gridTMax[i] = std::min(seg.tMax, t1);
+        }
     // Eight neighbouring rays of a row at a time (packets through the DDA where AVX2 runs).
     traceGridRays(*m_grid, s.gridRays.data(), s.gridTMin.data(), s.gridTMax.data(),
-                  static_cast<int>(n), m_settings.gridTrace, s.gridResults.data());
-    for (size_t i = 0; i < n; ++i) {
-        const GridTraceResult& g = s.gridResults[i];
-        TraceResult r;
-        r.hit = g.hit;
-        r.t = g.t;
-        r.evaluations = g.interpolations;
-        r.value = g.hit && m_gridHitValue ? m_grid->interpolate(s.segments[i].ray.at(g.t)) : 0.0f;
-        s.results[i] = r;
-        size_t p = static_cast<size_t>(y0 + i / tw) * m_film.width + (x0 + i % tw);
-        if (trav) m_film.travSteps[p] = static_cast<float>(g.traversalSteps);
-        if (isect) m_film.isectTests[p] = static_cast<float>(g.intersectionTests);
-        s.stats.traversalSteps += g.traversalSteps;
-        s.stats.intersectionTests += g.intersectionTests;
-    }
+                  static_cast<int>(n), m_settings.gridTrace, s.gridResults.data(),
+                  m_pixel.primary.gridStartSign);
+    for (int y = 0, i = 0; y < rows; ++y)
+        for (int x = 0; x < tw; ++x, ++i) {
+            const GridTraceResult& g = s.gridResults[i];
+            TraceResult r;
+            r.hit = g.hit;
+            r.t = g.t;
+            r.evaluations = g.interpolations;
+            r.value =
+                g.hit && m_gridHitValue ? m_grid->interpolate(s.segments[i].ray.at(g.t)) : 0.0f;
+            s.results[i] = r;
+            const size_t p = static_cast<size_t>(y0 + y) * m_film.width + (x0 + x);
+            if (trav) m_film.travSteps[p] = static_cast<float>(g.traversalSteps);
+            if (isect) m_film.isectTests[p] = static_cast<float>(g.intersectionTests);
+            s.stats.traversalSteps += g.traversalSteps;
+            s.stats.intersectionTests += g.intersectionTests;
+        }
 }
 
 // Jamriška 2010, §5: one of the three gradient estimators on the grid's samples.
@@ -448,8 +456,10 @@ void TileRenderer::gridNormals(TileScratch& s) {
     int hits = static_cast<int>(s.hitPixel.size());
     s.hitNormal.resize(hits);
     for (int h = 0; h < hits; ++h) {
-        Vec3 n = gridNormal(*m_grid, s.hitPoint[h], m_settings.gridNormals);
-        s.hitNormal[h] = normalOrFacing(n, s.segments[s.hitPixel[h]].ray.direction);
+        const int i = s.hitPixel[h];
+        const Vec3 n =
+            gridHitNormal(*m_grid, s.gridResults[i], s.hitPoint[h], m_settings.gridNormals);
+        s.hitNormal[h] = normalOrFacing(n, s.segments[i].ray.direction);
     }
 }
 

@@ -89,6 +89,23 @@ SDFT_HOST_DEVICE inline float valueAt(const GridView& g, const GridRay& r, float
     return trilinear(c, u, v, w);
 }
 
+// Jamriška §5, the analytic estimator: the derivatives of the trilinear filter of a cell's corners
+// c[i + 2 j + 4 k] at local coordinates (u, v, w), in grid units.
+SDFT_HOST_DEVICE inline Vec3 trilinearGradient(const float c[8], float u, float v, float w) {
+    auto lerp1 = [](float a, float b, float t) { return a + (b - a) * t; };
+    return {lerp1(lerp1(c[1] - c[0], c[3] - c[2], v), lerp1(c[5] - c[4], c[7] - c[6], v), w),
+            lerp1(lerp1(c[2] - c[0], c[3] - c[1], u), lerp1(c[6] - c[4], c[7] - c[5], u), w),
+            lerp1(lerp1(c[4] - c[0], c[5] - c[1], u), lerp1(c[6] - c[2], c[7] - c[3], u), v)};
+}
+
+// trilinearGradient at the ray's point at t, in cell (ci, cj, ck).
+SDFT_HOST_DEVICE inline Vec3 gradientAt(const GridRay& r, float t, int ci, int cj, int ck,
+                                        const float c[8]) {
+    const Vec3 p = r.o + r.d * t;
+    return trilinearGradient(c, clampf(p.x - ci, 0.f, 1.f), clampf(p.y - cj, 0.f, 1.f),
+                             clampf(p.z - ck, 0.f, 1.f));
+}
+
 // Jamriška §4.2 inside one surface cell on [tIn, tOut]: true and the hit parameter if the
 // reconstruction changes sign (relative to `sign`, +1 for rays starting outside).
 // `c` holds the cell's 8 corner samples.
@@ -99,6 +116,7 @@ SDFT_HOST_DEVICE inline bool intersectCell(const GridView& g, const GridRay& r, 
     res.intersectionTests++;
     if (o.cellMethod == CellIntersection::Midpoint) {
         tHit = 0.5f * (tIn + tOut);  // assumes every surface cell is hit (fast, shows artifacts)
+        res.gradient = gradientAt(r, tHit, ci, cj, ck, c);
         return true;
     }
     float fIn = sign * valueAt(g, r, tIn, ci, cj, ck, c);
@@ -107,6 +125,7 @@ SDFT_HOST_DEVICE inline bool intersectCell(const GridView& g, const GridRay& r, 
     if (fIn > 0 && fOut > 0) return false;
     if (fIn <= 0) {  // already at or behind the surface where the cell is entered
         tHit = tIn;
+        res.gradient = gradientAt(r, tHit, ci, cj, ck, c);
         return true;
     }
     float t1 = tIn, f1 = fIn, t2 = tOut, f2 = fOut;
@@ -124,6 +143,7 @@ SDFT_HOST_DEVICE inline bool intersectCell(const GridView& g, const GridRay& r, 
         if (f1 == f2) break;
         tHit = t1 + (t2 - t1) * f1 / (f1 - f2);
     }
+    res.gradient = gradientAt(r, tHit, ci, cj, ck, c);
     return true;
 }
 
@@ -136,9 +156,18 @@ struct Setup {
     int B;
 };
 
+// gridSignAt (grid_tracer.h).
+SDFT_HOST_DEVICE inline float signAt(const GridView& g, Vec3 p) {
+    const Vec3 q = (p - g.shape.origin) / g.shape.voxelSize;
+    for (int a = 0; a < 3; ++a)
+        if (!(q[a] >= 0 && q[a] <= static_cast<float>(g.shape.cells[a]))) return 1.0f;
+    return g.interpolate(p) >= 0 ? 1.0f : -1.0f;
+}
+
 // Clips the ray to the grid and prepares both traversal levels. False if the grid is missed.
+// startSign: the field's sign at tMin where the caller knows it (traceGridRay), 0 to look it up.
 SDFT_HOST_DEVICE inline bool setup(const GridView& g, const Ray& ray, float tMin, float tMax,
-                                   Setup& s) {
+                                   Setup& s, float startSign = 0) {
     const float h = g.shape.voxelSize;
     s.r = {(ray.origin - g.shape.origin) / h, ray.direction / h};
     for (int a = 0; a < 3; ++a) s.invD[a] = s.r.d[a] != 0 ? 1.0f / s.r.d[a] : kInfinity;
@@ -154,7 +183,10 @@ SDFT_HOST_DEVICE inline bool setup(const GridView& g, const Ray& ray, float tMin
     }
     // A ray clipped to the grid's box starts on its boundary, outside the solid (a surface cut by
     // the box is found at the entry cell); otherwise the sign of the first sample decides.
-    s.sign = (s.t0 > tMin || g.interpolate(ray.at(s.t0)) >= 0) ? 1.0f : -1.0f;
+    s.sign = s.t0 > tMin                        ? 1.0f
+             : startSign != 0                   ? startSign
+             : g.interpolate(ray.at(s.t0)) >= 0 ? 1.0f
+                                                : -1.0f;
     return true;
 }
 
@@ -347,10 +379,11 @@ SDFT_HOST_DEVICE inline void traverseBlocks(const GridView& g, const Setup& s, D
 
 // traceGridRay (grid_tracer.h).
 SDFT_HOST_DEVICE inline GridTraceResult traceRay(const GridView& g, const Ray& ray, float tMin,
-                                                 float tMax, const GridTraceOptions& o) {
+                                                 float tMax, const GridTraceOptions& o,
+                                                 float startSign = 0) {
     GridTraceResult res;
     Setup s;
-    if (!setup(g, ray, tMin, tMax, s)) return res;
+    if (!setup(g, ray, tMin, tMax, s, startSign)) return res;
     Dda blocks;
     blocks.init(s.r.o, s.r.d, s.invD, s.t0, static_cast<float>(s.B), s.blockLo, s.blockHi);
     traverseBlocks(g, s, blocks, o, res);
@@ -409,10 +442,7 @@ SDFT_HOST_DEVICE inline Vec3 gradientNormal(const GridView& g, Vec3 p, GridNorma
         float u = clampf(q.x - i, 0, 1), v = clampf(q.y - j, 0, 1), w = clampf(q.z - k, 0, 1);
         float c[8];
         g.cellCorners(i, j, k, c);
-        auto lerp1 = [](float a, float b, float t) { return a + (b - a) * t; };
-        grad.x = lerp1(lerp1(c[1] - c[0], c[3] - c[2], v), lerp1(c[5] - c[4], c[7] - c[6], v), w);
-        grad.y = lerp1(lerp1(c[2] - c[0], c[3] - c[1], u), lerp1(c[6] - c[4], c[7] - c[5], u), w);
-        grad.z = lerp1(lerp1(c[4] - c[0], c[5] - c[1], u), lerp1(c[6] - c[2], c[7] - c[3], u), v);
+        grad = trilinearGradient(c, u, v, w);
     } else if (method == GridNormal::DifferenceOfInterpolations) {
         // Central differences of interpolated values, one voxel apart.
         for (int a = 0; a < 3; ++a) {
@@ -439,6 +469,13 @@ SDFT_HOST_DEVICE inline Vec3 gradientNormal(const GridView& g, Vec3 p, GridNorma
         grad = lerp(lerp(c00, c10, v), lerp(c01, c11, v), w);
     }
     return normalize(grad);
+}
+
+// gridHitNormal (grid_tracer.h).
+SDFT_HOST_DEVICE inline Vec3 hitNormal(const GridView& g, const GridTraceResult& hit, Vec3 p,
+                                       GridNormal method) {
+    return method == GridNormal::AnalyticTrilinear ? normalize(hit.gradient)
+                                                   : gradientNormal(g, p, method);
 }
 
 }  // namespace sdft::grid_dda

@@ -150,7 +150,7 @@ struct Packet {
 // and its block walker, for rays[0..n). Returns the lanes whose ray meets the grid.
 template <int B>
 SDFT_TARGET_AVX2 Lanes startLanes(const GridView& g, Packet<B>& p, const Ray* rays,
-                                  const float* tMin, const float* tMax, int n) {
+                                  const float* tMin, const float* tMax, int n, float startSign) {
     static_assert(sizeof(Ray) == 6 * sizeof(float), "rays are gathered as 6 floats");
     const I8 lane = {0, 1, 2, 3, 4, 5, 6, 7};
     const I8 valid = lane < n;
@@ -187,10 +187,14 @@ SDFT_TARGET_AVX2 Lanes startLanes(const GridView& g, Packet<B>& p, const Ray* ra
     start(p.blocks, alive, t0, static_cast<float>(B), p.blockLo, p.blockHi, p.step, p.up, p.org,
           p.dir, p.inv);
     const Lanes lanes = bitsOf(alive);
-    // A ray clipped to the box starts outside the solid; otherwise the first sample's sign.
+    // A ray clipped to the box starts outside the solid; otherwise the caller's sign or the first
+    // sample's.
     for (Lanes v = lanes; v; v &= v - 1) {
         const int l = __builtin_ctz(v);
-        p.sign[l] = (t0[l] > lo[l] || g.interpolate(rays[l].at(t0[l])) >= 0) ? 1.0f : -1.0f;
+        p.sign[l] = t0[l] > lo[l]                           ? 1.0f
+                    : startSign != 0                        ? startSign
+                    : g.interpolate(rays[l].at(t0[l])) >= 0 ? 1.0f
+                                                            : -1.0f;
     }
     return lanes;
 }
@@ -347,9 +351,9 @@ SDFT_TARGET_AVX2 void advanceBlocks(Packet<B>& p, Lanes lanes) {
 template <int B>
 SDFT_TARGET_AVX2 void tracePacket(const GridView& g, const Ray* rays, const float* tMin,
                                   const float* tMax, int n, const GridTraceOptions& o,
-                                  GridTraceResult* out) {
+                                  float startSign, GridTraceResult* out) {
     Packet<B> p{};
-    p.blockLanes = startLanes(g, p, rays, tMin, tMax, n);
+    p.blockLanes = startLanes(g, p, rays, tMin, tMax, n, startSign);
     while (p.blockLanes | p.cellLanes) {
         Lanes advancing = p.blockLanes ? visitBlocks(g, p) : 0;
         if (p.cellLanes) advancing |= stepCells(g, p, o);
@@ -363,7 +367,7 @@ SDFT_TARGET_AVX2 void tracePacket(const GridView& g, const Ray* rays, const floa
 
 SDFT_TARGET_AVX2 void traceGridRaysAvx2(const GridView& g, const Ray* rays, const float* tMin,
                                         const float* tMax, int n, const GridTraceOptions& o,
-                                        GridTraceResult* out) {
+                                        float startSign, GridTraceResult* out) {
     for (int i = 0; i < n; i += kLanes) {
         const int k = n - i < kLanes ? n - i : kLanes;
         bool any = false;  // a packet the min/max buffer empties whole has nothing to trace
@@ -373,9 +377,9 @@ SDFT_TARGET_AVX2 void traceGridRaysAvx2(const GridView& g, const Ray* rays, cons
             continue;
         }
         if (g.blockSize == 8)
-            tracePacket<8>(g, rays + i, tMin + i, tMax + i, k, o, out + i);
+            tracePacket<8>(g, rays + i, tMin + i, tMax + i, k, o, startSign, out + i);
         else
-            tracePacket<4>(g, rays + i, tMin + i, tMax + i, k, o, out + i);
+            tracePacket<4>(g, rays + i, tMin + i, tMax + i, k, o, startSign, out + i);
     }
 }
 
@@ -384,19 +388,19 @@ SDFT_TARGET_AVX2 void traceGridRaysAvx2(const GridView& g, const Ray* rays, cons
 }  // namespace
 
 void traceGridRays(const GridView& g, const Ray* rays, const float* tMin, const float* tMax, int n,
-                   const GridTraceOptions& o, GridTraceResult* out) {
+                   const GridTraceOptions& o, GridTraceResult* out, float startSign) {
 #if SDFT_HAVE_AVX2_DISPATCH
     // Tile indices in 32 bits (a grid of 2^31 tiles would be 41,000 blocks across).
     const size_t tiles = static_cast<size_t>(g.tiles[0]) * g.tiles[1] * g.tiles[2];
     if (o.packets && tiles < (size_t{1} << 31) && useAvx2() && g.kind == GridKind::Sparse &&
         o.bitMasks && (g.blockSize == 4 || g.blockSize == 8)) {
-        traceGridRaysAvx2(g, rays, tMin, tMax, n, o, out);
+        traceGridRaysAvx2(g, rays, tMin, tMax, n, o, startSign, out);
         return;
     }
 #endif
     for (int i = 0; i < n; ++i)
-        out[i] =
-            tMin[i] <= tMax[i] ? traceGridRay(g, rays[i], tMin[i], tMax[i], o) : GridTraceResult{};
+        out[i] = tMin[i] <= tMax[i] ? traceGridRay(g, rays[i], tMin[i], tMax[i], o, startSign)
+                                    : GridTraceResult{};
 }
 
 }  // namespace sdft

@@ -45,20 +45,23 @@ Grid gridOf(const NodePtr& root, int resolution, int blockSize) {
 }
 
 // Every field of every result equal to traceGridRay's on the same ray; returns the hits.
-int expectSameAsSingleRays(const GridView& g, const Rays& r, const GridTraceOptions& o) {
+int expectSameAsSingleRays(const GridView& g, const Rays& r, const GridTraceOptions& o,
+                           float startSign = 0) {
     const int n = static_cast<int>(r.rays.size());
     std::vector<GridTraceResult> packet(n);
-    traceGridRays(g, r.rays.data(), r.tMin.data(), r.tMax.data(), n, o, packet.data());
+    traceGridRays(g, r.rays.data(), r.tMin.data(), r.tMax.data(), n, o, packet.data(), startSign);
     int hits = 0;
     for (int i = 0; i < n; ++i) {
-        const GridTraceResult one = r.tMin[i] <= r.tMax[i]
-                                        ? traceGridRay(g, r.rays[i], r.tMin[i], r.tMax[i], o)
-                                        : GridTraceResult{};
+        const GridTraceResult one =
+            r.tMin[i] <= r.tMax[i] ? traceGridRay(g, r.rays[i], r.tMin[i], r.tMax[i], o, startSign)
+                                   : GridTraceResult{};
         EXPECT_EQ(packet[i].hit, one.hit) << "ray " << i;
         EXPECT_EQ(packet[i].t, one.t) << "ray " << i;
         EXPECT_EQ(packet[i].traversalSteps, one.traversalSteps) << "ray " << i;
         EXPECT_EQ(packet[i].intersectionTests, one.intersectionTests) << "ray " << i;
         EXPECT_EQ(packet[i].interpolations, one.interpolations) << "ray " << i;
+        for (int a = 0; a < 3; ++a)
+            EXPECT_EQ(packet[i].gradient[a], one.gradient[a]) << "ray " << i;
         if (packet[i].hit != one.hit || packet[i].t != one.t) return hits;
         hits += one.hit;
     }
@@ -140,6 +143,21 @@ TEST(GridPacket, EqualAcrossSkippedTiles) {
         }
         SCOPED_TRACE(::testing::Message() << "B " << B);
         EXPECT_GT(expectSameAsSingleRays(grid.view(), rays, GridTraceOptions{}), 500);
+    }
+}
+
+// A camera's rays with the eye's sign given (traceGridRays' startSign), from outside the solid
+// and from inside it.
+TEST(GridPacket, EqualWithTheStartSignGiven) {
+    if (!cpuHasAvx2()) GTEST_SKIP() << "no AVX2: traceGridRays traces ray by ray";
+    const Grid grid = gridOf(shapes(), 64, 4);
+    const GridView g = grid.view();
+    for (Vec3 eye : {Vec3(0.2f, 0.4f, 1.2f), Vec3(0.1f, 0.3f, -0.1f)}) {
+        Rays rays;
+        addCamera(rays, eye, {-1.1f, 0.6f, 0.3f}, 1.2f, 48, 32);
+        const float sign = gridSignAt(g, eye);
+        SCOPED_TRACE(::testing::Message() << "sign " << sign);
+        EXPECT_GT(expectSameAsSingleRays(g, rays, GridTraceOptions{}, sign), 500);
     }
 }
 

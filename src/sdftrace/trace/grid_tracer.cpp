@@ -14,13 +14,15 @@ using grid_dda::traceShadow;
 
 // Each entry point built for AVX2 and for the baseline (core/macros.h); exec/simd.h picks.
 SDFT_TARGET_AVX2 GridTraceResult traceGridRayAvx2(const GridView& g, const Ray& ray, float tMin,
-                                                  float tMax, const GridTraceOptions& o) {
-    return traceRay(g, ray, tMin, tMax, o);
+                                                  float tMax, const GridTraceOptions& o,
+                                                  float startSign) {
+    return traceRay(g, ray, tMin, tMax, o, startSign);
 }
 SDFT_TARGET_BASELINE GridTraceResult traceGridRayBaseline(const GridView& g, const Ray& ray,
                                                           float tMin, float tMax,
-                                                          const GridTraceOptions& o) {
-    return traceRay(g, ray, tMin, tMax, o);
+                                                          const GridTraceOptions& o,
+                                                          float startSign) {
+    return traceRay(g, ray, tMin, tMax, o, startSign);
 }
 SDFT_TARGET_AVX2 GridTraceResult traceGridShadowAvx2(const GridView& g, const Ray& ray, float tMin,
                                                      float tMax, const GridTraceOptions& o,
@@ -43,10 +45,12 @@ SDFT_TARGET_BASELINE Vec3 gridNormalBaseline(const GridView& g, Vec3 p, GridNorm
 }  // namespace
 
 GridTraceResult traceGridRay(const GridView& g, const Ray& ray, float tMin, float tMax,
-                             const GridTraceOptions& o) {
-    return useAvx2() ? traceGridRayAvx2(g, ray, tMin, tMax, o)
-                     : traceGridRayBaseline(g, ray, tMin, tMax, o);
+                             const GridTraceOptions& o, float startSign) {
+    return useAvx2() ? traceGridRayAvx2(g, ray, tMin, tMax, o, startSign)
+                     : traceGridRayBaseline(g, ray, tMin, tMax, o, startSign);
 }
+
+float gridSignAt(const GridView& g, Vec3 p) { return grid_dda::signAt(g, p); }
 
 GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, float tMax,
                                 const GridTraceOptions& o, int threshold) {
@@ -56,6 +60,11 @@ GridTraceResult traceGridShadow(const GridView& g, const Ray& ray, float tMin, f
 
 Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
     return useAvx2() ? gridNormalAvx2(g, p, method) : gridNormalBaseline(g, p, method);
+}
+
+Vec3 gridHitNormal(const GridView& g, const GridTraceResult& hit, Vec3 p, GridNormal method) {
+    return method == GridNormal::AnalyticTrilinear ? normalize(hit.gradient)
+                                                   : gridNormal(g, p, method);
 }
 
 }  // namespace sdft

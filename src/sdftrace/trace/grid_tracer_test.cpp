@@ -426,6 +426,58 @@ TEST(GridTracer, MinMaxBuffersChangeNoHitAndSaveTraversalSteps) {
     EXPECT_LT(stepsBuffered, stepsPlain);
 }
 
+// A 64 x 48 camera at `eye` looking at `target`.
+CameraDesc cameraAt(Vec3 eye, Vec3 target, float fovDeg) {
+    CameraDesc d;
+    d.eye = eye;
+    d.target = target;
+    d.fovDeg = fovDeg;
+    d.width = 64;
+    d.height = 48;
+    return d;
+}
+
+// A primary ray starts at the eye, or where the min/max buffer starts it after no surface block:
+// the eye's sign (gridSignAt) is every primary ray's start sign, so passing it changes no result,
+// from outside the grid's box, inside it and inside the solid.
+TEST(GridTracer, TheEyesSignIsEveryPrimaryRaysStartSign) {
+    const Fixture& f = fixture();
+    const GridView g = f.sparse->view();
+    const GridTraceOptions o;
+    struct View {
+        Vec3 eye, target;
+        float sign;
+    };
+    const View views[] = {{{0.3f, 0.5f, 4.5f}, {0, 0.1f, 0}, 1},            // outside the box
+                          {{0.2f, 1.1f, 0.9f}, {0, 0.2f, 0}, 1},            // in the box, outside
+                          {{0.1f, 0.3f, -0.1f}, {-1.1f, 0.6f, 0.3f}, -1}};  // inside the box shape
+    int hits = 0;
+    for (const View& v : views) {
+        EXPECT_EQ(gridSignAt(g, v.eye), v.sign);
+        const CameraDesc d = cameraAt(v.eye, v.target, 60);
+        const Camera cam(d);
+        for (int res : {0, 128}) {
+            const MinMaxBuffer buf = res ? MinMaxBuffer::build(g, cam, res) : MinMaxBuffer{};
+            for (int y = 0; y < d.height; ++y)
+                for (int x = 0; x < d.width; ++x) {
+                    const Ray r = cam.pixelRay(x, y);
+                    float t0, t1;
+                    buf.range(x, y, t0, t1);
+                    if (!(t0 <= t1)) continue;
+                    const GridTraceResult looked = traceGridRay(g, r, t0, t1, o);
+                    const GridTraceResult given = traceGridRay(g, r, t0, t1, o, v.sign);
+                    ASSERT_EQ(looked.hit, given.hit)
+                        << "eye " << v.eye.x << " pixel " << x << "," << y;
+                    ASSERT_EQ(looked.t, given.t);
+                    ASSERT_EQ(looked.traversalSteps, given.traversalSteps);
+                    ASSERT_EQ(looked.intersectionTests, given.intersectionTests);
+                    hits += looked.hit;
+                }
+        }
+    }
+    EXPECT_GT(hits, 4000);
+}
+
 // Blocks behind the camera or outside its view frustum are never met by a primary ray: they do not
 // disable the bound (a block reaching the camera plane in view still does). Looking away from the
 // surface every range is empty; looking past it from beside it, the pixels off the surface have
@@ -440,12 +492,7 @@ TEST(GridTracer, MinMaxBuffersIgnoreBlocksBehindTheCamera) {
     for (const View& v : {View{{0, 0.2f, 2.2f}, {0, 0.2f, 6}},            // looking away
                           View{{0.2f, 0.2f, 1.6f}, {-1.5f, 0.2f, 1.0f}},  // past the sphere
                           View{{2.0f, 0.1f, 0.0f}, {2.0f, 0.1f, -3.0f}}}) {
-        CameraDesc d;
-        d.eye = v.eye;
-        d.target = v.target;
-        d.fovDeg = 40;
-        d.width = 64;
-        d.height = 48;
+        const CameraDesc d = cameraAt(v.eye, v.target, 40);
         Camera cam(d);
         MinMaxBuffer buf = MinMaxBuffer::build(g, cam, 64);
         int empty = 0, bounded = 0, hits = 0;
@@ -473,6 +520,47 @@ TEST(GridTracer, MinMaxBuffersIgnoreBlocksBehindTheCamera) {
             EXPECT_GT(bounded, hits / 2) << "eye " << v.eye.x;
         }
     }
+}
+
+// The gradient a hit carries is the analytic estimator's in the cell the hit was found in: where
+// the hit point lies inside that cell (not on a face, where the neighbour's reconstruction may
+// take over), gridNormal at the point gives the same normal; on every hit, gridHitNormal is its
+// unit vector and faces against the ray where the ray entered from outside.
+TEST(GridTracer, HitsCarryTheAnalyticGradientOfTheirCell) {
+    const Fixture& f = fixture();
+    for (const Grid* grid : {f.sparse.get(), f.dense.get()})
+        for (CellIntersection method :
+             {CellIntersection::FalsePosition, CellIntersection::Midpoint}) {
+            const GridView g = grid->view();
+            GridTraceOptions o;
+            o.cellMethod = method;
+            int hits = 0, interior = 0;
+            for (const RaySegment& seg : f.rays) {
+                const GridTraceResult r = traceGridRay(g, seg.ray, seg.tMin, seg.tMax, o);
+                if (!r.hit) {
+                    EXPECT_EQ(length(r.gradient), 0.0f);
+                    continue;
+                }
+                ++hits;
+                const Vec3 p = seg.ray.at(r.t);
+                const Vec3 n = gridHitNormal(g, r, p, GridNormal::AnalyticTrilinear);
+                EXPECT_NEAR(length(n), 1.0f, 1e-5f);
+                if (method == CellIntersection::FalsePosition)
+                    EXPECT_LT(dot(n, seg.ray.direction), 0.0f);  // the rays start outside
+                const Vec3 q = (p - g.shape.origin) / g.shape.voxelSize;
+                bool inside = true;
+                for (int a = 0; a < 3; ++a) {
+                    const float frac = q[a] - std::floor(q[a]);
+                    inside &= frac > 1e-3f && frac < 1 - 1e-3f;
+                }
+                if (!inside) continue;
+                ++interior;
+                const Vec3 at = gridNormal(g, p, GridNormal::AnalyticTrilinear);
+                EXPECT_GT(dot(at, n), 0.9999f) << "t " << r.t;
+            }
+            EXPECT_GT(hits, 1000);
+            EXPECT_GT(interior, hits / 2);
+        }
 }
 
 TEST(GridTracer, AllThreeGradientEstimatorsMatchTheSphereNormal) {
