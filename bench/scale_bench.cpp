@@ -1,7 +1,8 @@
-// Issue 15's side-by-side measurements on meshes of different kinds and sizes, in one run:
-// each mesh becomes a level set by OpenVDB's meshToLevelSet (band 3) written to a .vdb file, as a
-// user's level set would arrive; then, for three cameras (framed automatically, a close-up that
-// fills the frame, a grazing view skimming the top of the object) and two image sizes:
+// Side-by-side measurements on meshes of different kinds and sizes, in one run: each mesh becomes
+// a level set by OpenVDB's meshToLevelSet (band 3) written to a .vdb file, as a user's level set
+// would arrive; then, for four cameras (framed automatically, a close-up that fills the frame, a
+// grazing view skimming the top of the object, the framed view from four times as far) and two
+// image sizes:
 //  - render phase: `sdftrace render file.vdb --no-shadows --grid-normals analytic` as a process
 //    (the time its summary line gives) against OpenVDB's LevelSetRayIntersector with its normal
 //    and a headlight (what a minimal OpenVDB program does) and Embree's rtcIntersect1 on the
@@ -270,7 +271,7 @@ std::string vec(Vec3 v) {
     return b;
 }
 
-// The three cameras of the issue for the level set `grid`.
+// The cameras for the level set `grid`: framed, close, grazing and far.
 std::vector<std::pair<std::string, CameraDesc>> cameras(const Grid& grid, int size) {
     const Bounds3 b = grid.surfaceBounds();
     const CameraDesc framed = frameBounds(b, 35.0f, size, size);
@@ -311,7 +312,10 @@ std::vector<std::pair<std::string, CameraDesc>> cameras(const Grid& grid, int si
             grazing.target + normalize(Vec3(1.0f, 0.02f, 0.35f)) * (1.6f * length(b.extent()));
         grazing.fovDeg = 25;
     }
-    return {{"framed", framed}, {"close", close}, {"grazing", grazing}};
+    // Far: the framed view from four times as far, the object a quarter as wide on the image.
+    CameraDesc far = framed;
+    far.eye = framed.target + (framed.eye - framed.target) * 4.0f;
+    return {{"framed", framed}, {"close", close}, {"grazing", grazing}, {"far", far}};
 }
 
 void runMesh(const std::string& path, const Options& o) {
