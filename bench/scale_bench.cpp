@@ -47,6 +47,7 @@
 #include "sdftrace/io/mesh_io.h"
 #include "sdftrace/io/vdb_io.h"
 #include "sdftrace/math/camera.h"
+#include "sdftrace/render/render_settings.h"
 #include "sdftrace/scene/grid_scene.h"
 #include "sdftrace/trace/grid_tracer.h"
 #include "sdftrace/trace/minmax_buffer.h"
@@ -199,7 +200,7 @@ void renderGridRays(const Grid& grid, const CameraDesc& cd, int threads,
     const int tilesX = (cd.width + kTile - 1) / kTile, tilesY = (cd.height + kTile - 1) / kTile;
     tbb::task_arena arena(threads);
     arena.execute([&] {
-        const MinMaxBuffer minMax = MinMaxBuffer::build(g, cam, 128);
+        const MinMaxBuffer minMax = MinMaxBuffer::build(g, cam, RenderSettings{}.minMaxResolution);
         const GridTraceOptions options;
         const float eyeSign = gridSignAt(g, cd.eye);
         tbb::parallel_for(0, tilesX * tilesY, [&](int tile) {

@@ -164,6 +164,16 @@ SDFT_HOST_DEVICE inline float signAt(const GridView& g, Vec3 p) {
     return g.interpolate(p) >= 0 ? 1.0f : -1.0f;
 }
 
+// The sign a ray starts with at t0 (traceGridRay): +1 for a ray clipped to the grid's box (it
+// starts on the boundary, outside the solid: a surface cut by the box is found at the entry cell),
+// else the caller's `known` sign, else the first sample's.
+SDFT_HOST_DEVICE inline float raySign(const GridView& g, const Ray& ray, float t0, bool clipped,
+                                      float known) {
+    if (clipped) return 1.0f;
+    if (known != 0) return known;
+    return g.interpolate(ray.at(t0)) >= 0 ? 1.0f : -1.0f;
+}
+
 // Clips the ray to the grid and prepares both traversal levels. False if the grid is missed.
 // startSign: the field's sign at tMin where the caller knows it (traceGridRay), 0 to look it up.
 SDFT_HOST_DEVICE inline bool setup(const GridView& g, const Ray& ray, float tMin, float tMax,
@@ -181,12 +191,7 @@ SDFT_HOST_DEVICE inline bool setup(const GridView& g, const Ray& ray, float tMin
         s.blockLo[a] = 0;
         s.blockHi[a] = g.kind == GridKind::Sparse ? g.blocks[a] - 1 : 0;
     }
-    // A ray clipped to the grid's box starts on its boundary, outside the solid (a surface cut by
-    // the box is found at the entry cell); otherwise the sign of the first sample decides.
-    s.sign = s.t0 > tMin                        ? 1.0f
-             : startSign != 0                   ? startSign
-             : g.interpolate(ray.at(s.t0)) >= 0 ? 1.0f
-                                                : -1.0f;
+    s.sign = raySign(g, ray, s.t0, s.t0 > tMin, startSign);
     return true;
 }
 

@@ -187,14 +187,9 @@ SDFT_TARGET_AVX2 Lanes startLanes(const GridView& g, Packet<B>& p, const Ray* ra
     start(p.blocks, alive, t0, static_cast<float>(B), p.blockLo, p.blockHi, p.step, p.up, p.org,
           p.dir, p.inv);
     const Lanes lanes = bitsOf(alive);
-    // A ray clipped to the box starts outside the solid; otherwise the caller's sign or the first
-    // sample's.
     for (Lanes v = lanes; v; v &= v - 1) {
         const int l = __builtin_ctz(v);
-        p.sign[l] = t0[l] > lo[l]                           ? 1.0f
-                    : startSign != 0                        ? startSign
-                    : g.interpolate(rays[l].at(t0[l])) >= 0 ? 1.0f
-                                                            : -1.0f;
+        p.sign[l] = grid_dda::raySign(g, rays[l], t0[l], t0[l] > lo[l], startSign);
     }
     return lanes;
 }

@@ -9,6 +9,7 @@ namespace sdft {
 namespace {
 
 using grid_dda::gradientNormal;
+using grid_dda::hitNormal;
 using grid_dda::traceRay;
 using grid_dda::traceShadow;
 
@@ -41,6 +42,14 @@ SDFT_TARGET_AVX2 Vec3 gridNormalAvx2(const GridView& g, Vec3 p, GridNormal metho
 SDFT_TARGET_BASELINE Vec3 gridNormalBaseline(const GridView& g, Vec3 p, GridNormal method) {
     return gradientNormal(g, p, method);
 }
+SDFT_TARGET_AVX2 Vec3 gridHitNormalAvx2(const GridView& g, const GridTraceResult& hit, Vec3 p,
+                                        GridNormal method) {
+    return hitNormal(g, hit, p, method);
+}
+SDFT_TARGET_BASELINE Vec3 gridHitNormalBaseline(const GridView& g, const GridTraceResult& hit,
+                                                Vec3 p, GridNormal method) {
+    return hitNormal(g, hit, p, method);
+}
 
 }  // namespace
 
@@ -63,8 +72,8 @@ Vec3 gridNormal(const GridView& g, Vec3 p, GridNormal method) {
 }
 
 Vec3 gridHitNormal(const GridView& g, const GridTraceResult& hit, Vec3 p, GridNormal method) {
-    return method == GridNormal::AnalyticTrilinear ? normalize(hit.gradient)
-                                                   : gridNormal(g, p, method);
+    return useAvx2() ? gridHitNormalAvx2(g, hit, p, method)
+                     : gridHitNormalBaseline(g, hit, p, method);
 }
 
 }  // namespace sdft
