@@ -15,6 +15,7 @@
 #include "sdftrace/math/camera.h"
 #include "sdftrace/math/sampling.h"
 #include "sdftrace/render/direct_pixel.h"
+#include "sdftrace/render/light_batch.h"
 #include "sdftrace/render/light_sample.h"
 #include "sdftrace/render/normal_stencil.h"
 #include "sdftrace/render/path_tracer.h"
@@ -39,6 +40,7 @@ struct TileScratch {
     std::vector<MeshPrimary::Hit> triangleHits;  // hybrid mode: per pixel, t < inf on triangles
     std::vector<int> normalHits;                 // the hits whose normal is the field's gradient
     std::vector<Vec3> hitPoint, hitNormal;
+    std::vector<Vec3> hitView;  // per hit: its primary ray's direction
     std::vector<float> x, y, z, f;
     std::vector<RaySegment> shadowSegments;
     std::vector<TraceResult> shadowResults;
@@ -278,9 +280,15 @@ void TileRenderer::shadeDirect(TileScratch& s) {
     s.radiance.resize(hits);
     s.materials.resize(hits);
     s.ao.resize(hits);
+    s.hitView.resize(hits);
+    // One material everywhere (materialAt's shortcut): the lights read it once.
+    const bool oneMaterial =
+        m_pixel.uniformMaterial >= 0 && m_pixel.uniformMaterial < m_pixel.materialCount;
     for (int h = 0; h < hits; ++h) {
-        s.materials[h] =
-            direct_pixel::materialAt<kTapeMaxScalarRegs>(m_pixel, s.hitPoint[h], s.hitNormal[h]);
+        s.hitView[h] = s.segments[s.hitPixel[h]].ray.direction;
+        s.materials[h] = oneMaterial ? m_pixel.materials[m_pixel.uniformMaterial]
+                                     : direct_pixel::materialAt<kTapeMaxScalarRegs>(
+                                           m_pixel, s.hitPoint[h], s.hitNormal[h]);
         uint32_t evaluations = 0;
         s.radiance[h] = direct_pixel::ambientLight(m_pixel, s.hitPoint[h], s.hitNormal[h],
                                                    s.materials[h], s.ao[h], evaluations);
@@ -297,10 +305,14 @@ void TileRenderer::shadeDirect(TileScratch& s) {
             if (firstShadow) s.shadow = visible;
             firstShadow = false;
         }
+        if (!light.positional()) {
+            addDirectionalLight(light, s.materials.data(), oneMaterial, s.hitNormal.data(),
+                                s.hitView.data(), visible.data(), hits, s.radiance.data());
+            continue;
+        }
         for (int h = 0; h < hits; ++h)
-            s.radiance[h] +=
-                direct_pixel::lightTerm(light, s.materials[h], s.hitPoint[h], s.hitNormal[h],
-                                        s.segments[s.hitPixel[h]].ray.direction, visible[h]);
+            s.radiance[h] += direct_pixel::lightTerm(light, s.materials[h], s.hitPoint[h],
+                                                     s.hitNormal[h], s.hitView[h], visible[h]);
     }
 }
 

@@ -218,7 +218,7 @@ template <int B>
 SDFT_TARGET_AVX2 void skipCubes(Packet<B>& p, Lanes lanes, I8 r, I8 shift, Lanes& advancing,
                                 Lanes& restarted) {
     const I8 m = maskOf(lanes);
-    const F8 unit = static_cast<float>(B) * __builtin_convertvector(I8{} + 1 << shift, F8);
+    const F8 unit = static_cast<float>(B) * __builtin_convertvector((I8{} + 1) << shift, F8);
     F8 tCube = F8{} + kInfinity;
     I8 c[3];
     for (int a = 0; a < 3; ++a) {
