@@ -37,6 +37,7 @@ struct TileScratch {
     std::vector<float> gridTMin, gridTMax;
     std::vector<GridTraceResult> gridResults;
     std::vector<int> hitPixel;                   // tile-local index of each hit
+    std::vector<size_t> hitFilm;                 // each hit's pixel in the film
     std::vector<MeshPrimary::Hit> triangleHits;  // hybrid mode: per pixel, t < inf on triangles
     std::vector<int> normalHits;                 // the hits whose normal is the field's gradient
     std::vector<Vec3> hitPoint, hitNormal;
@@ -230,14 +231,19 @@ void TileRenderer::tracePrimary(TileScratch& s, int x0, int y0, int x1, int y1) 
     }
     if (m_plan.meshPrimary) tracePrimaryTriangles(s);
     s.hitPixel.clear();
+    s.hitFilm.clear();
     s.hitPoint.clear();
-    for (int i = 0; i < count; ++i) {
-        const TraceResult& r = s.results[i];
-        s.stats.primaryEvaluations += r.evaluations;
-        s.stats.fallbacks += r.fallbacks;
-        if (!r.hit) continue;
-        s.hitPixel.push_back(i);
-        s.hitPoint.push_back(s.segments[i].ray.at(r.t));
+    for (int y = y0, i = 0; y < y1; ++y) {
+        const size_t row = static_cast<size_t>(y) * m_film.width;
+        for (int x = x0; x < x1; ++x, ++i) {
+            const TraceResult& r = s.results[i];
+            s.stats.primaryEvaluations += r.evaluations;
+            s.stats.fallbacks += r.fallbacks;
+            if (!r.hit) continue;
+            s.hitPixel.push_back(i);
+            s.hitFilm.push_back(row + x);
+            s.hitPoint.push_back(s.segments[i].ray.at(r.t));
+        }
     }
     s.stats.primaryRays += count;
     s.stats.hits += s.hitPixel.size();
@@ -368,8 +374,8 @@ void TileRenderer::writeFilm(const TileScratch& s) {
         }
     }
     for (int h = 0; h < hits; ++h) {
-        int i = s.hitPixel[h];
-        size_t p = static_cast<size_t>(s.y0 + i / tw) * m_film.width + (s.x0 + i % tw);
+        const int i = s.hitPixel[h];
+        const size_t p = s.hitFilm[h];
         Vec3 c = s.radiance[h];
         if (!isFinite(c)) c = Vec3(0.0f);
         for (int a = 0; a < 3; ++a) {
@@ -432,11 +438,12 @@ void TileRenderer::tracePrimaryGrid(TileScratch& s, int x0, int y0, int tw) {
     s.gridTMax.resize(n);
     s.gridResults.resize(n);
     const int rows = static_cast<int>(n) / tw;
+    const MinMaxView minMax = m_minMax.view();
     for (int y = 0, i = 0; y < rows; ++y)
         for (int x = 0; x < tw; ++x, ++i) {
             const RaySegment& seg = s.segments[i];
             float t0, t1;  // [0, inf) without a buffer
-            m_minMax.range(x0 + x, y0 + y, t0, t1);
+            minMax.range(x0 + x, y0 + y, t0, t1);
             s.gridRays[i] = seg.ray;
             s.gridTMin[i] = std::max(seg.tMin, t0);
             s.gridTMax[i] = std::min(seg.tMax, t1);
