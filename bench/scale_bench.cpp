@@ -41,6 +41,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -66,10 +67,24 @@ double median(std::vector<double> v) {
     return v.empty() ? 0 : v[v.size() / 2];
 }
 
-std::vector<int> splitInts(const std::string& s) {
+// A positive whole number given to `flag`, or an error that names both.
+int positive(const std::string& flag, const std::string& s) {
+    size_t used = 0;
+    int v = 0;
+    try {
+        v = std::stoi(s, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != s.size() || v <= 0)
+        throw std::runtime_error(flag + ": '" + s + "' is not a positive whole number");
+    return v;
+}
+
+std::vector<int> splitInts(const std::string& flag, const std::string& s) {
     std::vector<int> out;
     std::stringstream in(s);
-    for (std::string part; std::getline(in, part, ',');) out.push_back(std::stoi(part));
+    for (std::string part; std::getline(in, part, ',');) out.push_back(positive(flag, part));
     return out;
 }
 
@@ -448,9 +463,11 @@ void runMesh(const std::string& path, const Options& o) {
     if (!o.keep) std::remove(vdbPath.c_str());
 }
 
-}  // namespace
+constexpr const char* kUsage =
+    "usage: sdftrace_scale_bench [--res 256] [--sizes 512,1024] [--reps 5] [--threads 2] [--keep]\n"
+    "                            [--commands] mesh.obj|ply ...\n";
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
     Options o;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -462,18 +479,24 @@ int main(int argc, char** argv) {
             return argv[++i];
         };
         if (a == "--res")
-            o.res = std::stoi(next());
+            o.res = positive(a, next());
         else if (a == "--reps")
-            o.reps = std::stoi(next());
+            o.reps = positive(a, next());
         else if (a == "--threads")
-            o.threads = std::stoi(next());
+            o.threads = positive(a, next());
         else if (a == "--keep")
             o.keep = true;
         else if (a == "--commands")
             o.commands = true;
         else if (a == "--sizes")
-            o.sizes = splitInts(next());
-        else
+            o.sizes = splitInts(a, next());
+        else if (a == "--help" || a == "-h") {
+            std::fputs(kUsage, stdout);
+            return 0;
+        } else if (a.rfind("--", 0) == 0) {
+            std::fprintf(stderr, "%s: unknown option\n%s", a.c_str(), kUsage);
+            return 2;
+        } else
             o.meshes.push_back(a);
     }
     if (o.meshes.empty()) {
@@ -485,4 +508,15 @@ int main(int argc, char** argv) {
                 o.reps);
     for (const std::string& m : o.meshes) runMesh(m, o);
     return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        return run(argc, argv);
+    } catch (const std::exception& e) {  // a mesh that does not load, a value that is no number
+        std::fprintf(stderr, "sdftrace_scale_bench: %s\n", e.what());
+        return 1;
+    }
 }
