@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_flags.h"
 #include "sdftrace/bake/exact_bake.h"
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/winding_number.h"
@@ -199,20 +200,25 @@ int main(int argc, char** argv) {
     std::string meshes = "bunny,teapot", sparse = "128,256,512", dense = "128,256",
                 methods = "exact,jfa,danielsson,edt,rtsdf,openvdb", threads = "1,2";
     int reps = 3;
+    constexpr const char* kUsage =
+        "usage: sdftrace_bake_bench [--meshes bunny,teapot|PATH,...] [--sparse 128,256,512|none]\n"
+        "       [--dense 128,256|none] [--methods exact,jfa,danielsson,edt,rtsdf,openvdb]\n"
+        "       [--threads 1,2] [--reps 3]\n";
+    if (const int status = bench::checkFlagPairs(argc, argv, kUsage); status >= 0) return status;
     for (int i = 1; i + 1 < argc; i += 2) {
         std::string k = argv[i], v = argv[i + 1];
         if (k == "--meshes")
             meshes = v;
-        else if (k == "--sparse")
-            sparse = v;
-        else if (k == "--dense")
-            dense = v;
-        else if (k == "--methods")
+        else if (k == "--sparse" || k == "--dense") {
+            if (v != "none") bench::intListFlag(k, v, 2);
+            (k == "--sparse" ? sparse : dense) = v;
+        } else if (k == "--methods")
             methods = v;
-        else if (k == "--threads")
+        else if (k == "--threads") {
+            bench::intListFlag(k, v);
             threads = v;
-        else if (k == "--reps")
-            reps = std::stoi(v);
+        } else if (k == "--reps")
+            reps = bench::intFlag(k, v);
         else {
             std::fprintf(stderr, "unknown option %s\n", k.c_str());
             return 2;

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_flags.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/animated_scene.h"
 #include "sdftrace/scene/plan_render.h"
@@ -71,19 +72,22 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
     int frames = 12, resolution = 96, truthRays = 256, width = 320, height = 200;
+    constexpr const char* kUsage =
+        "usage: sdftrace_dynamic_shadow_bench [--frames 12] [--resolution 96] [--truth 256]\n"
+        "       [--width 320] [--height 200]\n";
+    if (const int status = bench::checkFlagPairs(argc, argv, kUsage); status >= 0) return status;
     for (int i = 1; i + 1 < argc; i += 2) {
-        const std::string a = argv[i];
-        const int v = std::atoi(argv[i + 1]);
+        const std::string a = argv[i], v = argv[i + 1];
         if (a == "--frames")
-            frames = std::max(2, v);
+            frames = bench::intFlag(a, v, 2);
         else if (a == "--resolution")
-            resolution = std::max(16, v);
+            resolution = bench::intFlag(a, v, 16);
         else if (a == "--truth")
-            truthRays = std::max(1, v);
+            truthRays = bench::intFlag(a, v);
         else if (a == "--width")
-            width = std::max(16, v);
+            width = bench::intFlag(a, v, 16);
         else if (a == "--height")
-            height = std::max(16, v);
+            height = bench::intFlag(a, v, 16);
         else {
             std::fprintf(stderr, "unknown option %s\n", a.c_str());
             return 2;

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_flags.h"
 #include "sdftrace/field/tape.h"
 #include "sdftrace/render/film.h"
 #include "sdftrace/render/renderer.h"
@@ -294,23 +295,31 @@ void buildRow(const std::string& kind, int n, const Options& o) {
 
 int main(int argc, char** argv) {
     sdft::Options o;
+    constexpr const char* kUsage =
+        "usage: sdftrace_pruning_bench [--reps 3] [--threads 2] [--max 65536] [--max-off 4096]\n"
+        "       [--kinds clusters,city,molecule,sculpt] [--views above,close,grazing]\n"
+        "       [--tracer default|classic|segment] [--build-only 0|1] [--parse N]\n";
+    if (const int status = sdft::bench::checkFlagPairs(argc, argv, kUsage); status >= 0)
+        return status;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
         if (a == "--reps")
-            o.reps = std::stoi(v);
+            o.reps = sdft::bench::intFlag(a, v);
         else if (a == "--threads")
-            o.threads = std::stoi(v);
+            o.threads = sdft::bench::intFlag(a, v);
         else if (a == "--max")
-            o.max = std::stoi(v);
+            o.max = sdft::bench::intFlag(a, v);
         else if (a == "--max-off")
-            o.maxOff = std::stoi(v);
+            o.maxOff = sdft::bench::intFlag(a, v, 0);
         else if (a == "--build-only")
             o.buildOnly = v != "0";
         else if (a == "--parse")
-            o.parseN = std::stoi(v);
-        else if (a == "--tracer" && (v == "default" || v == "classic" || v == "segment"))
+            o.parseN = sdft::bench::intFlag(a, v);
+        else if (a == "--tracer") {
+            if (v != "default" && v != "classic" && v != "segment")
+                sdft::bench::badValue(a, v, "default, classic or segment");
             o.tracer = v;
-        else if (a == "--kinds" || a == "--views") {
+        } else if (a == "--kinds" || a == "--views") {
             std::vector<std::string>& list = a == "--kinds" ? o.kinds : o.views;
             list.clear();
             std::stringstream s(v);

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_flags.h"
 #include "sdftrace/bake/mesh_bake.h"
 #include "sdftrace/bake/mesh_bvh.h"
 #include "sdftrace/bake/rtsdf_bake.h"
@@ -33,26 +34,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double>(b - a).count();
-}
-
-std::vector<int> parseList(const char* s) {
-    std::vector<int> out;
-    for (const char* p = s; *p;) {
-        out.push_back(std::atoi(p));
-        while (*p && *p != ',') ++p;
-        if (*p) ++p;
-    }
-    return out;
-}
-
-std::vector<float> parseFloats(const char* s) {
-    std::vector<float> out;
-    for (const char* p = s; *p;) {
-        out.push_back(static_cast<float>(std::atof(p)));
-        while (*p && *p != ',') ++p;
-        if (*p) ++p;
-    }
-    return out;
 }
 
 double median(std::vector<double> v) {
@@ -91,22 +72,26 @@ int main(int argc, char** argv) {
     std::vector<float> alphas = {0.95f};
     float degrees = 6;
     std::vector<int> sizes = {128, 256}, rays = {1, 5, 10};
+    constexpr const char* kUsage =
+        "usage: sdftrace_rtsdf_frame_bench [--mesh PATH] [--frames 20] [--sizes 128,256]\n"
+        "       [--rays 1,5,10] [--alphas 0.95,...] [--degrees 6] [--threads 2]\n";
+    if (const int status = bench::checkFlagPairs(argc, argv, kUsage); status >= 0) return status;
     for (int i = 1; i + 1 < argc; i += 2) {
-        const std::string a = argv[i];
+        const std::string a = argv[i], v = argv[i + 1];
         if (a == "--mesh")
-            meshPath = argv[i + 1];
+            meshPath = v;
         else if (a == "--frames")
-            frames = std::max(2, std::atoi(argv[i + 1]));
+            frames = bench::intFlag(a, v, 2);
         else if (a == "--sizes")
-            sizes = parseList(argv[i + 1]);
+            sizes = bench::intListFlag(a, v, 8);
         else if (a == "--rays")
-            rays = parseList(argv[i + 1]);
+            rays = bench::intListFlag(a, v);
         else if (a == "--alpha" || a == "--alphas")
-            alphas = parseFloats(argv[i + 1]);
+            alphas = bench::floatListFlag(a, v);
         else if (a == "--degrees")
-            degrees = static_cast<float>(std::atof(argv[i + 1]));
+            degrees = bench::floatFlag(a, v);
         else if (a == "--threads")
-            threads = std::atoi(argv[i + 1]);
+            threads = bench::intFlag(a, v);
         else {
             std::fprintf(stderr, "unknown option %s\n", a.c_str());
             return 2;

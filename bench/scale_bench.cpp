@@ -45,6 +45,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_flags.h"
 #include "sdftrace/io/mesh_io.h"
 #include "sdftrace/io/vdb_io.h"
 #include "sdftrace/math/camera.h"
@@ -65,27 +66,6 @@ double ms(Clock::time_point a, Clock::time_point b) {
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v.empty() ? 0 : v[v.size() / 2];
-}
-
-// A positive whole number given to `flag`, or an error that names both.
-int positive(const std::string& flag, const std::string& s) {
-    size_t used = 0;
-    int v = 0;
-    try {
-        v = std::stoi(s, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used == 0 || used != s.size() || v <= 0)
-        throw std::runtime_error(flag + ": '" + s + "' is not a positive whole number");
-    return v;
-}
-
-std::vector<int> splitInts(const std::string& flag, const std::string& s) {
-    std::vector<int> out;
-    std::stringstream in(s);
-    for (std::string part; std::getline(in, part, ',');) out.push_back(positive(flag, part));
-    return out;
 }
 
 struct Options {
@@ -479,17 +459,17 @@ int run(int argc, char** argv) {
             return argv[++i];
         };
         if (a == "--res")
-            o.res = positive(a, next());
+            o.res = bench::intFlag(a, next(), 8);
         else if (a == "--reps")
-            o.reps = positive(a, next());
+            o.reps = bench::intFlag(a, next());
         else if (a == "--threads")
-            o.threads = positive(a, next());
+            o.threads = bench::intFlag(a, next());
         else if (a == "--keep")
             o.keep = true;
         else if (a == "--commands")
             o.commands = true;
         else if (a == "--sizes")
-            o.sizes = splitInts(a, next());
+            o.sizes = bench::intListFlag(a, next(), 16);
         else if (a == "--help" || a == "-h") {
             std::fputs(kUsage, stdout);
             return 0;

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_flags.h"
 #include "sdftrace/math/camera.h"
 #include "sdftrace/render/light_sample.h"
 #include "sdftrace/render/renderer.h"
@@ -78,9 +79,13 @@ Run renderWith(const Scene& base, const Method& m, int reps) {
 
 int main(int argc, char** argv) {
     int width = 480, height = 300, reps = 5, truthRays = 1024, threads = 2;
+    constexpr const char* kUsage =
+        "usage: sdftrace_shadow_bench [--width 480] [--height 300] [--reps 5] [--truth 1024]\n"
+        "       [--threads 2]\n";
+    if (const int status = bench::checkFlagPairs(argc, argv, kUsage); status >= 0) return status;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string k = argv[i];
-        const int v = std::atoi(argv[i + 1]);
+        const int v = bench::intFlag(k, argv[i + 1]);
         if (k == "--width")
             width = v;
         else if (k == "--height")

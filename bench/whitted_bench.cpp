@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_flags.h"
 #include "sdftrace/render/renderer.h"
 #include "sdftrace/scene/parse_scene.h"
 #include "sdftrace/scene/plan_render.h"
@@ -22,12 +23,14 @@ using namespace sdft;
 
 int main(int argc, char** argv) {
     int reps = 7, threads = 2;
+    constexpr const char* kUsage = "usage: sdftrace_whitted_bench [--reps 7] [--threads 2]\n";
+    if (const int status = bench::checkFlagPairs(argc, argv, kUsage); status >= 0) return status;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string k = argv[i];
         if (k == "--reps") {
-            reps = std::atoi(argv[i + 1]);
+            reps = bench::intFlag(k, argv[i + 1]);
         } else if (k == "--threads") {
-            threads = std::atoi(argv[i + 1]);
+            threads = bench::intFlag(k, argv[i + 1]);
         } else {
             std::fprintf(stderr, "unknown option %s\n", k.c_str());
             return 2;
