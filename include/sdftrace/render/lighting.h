@@ -29,19 +29,29 @@ struct Material {
 // Whole exponents up to this are raised by squaring (specularPower).
 constexpr int kMaxSquaredExponent = 256;
 
-// x^e for Blinn-Phong's specular lobe, x in [0, 1]: a whole exponent in [1, kMaxSquaredExponent]
-// (the usual ones: 8, 32, 64, ...) by repeated squaring, at a fraction of powf's cost and within
-// e/2 ulp of it (1e-5 relative at the largest); any other by powf.
-SDFT_HOST_DEVICE inline float specularPower(float x, float e) {
-    if (!(e >= 1 && e <= static_cast<float>(kMaxSquaredExponent)) ||
-        e != static_cast<float>(static_cast<int>(e)))
-        return std::pow(x, e);
-    float r = 1.0f, b = x;
-    for (int k = static_cast<int>(e);; b *= b) {
+// Whether specularPower raises x^e by squaring.
+SDFT_HOST_DEVICE inline bool squaredExponent(float e) {
+    return e >= 1 && e <= static_cast<float>(kMaxSquaredExponent) &&
+           e == static_cast<float>(static_cast<int>(e));
+}
+
+// x^k for a whole k >= 1 by repeated squaring: one product order for a float and for a vector of
+// floats (render/light_batch.cpp), so both give the same bits.
+template <class T>
+SDFT_HOST_DEVICE inline T raiseBySquaring(T x, int k) {
+    T r = T{} + 1.0f, b = x;
+    for (;; b *= b) {
         if (k & 1) r *= b;
         k >>= 1;
         if (k == 0) return r;
     }
+}
+
+// x^e for Blinn-Phong's specular lobe, x in [0, 1]: a whole exponent in [1, kMaxSquaredExponent]
+// (the usual ones: 8, 32, 64, ...) by repeated squaring, at a fraction of powf's cost and within
+// e/2 ulp of it (1e-5 relative at the largest); any other by powf.
+SDFT_HOST_DEVICE inline float specularPower(float x, float e) {
+    return squaredExponent(e) ? raiseBySquaring(x, static_cast<int>(e)) : std::pow(x, e);
 }
 
 // Lambert + Blinn-Phong for unit normal n, unit direction to the light l and the viewing ray's

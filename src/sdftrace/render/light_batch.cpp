@@ -2,8 +2,6 @@
 
 #include <immintrin.h>
 
-#include <cmath>
-
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/simd.h"
 
@@ -24,23 +22,14 @@ using F8 = float __attribute__((vector_size(kLanes * sizeof(float)), aligned(32)
 using I8 = int32_t __attribute__((vector_size(kLanes * sizeof(int32_t)), aligned(32)));
 
 // specularPower (lighting.h) on eight lanes: by squaring where every lane has the same whole
-// exponent in range (the same products in the same order), else lane by lane.
+// exponent in range (raiseBySquaring's products in its order), else lane by lane.
 SDFT_TARGET_AVX2 inline F8 specularPower8(F8 x, F8 e) {
     bool same = true;
     for (int l = 1; l < kLanes; ++l) same &= e[l] == e[0];
-    const float e0 = e[0];
-    if (!same || !(e0 >= 1 && e0 <= static_cast<float>(kMaxSquaredExponent)) ||
-        e0 != static_cast<float>(static_cast<int>(e0))) {
-        F8 out;
-        for (int l = 0; l < kLanes; ++l) out[l] = specularPower(x[l], e[l]);
-        return out;
-    }
-    F8 r = F8{} + 1.0f, b = x;
-    for (int k = static_cast<int>(e0);; b *= b) {
-        if (k & 1) r *= b;
-        k >>= 1;
-        if (k == 0) return r;
-    }
+    if (same && squaredExponent(e[0])) return raiseBySquaring(x, static_cast<int>(e[0]));
+    F8 out;
+    for (int l = 0; l < kLanes; ++l) out[l] = specularPower(x[l], e[l]);
+    return out;
 }
 
 // Eight hits' Vec3s as three vectors of x, y and z.
@@ -57,8 +46,8 @@ SDFT_TARGET_AVX2 void addDirectionalAvx2(const Light& light, const PixelMaterial
     const LightDirection to = towardLight(light, Vec3(0.0f));
     const Vec3 l = to.dir;
     F8 c[3], kd, ks, e;
-    auto loadMaterials = [&](int h, int lanes) {
-        for (int k = 0; k < lanes; ++k) {
+    auto loadMaterials = [&](int h) {  // hits h .. h + 7 (or materials[0] if shared)
+        for (int k = 0; k < kLanes; ++k) {
             const PixelMaterial& m = materials[shared ? 0 : h + k];
             for (int a = 0; a < 3; ++a) c[a][k] = m.color[a];
             kd[k] = m.diffuse;
@@ -66,7 +55,7 @@ SDFT_TARGET_AVX2 void addDirectionalAvx2(const Light& light, const PixelMaterial
             e[k] = m.shininess;
         }
     };
-    if (shared && n >= kLanes) loadMaterials(0, kLanes);
+    if (shared && n >= kLanes) loadMaterials(0);
     int h = 0;
     for (; h + kLanes <= n; h += kLanes) {
         F8 nv[3], dv[3], rad[3];
@@ -78,7 +67,7 @@ SDFT_TARGET_AVX2 void addDirectionalAvx2(const Light& light, const PixelMaterial
         const F8 ndl = nv[0] * l.x + nv[1] * l.y + nv[2] * l.z;
         const I8 lit = (vis != 0.0f) & ~(ndl <= 0.0f);
         if (!_mm256_movemask_ps((__m256)lit)) continue;
-        if (!shared) loadMaterials(h, kLanes);
+        if (!shared) loadMaterials(h);
         // blinnPhong: the half vector normalised as normalize() does, the lobe, the sum.
         F8 hv[3] = {l.x - dv[0], l.y - dv[1], l.z - dv[2]};
         const F8 len = (F8)_mm256_sqrt_ps((__m256)(hv[0] * hv[0] + hv[1] * hv[1] + hv[2] * hv[2]));
