@@ -29,6 +29,8 @@ class LaneBvh {
     // The groups whose boxes come within `reach` of the box [lo, hi], appended to `out`: false
     // (the search cut short) where they are more than `limit`.
     bool near(Vec3 lo, Vec3 hi, float reach, std::vector<uint32_t>& out, size_t limit) const;
+    // Each group's box, the union of its lanes' boxes.
+    const std::vector<Bounds3>& boxes() const { return m_boxes; }
 
   private:
     const std::vector<LaneGroup>& m_groups;

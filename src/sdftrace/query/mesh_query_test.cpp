@@ -137,6 +137,45 @@ TEST(MeshQuery, WindingOfOpenMeshesIsTheGeneralizedWindingNumber) {
     }
 }
 
+// A CAD-like part: a box whose walls are 1 % of its size thick (an outer shell and an inner one
+// facing inward), each face split into n x n squares, so that many coplanar faces and the far
+// side of a wall lie within a point's first bound.
+TriangleMesh thinWalledBox(int n) {
+    TriangleMesh m;
+    auto shell = [&](Vec3 lo, Vec3 hi, bool inward) {
+        for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side) {
+                const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+                const auto base = static_cast<uint32_t>(m.positions.size());
+                for (int i = 0; i <= n; ++i)
+                    for (int j = 0; j <= n; ++j) {
+                        Vec3 p;
+                        p[axis] = side ? hi[axis] : lo[axis];
+                        p[u] = lo[u] + (hi[u] - lo[u]) * static_cast<float>(i) / n;
+                        p[w] = lo[w] + (hi[w] - lo[w]) * static_cast<float>(j) / n;
+                        m.positions.push_back(p);
+                    }
+                // Outward where (side == 1) matches the axes' handedness, flipped for the inner.
+                const bool flip = (side == 0) != inward;
+                for (int i = 0; i < n; ++i)
+                    for (int j = 0; j < n; ++j) {
+                        const uint32_t a = base + i * (n + 1) + j, b = a + (n + 1), c = b + 1,
+                                       d = a + 1;
+                        if (flip) {
+                            m.triangles.push_back({a, c, b});
+                            m.triangles.push_back({a, d, c});
+                        } else {
+                            m.triangles.push_back({a, b, c});
+                            m.triangles.push_back({a, c, d});
+                        }
+                    }
+            }
+    };
+    shell(Vec3(0, 0, 0), Vec3(1, 0.6f, 0.4f), false);
+    shell(Vec3(0.01f, 0.01f, 0.01f), Vec3(0.99f, 0.59f, 0.39f), true);
+    return m;
+}
+
 // The batch walks points in Morton order with neighbour bounds: the same answers as one at a
 // time, in float and in double, for any subset of outputs.
 // Clusters of neighbours share one candidate search (triangle_lanes.h), or search one by one
@@ -155,6 +194,7 @@ TEST(MeshQuery, BatchesAnswerAsSinglePointsDo) {
         {"elephant", load("elephant-with-holes.obj")},  // open, 106 holes: the mesh's own sums
         {"bunny_npm", load("bunny_npm.obj")},           // closed: signs carried
         {"boxes", boxes},
+        {"thin-walled box", thinWalledBox(12)},  // many candidates: filtered by group boxes
         {"icosphere 5", icosphere(5)}};
     for (const auto& [name, mesh] : meshes) {
         const MeshQuery q = queryOf(mesh);

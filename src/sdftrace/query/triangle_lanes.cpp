@@ -74,10 +74,58 @@ __attribute__((always_inline)) inline Floats load(const float* x) {
 __attribute__((always_inline)) inline Floats vmin(Floats a, Floats b) { return a < b ? a : b; }
 __attribute__((always_inline)) inline Floats vmax(Floats a, Floats b) { return a > b ? a : b; }
 
+// Bit l set where lane l of a comparison mask is: movmskps (extracting each lane and ORing them
+// took a fifth of the point searches' time).
+template <bool kAvx2>
+__attribute__((always_inline)) inline unsigned laneBits(Ints m) {
+    if constexpr (kAvx2) {
+        return static_cast<unsigned>(__builtin_ia32_movmskps256(reinterpret_cast<Floats>(m)));
+    } else {
+        typedef int Ints4 __attribute__((vector_size(16)));
+        typedef float Floats4 __attribute__((vector_size(16)));
+        const Ints4 lo = __builtin_shufflevector(m, m, 0, 1, 2, 3);
+        const Ints4 hi = __builtin_shufflevector(m, m, 4, 5, 6, 7);
+        return static_cast<unsigned>(__builtin_ia32_movmskps(reinterpret_cast<Floats4>(lo))) |
+               static_cast<unsigned>(__builtin_ia32_movmskps(reinterpret_cast<Floats4>(hi))) << 4;
+    }
+}
+
+// groupsWithinBounds, eight points to a vector.
+template <bool kAvx2>
+__attribute__((always_inline)) inline void withinBody(const Bounds3* boxes, const uint32_t* which,
+                                                      size_t count, const Vec3* p,
+                                                      const float* bound2, size_t n, uint32_t* out,
+                                                      uint32_t* outCount) {
+    for (size_t i = 0; i < n; ++i) outCount[i] = 0;
+    for (size_t first = 0; first < n; first += kLanes) {
+        const size_t m = n - first < kLanes ? n - first : kLanes;
+        Floats px = {}, py = {}, pz = {}, b2 = {};
+        for (size_t l = 0; l < m; ++l) {
+            px[l] = p[first + l].x;
+            py[l] = p[first + l].y;
+            pz[l] = p[first + l].z;
+            b2[l] = bound2[first + l];
+        }
+        const Floats zero = {};
+        const Ints valid = (Ints{0, 1, 2, 3, 4, 5, 6, 7} < static_cast<int>(m));
+        for (size_t g = 0; g < count; ++g) {
+            const Bounds3& box = boxes[which[g]];
+            const Floats gx = vmax(vmax((zero + box.lo.x) - px, px - box.hi.x), zero);
+            const Floats gy = vmax(vmax((zero + box.lo.y) - py, py - box.hi.y), zero);
+            const Floats gz = vmax(vmax((zero + box.lo.z) - pz, pz - box.hi.z), zero);
+            for (unsigned bits = laneBits<kAvx2>(valid & (gx * gx + gy * gy + gz * gz <= b2)); bits;
+                 bits &= bits - 1) {
+                const size_t i = first + static_cast<size_t>(__builtin_ctz(bits));
+                out[i * count + outCount[i]++] = which[g];
+            }
+        }
+    }
+}
+
 // Point-triangle distance without branches (after Ericson, Real-Time Collision Detection
 // §5.1.5): the projection onto the plane where its barycentric weights are inside the face, else
 // the nearest of the three edges, each lane computing all four.
-template <class GroupAt>
+template <bool kAvx2, class GroupAt>
 __attribute__((always_inline)) inline float nearestBody(GroupAt groupAt, size_t count, Vec3 p,
                                                         float bound2, uint32_t& id) {
     const Floats zero = {}, one = zero + 1.0f, px = zero + p.x, py = zero + p.y, pz = zero + p.z;
@@ -89,9 +137,7 @@ __attribute__((always_inline)) inline float nearestBody(GroupAt groupAt, size_t 
         const Floats gy = vmax(vmax(load(f[kLoy]) - py, py - load(f[kHiy])), zero);
         const Floats gz = vmax(vmax(load(f[kLoz]) - pz, pz - load(f[kHiz])), zero);
         const Ints near = gx * gx + gy * gy + gz * gz <= bound2;
-        bool any = false;
-        for (int l = 0; l < kLanes; ++l) any |= near[l] != 0;
-        if (!any) continue;
+        if (laneBits<kAvx2>(near) == 0) continue;
         const Floats apx = px - load(f[kAx]), apy = py - load(f[kAy]), apz = pz - load(f[kAz]);
         const Floats abx = load(f[kAbx]), aby = load(f[kAby]), abz = load(f[kAbz]);
         const Floats acx = load(f[kAcx]), acy = load(f[kAcy]), acz = load(f[kAcz]);
@@ -144,14 +190,25 @@ struct Listed {
     const LaneGroup& operator()(size_t g) const { return groups[which[g]]; }
 };
 
+SDFT_TARGET_AVX2 void withinAvx2(const Bounds3* boxes, const uint32_t* which, size_t count,
+                                 const Vec3* p, const float* bound2, size_t n, uint32_t* out,
+                                 uint32_t* outCount) {
+    withinBody<true>(boxes, which, count, p, bound2, n, out, outCount);
+}
+SDFT_TARGET_BASELINE void withinBaseline(const Bounds3* boxes, const uint32_t* which, size_t count,
+                                         const Vec3* p, const float* bound2, size_t n,
+                                         uint32_t* out, uint32_t* outCount) {
+    withinBody<false>(boxes, which, count, p, bound2, n, out, outCount);
+}
+
 template <class GroupAt>
 SDFT_TARGET_AVX2 float nearestAvx2(GroupAt at, size_t count, Vec3 p, float bound2, uint32_t& id) {
-    return nearestBody(at, count, p, bound2, id);
+    return nearestBody<true>(at, count, p, bound2, id);
 }
 template <class GroupAt>
 SDFT_TARGET_BASELINE float nearestBaseline(GroupAt at, size_t count, Vec3 p, float bound2,
                                            uint32_t& id) {
-    return nearestBody(at, count, p, bound2, id);
+    return nearestBody<false>(at, count, p, bound2, id);
 }
 
 }  // namespace
@@ -168,6 +225,14 @@ float nearestInGroupList(const LaneGroup* groups, const uint32_t* which, size_t 
     const Listed at{groups, which};
     return useAvx2() ? nearestAvx2(at, count, p, bound2, id)
                      : nearestBaseline(at, count, p, bound2, id);
+}
+
+void groupsWithinBounds(const Bounds3* boxes, const uint32_t* which, size_t count, const Vec3* p,
+                        const float* bound2, size_t n, uint32_t* out, uint32_t* outCount) {
+    if (useAvx2())
+        withinAvx2(boxes, which, count, p, bound2, n, out, outCount);
+    else
+        withinBaseline(boxes, which, count, p, bound2, n, out, outCount);
 }
 
 }  // namespace sdft

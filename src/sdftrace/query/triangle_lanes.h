@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "sdftrace/bake/triangle_mesh.h"
+#include "sdftrace/math/ray.h"
 
 namespace sdft {
 
@@ -57,5 +58,12 @@ float nearestInGroups(const LaneGroup* groups, size_t count, Vec3 p, float bound
 // The same over the `count` groups of `groups` that `which` names.
 float nearestInGroupList(const LaneGroup* groups, const uint32_t* which, size_t count, Vec3 p,
                          float bound2, uint32_t& id);
+
+// For n points p[i] with squared bounds bound2[i]: the groups of `which` (count of them, boxes
+// indexed by group) whose box comes within each point's bound, in which's order. Point i's are
+// out[i * count ...], outCount[i] of them. The points are tested eight at a time against one
+// group's box, so a cluster pays one box test per group and eight points, not per point.
+void groupsWithinBounds(const Bounds3* boxes, const uint32_t* which, size_t count, const Vec3* p,
+                        const float* bound2, size_t n, uint32_t* out, uint32_t* outCount);
 
 }  // namespace sdft

@@ -5,6 +5,7 @@
 #include <numeric>
 #include <random>
 
+#include "sdftrace/exec/simd.h"
 #include "sdftrace/query/triangle_closest.h"
 
 namespace sdft {
@@ -94,6 +95,54 @@ TEST(TriangleLanes, NearestEqualsTheExactMinimum) {
                 best, 1e-5);
         }
     }
+}
+
+// groupsWithinBounds lists, for each of 1-16 points, exactly the named groups whose box lies
+// within its bound, in the order named; bounds of 0 (a point in a box only) and infinity too, on
+// both SIMD levels.
+TEST(TriangleLanes, GroupsWithinBoundsAreThoseWhoseBoxesReach) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::vector<Bounds3> boxes(40);
+    for (Bounds3& b : boxes) {
+        const Vec3 a(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng));
+        b.include(a);
+        b.include(a + (c - a) * 0.3f);
+    }
+    std::vector<uint32_t> which(boxes.size());
+    std::iota(which.begin(), which.end(), 0u);
+    const SimdLevel before = simdLevel();
+    for (SimdLevel level : {SimdLevel::Baseline, SimdLevel::Avx2}) {
+        setSimdLevel(level);
+        for (int round = 0; round < 50; ++round) {
+            std::shuffle(which.begin(), which.end(), rng);
+            const size_t count = 1 + rng() % which.size(), n = 1 + rng() % 16;
+            Vec3 p[16];
+            float bound2[16];
+            for (size_t i = 0; i < n; ++i) {
+                p[i] = Vec3(1.5f * u(rng), 1.5f * u(rng), 1.5f * u(rng));
+                const float r = 0.5f * (u(rng) + 1);
+                bound2[i] = i % 7 == 3 ? 0.0f : i % 7 == 5 ? INFINITY : r * r;
+            }
+            std::vector<uint32_t> out(n * count);
+            uint32_t outCount[16];
+            groupsWithinBounds(boxes.data(), which.data(), count, p, bound2, n, out.data(),
+                               outCount);
+            for (size_t i = 0; i < n; ++i) {
+                std::vector<uint32_t> expected;
+                for (size_t g = 0; g < count; ++g) {
+                    const Bounds3& b = boxes[which[g]];
+                    const Vec3 gap = max(max(b.lo - p[i], p[i] - b.hi), Vec3(0.0f));
+                    if (dot(gap, gap) <= bound2[i]) expected.push_back(which[g]);
+                }
+                ASSERT_EQ(std::vector<uint32_t>(out.begin() + i * count,
+                                                out.begin() + i * count + outCount[i]),
+                          expected)
+                    << "point " << i << " of " << n;
+            }
+        }
+    }
+    setSimdLevel(before);
 }
 
 }  // namespace
