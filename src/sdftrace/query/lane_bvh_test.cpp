@@ -24,7 +24,7 @@ double bruteNearest(const TriangleMesh& m, Vec3 p) {
     return best;
 }
 
-// Over Embree's BVH of Morton groups the nearest triangle is the brute-force one (up to float
+// Over the tree of Morton groups the nearest triangle is the brute-force one (up to float
 // rounding), near the surface, inside, far away and at a corner's tie; a radius short of it finds
 // nothing, one at it finds it. A mesh of one triangle (a group of one, repeated) and the
 // elephant's 4463 (a short last group) alike.

@@ -10,6 +10,7 @@
 #include "sdftrace/bake/lbvh.h"
 #include "sdftrace/core/macros.h"
 #include "sdftrace/exec/simd.h"
+#include "sdftrace/query/lane_vectors.h"
 
 namespace sdft {
 
@@ -56,39 +57,9 @@ TriangleLanes::TriangleLanes(const TriangleMesh& mesh) {
     });
 }
 
-// Every function passing these vectors is inlined: no call crosses the AVX / SSE ABI boundary.
-#pragma GCC diagnostic ignored "-Wpsabi"
-
 namespace {
 
-// Eight floats (and their comparison masks) as GCC's vector extension: one AVX register where the
-// function is compiled for AVX2, two SSE registers otherwise.
-typedef float Floats __attribute__((vector_size(4 * kLanes)));
-typedef int Ints __attribute__((vector_size(4 * kLanes)));
-
-__attribute__((always_inline)) inline Floats load(const float* x) {
-    Floats v;
-    __builtin_memcpy(&v, x, sizeof v);
-    return v;
-}
-__attribute__((always_inline)) inline Floats vmin(Floats a, Floats b) { return a < b ? a : b; }
-__attribute__((always_inline)) inline Floats vmax(Floats a, Floats b) { return a > b ? a : b; }
-
-// Bit l set where lane l of a comparison mask is: movmskps (extracting each lane and ORing them
-// took a fifth of the point searches' time).
-template <bool kAvx2>
-__attribute__((always_inline)) inline unsigned laneBits(Ints m) {
-    if constexpr (kAvx2) {
-        return static_cast<unsigned>(__builtin_ia32_movmskps256(reinterpret_cast<Floats>(m)));
-    } else {
-        typedef int Ints4 __attribute__((vector_size(16)));
-        typedef float Floats4 __attribute__((vector_size(16)));
-        const Ints4 lo = __builtin_shufflevector(m, m, 0, 1, 2, 3);
-        const Ints4 hi = __builtin_shufflevector(m, m, 4, 5, 6, 7);
-        return static_cast<unsigned>(__builtin_ia32_movmskps(reinterpret_cast<Floats4>(lo))) |
-               static_cast<unsigned>(__builtin_ia32_movmskps(reinterpret_cast<Floats4>(hi))) << 4;
-    }
-}
+using namespace lane_vectors;
 
 // groupsWithinBounds, eight points to a vector.
 template <bool kAvx2>
