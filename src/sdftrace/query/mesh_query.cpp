@@ -66,6 +66,7 @@ constexpr size_t kCandidateGroups = 256;
 // eight points a box test (groupsWithinBounds); fewer are measured by every point.
 constexpr size_t kFilterGroups = 6;
 constexpr int kSoloClusters = 8;
+constexpr size_t kQuarter = kCluster / 4;  // the points of a cluster's quarter
 // Rim loops beyond which an open mesh's hierarchical sums estimate its winding number faster
 // than its films' Taylor models and sums do: between 61 and 106 loops on the meshes measured
 // (docs/performance.md).
@@ -188,6 +189,10 @@ struct MeshQuery::Impl {
     // The nearer of c's known face and the nearest of the `count` groups `list` names.
     Closest nearestCandidate(Vec3d p, const ClusterPoint& c, const uint32_t* list,
                              size_t count) const;
+    // The answers of n points of a cluster from one search of the groups within reach of their
+    // box: false (nothing answered) where those are more than kCandidateGroups.
+    bool answerFromCandidates(const Vec3d* p, const ClusterPoint* c, size_t n, Closest* out,
+                              ClusterScratch& s) const;
 
     // The hierarchical tiers of an open mesh's own winding number: `coarse` (beta 1.5, trusted
     // to 0.3), then `fine` (the tree's beta 3, to 0.1), each taken where it is clearly off 1/2
@@ -380,13 +385,9 @@ MeshQuery::Closest MeshQuery::closest(Vec3d p, double bound) const {
 void MeshQuery::Impl::closestCluster(const MeshQuery& query, const Vec3d* p, size_t n, Closest* out,
                                      ClusterScratch& s) const {
     ClusterPoint c[kCluster];
-    Vec3 lo(INFINITY), hi(-INFINITY);
     if (s.winners.empty()) s.winners.push_back(lanes->groupOf(query.closest(p[0]).face));
-    float reach = 0;
     for (size_t i = 0; i < n; ++i) {
         c[i].q = toLocal(p[i]);
-        lo = min(lo, c[i].q);
-        hi = max(hi, c[i].q);
         c[i].knownId = UINT32_MAX;
         c[i].known = nearestInGroupList(lanes->groups().data(), s.winners.data(), s.winners.size(),
                                         c[i].q, INFINITY, c[i].knownId);
@@ -395,48 +396,63 @@ void MeshQuery::Impl::closestCluster(const MeshQuery& query, const Vec3d* p, siz
             std::max({localExtent, std::fabs(c[i].q.x), std::fabs(c[i].q.y), std::fabs(c[i].q.z)});
         c[i].slack = 1e-5f * std::sqrt(c[i].known) + 4e-6f * far;
         c[i].bound = std::sqrt(c[i].known) + c[i].slack;
+    }
+    bool answered = false;
+    if (s.solo > 0) {
+        --s.solo;
+    } else {
+        answered = answerFromCandidates(p, c, n, out, s);
+        // Each failure in a row doubles the clusters that skip the whole cluster's search.
+        s.solo = answered ? 0 : kSoloClusters << std::min(s.failures++, 5);
+        if (answered) s.failures = 0;
+    }
+    // Too many candidates for the cluster (a fine mesh, flat faces seen from afar): quarters of
+    // it search on their own, their boxes smaller; a quarter with too many still, point by point.
+    for (size_t first = 0; !answered && first < n; first += kQuarter) {
+        const size_t m = std::min(kQuarter, n - first);
+        if (!answerFromCandidates(p + first, c + first, m, out + first, s))
+            for (size_t i = first; i < first + m; ++i) out[i] = query.closest(p[i], c[i].bound);
+    }
+    s.winners.clear();
+    for (size_t i = 0; i < n; ++i) s.winners.push_back(lanes->groupOf(out[i].face));
+    std::sort(s.winners.begin(), s.winners.end());
+    s.winners.erase(std::unique(s.winners.begin(), s.winners.end()), s.winners.end());
+}
+
+bool MeshQuery::Impl::answerFromCandidates(const Vec3d* p, const ClusterPoint* c, size_t n,
+                                           Closest* out, ClusterScratch& s) const {
+    Vec3 lo(INFINITY), hi(-INFINITY);
+    float reach = 0;
+    for (size_t i = 0; i < n; ++i) {
+        lo = min(lo, c[i].q);
+        hi = max(hi, c[i].q);
         reach = std::max(reach, c[i].bound);
     }
     s.ids.clear();
-    bool clustered = false;
-    if (s.solo > 0) {
-        --s.solo;
-    } else if (std::isfinite(reach)) {
-        clustered = laneBvh->near(lo, hi, reach, s.ids, kCandidateGroups) && !s.ids.empty();
-        // Each failure in a row doubles the clusters searched point by point before the next try.
-        s.solo = clustered ? 0 : kSoloClusters << std::min(s.failures++, 5);
-        if (clustered) s.failures = 0;
-    }
+    if (!std::isfinite(reach) || !laneBvh->near(lo, hi, reach, s.ids, kCandidateGroups) ||
+        s.ids.empty())
+        return false;
     s.rest.clear();
-    if (clustered)
-        for (const uint32_t g : s.ids)
-            if (!std::binary_search(s.winners.begin(), s.winners.end(), g)) s.rest.push_back(g);
+    for (const uint32_t g : s.ids)
+        if (!std::binary_search(s.winners.begin(), s.winners.end(), g)) s.rest.push_back(g);
     const size_t count = s.rest.size();
+    if (count <= kFilterGroups) {
+        for (size_t i = 0; i < n; ++i) out[i] = nearestCandidate(p[i], c[i], s.rest.data(), count);
+        return true;
+    }
+    Vec3 q[kCluster];
+    float bound2[kCluster];
     uint32_t within[kCluster];
-    const bool filtered = count > kFilterGroups;
-    if (filtered) {
-        Vec3 q[kCluster];
-        float bound2[kCluster];
-        for (size_t i = 0; i < n; ++i) {
-            q[i] = c[i].q;
-            bound2[i] = c[i].bound * c[i].bound;
-        }
-        s.within.resize(n * count);
-        groupsWithinBounds(laneBvh->boxes().data(), s.rest.data(), count, q, bound2, n,
-                           s.within.data(), within);
-    }
-    s.winners.clear();
     for (size_t i = 0; i < n; ++i) {
-        if (!clustered)
-            out[i] = query.closest(p[i], c[i].bound);
-        else if (filtered)
-            out[i] = nearestCandidate(p[i], c[i], s.within.data() + i * count, within[i]);
-        else
-            out[i] = nearestCandidate(p[i], c[i], s.rest.data(), count);
-        s.winners.push_back(lanes->groupOf(out[i].face));
+        q[i] = c[i].q;
+        bound2[i] = c[i].bound * c[i].bound;
     }
-    std::sort(s.winners.begin(), s.winners.end());
-    s.winners.erase(std::unique(s.winners.begin(), s.winners.end()), s.winners.end());
+    s.within.resize(n * count);
+    groupsWithinBounds(laneBvh->boxes().data(), s.rest.data(), count, q, bound2, n, s.within.data(),
+                       within);
+    for (size_t i = 0; i < n; ++i)
+        out[i] = nearestCandidate(p[i], c[i], s.within.data() + i * count, within[i]);
+    return true;
 }
 
 MeshQuery::Closest MeshQuery::Impl::nearestCandidate(Vec3d p, const ClusterPoint& c,
