@@ -494,8 +494,8 @@ int run(int argc, char** argv) {
 int main(int argc, char** argv) {
     try {
         return run(argc, argv);
-    } catch (
-        const std::exception& e) {  // a mesh that does not load (bad flags exit in bench_flags.h)
+    } catch (const std::exception& e) {
+        // A mesh that does not load (bad flags exit in bench_flags.h).
         std::fprintf(stderr, "sdftrace_scale_bench: %s\n", e.what());
         return 1;
     }

@@ -42,6 +42,14 @@ namespace {
 
 using namespace lane_vectors;
 
+// The squared gaps between a node's eight boxes and the box [qlo, qhi].
+__attribute__((always_inline)) inline Floats nodeGap2(const GroupTree::Node& n, const Floats qlo[3],
+                                                      const Floats qhi[3]) {
+    const Floats lo[3] = {load(n.lo[0]), load(n.lo[1]), load(n.lo[2])};
+    const Floats hi[3] = {load(n.hi[0]), load(n.hi[1]), load(n.hi[2])};
+    return gapSquared(lo, hi, qlo, qhi);
+}
+
 // The depth-first walk: a node's children that reach the query box are visited in increasing
 // order (pushed in decreasing order), so the groups come out in increasing order.
 template <bool kAvx2>
@@ -60,14 +68,8 @@ __attribute__((always_inline)) inline bool nearBody(
     stack[top++] = {static_cast<uint32_t>(levels.size() - 1), 0};
     while (top > 0) {
         const Entry e = stack[--top];
-        const GroupTree::Node& n = levels[e.level][e.node];
-        Floats gap2 = zero;
-        for (int a = 0; a < 3; ++a) {
-            const Floats g = vmax(vmax(load(n.lo[a]) - qhi[a], qlo[a] - load(n.hi[a])), zero);
-            gap2 += g * g;
-        }
         // An empty box's gap is +inf (or NaN against an infinite query): never within reach.
-        unsigned bits = laneBits<kAvx2>(gap2 <= reach2);
+        unsigned bits = laneBits<kAvx2>(nodeGap2(levels[e.level][e.node], qlo, qhi) <= reach2);
         if (e.level == 0) {
             for (; bits; bits &= bits - 1) {
                 const size_t g = e.node * size_t{8} + static_cast<size_t>(__builtin_ctz(bits));
@@ -96,12 +98,8 @@ __attribute__((always_inline)) inline int reachingChildren(const GroupTree::Node
                                                            float bound2, size_t children,
                                                            uint32_t first, Child out[8]) {
     const Floats zero = {};
-    Floats gap2 = zero;
-    const float q[3] = {p.x, p.y, p.z};
-    for (int a = 0; a < 3; ++a) {
-        const Floats g = vmax(vmax(load(n.lo[a]) - q[a], q[a] - load(n.hi[a])), zero);
-        gap2 += g * g;
-    }
+    const Floats q[3] = {zero + p.x, zero + p.y, zero + p.z};
+    const Floats gap2 = nodeGap2(n, q, q);
     int count = 0;
     for (unsigned bits = laneBits<kAvx2>(gap2 <= bound2); bits; bits &= bits - 1) {
         const int l = __builtin_ctz(bits);

@@ -20,6 +20,17 @@ __attribute__((always_inline)) inline Floats load(const float* x) {
 __attribute__((always_inline)) inline Floats vmin(Floats a, Floats b) { return a < b ? a : b; }
 __attribute__((always_inline)) inline Floats vmax(Floats a, Floats b) { return a > b ? a : b; }
 
+// The squared gaps between eight boxes (lo[a], hi[a]: coordinate a of each of the eight) and the
+// box [qlo, qhi] (a point where they are equal), 0 where they overlap; +inf for an empty box
+// (lo = +inf, hi = -inf) against a finite query.
+__attribute__((always_inline)) inline Floats gapSquared(const Floats lo[3], const Floats hi[3],
+                                                        const Floats qlo[3], const Floats qhi[3]) {
+    const Floats zero = {};
+    Floats g[3];
+    for (int a = 0; a < 3; ++a) g[a] = vmax(vmax(lo[a] - qhi[a], qlo[a] - hi[a]), zero);
+    return g[0] * g[0] + g[1] * g[1] + g[2] * g[2];  // (no 0 + first: -0 keeps it an add)
+}
+
 // Bit l set where lane l of a comparison mask is: movmskps (extracting each lane and ORing them
 // took a fifth of the point searches' time).
 template <bool kAvx2>

@@ -56,8 +56,9 @@ constexpr size_t kRun = 256;
 // Neighbours in Morton order that share one search for their candidate triangles.
 constexpr size_t kCluster = 16;
 // More lane groups than this within reach of a cluster (sixteen a point: a fine mesh, flat faces
-// seen from afar, points far apart): the next clusters' points search the BVH one by one, each
-// within its own bound, where the shell of candidates is as thin as the bound is tight. (Measured
+// seen from afar, points far apart): its quarters search for their own candidates, and a quarter
+// with more still searches point by point, each point within its own bound, where the shell of
+// candidates is as thin as the bound is tight. (Measured
 // with the groups' boxes filtering each point's candidates: 256 took 8-17 % fewer instructions
 // than 96 on bunny_npm, the elephant and the Stanford bunny, the same on the thin part; 512 no
 // fewer.)
@@ -65,6 +66,8 @@ constexpr size_t kCandidateGroups = 256;
 // Above this many candidate groups, a cluster's points take theirs by the groups' boxes first,
 // eight points a box test (groupsWithinBounds); fewer are measured by every point.
 constexpr size_t kFilterGroups = 6;
+// Clusters after a failed whole-cluster search that go straight to their quarters (doubling with
+// each failure in a row).
 constexpr int kSoloClusters = 8;
 constexpr size_t kQuarter = kCluster / 4;  // the points of a cluster's quarter
 // Rim loops beyond which an open mesh's hierarchical sums estimate its winding number faster
@@ -174,7 +177,7 @@ struct MeshQuery::Impl {
         std::vector<uint32_t> ids, winners;  // lane groups
         std::vector<uint32_t> rest;          // ids less winners
         std::vector<uint32_t> within;        // per point, the rest within its bound
-        int solo = 0;                        // clusters still to search point by point
+        int solo = 0;                        // clusters still to search by quarters
         int failures = 0;                    // clusters in a row with too many candidates
     };
     void closestCluster(const MeshQuery& query, const Vec3d* p, size_t n, Closest* out,
@@ -379,9 +382,10 @@ MeshQuery::Closest MeshQuery::closest(Vec3d p, double bound) const {
 
 // The closest answers of n <= kCluster neighbouring points: their upper bounds from the previous
 // cluster's faces (1-Lipschitz), the candidates for all of them from one BVH traversal about
-// their box, then each point's nearest candidate by the lane test (triangle_lanes.h). The groups
-// the bounds came from are not measured again: a point's nearest is the nearer of its nearest
-// among them and among the other candidates (every triangle within its bound is a candidate).
+// their box (or, where those are too many, for each quarter of them), then each point's nearest
+// candidate by the lane test (triangle_lanes.h). The groups the bounds came from are not measured
+// again: a point's nearest is the nearer of its nearest among them and among the other candidates
+// (every triangle within its bound is a candidate).
 void MeshQuery::Impl::closestCluster(const MeshQuery& query, const Vec3d* p, size_t n, Closest* out,
                                      ClusterScratch& s) const {
     ClusterPoint c[kCluster];
